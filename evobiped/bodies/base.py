@@ -1,0 +1,84 @@
+"""What every body provides to an episode.
+
+A body wraps one MJCF model: its actuators and what they take (PD target
+angles in rad, or torques in N m), its initial state, its sensors, the fall
+test and the walker's planar position.  All methods act on a :class:`Sims`
+batch and return ``(P, ...)`` arrays; ``ids`` selects the simulations to touch.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar, Literal
+
+import mujoco
+import numpy as np
+
+from ..models import load_model, model_path
+from ..sim import Sims
+
+
+class Body(ABC):
+    """Base class; subclasses are registered in :data:`evobiped.bodies.BODIES`."""
+
+    name: ClassVar[str]
+    #: file stem in models/
+    model_name: ClassVar[str]
+    #: "position": actions are PD target angles (rad); "torque": joint torques (N m)
+    action_kind: ClassVar[Literal["position", "torque"]]
+    #: True if :meth:`substep` must run before every physics step
+    has_custom_forces: ClassVar[bool] = False
+
+    def __init__(self, *, timestep: float, model_file: str | None = None):
+        self.timestep = float(timestep)
+        self.model_file = model_file or str(model_path(self.model_name))
+
+    def build_model(self) -> mujoco.MjModel:
+        """Compile the MJCF once (per worker); the timestep is this body's."""
+        model = load_model(self.model_file)
+        model.opt.timestep = self.timestep
+        self.bind_model(model)
+        return model
+
+    def bind_model(self, model: mujoco.MjModel) -> None:
+        """Look up names and ids in the compiled model (UserError if one is missing)."""
+
+    @property
+    @abstractmethod
+    def actuator_names(self) -> tuple[str, ...]:
+        """The actuated joints, in the order actions are given."""
+
+    @abstractmethod
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)``, each ``(n_actuators,)``: rad for targets, N m for torques."""
+
+    def reset(self, sims: Sims) -> None:
+        """Put every simulation in the body's initial state (default: the model's)."""
+        sims.reset()
+
+    @abstractmethod
+    def apply(self, sims: Sims, ids: np.ndarray, action: np.ndarray) -> None:
+        """Set the actuators of simulations ``ids`` to ``action`` ``(len(ids), n_act)``."""
+
+    def substep(self, sims: Sims, ids: np.ndarray) -> None:
+        """Custom forces before each physics step (only if ``has_custom_forces``)."""
+
+    @abstractmethod
+    def com(self, sims: Sims) -> np.ndarray:
+        """Centre of mass of the walker, ``(P, 3)`` in m."""
+
+    @abstractmethod
+    def planar_position(self, sims: Sims) -> np.ndarray:
+        """The walker's position on the ground plane, ``(P, 2)`` in m."""
+
+    @abstractmethod
+    def heading(self, sims: Sims) -> np.ndarray:
+        """The direction the walker faces on the ground plane, ``(P, 2)`` unit vectors."""
+
+    @abstractmethod
+    def fallen(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
+        """Bool ``(len(ids),)``: the walker has fallen (episode ends)."""
+
+    def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
+        """Named sensor arrays ``(P, k)`` a controller may take as inputs."""
+        return {}

@@ -1,0 +1,115 @@
+"""The 3D 6-DOF biped of Reil & Husbands 2002 (``models/reil_biped.xml``).
+
+PD gains.  The paper gives k_s = 5, k_d = 4 in MathEngine's units without
+saying what they are.  Read as SI (N m/rad, N m s/rad) on this 3.4 kg body they
+cannot do what the paper says the PD does ("largely eliminates the need to
+physically limit joint angles"): the stance knee carries ~2.8 kg at a lever of
+up to ~0.3 m (~8 N m), so k_s = 5 N m/rad would sag by more than a radian, and
+a swinging leg (I ~ 0.4 kg m^2 about the hip) would have a natural period of
+~2.8 s, far slower than a step.  We therefore choose
+k_s = 50 N m/rad (static sag under the stance load ~0.1-0.15 rad; swing-leg
+natural frequency ~1.8 Hz, the range of a walking step) and
+k_d = 2 N m s/rad (damping ratio ~0.2 for the whole leg about the hip and ~0.6
+for the shank about the knee: under-damped but without ringing).
+Both are config values (``kp``, ``kv``).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import mujoco
+import numpy as np
+
+from ..errors import UserError
+from ..sim import Sims
+from .base import Body
+
+#: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
+ACTUATORS = (
+    "left_hip_pitch",
+    "left_hip_roll",
+    "left_knee",
+    "right_hip_pitch",
+    "right_hip_roll",
+    "right_knee",
+)
+TABLE_II = {
+    "knee": (-1.4, 0.0),
+    "hip_roll": (-0.8, 0.8),
+    "hip_pitch": (-1.3, 1.6),
+}
+
+
+def _range_of(actuator: str) -> tuple[float, float]:
+    return TABLE_II[actuator.split("_", 1)[1]]
+
+
+class ReilBiped(Body):
+    """Reil & Husbands' walker: PD targets in Table II's ranges, sphere feet."""
+
+    name: ClassVar[str] = "reil"
+    model_name: ClassVar[str] = "reil_biped"
+    action_kind: ClassVar[str] = "position"
+
+    def __init__(
+        self,
+        *,
+        timestep: float = 0.005,
+        kp: float = 50.0,
+        kv: float = 2.0,
+        fall_height: float = 0.5,
+        model_file: str | None = None,
+    ):
+        super().__init__(timestep=timestep, model_file=model_file)
+        if not (kp > 0 and kv >= 0 and fall_height > 0):
+            raise UserError("reil body: kp must be > 0, kv >= 0 and fall_height > 0")
+        self.kp, self.kv, self.fall_height = float(kp), float(kv), float(fall_height)
+
+    @property
+    def actuator_names(self) -> tuple[str, ...]:
+        return ACTUATORS
+
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = zip(*(_range_of(a) for a in ACTUATORS))
+        return np.array(lo), np.array(hi)
+
+    def bind_model(self, model: mujoco.MjModel) -> None:
+        names = tuple(model.actuator(i).name for i in range(model.nu))
+        if names != ACTUATORS:
+            raise UserError(f"reil body: the model's actuators are {names}, expected {ACTUATORS}")
+        for i in range(model.nu):  # eq. 1 with this body's gains
+            model.actuator_gainprm[i, 0] = self.kp
+            model.actuator_biasprm[i, 1] = -self.kp
+            model.actuator_biasprm[i, 2] = -self.kv
+        m = model
+        self._pelvis = m.body("pelvis").id
+        self._qadr = np.array([m.joint(a).qposadr[0] for a in ACTUATORS])
+        self._dadr = np.array([m.joint(a).dofadr[0] for a in ACTUATORS])
+        self._touch = np.concatenate(
+            [np.arange(m.sensor(s).adr[0], m.sensor(s).adr[0] + 1) for s in ("left_foot_touch", "right_foot_touch")]
+        )
+
+    def apply(self, sims: Sims, ids: np.ndarray, action: np.ndarray) -> None:
+        sims.ctrl[ids] = action
+
+    def com(self, sims: Sims) -> np.ndarray:
+        return sims.subtree_com[:, self._pelvis]
+
+    def planar_position(self, sims: Sims) -> np.ndarray:
+        return sims.xpos[:, self._pelvis, :2]
+
+    def heading(self, sims: Sims) -> np.ndarray:
+        # the body x axis (forward) is column 0 of the pelvis rotation matrix
+        fwd = sims.xmat[:, self._pelvis].reshape(-1, 3, 3)[:, :2, 0]
+        return fwd / np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-12)
+
+    def fallen(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
+        return sims.subtree_com[ids, self._pelvis, 2] < self.fall_height
+
+    def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
+        return {
+            "joint_angles": sims.qpos[:, self._qadr],
+            "joint_velocities": sims.qvel[:, self._dadr],
+            "foot_contact": (sims.sensordata[:, self._touch] > 0).astype(float),
+        }

@@ -1,0 +1,116 @@
+"""The ``evobiped`` command: parse, build configs, call the package, print.
+
+Every subcommand is a function ``add_<name>(subparsers)`` that registers its
+parser and handler.  A :class:`~evobiped.errors.UserError` (or a bad argument)
+becomes one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+from . import __version__
+from .errors import UserError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2, no usage dump
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v > 0 and np.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return v
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return v
+
+
+# ---------------------------------------------------------------- episode
+def add_episode(sub) -> None:
+    p = sub.add_parser("episode", help="run one episode and print its fitness")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--genome", metavar="FILE", help="genome JSON file (default: a random genome)")
+    src.add_argument("--seed", type=int, default=0, help="seed of the random genome (default 0)")
+    p.add_argument("--body", default="reil", help="body name (default reil)")
+    p.add_argument("--controller", default="ctrnn", help="controller name (default ctrnn)")
+    p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.set_defaults(func=run_episode_cmd)
+
+
+def run_episode_cmd(args) -> int:
+    from .episode import EpisodeConfig
+    from .genome_file import load_genome
+
+    if args.genome:
+        genome, cfg, _ = load_genome(args.genome)
+    else:
+        cfg = EpisodeConfig(body=args.body, controller=args.controller)
+        genome = None
+    if args.seconds:
+        cfg = EpisodeConfig(**{**cfg.__dict__, "seconds": args.seconds})
+    ep = cfg.build()
+    if genome is None:
+        lay = ep.controller.layout
+        rng = np.random.default_rng(args.seed)
+        genome = np.clip(rng.normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
+    r = ep.run(genome)
+    out = {
+        "body": cfg.body,
+        "controller": cfg.controller,
+        "fitness": float(r.fitness[0]),
+        "fell": bool(r.fell[0]),
+        "unstable": bool(r.unstable[0]),
+        "end_time": float(r.end_time[0]),
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        state = f"fell at t = {out['end_time']:.2f} s" if out["fell"] else f"stayed up for {out['end_time']:.1f} s"
+        print(f"fitness (distance from start) = {out['fitness']:.3f} m; {state}")
+    return 0
+
+
+SUBCOMMANDS = [add_episode]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="evobiped", description="Evolve neural controllers for bipedal walkers in MuJoCo.")
+    parser.add_argument("--version", action="version", version=f"evobiped {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in SUBCOMMANDS:
+        add(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except UserError as exc:
+        print(f"evobiped: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("evobiped: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,60 @@
+"""What every controller provides: a genome layout and a vectorised step.
+
+A controller is structure only.  Its parameters (decoded from a ``(P, G)``
+genome array) and its state (``(P, ...)`` arrays) are separate, and ``step`` is a
+pure function ``(params, state, inputs) -> (state, outputs)`` over the whole
+population, so one implementation serves a replay (P = 1) and a batch (P = 50+).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from ..genome import GenomeLayout
+
+
+class Controller(ABC):
+    """Base class; subclasses are registered in :data:`evobiped.controllers.CONTROLLERS`."""
+
+    name: ClassVar[str]
+    #: "unit": outputs in [0, 1]; "signed": real-valued outputs centred on 0
+    output_kind: ClassVar[Literal["unit", "signed"]]
+
+    #: number of motor outputs (= the body's actuators)
+    n_outputs: int
+    #: names of the sensor arrays (body or task) concatenated into ``inputs``
+    input_names: tuple[str, ...] = ()
+    #: control period in s, or None to step at every physics step
+    dt: float | None
+
+    @property
+    @abstractmethod
+    def layout(self) -> GenomeLayout:
+        """The genome layout: blocks, bounds, init and mutation distributions."""
+
+    def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
+        """``(P, G)`` genomes -> parameter arrays with leading dimension P.
+
+        Validates the genomes first (GenomeError on a bad one).
+        """
+        g = self.layout.validate(genomes)
+        return {k: v.copy() for k, v in self.layout.split(g).items()}
+
+    @abstractmethod
+    def initial_state(self, params: dict[str, np.ndarray]) -> Any:
+        """The state at t = 0 for every individual."""
+
+    @abstractmethod
+    def step(self, params: dict[str, np.ndarray], state: Any, inputs: np.ndarray) -> tuple[Any, np.ndarray]:
+        """Advance one control period.  ``inputs`` ``(P, n_in)`` -> ``(state, outputs (P, n_outputs))``."""
+
+    @abstractmethod
+    def neuron_outputs(self, params: dict[str, np.ndarray], state: Any) -> np.ndarray:
+        """Every neuron's output ``(P, n_neurons)``, motor neurons first (for recording)."""
+
+    def describe(self) -> dict:
+        """Structure settings, saved with genomes so a replay can rebuild the controller."""
+        return {"name": self.name}

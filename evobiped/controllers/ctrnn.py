@@ -1,0 +1,95 @@
+"""Continuous-time recurrent neural network (Reil & Husbands 2002, eqs. 2-3).
+
+    tau_j dA_j/dt = -A_j + sum_i w_ij O_i (+ sum_k v_kj s_k)      (2)
+    O_j = 1 / (1 + exp(alpha_j - A_j))                             (3)
+
+Forward Euler at the control period dt = 0.02 s (stable for dt < 2 tau_min =
+1 s, no overshoot for dt < tau_min = 0.5 s).  All activations are 0 at t = 0.
+At each tick the motor outputs are O(t) = sigma(A(t) - alpha); A then advances
+to t + dt.  Neurons 1..n_outputs are the motor neurons, in the body's actuator
+order.
+
+Genome (Fig. 4): n*n weights, then n time constants, then n biases (120 values
+for n = 10), then, if the controller has external inputs, k*n input weights.
+Weight w_ij (from neuron i to neuron j) is gene i*n + j.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..genome import GeneBlock, GenomeLayout
+from .base import Controller
+
+#: Table III (init mean, init sigma, mutation sigma) and the ranges of Sect. II-C1
+WEIGHT = dict(low=-16.0, high=16.0, init_mean=0.0, init_sigma=8.0, mutation_sigma=8.0)
+TAU = dict(low=0.5, high=5.0, init_mean=2.75, init_sigma=1.5, mutation_sigma=1.5)
+BIAS = dict(low=-4.0, high=4.0, init_mean=0.0, init_sigma=3.0, mutation_sigma=3.0)
+
+
+def sigmoid(x: np.ndarray) -> np.ndarray:
+    return 1.0 / (1.0 + np.exp(-x))
+
+
+class CTRNN(Controller):
+    """Fully connected CTRNN of ``n_neurons``; the first ``n_outputs`` drive the body."""
+
+    name: ClassVar[str] = "ctrnn"
+    output_kind: ClassVar[str] = "unit"
+
+    def __init__(self, *, n_outputs: int, n_neurons: int = 10, inputs: dict[str, int] | None = None, dt: float = 0.02):
+        inputs = dict(inputs or {})
+        if n_neurons < 1 or n_neurons < n_outputs:
+            raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
+        if not dt > 0:
+            raise ConfigError(f"ctrnn: dt must be > 0, got {dt}")
+        self.n = int(n_neurons)
+        self.n_outputs = int(n_outputs)
+        self.input_names = tuple(inputs)
+        self.n_inputs = int(sum(inputs.values()))
+        self.dt = float(dt)
+        n, k = self.n, self.n_inputs
+        blocks = [
+            GeneBlock(name="weights", size=n * n, **WEIGHT),
+            GeneBlock(name="time_constants", size=n, **TAU),
+            GeneBlock(name="biases", size=n, **BIAS),
+        ]
+        if k:
+            blocks.append(GeneBlock(name="input_weights", size=k * n, **WEIGHT))
+        self._layout = GenomeLayout(tuple(blocks))
+
+    @property
+    def layout(self) -> GenomeLayout:
+        return self._layout
+
+    def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
+        p = super().decode(genomes)
+        P, n = p["biases"].shape[0], self.n
+        out = {"W": p["weights"].reshape(P, n, n), "tau": p["time_constants"], "alpha": p["biases"]}
+        out["V"] = p["input_weights"].reshape(P, self.n_inputs, n) if self.n_inputs else np.zeros((P, 0, n))
+        return out
+
+    def initial_state(self, params: dict[str, np.ndarray]) -> np.ndarray:
+        return np.zeros_like(params["alpha"])
+
+    def outputs_of(self, params: dict[str, np.ndarray], A: np.ndarray) -> np.ndarray:
+        """O = sigma(A - alpha), ``(P, n)``."""
+        return sigmoid(A - params["alpha"])
+
+    def step(self, params, state, inputs):
+        O = self.outputs_of(params, state)
+        # per-individual sums in a fixed order: row p never depends on P
+        net = (O[:, :, None] * params["W"]).sum(axis=1)
+        if self.n_inputs:
+            net = net + (inputs[:, :, None] * params["V"]).sum(axis=1)
+        A = state + (self.dt / params["tau"]) * (net - state)
+        return A, O[:, : self.n_outputs]
+
+    def neuron_outputs(self, params, state):
+        return self.outputs_of(params, state)
+
+    def describe(self) -> dict:
+        return {"name": self.name, "n_neurons": self.n, "dt": self.dt}

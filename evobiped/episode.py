@@ -1,0 +1,197 @@
+"""One episode = body + controller + task, run for a whole population at once.
+
+Control ticks at the controller's period (0.02 s for the CTRNN) over finer
+physics steps stepped in C (``mujoco.batch``); bodies with custom forces (the
+Taga ground) get them before every physics step.  A walker's episode ends at
+``seconds`` or when it falls; a simulation that blows up counts as a fall.
+Row p of every result depends only on genome p: the same genome gives the
+bit-identical fitness alone or inside any batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from .bodies import BODIES
+from .bodies.base import Body
+from .controllers import CONTROLLERS
+from .controllers.base import Controller
+from .errors import ConfigError, UserError
+from .mapping import to_action
+from .sim import Sims
+from .tasks import TASKS
+from .tasks.base import Task
+
+
+@dataclass(frozen=True, kw_only=True)
+class EpisodeConfig:
+    """What to simulate: registry names, their options, and the episode length (s)."""
+
+    body: str = "reil"
+    controller: str = "ctrnn"
+    task: str = "walk"
+    seconds: float = 50.0
+    body_options: dict = field(default_factory=dict)
+    controller_options: dict = field(default_factory=dict)
+    task_options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
+            if name not in reg:
+                raise ConfigError(f"unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
+        if not (isinstance(self.seconds, (int, float)) and self.seconds > 0):
+            raise ConfigError(f"episode seconds must be > 0, got {self.seconds!r}")
+        for opt in ("body_options", "controller_options", "task_options"):
+            if not isinstance(getattr(self, opt), dict):
+                raise ConfigError(f"{opt} must be a table of options")
+
+    def build(self) -> "Episode":
+        body = _construct(BODIES[self.body], "body", self.body_options)
+        task = _construct(TASKS[self.task], "task", self.task_options)
+        widths = {**_sensor_widths(body), **task.sensor_widths()}
+        opts = dict(self.controller_options)
+        wanted = opts.pop("inputs", None)
+        if wanted is None:
+            wanted = list(task.sensor_widths())
+        missing = [w for w in wanted if w not in widths]
+        if missing:
+            raise ConfigError(f"controller inputs {missing} are not sensors of body {self.body!r} / task {self.task!r} (have {sorted(widths)})")
+        inputs = {w: widths[w] for w in wanted}
+        controller = _construct(CONTROLLERS[self.controller], "controller", dict(opts, n_outputs=len(body.actuator_names), inputs=inputs))
+        return Episode(body, controller, task, seconds=float(self.seconds))
+
+
+def _construct(cls, kind: str, options: dict):
+    try:
+        return cls(**options)
+    except TypeError as exc:
+        raise ConfigError(f"bad {kind} option for {cls.name!r}: {exc}") from None
+
+
+def _sensor_widths(body: Body) -> dict[str, int]:
+    sims = Sims(body.build_model(), 1)
+    body.reset(sims)
+    return {k: v.shape[1] for k, v in body.sensors(sims).items()}
+
+
+@dataclass
+class EpisodeResult:
+    """Per-individual outcome, every array ``(P,)`` (positions ``(P, 2)``)."""
+
+    fitness: np.ndarray
+    fell: np.ndarray
+    unstable: np.ndarray
+    end_time: np.ndarray
+    start_position: np.ndarray
+    end_position: np.ndarray
+
+
+class Listener(Protocol):
+    """Watches an episode (recording, figures); never changes it."""
+
+    def start(self, episode: "Episode", sims: Sims) -> None: ...
+    def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: dict) -> None: ...
+    def end(self, result: EpisodeResult) -> None: ...
+
+
+class Episode:
+    """A body, a controller and a task with the model compiled once; run many times."""
+
+    def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float):
+        self.body, self.controller, self.task = body, controller, task
+        self.seconds = float(seconds)
+        self.model = body.build_model()
+        self.low, self.high = body.action_bounds()
+        dt = controller.dt if controller.dt is not None else body.timestep
+        ratio = dt / body.timestep
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
+        self.control_dt = dt
+        self.substeps = int(round(ratio))
+        self._sims: dict[int, Sims] = {}
+
+    @property
+    def n_ticks(self) -> int:
+        return int(round(self.seconds / self.control_dt))
+
+    def sims(self, n: int) -> Sims:
+        """A batch of ``n`` simulations, created once per size and reused."""
+        if n not in self._sims:
+            self._sims[n] = Sims(self.model, n)
+        return self._sims[n]
+
+    def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None) -> EpisodeResult:
+        """Simulate every genome ``(P, G)`` (or one ``(G,)``); returns fitness and outcome."""
+        params = self.controller.decode(genomes)
+        P = next(iter(params.values())).shape[0]
+        n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
+        body, ctrl, task = self.body, self.controller, self.task
+        sims = self.sims(P)
+        body.reset(sims)
+        state = ctrl.initial_state(params)
+        tstate = task.start(body, sims)
+        alive = np.ones(P, bool)
+        fell = np.zeros(P, bool)
+        unstable = np.zeros(P, bool)
+        end_time = np.full(P, n_ticks * self.control_dt)
+        start = body.planar_position(sims).copy()
+        if listener is not None:
+            listener.start(self, sims)
+        for k in range(n_ticks):
+            ids = np.flatnonzero(alive)
+            if ids.size == 0:
+                break
+            neurons = ctrl.neuron_outputs(params, state)
+            inputs = self._inputs(sims, tstate, P)
+            state, out = ctrl.step(params, state, inputs)
+            action = to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)
+            body.apply(sims, ids, action[ids])
+            bad = self._advance(sims, ids)
+            t = (k + 1) * self.control_dt
+            task.on_tick(body, sims, tstate, ids, ~bad, neurons)
+            if listener is not None:
+                listener.tick(t, sims, ids, neurons, action, tstate)
+            down = bad | body.fallen(sims, ids)
+            unstable[ids[bad]] = True
+            fell[ids[down]] = True
+            alive[ids[down]] = False
+            end_time[ids[down]] = t
+        result = EpisodeResult(
+            fitness=task.fitness(tstate),
+            fell=fell,
+            unstable=unstable,
+            end_time=end_time,
+            start_position=start,
+            end_position=tstate.get("position", body.planar_position(sims)).copy(),
+        )
+        if listener is not None:
+            listener.end(result)
+        return result
+
+    def _inputs(self, sims: Sims, tstate: dict[str, Any], P: int) -> np.ndarray:
+        names = self.controller.input_names
+        if not names:
+            return np.zeros((P, 0))
+        available = {**self.body.sensors(sims), **self.task.sensors(self.body, sims, tstate)}
+        return np.concatenate([available[n] for n in names], axis=1)
+
+    def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
+        """One control period of physics for ``ids``; bool mask of blow-ups."""
+        if not self.body.has_custom_forces:
+            return sims.step(ids, self.substeps)
+        bad = np.zeros(len(ids), bool)
+        for _ in range(self.substeps):
+            self.body.substep(sims, ids)
+            bad |= sims.step(ids, 1)
+        return bad
+
+
+def build_episode(**config: Any) -> Episode:
+    """Convenience: ``build_episode(body="reil", seconds=10)``."""
+    try:
+        return EpisodeConfig(**config).build()
+    except TypeError as exc:
+        raise UserError(f"bad episode setting: {exc}") from None

@@ -1,0 +1,60 @@
+"""Genome JSON files: a genome with everything needed to re-simulate it.
+
+Format (all keys written, ``genome`` and ``episode`` required on reading)::
+
+    {"format": "evobiped-genome/1", "genome": [...G floats...],
+     "episode": {EpisodeConfig fields}, "controller": {structure},
+     "fitness": 12.3, "fell": false, "seed": 1, "generation": 119, "version": "0.1.0"}
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import __version__
+from .episode import EpisodeConfig
+from .errors import ConfigError, UserError
+from .fileio import read_json, write_json
+
+FORMAT = "evobiped-genome/1"
+
+
+def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> None:
+    """Write one genome ``(G,)`` with its episode config and metadata, atomically."""
+    obj = {
+        "format": FORMAT,
+        "genome": [float(x) for x in np.asarray(genome, float).ravel()],
+        "episode": dataclasses.asdict(episode),
+        **{k: _plain(v) for k, v in meta.items()},
+        "version": __version__,
+    }
+    write_json(path, obj)
+
+
+def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
+    """Read a genome file -> ``(genome (G,), EpisodeConfig, metadata)``; UserError if malformed."""
+    obj = read_json(path, what="genome file")
+    if not isinstance(obj, dict) or "genome" not in obj or "episode" not in obj:
+        raise UserError(f"{path} is not an evobiped genome file (needs 'genome' and 'episode')")
+    if not isinstance(obj["genome"], list) or not all(isinstance(x, (int, float)) for x in obj["genome"]):
+        raise UserError(f"{path}: 'genome' must be a list of numbers")
+    if not isinstance(obj["episode"], dict):
+        raise UserError(f"{path}: 'episode' must be a table")
+    try:
+        cfg = EpisodeConfig(**obj["episode"])
+    except TypeError as exc:
+        raise ConfigError(f"{path}: bad episode config ({exc})") from None
+    meta = {k: v for k, v in obj.items() if k not in ("genome", "episode")}
+    return np.array(obj["genome"], float), cfg, meta
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return v

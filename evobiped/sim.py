@@ -1,0 +1,63 @@
+"""P simulations of one MuJoCo model, stepped in C between control ticks.
+
+A thin layer over :class:`mujoco.batch.Batch` (persistent, one ``MjData`` per
+simulation): live ``(P, ...)`` numpy views of the state and derived fields,
+stepping of a subset of simulations, and detection of numerical blow-ups so
+that an unstable simulation is reported (and scored as a fall), never raised.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from mujoco.batch import Batch, SimulationError
+
+_VEL = mujoco.mjtStage.mjSTAGE_VEL
+# warnings that mean the state blew up: BADQPOS, BADQVEL, BADQACC, BADCTRL
+_FIRST_BAD = int(mujoco.mjtWarning.mjWARN_BADQPOS)
+
+
+class Sims:
+    """``n`` simulations of ``model``; fields are ``(n, ...)`` arrays."""
+
+    def __init__(self, model: mujoco.MjModel, n: int, *, nthread: int = 1):
+        self.model = model
+        self.n = n
+        self.batch = Batch(model, nsim=n, nthread=nthread, persistent=True)
+        self._fields: dict[str, np.ndarray] = {}
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        # qpos, qvel, ctrl, xpos, xquat, subtree_com, sensordata, ...: live views
+        if name.startswith("_") or name not in mujoco.batch.DATA_FIELDS:
+            raise AttributeError(name)
+        arr = self._fields.get(name)
+        if arr is None:
+            arr = self._fields[name] = self.batch.bind(name)
+        return arr
+
+    def reset(self) -> None:
+        """All simulations to the model's initial state, derived fields current."""
+        self.batch.reset()
+        self.batch.forward(stage=_VEL)
+
+    def forward(self, ids: np.ndarray | None = None) -> None:
+        """Recompute derived fields after the caller wrote qpos/qvel."""
+        self.batch.forward(ids=ids, stage=_VEL)
+
+    def step(self, ids: np.ndarray, nstep: int) -> np.ndarray:
+        """Advance simulations ``ids`` by ``nstep`` physics steps.
+
+        Returns a bool mask over ``ids`` of simulations that became unstable
+        (MuJoCo error, warning such as bad QACC, or non-finite state).
+        Derived fields (xpos, subtree_com, sensordata) are current afterwards.
+        """
+        failed = np.zeros(len(ids), bool)
+        if len(ids) == 0:
+            return failed
+        try:
+            self.batch.step(ids=ids, nstep=nstep, stage=_VEL)
+        except SimulationError as exc:
+            failed |= np.isin(ids, exc.ids)
+        warn = self.batch.warning[ids, _FIRST_BAD:, 0].any(axis=1)
+        nonfinite = ~np.isfinite(self.qpos[ids]).all(axis=1) | ~np.isfinite(self.qvel[ids]).all(axis=1)
+        return failed | warn | nonfinite

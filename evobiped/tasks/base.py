@@ -1,0 +1,41 @@
+"""What a task adds to an episode: sensor inputs, bookkeeping per tick, fitness.
+
+Fitness is higher-is-better everywhere.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..bodies.base import Body
+from ..sim import Sims
+
+
+class Task:
+    """Base class: no sensors, no bookkeeping; subclasses define fitness."""
+
+    name = "task"
+
+    def sensor_widths(self) -> dict[str, int]:
+        """Widths of the sensor arrays this task provides, by name."""
+        return {}
+
+    def start(self, body: Body, sims: Sims) -> dict[str, Any]:
+        """Task state at t = 0 (after the body's reset)."""
+        return {}
+
+    def sensors(self, body: Body, sims: Sims, state: dict[str, Any]) -> dict[str, np.ndarray]:
+        """Named sensor arrays ``(P, k)`` for the controller."""
+        return {}
+
+    def on_tick(self, body: Body, sims: Sims, state: dict[str, Any], ids: np.ndarray, healthy: np.ndarray, neurons: np.ndarray) -> None:
+        """After a control tick; ``ids`` were stepped, ``healthy`` (over ids) are finite."""
+
+    def fitness(self, state: dict[str, Any]) -> np.ndarray:
+        """``(P,)`` fitness at the end of the episode."""
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        return {"name": self.name}
