@@ -1,0 +1,13 @@
+import numpy as np
+import pytest
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)
+
+
+def random_genomes(layout, n, seed=0):
+    """Genomes drawn from the layout's initialisation Gaussians, clipped to bounds."""
+    r = np.random.default_rng(seed)
+    return np.clip(r.normal(layout.init_mean, layout.init_sigma, (n, layout.size)), layout.low, layout.high)
