@@ -88,7 +88,118 @@ def run_episode_cmd(args) -> int:
     return 0
 
 
-SUBCOMMANDS = [add_episode]
+# ---------------------------------------------------------------- evolve
+def add_evolve(sub) -> None:
+    p = sub.add_parser("evolve", help="evolve controllers with the GA of Reil & Husbands (defaults: the paper's)")
+    p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
+    p.add_argument("--body", help="body (default reil)")
+    p.add_argument("--controller", help="controller (default ctrnn)")
+    p.add_argument("--task", help="task (default walk)")
+    p.add_argument("--population", type=positive_int, help="population size (default 50)")
+    p.add_argument("--generations", type=positive_int, help="generations (default 120)")
+    p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A)")
+    p.add_argument("--seed", type=int, help="run seed (default 0)")
+    p.add_argument("--backend", help="serial, process (default) or ray")
+    p.add_argument("--workers", type=positive_int, help="worker processes / Ray actors (default: all cores)")
+    p.add_argument("--address", help="Ray cluster address (with --backend ray; default: start a local Ray)")
+    p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="seed the population with clones of this genome")
+    p.add_argument("--out", metavar="DIR", help="run directory (default runs/<body>_<controller>_seed<seed>)")
+    p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last checkpoint")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_evolve_cmd)
+
+
+def evolve_config(args):
+    """RunConfig from --config and the flags (flags win)."""
+    from .evolution.run import RunConfig, load_toml
+
+    d = load_toml(args.config) if args.config else {}
+    ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
+    ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
+    for flag, key in (("body", "body"), ("controller", "controller"), ("task", "task"), ("episode_seconds", "seconds")):
+        if getattr(args, flag) is not None:
+            ep[key] = getattr(args, flag)
+    if args.cyclic:
+        ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
+    if args.population is not None:
+        ga["population"] = args.population
+    for flag in ("generations", "seed", "backend", "workers", "address", "initial"):
+        if getattr(args, flag) is not None:
+            d[flag] = getattr(args, flag)
+    return RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=args.config or "settings")
+
+
+def default_run_dir(config) -> str:
+    from pathlib import Path
+
+    base = Path("runs") / f"{config.episode.body}_{config.episode.controller}_seed{config.seed}"
+    path, i = base, 1
+    while path.exists():
+        i += 1
+        path = base.with_name(f"{base.name}_{i}")
+    return str(path)
+
+
+def run_evolve_cmd(args) -> int:
+    from .evolution.evaluate import make_evaluator
+    from .evolution.run import Run, eta_seconds
+
+    if args.resume:
+        if any(getattr(args, f) is not None for f in ("config", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic")):
+            raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
+        run = Run.resume(args.resume)
+        if run.done:
+            print(f"run {args.resume} is already complete ({run.ga.generation} generations)")
+            return 0
+        backend = args.backend or run.config.backend
+        workers = args.workers or run.config.workers
+        address = args.address or run.config.address
+    else:
+        config = evolve_config(args)
+        backend, workers, address = config.backend, config.workers, config.address
+        out = args.out or default_run_dir(config)
+        evaluator = make_evaluator(config.episode, backend, workers, address)  # fails before any file is written
+        try:
+            run = Run.create(out, config)
+        except BaseException:
+            evaluator.close()
+            raise
+    if args.resume:
+        evaluator = make_evaluator(run.config.episode, backend, workers, address)
+    say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
+    c = run.config
+    say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}', population {c.ga.population}, "
+        f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+
+    def progress(s):
+        eta = eta_seconds(s, run.history)
+        say(f"gen {s.generation + 1:4d}/{s.generations_total}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
+            f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
+            f"elapsed {_hms(run.wall)}  left ~{_hms(eta)}")
+
+    try:
+        with evaluator:
+            summary = run.evolve(evaluator, progress)
+    except KeyboardInterrupt:
+        print(f"evobiped: interrupted after generation {run.ga.generation}; checkpoint saved; "
+              f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
+        return 130
+    best = summary["best"]
+    state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
+    print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}); "
+          f"{summary['evaluations']} evaluations in {_hms(summary['wall_seconds'])}; results in {run.dir}")
+    return 0
+
+
+def _hms(seconds: float) -> str:
+    if not np.isfinite(seconds):
+        return "?"
+    s = int(round(seconds))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+
+
+SUBCOMMANDS = [add_episode, add_evolve]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -2,28 +2,94 @@
 
     W = sqrt((x_t - x_0)^2 + (y_t - y_0)^2)
 
-with t the time the evaluation ends (the 50 s limit, or the fall that ends it
-early).  The walker's position is the pelvis centre projected on the ground;
-for a simulation that blew up the last finite position counts.
+with t the time the evaluation ends (the time limit, or the fall that ends it
+early).  The walker's position is its planar position (the pelvis centre for
+the Reil body); for a simulation that blew up, the last finite position counts.
+
+Cyclic-activity criterion (Sect. III-A: "an additional fitness criterion that
+actively rewarded cyclic activity"; the paper gives no formula, this is ours).
+For each motor neuron j, over the ticks the walker was evaluated:
+
+    m_j = mean output;  a cycle = a passage from below m_j - h to above m_j + h
+    (h = ``cyclic_band``, 0.05 of the unit output range), counted n_j times;
+    c = mean_j min(n_j, N) / N      with N = ``cyclic_cycles`` (25: 0.5 Hz over 50 s)
+    fitness = W (1 + ``cyclic_weight`` c)
+
+so c in [0, 1] grows with sustained oscillation of every motor neuron and
+vanishes for a network that settles to a fixed point; it multiplies distance,
+so oscillating in place earns nothing.  ``cyclic_weight`` = 0 (default) is the
+paper's plain eq. 4; ``evobiped evolve --cyclic`` sets it to 1.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ConfigError
 from .base import Task
+
+
+def count_cycles(series: np.ndarray, lengths: np.ndarray, band: float) -> np.ndarray:
+    """Hysteresis cycles per row and channel.
+
+    ``series`` (T, P, n), ``lengths`` (P,) valid ticks per row -> counts (P, n).
+    """
+    T, P, n = series.shape
+    valid = np.arange(T)[:, None] < lengths[None, :]  # (T, P)
+    w = valid[:, :, None]
+    mean = (series * w).sum(0) / np.maximum(lengths, 1)[:, None]
+    low, high = mean - band, mean + band
+    below = np.zeros((P, n), bool)
+    count = np.zeros((P, n), int)
+    for t in range(T):
+        x, ok = series[t], w[t]
+        rise = below & (x > high) & ok
+        count += rise
+        below = np.where(ok & (x < low), True, np.where(rise, False, below))
+    return count
 
 
 class WalkTask(Task):
     name = "walk"
 
+    def __init__(self, *, cyclic_weight: float = 0.0, cyclic_cycles: int = 25, cyclic_band: float = 0.05):
+        if cyclic_weight < 0 or cyclic_cycles < 1 or cyclic_band <= 0:
+            raise ConfigError("walk task: cyclic_weight >= 0, cyclic_cycles >= 1 and cyclic_band > 0 required")
+        self.cyclic_weight = float(cyclic_weight)
+        self.cyclic_cycles = int(cyclic_cycles)
+        self.cyclic_band = float(cyclic_band)
+
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        return {"start": p0, "position": p0.copy()}
+        state = {"start": p0, "position": p0.copy(), "n_motor": len(body.actuator_names)}
+        if self.cyclic_weight:
+            state["motor"] = []
+            state["ticks"] = np.zeros(sims.n, int)
+        return state
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         state["position"][ok] = body.planar_position(sims)[ok]
+        if self.cyclic_weight:
+            state["motor"].append(neurons[:, : state["n_motor"]].copy())
+            state["ticks"][ok] += 1
+
+    def distance(self, state) -> np.ndarray:
+        """Eq. 4, ``(P,)`` m."""
+        return np.linalg.norm(state["position"] - state["start"], axis=1)
+
+    def cyclicity(self, state) -> np.ndarray:
+        """c in [0, 1] per individual ``(P,)`` (see the module docstring)."""
+        if not state.get("motor"):
+            return np.zeros(len(state["start"]))
+        n = count_cycles(np.stack(state["motor"]), state["ticks"], self.cyclic_band)
+        return (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1)
 
     def fitness(self, state):
-        return np.linalg.norm(state["position"] - state["start"], axis=1)
+        W = self.distance(state)
+        if not self.cyclic_weight:
+            return W
+        return W * (1.0 + self.cyclic_weight * self.cyclicity(state))
+
+    def describe(self):
+        return {"name": self.name, "cyclic_weight": self.cyclic_weight}

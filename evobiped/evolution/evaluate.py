@@ -1,0 +1,172 @@
+"""Evaluation backends behind one interface: serial, a process pool, Ray.
+
+Every backend builds the episode (and so the MuJoCo model) once per worker and
+keeps its workers across generations.  A genome's result depends on that genome
+alone (episodes are deterministic and batch-independent), so a run's history
+does not depend on the backend or on the number of workers.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import signal
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..episode import Episode, EpisodeConfig
+from ..errors import ConfigError, UserError
+
+BACKENDS = ("serial", "process", "ray")
+
+
+@dataclass
+class Evaluation:
+    """Results for N genomes, each ``(N,)``."""
+
+    fitness: np.ndarray
+    fell: np.ndarray
+    unstable: np.ndarray
+    end_time: np.ndarray
+
+    @staticmethod
+    def concat(parts: list["Evaluation"]) -> "Evaluation":
+        return Evaluation(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("fitness", "fell", "unstable", "end_time")))
+
+
+def _evaluate(episode: Episode, genomes: np.ndarray) -> Evaluation:
+    r = episode.run(genomes)
+    return Evaluation(r.fitness, r.fell, r.unstable, r.end_time)
+
+
+def chunks(n: int, size: int) -> list[slice]:
+    return [slice(i, min(i + size, n)) for i in range(0, n, size)]
+
+
+class Evaluator(ABC):
+    """Evaluates genomes ``(N, G)``; use as a context manager to release workers."""
+
+    def __init__(self, episode: EpisodeConfig):
+        self.config = episode
+
+    @abstractmethod
+    def evaluate(self, genomes: np.ndarray) -> Evaluation: ...
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class SerialEvaluator(Evaluator):
+    """All genomes in one batch in this process."""
+
+    def __init__(self, episode: EpisodeConfig):
+        super().__init__(episode)
+        self.episode = episode.build()
+
+    def evaluate(self, genomes):
+        return _evaluate(self.episode, genomes)
+
+
+# ---- process pool: one Episode per worker process, built by the initializer
+_worker_episode: Episode | None = None
+
+
+def _init_worker(config: EpisodeConfig) -> None:
+    global _worker_episode
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    _worker_episode = config.build()
+
+
+def _work(genomes: np.ndarray) -> Evaluation:
+    return _evaluate(_worker_episode, genomes)
+
+
+class ProcessPoolEvaluator(Evaluator):
+    """A persistent pool of ``workers`` processes; genomes go out in small batches.
+
+    Batches of ``chunk`` genomes balance the load (walkers that fall early cost
+    little, stable walkers the full episode).
+    """
+
+    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int = 5):
+        super().__init__(episode)
+        if workers < 1:
+            raise ConfigError(f"workers must be >= 1, got {workers}")
+        self.workers, self.chunk = int(workers), int(chunk)
+        ctx = mp.get_context("spawn")
+        self.pool = ctx.Pool(self.workers, initializer=_init_worker, initargs=(episode,))
+
+    def evaluate(self, genomes):
+        genomes = np.asarray(genomes, float)
+        parts = self.pool.map(_work, [genomes[s] for s in chunks(len(genomes), self.chunk)])
+        return Evaluation.concat(parts)
+
+    def close(self):
+        self.pool.terminate()
+        self.pool.join()
+
+
+class RayEvaluator(Evaluator):
+    """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
+
+    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int = 5):
+        super().__init__(episode)
+        try:
+            import ray
+        except ImportError:
+            raise UserError("the ray backend needs Ray: pip install 'evobiped[ray]'") from None
+        self.ray = ray
+        self.chunk = int(chunk)
+        self._owns = not ray.is_initialized()
+        if self._owns:
+            try:
+                kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
+                ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
+            except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...
+                where = f" at {address}" if address else ""
+                raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+        n = workers or int(ray.cluster_resources().get("CPU", 1))
+
+        @ray.remote(num_cpus=1)
+        class _Worker:
+            def __init__(self, config):
+                self.episode = config.build()
+
+            def evaluate(self, genomes):
+                return _evaluate(self.episode, genomes)
+
+        self.actors = [_Worker.remote(episode) for _ in range(max(1, n))]
+
+    def evaluate(self, genomes):
+        genomes = np.asarray(genomes, float)
+        pieces = [genomes[s] for s in chunks(len(genomes), self.chunk)]
+        pool = self.ray.util.ActorPool(self.actors)
+        return Evaluation.concat(list(pool.map(lambda a, g: a.evaluate.remote(g), pieces)))
+
+    def close(self):
+        for a in self.actors:
+            self.ray.kill(a)
+        self.actors = []
+        if self._owns:
+            self.ray.shutdown()
+
+
+def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: int | None = None, address: str | None = None) -> Evaluator:
+    """The evaluator for a backend name; ``workers`` defaults to all cores."""
+    if backend not in BACKENDS:
+        raise ConfigError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
+    if workers is not None and workers < 1:
+        raise ConfigError(f"workers must be >= 1, got {workers}")
+    if backend == "serial":
+        return SerialEvaluator(episode)
+    if backend == "ray":
+        return RayEvaluator(episode, workers, address)
+    return ProcessPoolEvaluator(episode, workers or os.cpu_count() or 1)

@@ -1,0 +1,150 @@
+"""The genetic algorithm of Reil & Husbands 2002 (Sect. II-C, Table III), ask/tell.
+
+* real-valued genes, initialised from per-type Gaussians (Table III) and
+  clipped to their ranges;
+* Gaussian mutation with per-type sigma and mean 0, at a per-locus rate that
+  gives on average ``mutations_per_genome`` (1) changes per chromosome; values
+  outside the range are clipped;
+* rank-based truncation with fittest fraction 0.5: the top half survives
+  unchanged, the bottom half is replaced by mutated copies of the top half;
+* no crossover.
+
+The GA knows nothing of neurons: it sees a :class:`GenomeLayout`'s bounds and
+sigmas only.  Randomness for generation g comes from (seed, g) alone, so a run
+resumed from a checkpoint continues exactly as an uninterrupted one.
+Fitness: higher is better.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..genome import GenomeLayout
+
+
+@dataclass(frozen=True, kw_only=True)
+class GAConfig:
+    """GA settings, the paper's values by default."""
+
+    population: int = 50
+    fittest_fraction: float = 0.5
+    mutations_per_genome: float = 1.0
+    #: re-evaluate survivors every generation (useless with deterministic tasks)
+    reevaluate_survivors: bool = False
+
+    def __post_init__(self):
+        if not (isinstance(self.population, int) and self.population >= 2):
+            raise ConfigError(f"ga population must be an integer >= 2, got {self.population!r}")
+        if not (0 < self.fittest_fraction < 1):
+            raise ConfigError(f"ga fittest_fraction must be in (0, 1), got {self.fittest_fraction!r}")
+        if not (self.mutations_per_genome > 0):
+            raise ConfigError(f"ga mutations_per_genome must be > 0, got {self.mutations_per_genome!r}")
+        if self.n_survivors < 1:
+            raise ConfigError("ga population * fittest_fraction must keep at least one individual")
+
+    @property
+    def n_survivors(self) -> int:
+        return int(round(self.population * self.fittest_fraction))
+
+
+def generation_rng(seed: int, generation: int) -> np.random.Generator:
+    """The random stream of one generation, from (run seed, generation) only."""
+    return np.random.default_rng([int(seed), int(generation), 0x6A])
+
+
+class GA:
+    """Ask/tell truncation GA.
+
+    ``ask()`` returns the current population ``(P, G)`` and a bool mask of the
+    individuals whose fitness is unknown; ``tell(fitness)`` takes the fitness of
+    those ``(n_unknown,)`` and builds the next generation.
+    """
+
+    def __init__(
+        self,
+        layout: GenomeLayout,
+        config: GAConfig,
+        *,
+        seed: int,
+        initial: np.ndarray | None = None,
+        mutable: np.ndarray | None = None,
+    ):
+        self.layout, self.config, self.seed = layout, config, int(seed)
+        self.low, self.high = layout.low, layout.high
+        self.sigma = layout.mutation_sigma
+        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
+        if self.mutable.shape != (layout.size,) or not self.mutable.any():
+            raise ConfigError("the mutable-gene mask must have one entry per gene and at least one True")
+        self.generation = 0
+        P = config.population
+        rng = generation_rng(self.seed, 0)
+        if initial is None:
+            pop = rng.normal(layout.init_mean, layout.init_sigma, (P, layout.size))
+        else:  # clones of one genome (G,), or a population (n, G) repeated to size P
+            initial = layout.validate(initial, what="initial genome")
+            pop = initial[np.arange(P) % len(initial)].copy()
+        self.population = np.clip(pop, self.low, self.high)
+        self.fitness = np.full(P, np.nan)
+
+    @property
+    def mutation_rate(self) -> float:
+        """Per-locus probability: on average ``mutations_per_genome`` mutable genes change."""
+        return min(1.0, self.config.mutations_per_genome / int(self.mutable.sum()))
+
+    def ask(self) -> tuple[np.ndarray, np.ndarray]:
+        unknown = np.isnan(self.fitness)
+        return self.population, unknown
+
+    def tell(self, fitness: np.ndarray) -> None:
+        unknown = np.isnan(self.fitness)
+        fitness = np.asarray(fitness, float)
+        if fitness.shape != (int(unknown.sum()),):
+            raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
+        # an undefined fitness (should not happen: unstable runs score as falls) ranks last
+        self.fitness[unknown] = np.where(np.isfinite(fitness), fitness, -np.inf)
+
+    def ranking(self) -> np.ndarray:
+        """Indices best first; ties keep population order (stable)."""
+        return np.argsort(-self.fitness, kind="stable")
+
+    def next_generation(self) -> None:
+        """Truncation selection + mutation; call after the population is fully told."""
+        if np.isnan(self.fitness).any():
+            raise RuntimeError("next_generation before every individual was evaluated")
+        P, k = self.config.population, self.config.n_survivors
+        order = self.ranking()
+        parents = order[:k]
+        children_of = parents[np.arange(P - k) % k]
+        self.generation += 1
+        rng = generation_rng(self.seed, self.generation)
+        children = self.mutate(self.population[children_of], rng)
+        self.population = np.concatenate([self.population[parents], children])
+        fit = np.full(P, np.nan)
+        if not self.config.reevaluate_survivors:
+            fit[:k] = self.fitness[parents]
+        self.fitness = fit
+
+    def mutate(self, genomes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Gaussian mutation per locus with probability :attr:`mutation_rate`, clipped."""
+        hit = (rng.random(genomes.shape) < self.mutation_rate) & self.mutable
+        noise = rng.normal(0.0, 1.0, genomes.shape) * self.sigma
+        return np.clip(np.where(hit, genomes + noise, genomes), self.low, self.high)
+
+    # ---- checkpointing
+    def state_dict(self) -> dict:
+        return {
+            "generation": self.generation,
+            "population": self.population.tolist(),
+            "fitness": [None if np.isnan(f) else float(f) for f in self.fitness],
+        }
+
+    def load_state_dict(self, state: dict) -> None:
+        pop = np.array(state["population"], float)
+        if pop.shape != self.population.shape:
+            raise ConfigError(f"checkpoint population has shape {pop.shape}, the config needs {self.population.shape}")
+        self.population = pop
+        self.fitness = np.array([np.nan if f is None else f for f in state["fitness"]], float)
+        self.generation = int(state["generation"])
