@@ -275,3 +275,12 @@ def test_figures_are_written(tmp_path):
         img = mpimg.imread(p)
         assert img.ndim == 3 and img.shape[0] > 200 and img.shape[1] > 300
         assert img[..., :3].std() > 0.05  # not a blank canvas
+
+
+def test_importing_the_package_does_not_import_rerun_or_matplotlib():
+    import subprocess
+    import sys
+
+    code = "import sys, evobiped.cli, evobiped.record.replay, evobiped.record.figures, evobiped.record.rerun_recorder, evobiped.record.evolution_log; print(sorted({m.split('.')[0] for m in sys.modules} & {'rerun', 'matplotlib'}))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -94,6 +94,20 @@ def _color(name: str) -> str:
     return "tab:blue" if "left" in n else "tab:red" if "right" in n else "0.25"
 
 
+def _side_points(traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Side-view coordinates ``(R, n)`` (along ``axis``, height) of every shape's extreme points."""
+    pts = []
+    for s in parts:
+        if s.body == 0:
+            continue
+        seg = segment(s, traj.body_pos[rows, s.body], traj.body_quat[rows, s.body])  # (R, 2, 3)
+        r = s.size[0] if s.kind in ("sphere", "capsule", "cylinder") else 0.0
+        for dz in (-r, r):
+            pts.append(seg + np.array([0.0, 0.0, dz]))
+    allp = np.concatenate(pts, axis=1)  # (R, n, 3)
+    return allp[..., :2] @ axis, allp[..., 2]
+
+
 def _draw_walker(ax, traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray, offset: float = 0.0, alpha: float = 1.0) -> None:
     """Side view of the walker at state rows ``rows``: horizontal = along ``axis``, vertical = z."""
     import matplotlib.patches as mpatches
@@ -120,10 +134,10 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
     idx = np.unique(np.linspace(0, len(traj.state_time) - 1, frames).round().astype(int))
     axis, parts = _side_axis(traj), shapes(traj.model)
     fig, axes = plt.subplots(rows_n, columns, figsize=(2.2 * columns, 2.6 * rows_n), squeeze=False)
-    height = max(traj.body_pos[:, 1:, 2].max() + 0.15, 0.5)
     centres = traj.com[idx, :2] @ axis
-    reach = np.abs(traj.body_pos[idx, 1:, :2] @ axis - centres[:, None]).max() + 0.2
-    half = max(0.75, float(reach))
+    h, z = _side_points(traj, parts, idx, axis)
+    height = max(float(z.max()) + 0.1, 0.5)
+    half = max(0.75, float(np.abs(h - centres[:, None]).max()) + 0.1)
     for ax in axes.ravel():
         ax.axis("off")
     for ax, k, centre in zip(axes.ravel(), idx, centres):
