@@ -146,3 +146,28 @@ def test_bad_sources_give_one_line_exit_2_and_write_nothing(tmp_path, run_dir, c
         assert cap.out == ""
     after = {p: sorted(x.name for x in p.iterdir()) for p in (tmp_path, run_dir)}
     assert after == before
+
+
+def test_connect_to_an_absent_viewer_is_one_line_exit_2(tmp_path, run_dir, capsys):
+    import socket
+
+    with socket.socket() as s:  # a free port that nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    assert main(["replay", str(run_dir / "best.json"), "--connect", f"127.0.0.1:{port}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"no Rerun viewer at 127.0.0.1:{port}" in err[0]
+
+
+def test_spawn_streams_to_a_new_viewer_and_writes_no_file(tmp_path, monkeypatch, capsys):
+    import rerun as rr
+
+    calls = []
+    monkeypatch.setattr(rr.RecordingStream, "spawn", lambda self, **kw: calls.append(kw) or self.memory_recording())
+    cfg = EpisodeConfig(seconds=0.5)
+    g = random_genomes(cfg.build().controller.layout, 1, seed=3)[0]
+    save_genome(tmp_path / "w.json", g, cfg, fitness=cfg.build().run(g).fitness[0])
+    assert main(["replay", str(tmp_path / "w.json"), "--spawn"]) == 0
+    assert len(calls) == 1
+    assert "recording streamed to the viewer" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]

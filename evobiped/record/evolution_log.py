@@ -2,7 +2,7 @@
 
 The GA loop calls :meth:`EvolutionLog.log_generation` once per generation::
 
-    log = EvolutionLog(path=run_dir / "evolution.rrd")        # and/or spawn=True / connect=URL
+    log = EvolutionLog(path=run_dir / "evolution.rrd")   # and/or spawn=True / connect="HOST:PORT"
     log.log_generation(gen, best=..., mean=..., worst=..., median=..., evaluations=..., falls=...)
     log.close()
 
@@ -19,15 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .viewer import connect_url, flush, require_viewer
+
 TIMELINE = "generation"
 _STYLE = {"best": ((0, 0, 0), 2.5), "mean": ((150, 150, 150), 2.0), "median": ((90, 140, 200), 1.0), "worst": ((220, 120, 120), 1.0)}
-
-
-def connect_url(addr: str | None) -> str | None:
-    """``host:port`` or a full ``rerun+http://.../proxy`` URL -> a URL for ``connect_grpc`` (None: the default)."""
-    if not addr:
-        return None
-    return addr if "://" in addr else f"rerun+http://{addr}/proxy"
 
 
 def declare_series(rec) -> None:
@@ -70,10 +65,14 @@ class EvolutionLog:
         sinks = []
         if path is not None:
             sinks.append(rr.FileSink(str(path)))
-        if connect is not None or spawn:
-            if spawn:
-                self.rec.spawn(connect=False)
-            sinks.append(rr.GrpcSink(connect_url(connect)) if connect_url(connect) else rr.GrpcSink())
+        self.streaming = spawn or connect is not None
+        if spawn:
+            self.rec.spawn(connect=False)
+            sinks.append(rr.GrpcSink())
+        elif connect is not None:
+            url = connect_url(connect)
+            require_viewer(url)
+            sinks.append(rr.GrpcSink(url))
         if not sinks:
             raise ValueError("EvolutionLog needs a path, spawn=True or a connect address")
         self.rec.set_sinks(*sinks, default_blueprint=bp)
@@ -92,10 +91,13 @@ class EvolutionLog:
             if v is not None:
                 self.rec.log(f"evolution/counts/{name}", rr.Scalars(float(v)))
 
+    def log_history(self, history: dict[str, np.ndarray]) -> None:
+        """Every generation so far at once, e.g. from ``history.csv`` when a run resumes."""
+        log_history(self.rec, history)
+
     def close(self) -> None:
         """Flush everything and finish the file."""
-        self.rec.flush()
-        self.rec.disconnect()
+        flush(self.rec, streaming=self.streaming)
 
     def __enter__(self) -> "EvolutionLog":
         return self

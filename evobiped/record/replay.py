@@ -58,9 +58,10 @@ def replay(
     """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``)."""
     import rerun as rr
 
-    from .evolution_log import connect_url, log_history
+    from .evolution_log import log_history
     from .figures import replay_figures
     from .rerun_recorder import RerunRecorder, blueprint
+    from .viewer import connect_url, flush, require_viewer
 
     cfg = source.config
     if seconds is not None:
@@ -70,6 +71,8 @@ def replay(
 
     streaming = spawn or connect is not None
     target = None if streaming and out is None else Path(out) if out is not None else default_out(source)
+    if connect is not None and target is None:
+        require_viewer(connect_url(connect))
     rec = rr.RecordingStream("evobiped_replay", recording_id=uuid.uuid4().hex)
     tmp = None
     if target is not None:
@@ -88,8 +91,7 @@ def replay(
         if history is not None:
             log_history(rec, history)
         rec.send_blueprint(blueprint(traj, with_evolution=history is not None))
-        rec.flush()
-        rec.disconnect()
+        flush(rec, streaming=target is None)
         if tmp is not None:
             os.replace(tmp, target)
     finally:
