@@ -284,3 +284,25 @@ def test_importing_the_package_does_not_import_rerun_or_matplotlib():
     code = "import sys, evobiped.cli, evobiped.record.replay, evobiped.record.figures, evobiped.record.rerun_recorder, evobiped.record.evolution_log; print(sorted({m.split('.')[0] for m in sys.modules} & {'rerun', 'matplotlib'}))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_sound_sources_from_the_task_state_are_recorded(tmp_path):
+    """Steering tasks put ``sources`` (all) and ``source`` (current, per individual) in their state."""
+    from evobiped.record.figures import ground_trajectory
+
+    ep = EpisodeConfig(seconds=0.5).build()
+    start = ep.task.start
+    sources = np.array([[-3.0, -10.0], [3.0, -10.0]])
+
+    def with_sources(body, sims):
+        return {**start(body, sims), "sources": sources, "source": np.tile(sources[0], (sims.n, 1))}
+
+    ep.task.start = with_sources
+    result, traj = write_recording(ep, random_genome(ep.controller.layout, 4), tmp_path / "s.rrd")
+    np.testing.assert_array_equal(traj.sources, sources)
+    assert traj.source.shape == (traj.n_ticks, 2) and (traj.source == sources[0]).all()
+    rrd = read_rrd(tmp_path / "s.rrd")
+    pts = rrd["/world/sources"]["static"][0].column("Points3D:positions").to_pylist()[0]
+    np.testing.assert_array_equal(pts, [[-3, -10, 0], [3, -10, 0]])
+    assert len(column(rrd["/world/source"], "Points3D:positions")[0]) == traj.n_ticks
+    assert ground_trajectory(traj, tmp_path / "g.png").stat().st_size > 10_000
