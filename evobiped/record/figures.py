@@ -151,11 +151,12 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
     return _save(fig, path)
 
 
-def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1) -> Path:
-    """Stick figures every ``every`` s, drawn where they were along the ground (Taga Figs. 5, 9)."""
+def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, max_figures: int = 60) -> Path:
+    """Stick figures every ``every`` s (at most ``max_figures``), drawn where they were along the ground (Taga Figs. 5, 9)."""
     plt = _plt()
     axis, parts = _side_axis(traj), shapes(traj.model)
-    step = max(1, int(round(every / traj.dt)))
+    step = max(1, int(round(every / traj.dt)), int(np.ceil(len(traj.state_time) / max_figures)))
+    every = step * traj.dt
     rows = np.arange(0, len(traj.state_time), step)
     h = traj.com[:, :2] @ axis
     fig, ax = plt.subplots(figsize=(max(6.0, 2.0 + 2.0 * float(np.ptp(h))), 3.2))
