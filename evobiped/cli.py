@@ -199,7 +199,48 @@ def _hms(seconds: float) -> str:
     return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
 
-SUBCOMMANDS = [add_episode, add_evolve]
+# ---------------------------------------------------------------- replay
+def add_replay(sub) -> None:
+    p = sub.add_parser("replay", help="re-simulate a stored genome into a Rerun recording (and figures)")
+    p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
+    p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
+    p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd or next to the genome file)")
+    where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
+    where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
+    p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    p.set_defaults(func=run_replay_cmd)
+
+
+def run_replay_cmd(args) -> int:
+    from pathlib import Path
+
+    from .record.replay import default_out, replay
+    from .record.source import resolve
+
+    source = resolve(args.source, args.generation)
+    figures = args.figures
+    if figures == "":
+        base = Path(args.out).parent if args.out else default_out(source).parent
+        figures = base / f"figures_{source.label}"
+    r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures)
+    state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
+    print(f"replayed fitness = {r.fitness!r} m; {state}")
+    if not r.compared:
+        print("stored fitness not compared: --seconds changed the episode length")
+    elif r.stored_fitness is None:
+        print("stored fitness: none in the genome file")
+    else:
+        verdict = "equals it bit for bit" if r.matches else f"DIFFERS by {r.fitness - r.stored_fitness:.3g}"
+        print(f"stored fitness   = {r.stored_fitness!r} m: the replay {verdict}")
+    print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
+    for f in r.figures:
+        print(f"figure: {f}")
+    return 0 if (r.matches or not r.compared or r.stored_fitness is None) else 1
+
+
+SUBCOMMANDS = [add_episode, add_evolve, add_replay]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,117 @@
+"""Replay a stored genome: re-simulate it deterministically, record it, compare fitness.
+
+The replay is the same episode the GA ran (``EpisodeConfig(**stored).build()``
+with the genome alone; batch size does not change results) with a
+:class:`~.rerun_recorder.RerunRecorder` attached, so the replayed fitness
+equals the stored one to the last bit.  The ``.rrd`` is written to a
+temporary file and renamed into place at the end: a failed replay leaves
+nothing half-written.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+from .source import Source, read_history
+from .trajectory import Trajectory
+
+
+@dataclass
+class ReplayReport:
+    """What a replay did."""
+
+    fitness: float
+    stored_fitness: float | None  # None if the source has none
+    compared: bool  # False when --seconds changed the episode length
+    fell: bool
+    end_time: float
+    recording: Path | None
+    figures: list[Path]
+    trajectory: Trajectory
+
+    @property
+    def matches(self) -> bool:
+        """Replayed fitness equals the stored one bit for bit."""
+        return self.compared and self.stored_fitness is not None and self.fitness == self.stored_fitness
+
+
+def default_out(source: Source) -> Path:
+    """``RUN/replay_best.rrd``, ``RUN/replay_gen_0007.rrd``, or ``<genome>.rrd`` next to a genome file."""
+    if source.run_dir is not None:
+        return source.run_dir / f"replay_{source.label}.rrd"
+    return source.genome_path.with_suffix(".rrd")
+
+
+def replay(
+    source: Source,
+    *,
+    seconds: float | None = None,
+    out: str | Path | None = None,
+    spawn: bool = False,
+    connect: str | None = None,
+    figures_dir: str | Path | None = None,
+) -> ReplayReport:
+    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``)."""
+    import rerun as rr
+
+    from .evolution_log import log_history
+    from .figures import replay_figures
+    from .rerun_recorder import RerunRecorder, blueprint
+    from .viewer import connect_url, flush, require_viewer
+
+    cfg = source.config
+    if seconds is not None:
+        cfg = dataclasses.replace(cfg, seconds=float(seconds))
+    episode = cfg.build()
+    history = _history(source)
+
+    streaming = spawn or connect is not None
+    target = None if streaming and out is None else Path(out) if out is not None else default_out(source)
+    if connect is not None and target is None:
+        require_viewer(connect_url(connect))
+    rec = rr.RecordingStream("evobiped_replay", recording_id=uuid.uuid4().hex)
+    tmp = None
+    if target is not None:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+        rec.save(tmp)
+    elif spawn:
+        rec.spawn()
+    else:
+        rec.connect_grpc(connect_url(connect))
+    try:
+        rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
+        listener = RerunRecorder(rec)
+        result = episode.run(source.genome[None, :], listener=listener)
+        traj = listener.trajectory
+        if history is not None:
+            log_history(rec, history)
+        rec.send_blueprint(blueprint(traj, with_evolution=history is not None))
+        flush(rec, streaming=target is None)
+        if tmp is not None:
+            os.replace(tmp, target)
+    finally:
+        if tmp is not None and tmp.exists():
+            tmp.unlink()
+    figs = replay_figures(traj, figures_dir, history=history) if figures_dir is not None else []
+    stored = source.meta.get("fitness")
+    return ReplayReport(
+        fitness=float(result.fitness[0]),
+        stored_fitness=float(stored) if isinstance(stored, (int, float)) else None,
+        compared=cfg.seconds == source.config.seconds,
+        fell=bool(result.fell[0]),
+        end_time=float(result.end_time[0]),
+        recording=target,
+        figures=figs,
+        trajectory=traj,
+    )
+
+
+def _history(source: Source):
+    if source.run_dir is None or not (source.run_dir / "history.csv").is_file():
+        return None
+    return read_history(source.run_dir / "history.csv")

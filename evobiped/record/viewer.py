@@ -1,0 +1,47 @@
+"""Streaming to a running Rerun viewer: addresses, a reachability check, a bounded flush.
+
+Rerun's gRPC sink retries silently and its flush waits forever when no
+viewer listens, so we check the address first and flush with a time limit;
+both failures are a :class:`~evobiped.errors.UserError` (one line, exit 2).
+"""
+
+from __future__ import annotations
+
+import socket
+from urllib.parse import urlparse
+
+from ..errors import UserError
+
+DEFAULT_ADDR = "127.0.0.1:9876"
+#: seconds to wait for a viewer to take the data
+FLUSH_TIMEOUT = 30.0
+
+
+def connect_url(addr: str | None) -> str:
+    """``host:port`` (default 127.0.0.1:9876) or a full ``rerun+http://host:port/proxy`` URL -> the URL."""
+    addr = addr or DEFAULT_ADDR
+    return addr if "://" in addr else f"rerun+http://{addr}/proxy"
+
+
+def require_viewer(url: str, *, timeout: float = 2.0) -> None:
+    """UserError unless something accepts TCP connections at the URL's host and port."""
+    u = urlparse(url)
+    try:
+        host, port = u.hostname, u.port or 9876
+    except ValueError:
+        raise UserError(f"bad viewer address {url!r} (expected HOST:PORT)") from None
+    if not host:
+        raise UserError(f"bad viewer address {url!r} (expected HOST:PORT)")
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as exc:
+        raise UserError(f"no Rerun viewer at {host}:{port} ({exc.strerror or exc}); start one with `rerun` or use --spawn") from None
+
+
+def flush(rec, *, streaming: bool) -> None:
+    """Flush ``rec`` (bounded when streaming to a viewer) and close its sinks."""
+    try:
+        rec.flush(timeout_sec=FLUSH_TIMEOUT) if streaming else rec.flush()
+    except RuntimeError as exc:
+        raise UserError(f"could not send the recording to the viewer: {str(exc).splitlines()[0]}") from None
+    rec.disconnect()

@@ -1,0 +1,173 @@
+"""``evobiped replay``: run directories and genome files, bit-exact fitness, bad sources.
+
+The run directory is built the way ``evobiped evolve`` writes it (issue 3's
+contract): ``config.json``, ``history.csv``, ``generations/gen_NNNN.json`` and
+``best.json``, each genome saved with the fitness its episode scored.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from evobiped.cli import main
+from evobiped.episode import EpisodeConfig
+from evobiped.genome_file import save_genome
+
+pytest.importorskip("rerun")
+
+SECONDS = 2.0
+
+
+def random_genomes(layout, n, seed):
+    r = np.random.default_rng(seed)
+    return np.clip(r.normal(layout.init_mean, layout.init_sigma, (n, layout.size)), layout.low, layout.high)
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    """Three 'generations' of 8 random genomes each, evaluated as a batch like the GA does."""
+    cfg = EpisodeConfig(seconds=SECONDS)
+    ep = cfg.build()
+    run = tmp_path_factory.mktemp("runs") / "run"
+    (run / "generations").mkdir(parents=True)
+    (run / "config.json").write_text(json.dumps({"episode": cfg.__dict__, "ga": {"population": 8}, "seed": 7}))
+    rows, best_overall = [], None
+    for gen in range(3):
+        pop = random_genomes(ep.controller.layout, 8, seed=100 + gen)
+        r = ep.run(pop)  # the whole population at once: batch size must not matter for the replay
+        i = int(np.argmax(r.fitness))
+        meta = dict(generation=gen, fitness=r.fitness[i], fell=r.fell[i], seed=7)
+        save_genome(run / "generations" / f"gen_{gen:04d}.json", pop[i], cfg, **meta)
+        if best_overall is None or r.fitness[i] > best_overall[1]["fitness"]:
+            best_overall = (pop[i], meta)
+        f = np.sort(r.fitness)
+        rows.append(f"{gen},{float(f[-1])!r},{float(f.mean())!r},{float(np.median(f))!r},{float(f[0])!r},8,{int(r.fell.sum())},0,0.1")
+    save_genome(run / "best.json", best_overall[0], cfg, **best_overall[1])
+    (run / "history.csv").write_text("generation,best,mean,median,worst,evaluations,falls,unstable,wall_seconds\n" + "\n".join(rows) + "\n")
+    return run
+
+
+def stored(path):
+    return json.loads(path.read_text())["fitness"]
+
+
+def replayed(out: str) -> float:
+    line = next(l for l in out.splitlines() if l.startswith("replayed fitness = "))
+    return float(line.split("= ")[1].split(" ")[0])
+
+
+def test_replay_of_a_run_directory_reproduces_the_stored_fitness_bit_for_bit(run_dir, capsys):
+    assert main(["replay", str(run_dir)]) == 0
+    out = capsys.readouterr().out
+    assert replayed(out) == stored(run_dir / "best.json")
+    assert "equals it bit for bit" in out
+    assert (run_dir / "replay_best.rrd").stat().st_size > 10_000
+    assert not list(run_dir.glob(".*tmp"))
+
+
+def test_replay_of_each_generation(run_dir, capsys):
+    for gen in range(3):
+        assert main(["replay", str(run_dir), "--generation", str(gen)]) == 0
+        out = capsys.readouterr().out
+        assert replayed(out) == stored(run_dir / "generations" / f"gen_{gen:04d}.json")
+        assert (run_dir / f"replay_gen_{gen:04d}.rrd").is_file()
+
+
+def test_run_directory_recording_holds_the_evolution_and_figures(run_dir, tmp_path, capsys):
+    import rerun as rr
+
+    out = tmp_path / "r.rrd"
+    assert main(["replay", str(run_dir), "--out", str(out), "--figures", str(tmp_path / "figs")]) == 0
+    best = {}
+    for c in rr.chunk.RrdReader(out).stream():
+        if c.entity_path == "/evolution/best" and not c.is_static:
+            rb = c.to_record_batch()
+            best.update(zip(rb.column("generation").to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
+    history = np.loadtxt(run_dir / "history.csv", delimiter=",", skiprows=1)
+    assert best == {int(g): b for g, b in history[:, :2]}
+    names = sorted(p.name for p in (tmp_path / "figs").iterdir())
+    assert names == ["fitness.png", "ground_trajectory.png", "motion_sequence.png", "motor_neurons.png", "stick_figure.png"]
+
+
+def test_replay_of_a_genome_file_writes_next_to_it(tmp_path, capsys):
+    cfg = EpisodeConfig(seconds=1.0)
+    ep = cfg.build()
+    g = random_genomes(ep.controller.layout, 1, seed=3)[0]
+    r = ep.run(g)
+    save_genome(tmp_path / "walker.json", g, cfg, fitness=r.fitness[0])
+    assert main(["replay", str(tmp_path / "walker.json")]) == 0
+    out = capsys.readouterr().out
+    assert replayed(out) == r.fitness[0]
+    assert (tmp_path / "walker.rrd").is_file()
+    # a shorter replay is not compared with the stored fitness
+    assert main(["replay", str(tmp_path / "walker.json"), "--seconds", "0.1", "--out", str(tmp_path / "short.rrd")]) == 0
+    assert "not compared" in capsys.readouterr().out
+
+
+def test_a_different_stored_fitness_is_reported_and_fails(tmp_path, capsys):
+    cfg = EpisodeConfig(seconds=1.0)
+    ep = cfg.build()
+    g = random_genomes(ep.controller.layout, 1, seed=3)[0]
+    save_genome(tmp_path / "w.json", g, cfg, fitness=float(ep.run(g).fitness[0]) + 1e-12)
+    assert main(["replay", str(tmp_path / "w.json")]) == 1
+    assert "DIFFERS" in capsys.readouterr().out
+
+
+def _bad_sources(tmp_path, run_dir):
+    ep = EpisodeConfig(seconds=1.0).build()
+    short = tmp_path / "short.json"
+    save_genome(short, np.zeros(ep.controller.layout.size - 3), EpisodeConfig(seconds=1.0), fitness=0.0)
+    (tmp_path / "notgenome.json").write_text(json.dumps({"hello": 1}))
+    (tmp_path / "garbage.json").write_text("{not json")
+    (tmp_path / "emptydir").mkdir()
+    return {
+        "missing": ([str(tmp_path / "nope")], "no such run directory"),
+        "not a run dir": ([str(tmp_path / "emptydir")], "no best.json"),
+        "wrong size": ([str(short)], "genes, the layout needs 120"),
+        "not a genome": ([str(tmp_path / "notgenome.json")], "not an evobiped genome file"),
+        "not json": ([str(tmp_path / "garbage.json")], "not valid JSON"),
+        "no such generation": ([str(run_dir), "--generation", "9"], "no generation 9 (generations saved: 0000..0002)"),
+        "generation of a file": ([str(short), "--generation", "1"], "--generation needs a run directory"),
+    }
+
+
+def test_bad_sources_give_one_line_exit_2_and_write_nothing(tmp_path, run_dir, capsys):
+    cases = _bad_sources(tmp_path, run_dir)
+    before = {p: sorted(x.name for x in p.iterdir()) for p in (tmp_path, run_dir)}
+    for name, (args, message) in cases.items():
+        assert main(["replay", *args]) == 2, name
+        cap = capsys.readouterr()
+        lines = cap.err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("evobiped: error: "), (name, cap.err)
+        assert message in lines[0], (name, lines[0])
+        assert cap.out == ""
+    after = {p: sorted(x.name for x in p.iterdir()) for p in (tmp_path, run_dir)}
+    assert after == before
+
+
+def test_connect_to_an_absent_viewer_is_one_line_exit_2(tmp_path, run_dir, capsys):
+    import socket
+
+    with socket.socket() as s:  # a free port that nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    assert main(["replay", str(run_dir / "best.json"), "--connect", f"127.0.0.1:{port}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"no Rerun viewer at 127.0.0.1:{port}" in err[0]
+
+
+def test_spawn_streams_to_a_new_viewer_and_writes_no_file(tmp_path, monkeypatch, capsys):
+    import rerun as rr
+
+    calls = []
+    monkeypatch.setattr(rr.RecordingStream, "spawn", lambda self, **kw: calls.append(kw) or self.memory_recording())
+    cfg = EpisodeConfig(seconds=0.5)
+    g = random_genomes(cfg.build().controller.layout, 1, seed=3)[0]
+    save_genome(tmp_path / "w.json", g, cfg, fitness=cfg.build().run(g).fitness[0])
+    assert main(["replay", str(tmp_path / "w.json"), "--spawn"]) == 0
+    assert len(calls) == 1
+    assert "recording streamed to the viewer" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]
