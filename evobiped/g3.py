@@ -286,6 +286,14 @@ PRESETS: dict[str, Preset] = {
         Preset(name="fig7", source="Fig. 7: Table 1 modulation, input asymmetry delta = 0.001 on LF", network=_FIG7, go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
         Preset(name="fig8a", source="Fig. 8A/9: Table 1 modulation, cordlag 0.00025, sidelag 0.0001", network=_FIG8A, go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
         Preset(name="human", source="Sect. 6, Figs. 10-11: Fig. 4 parameters; walk at I = 0.1, run at I = 0.15", network=_FIG4, go=(0.1, 0.15), t_max=60.0, t_run=120.0),
+        Preset(
+            name="human-lagged",
+            source="TUNED, not published: Fig. 4 parameters with Fig. 5A's GO lags (cordlag 0.2, sidelag 0.05); the run keeps the walk's phases when entered from the walk",
+            network=replace(_FIG4, lags=_lags(0.2, 0.05)),
+            go=(0.1, 0.2),
+            t_max=60.0,
+            t_run=120.0,
+        ),
     )
 }
 
@@ -296,3 +304,64 @@ def preset(name: str) -> Preset:
         return PRESETS[name]
     except KeyError:
         raise ConfigError(f"unknown G3 preset {name!r} (choose from {', '.join(PRESETS)})") from None
+
+
+# ------------------------------------------------------------------ sweeps
+@dataclass
+class Sweep:
+    """GO levels ``(L,)`` with the steady gait at each and the run behind it.
+
+    reset: trajectory row l holds level l (from zero state, or after ``from_go``);
+    continue: one row steps through the levels, ``t_run`` each.
+    start[l]: when level l was switched on; gaits[l].settle_time is relative to it.
+    """
+
+    levels: np.ndarray
+    gaits: list
+    traj: Trajectory
+    rows: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+
+
+def sweep(p: Preset, levels, *, mode: str = "reset", t_run: float | None = None, from_go: float | None = None,
+          switch_at: float = 30.0, dt: float = 0.005, sample_dt: float = 0.025, window: float = 0.4) -> Sweep:
+    """Run ``p`` at each GO level and analyse the last ``window`` of each level's hold.
+
+    mode "reset": every level from zero initial conditions (a batch); with
+    ``from_go`` each row first runs at ``from_go`` until ``switch_at`` (Figs. 8B,
+    10).  mode "continue": one run through the levels in order, state kept.
+    """
+    from .gaits import analyse
+
+    lv = np.asarray(levels, float).ravel()
+    if lv.size == 0:
+        raise ConfigError("G3: no GO levels given")
+    if mode not in ("reset", "continue"):
+        raise ConfigError(f"G3: sweep mode must be 'reset' or 'continue', got {mode!r}")
+    if not 0 < window <= 1:
+        raise ConfigError("G3: window must be in (0, 1]")
+    t_run = float(p.t_run if t_run is None else t_run)
+    if mode == "reset":
+        if from_go is None:
+            sched, t0 = go_schedule(lv), 0.0
+        else:
+            sched, t0 = go_schedule(np.stack([np.full_like(lv, from_go), lv], 1), [0.0, switch_at]), float(switch_at)
+        traj = simulate(p.network, sched, t0 + t_run, dt=dt, sample_dt=sample_dt)
+        rows, start = np.arange(lv.size), np.full(lv.size, t0)
+    else:
+        times = np.arange(lv.size) * t_run
+        if from_go is not None:
+            times, lv_s = np.concatenate([[0.0], times + switch_at]), np.concatenate([[from_go], lv])
+        else:
+            lv_s = lv
+        traj = simulate(p.network, go_schedule(lv_s[None, :], times), times[-1] + t_run, dt=dt, sample_dt=sample_dt)
+        rows, start = np.zeros(lv.size, int), times[-lv.size:]
+    end = start + t_run
+    out = []
+    for r, a, b in zip(rows, start, end):
+        m = (traj.t >= a - 1e-9) & (traj.t <= b + 1e-9)
+        g = analyse(traj.t[m], traj.x[r][m], t_start=b - window * t_run)
+        g.settle_time -= a
+        out.append(g)
+    return Sweep(levels=lv, gaits=out, traj=traj, rows=rows, start=start, end=end)

@@ -1,0 +1,112 @@
+"""The G3 network against Pribe, Grossberg & Cohen 1997 (claims 1, 2, 4 of issue 6)."""
+
+import numpy as np
+import pytest
+
+from evobiped import g3, gaits
+from evobiped.errors import ConfigError, UserError
+
+
+def test_inhibition_matrix_layout():
+    D = g3.quadruped_D(0.8, 0.185, 0.01, 0.15, 0.02, 0.03)
+    LF, RF, LH, RH = range(4)
+    assert np.all(np.diag(D) == 0.8)
+    assert D[LF, RF] == D[RF, LF] == D[LH, RH] == D[RH, LH] == 0.185
+    assert D[LH, LF] == D[RH, RF] == 0.15  # D2 fore -> aft inhibits the hind channel
+    assert D[LF, LH] == D[RF, RH] == 0.01  # D2 aft -> fore
+    assert D[RH, LF] == D[LH, RF] == 0.03  # D3 fore -> aft
+    assert D[LF, RH] == D[RF, LH] == 0.02  # D3 aft -> fore
+
+
+def test_table1_boundaries_belong_to_the_lower_gait():
+    assert list(g3.table1_gait([0.1, 0.17, 0.171, 0.25, 0.35, 0.351])) == [0, 0, 1, 1, 2, 3]
+    assert g3.table1_D(np.array([0.35]))[0, 0, 2] == 0.55  # pace: D2 aft->fore raised
+
+
+def test_go_lags_delay_every_change():
+    """With only self-inhibition the channels are independent copies: channel k is
+    channel 0 shifted by its lag, for the switch-on and the later switch-off alike."""
+    net = g3.G3Network(D=tuple(map(tuple, g3.quadruped_D(1, 0, 0, 0, 0, 0))), lags=(0.0, 0.5, 1.0, 1.5))
+    tr = g3.simulate(net, g3.go_schedule([[0.2, 0.0]], [0.0, 2.0]), 6.0, dt=0.01, sample_dt=0.01)
+    x = tr.x[0]
+    assert x[:, 0].max() > 0.3 and x[600 - 1, 0] < 0.5 * x[200, 0]  # it rises, then decays after t = 2
+    for k, lag in enumerate((0.5, 1.0, 1.5), start=1):
+        s = int(round(lag / 0.01))
+        assert np.all(x[:s, k] == 0)
+        assert np.allclose(x[s:, k], x[:-s, 0], atol=1e-9)
+
+
+def test_fig4_walk_claim1():
+    """Claim 1: Fig. 4 at I = 0.1 walks (lateral sequence LF, RH, RF, LH), equal duty."""
+    tr = g3.simulate(g3.preset("fig4").network, g3.go_schedule([0.1]), 120.0)
+    g = gaits.analyse(tr.t, tr.x[0], t_start=70.0)
+    assert (g.label, g.sequence) == ("walk", "lateral")
+    assert np.all(gaits.circ_dist(g.phases, [0, 0.5, 0.75, 0.25]) < 0.01)
+    assert g.period == pytest.approx(10.02, abs=0.05)
+    assert np.ptp(g.duty) < 0.003 and 0.17 < np.mean(g.duty) < 0.19
+
+
+def test_integrator_converges():
+    """Halving dt changes the Fig. 4 walk period by < 0.1 % (measured: ~1e-5)."""
+    net = g3.preset("fig4").network
+    periods = [
+        gaits.analyse(tr.t, tr.x[0], t_start=60).period
+        for tr in (g3.simulate(net, g3.go_schedule([0.1]), 100.0, dt=dt, sample_dt=0.02) for dt in (0.01, 0.005))
+    ]
+    assert abs(periods[0] / periods[1] - 1) < 1e-3
+
+
+#: Fig. 8A / 9 sweep, state reset per I: Table 1's ranges, boundaries in the lower gait
+CLAIM2 = {0.08: "walk", 0.12: "walk", 0.17: "walk", 0.19: "trot", 0.25: "trot", 0.26: "pace", 0.35: "pace", 0.36: "gallop", 0.45: "gallop"}
+
+
+@pytest.fixture(scope="module")
+def fig8a_sweep():
+    return g3.sweep(g3.preset("fig8a"), list(CLAIM2), t_run=120.0)
+
+
+def test_fig8a_gait_order_claim2(fig8a_sweep):
+    labels = [g.label for g in fig8a_sweep.gaits]
+    assert labels == list(CLAIM2.values())
+    for g in fig8a_sweep.gaits:
+        tpl = {"walk": (0, 0.5, 0.75, 0.25), "trot": (0, 0.5, 0.5, 0), "pace": (0, 0.5, 0, 0.5), "gallop": (0, 0, 0.5, 0.5)}[g.label]
+        assert np.all(gaits.circ_dist(g.phases, tpl) < 0.02)
+
+
+def test_fig8a_frequency_rises_ground_time_falls_claim2(fig8a_sweep):
+    f = np.array([g.frequency for g in fig8a_sweep.gaits])
+    assert np.all(np.diff(f) > 0)
+    assert f[0] == pytest.approx(0.0967, abs=0.002) and f[-1] == pytest.approx(0.2476, abs=0.003)
+    ground = np.array([(1 - np.mean(g.duty)) * g.period for g in fig8a_sweep.gaits])  # time down per cycle
+    assert np.all(np.diff(ground) < 0)
+
+
+def test_human_walk_and_run_claim4():
+    """Claim 4 (tuned lags, see docs/g3.md): same phases, duty < 0.23 walking, > 0.31 running,
+    overlapping frequencies.  The run is entered from the walk (Fig. 10's protocol)."""
+    levels = [0.06, 0.1, 0.14, 0.16, 0.2, 0.26]
+    s = g3.sweep(g3.preset("human-lagged"), levels, from_go=0.1, switch_at=30.0, t_run=90.0)
+    walk, run = s.gaits[:3], s.gaits[3:]
+    for g in s.gaits:
+        assert (g.label, g.sequence) == ("walk", "lateral")
+    assert max(max(g.duty) for g in walk) < 0.23
+    assert min(min(g.duty) for g in run) > 0.31
+    assert min(g.frequency for g in run) < max(g.frequency for g in walk)
+
+
+def test_human_faithful_lags_pronk_instead_of_run():
+    """With Fig. 4's own lags the step from the walk to I = 0.15 ends in a pronk (not the run)."""
+    s = g3.sweep(g3.preset("human"), [0.1, 0.15], from_go=0.1, switch_at=30.0, t_run=90.0)
+    assert [g.label for g in s.gaits] == ["walk", "pronk"]
+    assert s.gaits[0].duty[0] < 0.23 and s.gaits[1].duty[0] < 0.31
+
+
+def test_bad_arguments():
+    with pytest.raises(ConfigError, match="unknown G3 preset 'cat'"):
+        g3.preset("cat")
+    with pytest.raises(UserError, match=">= 0"):
+        g3.go_schedule([-0.1])
+    with pytest.raises(ConfigError, match="no GO levels"):
+        g3.sweep(g3.preset("fig4"), [])
+    with pytest.raises(ConfigError, match="lags"):
+        g3.G3Network(D=(), lags=(), delta=())
