@@ -110,3 +110,66 @@ def test_bad_arguments():
         g3.sweep(g3.preset("fig4"), [])
     with pytest.raises(ConfigError, match="lags"):
         g3.G3Network(D=(), lags=(), delta=())
+
+
+# ------------------------------------------------------------------ the G3 controller
+class _Actions:
+    """Listener keeping every tick's action ``(P, n)``."""
+
+    def __init__(self):
+        self.actions = []
+
+    def start(self, episode, sims):
+        pass
+
+    def tick(self, t, sims, ids, neurons, action, task_state):
+        self.actions.append(action.copy())
+
+    def end(self, result):
+        pass
+
+
+def _predicted_period_s(ctrl, D, go):
+    """Period (s) of the same network integrated on its own by g3.simulate."""
+    net = g3.G3Network(cells=ctrl.cells, D=tuple(map(tuple, D)), lags=tuple(ctrl.lag_steps * ctrl.h), delta=(0.0,) * ctrl.n)
+    tr = g3.simulate(net, g3.go_schedule([go]), 60.0, dt=0.01, sample_dt=0.01)
+    return gaits.analyse(tr.t, tr.x[0], t_start=30.0).period / ctrl.time_scale
+
+
+def test_g3_controller_drives_reil_body_at_the_network_frequency():
+    """The Reil body's PD targets oscillate at the network's own frequency, and turning
+    the GO knob from 0.1 to 0.2 at t = 10 s speeds the rhythm up as predicted."""
+    from evobiped.episode import EpisodeConfig
+
+    cfg = EpisodeConfig(body="reil", controller="g3", seconds=20.0, body_options={"fall_height": 1e-3},
+                        controller_options={"go": [[0.0, 0.1], [10.0, 0.2]]})
+    ep = cfg.build()
+    ctrl = ep.controller
+    lay = ctrl.layout
+    assert lay.size == 6 + 30 + 6 + 6 and ctrl.substeps == 4
+    g = lay.init_mean.copy()
+    g[lay.slices()["gain"]] = 1.0
+    g[lay.slices()["offset"]] = 0.2
+    rec = _Actions()
+    res = ep.run(g, listener=rec)
+    assert not res.fell[0]
+    a = np.array(rec.actions)[:, 0, :]  # (ticks, 6) PD targets, rad
+    t = np.arange(1, len(a) + 1) * ctrl.dt
+    lo, hi = ep.low, ep.high
+    o = (a - lo) / (hi - lo)  # back to the unit outputs o = 0.2 + x
+    D = ctrl.decode(g)["D"][0]
+    for go, (t0, t1) in ((0.1, (4.0, 10.0)), (0.2, (14.0, 20.0))):
+        on = gaits.onsets(t, o[:, 0], 0.2 + 0.33)
+        on = on[(on > t0) & (on < t1)]
+        measured = np.median(np.diff(on))
+        assert measured == pytest.approx(_predicted_period_s(ctrl, D, go), rel=0.01)
+    periods = [np.median(np.diff(gaits.onsets(t[m], o[m, 0], 0.53))) for m in (t < 10, t > 12)]
+    assert periods[1] < 0.75 * periods[0]  # measured 0.93 s -> 0.63 s
+
+
+def test_g3_controller_bad_options():
+    from evobiped.episode import EpisodeConfig
+
+    for opts, msg in (({"go": -0.1}, ">= 0"), ({"go": []}, "empty"), ({"go": [[1.0, 0.1], [0.5, 0.2]]}, "increase"), ({"time_scale": 0}, "> 0")):
+        with pytest.raises(ConfigError, match=msg):
+            EpisodeConfig(body="reil", controller="g3", controller_options=opts).build()
