@@ -173,3 +173,36 @@ def test_g3_controller_bad_options():
     for opts, msg in (({"go": -0.1}, ">= 0"), ({"go": []}, "empty"), ({"go": [[1.0, 0.1], [0.5, 0.2]]}, "increase"), ({"time_scale": 0}, "> 0")):
         with pytest.raises(ConfigError, match=msg):
             EpisodeConfig(body="reil", controller="g3", controller_options=opts).build()
+
+
+# ------------------------------------------------------------------ the CLI
+def test_cli_g3_json_and_figures(tmp_path, capsys):
+    import json
+
+    from evobiped.cli import main
+
+    assert main(["g3", "fig4", "--go", "0.1", "--t-run", "100", "--json", "--out", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    (row,) = out["levels"]
+    assert (row["go"], row["label"], row["sequence"]) == (0.1, "walk", "lateral")
+    assert row["period"] == pytest.approx(10.02, abs=0.05)
+    assert sorted(p.rsplit("/", 1)[1] for p in out["files"]) == ["g3_fig4_diagrams.png", "g3_fig4_run.png"]
+    assert all((tmp_path / p.rsplit("/", 1)[1]).stat().st_size > 10_000 for p in out["files"])
+
+
+@pytest.mark.parametrize(
+    "argv, msg",
+    [
+        (["g3", "cat"], "unknown G3 preset 'cat'"),
+        (["g3", "fig4", "--go", "-0.1"], "GO levels must be >= 0"),
+        (["g3", "fig4", "--channels", ","], "channel list is empty"),
+        (["g3", "fig4", "--channels", "LF,XX"], "unknown channel 'XX'"),
+        (["g3", "fig4", "--sweep", "0.3", "0.1", "0.1"], "START <= STOP"),
+    ],
+)
+def test_cli_g3_bad_arguments(argv, msg, capsys):
+    from evobiped.cli import main
+
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert msg in err and err.count("\n") == 1

@@ -1,0 +1,1 @@
+"""Recording and figures: the only package code that imports rerun and matplotlib."""
