@@ -63,6 +63,7 @@ class Gait:
     frequency: float
     phases: list[float]  # (N,), channel 0 = 0
     duty: list[float]  # (N,) fraction of the cycle above threshold
+    steps: list[float]  # (N,) onsets per cycle of channel 0 (1 = steps every cycle, 0 = never up)
     n_cycles: int
     transient_label: str  # label of the first whole cycle
     settle_time: float  # time after which every cycle matches the steady phases
@@ -147,7 +148,7 @@ def analyse(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, thres
     nan = [float("nan")] * N
     first = classify(ph[0])[0] if len(ph) and N == 4 else "none"
     if w.size < 3:
-        return Gait("none", "", False, float("nan"), 0.0, nan, nan, 0, first, float("nan"))
+        return Gait("none", "", False, float("nan"), 0.0, nan, nan, nan, 0, first, float("nan"))
     period = float(np.median(np.diff(w)))
     sel = (starts >= w[0] - 1e-9) & (starts < w[-1] - 1e-9)
     wp = ph[sel]
@@ -158,6 +159,8 @@ def analyse(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, thres
     a, b = w[0], w[-1]
     m = (t >= a) & (t < b)
     duty = [float(v) for v in (x[m] > threshold).mean(axis=0)]
+    steps = [float(np.sum((o >= a - 0.02 * period) & (o < b - 0.02 * period)) / (w.size - 1))
+             for o in (onsets(t, x[:, k], threshold) for k in range(N))]
     label, seq = classify(phases, tol) if N == 4 else ("none", "")
     # settling: the first time after which every cycle stays within tol of the steady phases
     if np.all(np.isfinite(phases)):
@@ -165,7 +168,7 @@ def analyse(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, thres
         settle = float(starts[bad[-1] + 1]) if bad.size and bad[-1] + 1 < starts.size else (float(starts[0]) if starts.size else float("nan"))
     else:
         settle = float("nan")
-    return Gait(label, seq, True, period, 1.0 / period, phases, duty, int(w.size - 1), first, settle)
+    return Gait(label, seq, True, period, 1.0 / period, phases, duty, steps, int(w.size - 1), first, settle)
 
 
 def analyse_batch(t: np.ndarray, x: np.ndarray, **kw) -> list[Gait]:

@@ -92,10 +92,11 @@ def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.
     return Path(path)
 
 
-def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0) -> list[Path]:
+def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0, max_diagrams: int = 12) -> list[Path]:
     """The PNGs of a :class:`evobiped.g3.Sweep`: each level's run (one level) or
-    one diagram per level over the last ``span`` time units of its hold, plus
-    frequency/duty vs I (several levels).  Returns the paths written."""
+    one diagram per level over the last ``span`` time units of its hold (at
+    most ``max_diagrams`` evenly spaced levels), plus frequency/duty vs I
+    (several levels).  Returns the paths written."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     tr, names = sweep.traj, [names[c] for c in channels]
@@ -105,7 +106,10 @@ def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *
         written.append(run_figure(out_dir / f"{stem}_run.png", tr.t, tr.x[r][:, channels], names,
                                   title=f"{title}: I = {sweep.levels[0]:g}, {sweep.gaits[0].label}", go=tr.go[r]))
     xs, labels = [], []
-    for lv, g, r, b in zip(sweep.levels, sweep.gaits, sweep.rows, sweep.end):
+    L = len(sweep.levels)
+    pick = np.unique(np.round(np.linspace(0, L - 1, min(L, max_diagrams))).astype(int))
+    for i in pick:
+        lv, g, r, b = sweep.levels[i], sweep.gaits[i], sweep.rows[i], sweep.end[i]
         m = (tr.t > b - span - 1e-9) & (tr.t <= b + 1e-9)
         xs.append(tr.x[r][m][:, channels])
         labels.append(f"I={lv:.3g}\n{g.label}")
