@@ -206,3 +206,24 @@ def test_cli_g3_bad_arguments(argv, msg, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert msg in err and err.count("\n") == 1
+
+
+def test_fig8b_walk_to_pace_within_about_a_cycle():
+    """Claim 3: I 0.1 -> 0.35 at t = 25 gives a steady pace from the second cycle after the switch."""
+    tr = g3.simulate(g3.preset("fig8a").network, g3.go_schedule([[0.1, 0.35]], [0.0, 25.0]), 50.0)
+    starts, ph = gaits.cycle_phases(tr.t, tr.x[0])
+    labels = [gaits.classify(q)[0] for q in ph]
+    after = starts >= 25.0
+    first_pace = np.flatnonzero(after)[1]
+    assert all(lab == "pace" for lab in labels[first_pace:]) and len(labels) - first_pace >= 3
+    assert (starts[first_pace] - 25.0) / np.median(np.diff(starts[first_pace:])) < 1.2  # measured 1.10
+
+
+def test_g3_controller_rows_do_not_depend_on_the_batch():
+    from evobiped.episode import EpisodeConfig
+
+    ep = EpisodeConfig(body="reil", controller="g3", seconds=1.0).build()
+    lay = ep.controller.layout
+    g = np.clip(np.random.default_rng(3).normal(lay.init_mean, lay.init_sigma, (3, lay.size)), lay.low, lay.high)
+    alone = ep.run(g[1]).fitness[0]
+    assert ep.run(g).fitness[1] == alone
