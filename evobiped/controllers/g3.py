@@ -1,0 +1,160 @@
+"""The G3 GO Gait Generator as a body controller (Pribe, Grossberg & Cohen 1997).
+
+One G3 channel (excitatory x_k, slow inhibitory y_k; :mod:`evobiped.g3`) per
+driven joint, ``n_outputs`` channels in the body's actuator order, so the same
+class drives any body.  Evolvable (the genome):
+
+* ``self_inhibition`` D_kk (N) and ``coupling`` D_kj, k != j (N(N-1), row-major
+  without the diagonal): the inhibition matrix of eq. (1);
+* ``gain`` and ``offset`` (N each): the output mapping
+  o_k = clip(offset_k + gain_k x_k, 0, 1) ("unit" output: a PD target
+  low + o (high - low) for the Reil body, or a torque for torque bodies).
+
+Fixed (options): the cell constants A-G2 of a preset (default ``fig4``); the GO
+signal ``go``, either a level or a schedule ``[[t_s, level], ...]`` (seconds from
+the episode start; the level is 0 before the first entry), so a user can speed
+a walker up or switch its gait during an episode by changing one number; the
+per-channel GO lag ``lag`` (channel k receives every GO change k*lag model
+time units late, to break symmetry as the paper's cordlag/sidelag do, rounded
+to the internal step); and the time scale.
+
+Time: the network's equations are dimensionless.  ``time_scale`` is the number
+of model time units per second of simulated time (default 10: the Fig. 4 walk,
+period 10.0 units at I = 0.1, steps once per 1.0 s).  Each control period
+``dt`` (s) advances the network by dt * time_scale units in RK4 steps of at most
+``max_step`` units (0.05: the Fig. 4 period is within 0.02 % of its dt -> 0 value).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..g3 import preset as g3_preset
+from ..g3 import rk4_step
+from ..genome import GeneBlock, GenomeLayout
+from .base import Controller
+
+SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1)
+COUPLING = dict(low=0.0, high=1.5, init_mean=0.15, init_sigma=0.1, mutation_sigma=0.05)
+GAIN = dict(low=-2.0, high=2.0, init_mean=0.0, init_sigma=1.0, mutation_sigma=0.3)
+OFFSET = dict(low=0.0, high=1.0, init_mean=0.5, init_sigma=0.2, mutation_sigma=0.1)
+
+
+def _schedule(go) -> tuple[np.ndarray, np.ndarray]:
+    """``go`` (a level, or [[t_s, level], ...]) -> (times (K,) s, levels (K,))."""
+    if isinstance(go, (int, float)):
+        pairs = [(0.0, float(go))]
+    else:
+        try:
+            pairs = [(float(t), float(v)) for t, v in go]
+        except (TypeError, ValueError):
+            raise ConfigError(f"g3: go must be a level or a list of [time_s, level] pairs, got {go!r}") from None
+    if not pairs:
+        raise ConfigError("g3: the go schedule is empty")
+    t, v = np.array(pairs).T
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))) or (v < 0).any() or (t < 0).any():
+        raise ConfigError(f"g3: go levels and times must be finite and >= 0, got {go!r}")
+    if np.any(np.diff(t) <= 0):
+        raise ConfigError("g3: go schedule times must increase")
+    return t, v
+
+
+class G3Controller(Controller):
+    """``n_outputs`` G3 channels, one per actuator; D and the output mapping evolve."""
+
+    name: ClassVar[str] = "g3"
+    output_kind: ClassVar[str] = "unit"
+
+    def __init__(
+        self,
+        *,
+        n_outputs: int,
+        inputs: dict[str, int] | None = None,
+        dt: float = 0.02,
+        go=0.1,
+        lag: float = 0.05,
+        time_scale: float = 10.0,
+        max_step: float = 0.05,
+        preset: str = "fig4",
+    ):
+        if inputs:
+            raise ConfigError(f"g3: takes no sensor inputs (got {sorted(inputs)}); its GO signal is the 'go' option")
+        if n_outputs < 1:
+            raise ConfigError("g3: needs at least one output channel")
+        if not (dt > 0 and time_scale > 0 and max_step > 0 and lag >= 0):
+            raise ConfigError("g3: dt, time_scale and max_step must be > 0 and lag >= 0")
+        self.n_outputs = self.n = int(n_outputs)
+        self.input_names = ()
+        self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)
+        self.go = go
+        self.go_times, self.go_levels = _schedule(go)
+        self.preset, self.max_step = preset, float(max_step)
+        self.cells = g3_preset(preset).network.cells
+        span = self.dt * self.time_scale  # model units per control period
+        self.substeps = int(np.ceil(span / max_step - 1e-9))
+        self.h = span / self.substeps
+        # channel k sees the GO signal lag_k units late: a whole number of internal steps
+        self.lag_steps = np.round(np.arange(self.n) * self.lag / self.h).astype(int)
+        n = self.n
+        self._layout = GenomeLayout(
+            (
+                GeneBlock(name="self_inhibition", size=n, **SELF),
+                GeneBlock(name="coupling", size=n * (n - 1), **COUPLING),
+                GeneBlock(name="gain", size=n, **GAIN),
+                GeneBlock(name="offset", size=n, **OFFSET),
+            )
+        )
+
+    @property
+    def layout(self) -> GenomeLayout:
+        return self._layout
+
+    def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
+        p = super().decode(genomes)
+        P, n = p["gain"].shape[0], self.n
+        D = np.zeros((P, n, n))
+        off = ~np.eye(n, dtype=bool)
+        D[:, off] = p["coupling"]
+        D[:, np.arange(n), np.arange(n)] = p["self_inhibition"]
+        return {"D": D, "gain": p["gain"], "offset": p["offset"]}
+
+    def initial_state(self, params: dict[str, np.ndarray]) -> dict:
+        """x, y ``(P, N)`` zero (the paper's resting start) and the internal step count k."""
+        P = params["gain"].shape[0]
+        return {"x": np.zeros((P, self.n)), "y": np.zeros((P, self.n)), "k": 0}
+
+    def go_at(self, k: np.ndarray) -> np.ndarray:
+        """GO level at internal steps ``k`` (any shape): the schedule's level at t = k h / time_scale s."""
+        t = np.asarray(k) * self.h / self.time_scale
+        i = np.searchsorted(self.go_times, t + 1e-9, side="right") - 1
+        return np.where(i >= 0, self.go_levels[np.maximum(i, 0)], 0.0)
+
+    def outputs_of(self, params: dict[str, np.ndarray], x: np.ndarray) -> np.ndarray:
+        """o = clip(offset + gain x, 0, 1), ``(P, N)``."""
+        return np.clip(params["offset"] + params["gain"] * x, 0.0, 1.0)
+
+    def step(self, params, state, inputs):
+        x, y, k = state["x"], state["y"], state["k"]
+        out = self.outputs_of(params, x)
+        for s in range(self.substeps):
+            I = self.go_at(k + s - self.lag_steps)[None, :]  # (1, N); 0 before it arrives
+            x, y = rk4_step(self.cells, x, y, I, params["D"], self.h)
+        return {"x": x, "y": y, "k": k + self.substeps}, out
+
+    def neuron_outputs(self, params, state):
+        """x (the motor channels) then y, ``(P, 2N)``."""
+        return np.concatenate([state["x"], state["y"]], axis=1)
+
+    def describe(self) -> dict:
+        return {
+            "name": self.name,
+            "dt": self.dt,
+            "go": self.go if isinstance(self.go, (int, float)) else [list(map(float, p)) for p in self.go],
+            "lag": self.lag,
+            "time_scale": self.time_scale,
+            "max_step": self.max_step,
+            "preset": self.preset,
+        }

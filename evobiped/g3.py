@@ -1,0 +1,367 @@
+"""The G3 GO Gait Generator (Pribe, Grossberg & Cohen 1997, eqs. 1-6) and its presets.
+
+    dx_i/dt = -A x_i + (B - x_i)[f(x_i) + I_i] - (C + x_i) sum_j D_ij h_ij(I) g(y_j)   (1, 5)
+    dy_i/dt = E[(1 - y_i)[x_i]^+ - y_i]                                                 (2, 6)
+    f(w) = F1 [w]+^2 / (F2 + [w]+^2),   g(w) = G1 [w]+^2 / (G2 + [w]+^2)                  (4)
+
+Readings of the text (DESIGN.md Sect. 4): inhibition is D_ij g(y_j) (x_i is
+inhibited by y_j); quadruped channels are 0 = left fore, 1 = right fore,
+2 = left hind, 3 = right hind (the paper's 1-4); the GO signal and every later
+change of it reaches channel k ``lags[k]`` time units late ([0, sidelag,
+hindlag, sidelag + hindlag], hindlag = cordlag) and a channel's input is 0
+before the first arrival; Table 1's boundaries belong to the lower gait
+(I = 0.35 is a pace); the modulation uses the command cell's (unlagged) I.
+
+Time is in the model's dimensionless units.  Integration is fixed-step RK4
+(default dt = 0.005) on the uniform grid k dt; a step that contains a change
+of input (a GO change arriving at some channel) is split there, so the
+piecewise-constant inputs are integrated exactly and the lags, even those far
+below dt (Fig. 8A: 0.00025), act as published.  Everything is vectorised over
+a batch dimension B (e.g. many GO levels at once).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .errors import ConfigError
+
+#: quadruped channel names, in channel order
+LIMBS = ("LF", "RF", "LH", "RH")
+
+
+# ------------------------------------------------------------------ network
+@dataclass(frozen=True, kw_only=True)
+class Shunting:
+    """The cell constants A-G2 of eqs. (1)-(4) (dimensionless)."""
+
+    A: float = 1.0
+    B: float = 1.1
+    C: float = 2.5
+    E: float = 1.5
+    F1: float = 9.8
+    F2: float = 0.5
+    G1: float = 3.9
+    G2: float = 0.5
+
+
+def sigmoid_sq(w: np.ndarray, gain: float, half: float) -> np.ndarray:
+    """Rectified sigmoid ``gain [w]+^2 / (half + [w]+^2)`` of eq. (4)."""
+    wp = np.maximum(w, 0.0)
+    w2 = wp * wp
+    return gain * w2 / (half + w2)
+
+
+def derivatives(c: Shunting, x: np.ndarray, y: np.ndarray, I: np.ndarray, D: np.ndarray):
+    """Right-hand side of eqs. (1)-(2) (or (5)-(6) with D already modulated).
+
+    x, y, I: ``(B, N)``; D: ``(B, N, N)``, D[b, i, j] inhibits x_i by g(y_j).
+    Returns (dx/dt, dy/dt), each ``(B, N)``.
+    """
+    inh = np.einsum("bij,bj->bi", D, sigmoid_sq(y, c.G1, c.G2))
+    dx = -c.A * x + (c.B - x) * (sigmoid_sq(x, c.F1, c.F2) + I) - (c.C + x) * inh
+    dy = c.E * ((1.0 - y) * np.maximum(x, 0.0) - y)
+    return dx, dy
+
+
+def rk4_step(c: Shunting, x, y, I, D, h: float):
+    """One classical RK4 step of length h with inputs I and D held constant."""
+    k1x, k1y = derivatives(c, x, y, I, D)
+    k2x, k2y = derivatives(c, x + 0.5 * h * k1x, y + 0.5 * h * k1y, I, D)
+    k3x, k3y = derivatives(c, x + 0.5 * h * k2x, y + 0.5 * h * k2y, I, D)
+    k4x, k4y = derivatives(c, x + h * k3x, y + h * k3y, I, D)
+    return (x + (h / 6.0) * (k1x + 2 * k2x + 2 * k3x + k4x), y + (h / 6.0) * (k1y + 2 * k2y + 2 * k3y + k4y))
+
+
+def quadruped_D(D0, D1, D2_af, D2_fa, D3_af, D3_fa) -> np.ndarray:
+    """The 4x4 inhibition matrix of Figs. 2-3 from its six coefficients.
+
+    Each argument is a scalar or a ``(B,)`` array; returns ``(..., 4, 4)``.
+    "fore -> aft" is from a fore channel (j) onto a hind channel (i).
+    """
+    a = np.broadcast_arrays(*(np.asarray(v, float) for v in (D0, D1, D2_af, D2_fa, D3_af, D3_fa)))
+    D0, D1, D2_af, D2_fa, D3_af, D3_fa = a
+    D = np.zeros(a[0].shape + (4, 4))
+    LF, RF, LH, RH = range(4)
+    for i in range(4):
+        D[..., i, i] = D0
+    for i, j in ((LF, RF), (RF, LF), (LH, RH), (RH, LH)):
+        D[..., i, j] = D1
+    for fore, hind in ((LF, LH), (RF, RH)):  # ipsilateral
+        D[..., hind, fore] = D2_fa
+        D[..., fore, hind] = D2_af
+    for fore, hind in ((LF, RH), (RF, LH)):  # contralateral
+        D[..., hind, fore] = D3_fa
+        D[..., fore, hind] = D3_af
+    return D
+
+
+#: Table 1: (upper bound of I, inclusive; D0, D1, D2 aft->fore, D2 fore->aft, D3 aft->fore, D3 fore->aft)
+TABLE_1 = (
+    ("walk", 0.17, (1.0, 0.3, 0.0, 0.3, 0.3, 0.0)),
+    ("trot", 0.25, (1.0, 0.3, 0.3, 0.3, 0.55, 0.55)),
+    ("pace", 0.35, (1.0, 0.3, 0.55, 0.55, 0.3, 0.3)),
+    ("gallop", np.inf, (1.0, 0.55, 0.3, 0.3, 0.3, 0.3)),
+)
+
+
+def table1_gait(I: np.ndarray) -> np.ndarray:
+    """Index of the Table 1 column for each I (boundaries belong to the lower gait)."""
+    bounds = np.array([row[1] for row in TABLE_1[:-1]])
+    return np.searchsorted(bounds, np.asarray(I, float) - 1e-12, side="left")
+
+
+def table1_D(I: np.ndarray) -> np.ndarray:
+    """Modulated inhibition D_ij h_ij(I) of eq. (5) for each I: ``(..., 4, 4)``."""
+    coef = np.array([row[2] for row in TABLE_1])[table1_gait(I)]
+    return quadruped_D(*np.moveaxis(coef, -1, 0))
+
+
+@dataclass(frozen=True, kw_only=True)
+class G3Network:
+    """An N-channel G3 network: constants, inhibition, GO lags and input asymmetry.
+
+    D: ``(N, N)`` fixed inhibition, or None with ``modulated=True`` (Table 1, N = 4).
+    lags: ``(N,)`` arrival lag of every GO change per channel (time units).
+    delta: ``(N,)`` added to a channel's input once the GO signal has reached it (Fig. 7).
+    """
+
+    cells: Shunting = field(default_factory=Shunting)
+    D: tuple | None = None
+    modulated: bool = False
+    lags: tuple = (0.0, 0.0, 0.0, 0.0)
+    delta: tuple = (0.0, 0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        n = len(self.lags)
+        if n < 1 or len(self.delta) != n:
+            raise ConfigError("G3: lags and delta need one value per channel (at least one channel)")
+        if min(self.lags) < 0:
+            raise ConfigError(f"G3: lags must be >= 0, got {self.lags}")
+        if self.modulated:
+            if n != 4:
+                raise ConfigError("G3: Table 1 modulation needs the 4 quadruped channels")
+        elif self.D is None or np.shape(self.D) != (n, n):
+            raise ConfigError(f"G3: D must be {n}x{n}")
+
+    @property
+    def n(self) -> int:
+        return len(self.lags)
+
+    def inhibition(self, I_command: np.ndarray) -> np.ndarray:
+        """``(B, N, N)`` inhibition for the command GO level ``(B,)``."""
+        if self.modulated:
+            return table1_D(I_command)
+        return np.broadcast_to(np.asarray(self.D, float), (len(I_command), self.n, self.n))
+
+
+@dataclass
+class Trajectory:
+    """Sampled states: t ``(T,)``, x and y ``(B, T, N)``, the command GO level ``(B, T)``."""
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    go: np.ndarray
+
+
+def go_schedule(levels, times=None) -> tuple[np.ndarray, np.ndarray]:
+    """A GO schedule: ``levels`` ``(B,)`` or ``(B, K)`` switched on at ``times`` ``(K,)``.
+
+    Level k holds from times[k] to times[k+1]; the GO signal is 0 before times[0].
+    Returns (times ``(K,)``, levels ``(B, K)``).  Negative levels -> ConfigError.
+    """
+    lv = np.asarray(levels, float)
+    if lv.ndim == 1:
+        lv = lv[:, None]
+    tm = np.zeros(1) if times is None else np.asarray(times, float).ravel()
+    if lv.ndim != 2 or lv.shape[1] != tm.size or lv.size == 0:
+        raise ConfigError("G3: GO schedule needs one level per switching time")
+    if not np.all(np.isfinite(lv)) or (lv < 0).any():
+        raise ConfigError(f"G3: GO levels must be finite and >= 0, got {lv.min():g}")
+    if tm.size > 1 and np.any(np.diff(tm) <= 0):
+        raise ConfigError("G3: GO switching times must increase")
+    return tm, lv
+
+
+def simulate(net: G3Network, schedule, t_end: float, *, dt: float = 0.005, sample_dt: float = 0.025, state=None) -> Trajectory:
+    """Integrate ``net`` from t = 0 to ``t_end`` under a GO ``schedule`` (see :func:`go_schedule`).
+
+    state: optional (x, y) ``(B, N)`` initial state (default zeros: the paper's
+    reset).  Samples are taken every ``sample_dt`` (a multiple of dt).
+    """
+    times, levels = schedule
+    if not (dt > 0 and t_end > 0):
+        raise ConfigError("G3: dt and t_end must be > 0")
+    stride = int(round(sample_dt / dt))
+    if stride < 1 or abs(stride * dt - sample_dt) > 1e-9 * sample_dt:
+        raise ConfigError(f"G3: sample_dt {sample_dt} must be a multiple of dt {dt}")
+    Bn, N = levels.shape[0], net.n
+    lags = np.asarray(net.lags, float)
+    delta = np.asarray(net.delta, float)
+    c = net.cells
+    if state is None:
+        x, y = np.zeros((Bn, N)), np.zeros((Bn, N))
+    else:
+        x, y = (np.array(s, float) for s in state)
+    # every instant at which some channel's input (or the command level) changes
+    events = np.unique(np.concatenate([times, (times[:, None] + lags[None, :]).ravel()]))
+
+    def inputs_at(t: float):
+        """Right-continuous inputs on [t, next event): per-channel I (B, N), D (B, N, N), command (B,)."""
+        arrived = times[None, :] + lags[:, None] <= t + 1e-12  # (N, K)
+        idx = arrived.sum(axis=1) - 1  # latest change seen by each channel
+        I = np.where(idx[None, :] >= 0, levels[:, np.maximum(idx, 0)], 0.0)
+        I = I + np.where(idx >= 0, delta, 0.0)[None, :]
+        kc = int(np.sum(times <= t + 1e-12)) - 1
+        cmd = levels[:, kc] if kc >= 0 else np.zeros(Bn)
+        return I, net.inhibition(cmd), cmd
+
+    n_steps = int(round(t_end / dt))
+    n_samples = n_steps // stride + 1
+    xs = np.empty((Bn, n_samples, N))
+    ys = np.empty((Bn, n_samples, N))
+    gos = np.empty((Bn, n_samples))
+    I, D, cmd = inputs_at(0.0)
+    xs[:, 0], ys[:, 0], gos[:, 0] = x, y, cmd
+    ev = 0
+    while ev < events.size and events[ev] <= 1e-12:
+        ev += 1
+    for k in range(n_steps):
+        t0, t1 = k * dt, (k + 1) * dt
+        t = t0
+        while ev < events.size and events[ev] < t1 - 1e-12:  # split at input changes
+            te = events[ev]
+            if te - t > 1e-15:
+                x, y = rk4_step(c, x, y, I, D, te - t)
+            t = te
+            I, D, cmd = inputs_at(t)
+            ev += 1
+        x, y = rk4_step(c, x, y, I, D, t1 - t)
+        if ev < events.size and abs(events[ev] - t1) <= 1e-12:
+            I, D, cmd = inputs_at(t1)
+            ev += 1
+        if (k + 1) % stride == 0:
+            s = (k + 1) // stride
+            xs[:, s], ys[:, s], gos[:, s] = x, y, cmd
+    return Trajectory(t=np.arange(n_samples) * stride * dt, x=xs, y=ys, go=gos)
+
+
+# ------------------------------------------------------------------ presets
+@dataclass(frozen=True, kw_only=True)
+class Preset:
+    """A published parameter set: the network, its GO level(s) and run length.
+
+    go: the GO level(s) the paper shows; t_max: the paper's run length; t_run:
+    the length we integrate (longer, to measure steady states).
+    """
+
+    name: str
+    source: str
+    network: G3Network
+    go: tuple[float, ...]
+    t_max: float
+    t_run: float
+
+
+def _lags(cordlag: float, sidelag: float) -> tuple:
+    return (0.0, sidelag, cordlag, sidelag + cordlag)
+
+
+_FIG4_D = quadruped_D(0.8, 0.185, 0.0, 0.15, 0.15, 0.0)
+_FIG5_D = quadruped_D(0.95, 0.255, 0.3, 0.3, 0.3, 0.3)
+_FIG4 = G3Network(D=tuple(map(tuple, _FIG4_D)), lags=_lags(0.0025, 0.001))
+_FIG5A = G3Network(D=tuple(map(tuple, _FIG5_D)), lags=_lags(0.2, 0.05))
+_FIG7 = G3Network(cells=Shunting(B=1.05), modulated=True, lags=_lags(0.0, 0.0), delta=(0.001, 0.0, 0.0, 0.0))
+_FIG8A = G3Network(cells=Shunting(B=1.05), modulated=True, lags=_lags(0.00025, 0.0001))
+
+PRESETS: dict[str, Preset] = {
+    p.name: p
+    for p in (
+        Preset(name="fig4", source="Fig. 4: a walk at I = 0.1", network=_FIG4, go=(0.1,), t_max=60.0, t_run=120.0),
+        Preset(name="fig5a", source="Fig. 5A: symmetric, unmodulated; trot, pace, gallop by I", network=_FIG5A, go=(0.1, 0.2, 0.3, 0.4), t_max=60.0, t_run=120.0),
+        Preset(name="fig5b", source="Fig. 5B: Fig. 5A with B = 1.05 (the pace disappears)", network=replace(_FIG5A, cells=Shunting(B=1.05)), go=(0.1, 0.2, 0.3, 0.4), t_max=60.0, t_run=120.0),
+        Preset(name="fig7", source="Fig. 7: Table 1 modulation, input asymmetry delta = 0.001 on LF", network=_FIG7, go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
+        Preset(name="fig8a", source="Fig. 8A/9: Table 1 modulation, cordlag 0.00025, sidelag 0.0001", network=_FIG8A, go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
+        Preset(name="human", source="Sect. 6, Figs. 10-11: Fig. 4 parameters; walk at I = 0.1, run at I = 0.15", network=_FIG4, go=(0.1, 0.15), t_max=60.0, t_run=120.0),
+        Preset(
+            name="human-lagged",
+            source="TUNED, not published: Fig. 4 parameters with Fig. 5A's GO lags (cordlag 0.2, sidelag 0.05); the run keeps the walk's phases when entered from the walk",
+            network=replace(_FIG4, lags=_lags(0.2, 0.05)),
+            go=(0.1, 0.2),
+            t_max=60.0,
+            t_run=120.0,
+        ),
+    )
+}
+
+
+def preset(name: str) -> Preset:
+    """The preset called ``name``; ConfigError naming the choices otherwise."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ConfigError(f"unknown G3 preset {name!r} (choose from {', '.join(PRESETS)})") from None
+
+
+# ------------------------------------------------------------------ sweeps
+@dataclass
+class Sweep:
+    """GO levels ``(L,)`` with the steady gait at each and the run behind it.
+
+    reset: trajectory row l holds level l (from zero state, or after ``from_go``);
+    continue: one row steps through the levels, ``t_run`` each.
+    start[l]: when level l was switched on; gaits[l].settle_time is relative to it.
+    """
+
+    levels: np.ndarray
+    gaits: list
+    traj: Trajectory
+    rows: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+
+
+def sweep(p: Preset, levels, *, mode: str = "reset", t_run: float | None = None, from_go: float | None = None,
+          switch_at: float = 30.0, dt: float = 0.005, sample_dt: float = 0.025, window: float = 0.4) -> Sweep:
+    """Run ``p`` at each GO level and analyse the last ``window`` of each level's hold.
+
+    mode "reset": every level from zero initial conditions (a batch); with
+    ``from_go`` each row first runs at ``from_go`` until ``switch_at`` (Figs. 8B,
+    10).  mode "continue": one run through the levels in order, state kept.
+    """
+    from .gaits import analyse
+
+    lv = np.asarray(levels, float).ravel()
+    if lv.size == 0:
+        raise ConfigError("G3: no GO levels given")
+    if mode not in ("reset", "continue"):
+        raise ConfigError(f"G3: sweep mode must be 'reset' or 'continue', got {mode!r}")
+    if not 0 < window <= 1:
+        raise ConfigError("G3: window must be in (0, 1]")
+    t_run = float(p.t_run if t_run is None else t_run)
+    if mode == "reset":
+        if from_go is None:
+            sched, t0 = go_schedule(lv), 0.0
+        else:
+            sched, t0 = go_schedule(np.stack([np.full_like(lv, from_go), lv], 1), [0.0, switch_at]), float(switch_at)
+        traj = simulate(p.network, sched, t0 + t_run, dt=dt, sample_dt=sample_dt)
+        rows, start = np.arange(lv.size), np.full(lv.size, t0)
+    else:
+        times = np.arange(lv.size) * t_run
+        if from_go is not None:
+            times, lv_s = np.concatenate([[0.0], times + switch_at]), np.concatenate([[from_go], lv])
+        else:
+            lv_s = lv
+        traj = simulate(p.network, go_schedule(lv_s[None, :], times), times[-1] + t_run, dt=dt, sample_dt=sample_dt)
+        rows, start = np.zeros(lv.size, int), times[-lv.size:]
+    end = start + t_run
+    out = []
+    for r, a, b in zip(rows, start, end):
+        m = (traj.t >= a - 1e-9) & (traj.t <= b + 1e-9)
+        g = analyse(traj.t[m], traj.x[r][m], t_start=b - window * t_run)
+        g.settle_time -= a
+        out.append(g)
+    return Sweep(levels=lv, gaits=out, traj=traj, rows=rows, start=start, end=end)
