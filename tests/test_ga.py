@@ -1,0 +1,109 @@
+"""The GA of Reil & Husbands (Table III, Sect. II-C1): operator statistics and search."""
+
+import numpy as np
+import pytest
+
+from evobiped.controllers import CTRNN
+from evobiped.errors import ConfigError
+from evobiped.evolution.ga import GA, GAConfig
+from evobiped.genome import GeneBlock, GenomeLayout
+
+LAYOUT = CTRNN(n_outputs=6).layout
+
+
+def test_initial_population_table_III():
+    ga = GA(LAYOUT, GAConfig(population=4000), seed=1)
+    pop = ga.population
+    w, tau, b = pop[:, :100], pop[:, 100:110], pop[:, 110:]
+    assert pop.min() >= -16 and pop.max() <= 16
+    assert tau.min() >= 0.5 and tau.max() <= 5 and b.min() >= -4 and b.max() <= 4
+    # clipped Gaussians: the fraction at the clip bounds equals the Gaussian tail mass
+    assert np.mean(np.abs(w) == 16) == pytest.approx(0.0455, abs=0.004)  # |N(0, 8)| > 2 sigma
+    assert np.median(w) == pytest.approx(0, abs=0.1)
+    assert np.median(tau) == pytest.approx(2.75, abs=0.05)  # clipping keeps the median
+    assert np.mean(tau == 0.5) == pytest.approx(0.0668, abs=0.006)  # P(N(2.75, 1.5) < 0.5) = P(z < -1.5)
+    assert np.mean(np.abs(b) == 4) == pytest.approx(0.1824, abs=0.008)  # P(|N(0, 3)| > 4/3 sigma)
+
+
+def test_one_mutation_per_chromosome_on_average():
+    ga = GA(LAYOUT, GAConfig(), seed=2)
+    assert ga.mutation_rate == pytest.approx(1 / 120)
+    parents = np.zeros((20000, 120)) + LAYOUT.init_mean
+    children = ga.mutate(parents, np.random.default_rng(0))
+    changed = (children != parents).sum(axis=1)
+    assert changed.mean() == pytest.approx(1.0, abs=0.03)
+    assert np.mean(changed == 0) == pytest.approx((1 - 1 / 120) ** 120, abs=0.01)  # binomial P(0) ~ e^-1
+    # per-type mutation sigma (Table III): 8, 1.5, 3 (tau at 2.75 and biases at 0 rarely clip)
+    d = children - parents
+    tau_d = d[:, 100:110][d[:, 100:110] != 0]
+    bias_d = d[:, 110:][d[:, 110:] != 0]
+    assert np.std(tau_d) == pytest.approx(1.5 * 0.93, rel=0.08)  # clipping at 0.5 / 5 trims the tails
+    assert np.std(bias_d) == pytest.approx(3 * 0.88, rel=0.08)
+    assert children.min() >= LAYOUT.low.min() and np.all(children <= LAYOUT.high) and np.all(children >= LAYOUT.low)
+
+
+def test_mutation_clips_to_range():
+    lay = GenomeLayout((GeneBlock(name="x", size=1, low=-1, high=1, init_mean=0, init_sigma=0, mutation_sigma=100),))
+    ga = GA(lay, GAConfig(population=2), seed=0)
+    out = ga.mutate(np.zeros((10000, 1)), np.random.default_rng(1))
+    assert out.min() == -1.0 and out.max() == 1.0
+    # rate 1 for a one-gene genome; P(|N(0, 100)| > 1) = 0.992, half of it clipped to each bound
+    assert np.mean(out == 1) == pytest.approx(0.496, abs=0.015)
+    assert np.mean(out == -1) == pytest.approx(0.496, abs=0.015)
+
+
+def test_truncation_keeps_top_half_unchanged():
+    ga = GA(LAYOUT, GAConfig(population=10), seed=3)
+    pop0 = ga.population.copy()
+    fit = np.array([5, 1, 9, 3, 7, 0, 8, 2, 6, 4], float)
+    ga.tell(fit)
+    ga.next_generation()
+    top = [2, 6, 4, 8, 0]  # best first
+    assert np.array_equal(ga.population[:5], pop0[top])
+    assert np.array_equal(ga.fitness[:5], fit[top]) and np.isnan(ga.fitness[5:]).all()
+    # each child is a copy of parent i (mutated in about one gene)
+    diff = (ga.population[5:] != pop0[top]).sum(axis=1)
+    assert diff.max() <= 5
+    pop, unknown = ga.ask()
+    assert unknown.tolist() == [False] * 5 + [True] * 5
+
+
+def test_frozen_genes_never_change():
+    mutable = np.zeros(120, bool)
+    mutable[110:] = True
+    ga = GA(LAYOUT, GAConfig(population=6), seed=4, initial=LAYOUT.init_mean, mutable=mutable)
+    assert ga.mutation_rate == pytest.approx(1 / 10)
+    for g in range(30):
+        _, unknown = ga.ask()
+        ga.tell(np.random.default_rng(g).random(int(unknown.sum())))
+        ga.next_generation()
+    assert np.all(ga.population[:, :110] == LAYOUT.init_mean[:110])
+    assert np.any(ga.population[:, 110:] != LAYOUT.init_mean[110:])
+
+
+def test_ga_improves_a_known_function():
+    """Maximise -||x - x*||^2 on a 12-gene layout: the GA gets close to x*."""
+    lay = GenomeLayout((GeneBlock(name="x", size=12, low=-5, high=5, init_mean=0, init_sigma=2, mutation_sigma=0.3),))
+    target = np.linspace(-3, 3, 12)
+    ga = GA(lay, GAConfig(population=50), seed=5)
+    first = None
+    for g in range(400):
+        pop, unknown = ga.ask()
+        ga.tell(-((pop[unknown] - target) ** 2).sum(axis=1))
+        if first is None:
+            first = ga.fitness.max()
+        if g < 399:
+            ga.next_generation()
+    assert first < -30
+    assert ga.fitness.max() > -0.5
+    # survivors keep their fitness: the best never gets worse
+    assert np.isfinite(ga.fitness).all()
+
+
+def test_same_seed_same_population_and_bad_configs():
+    a, b = GA(LAYOUT, GAConfig(), seed=9), GA(LAYOUT, GAConfig(), seed=9)
+    assert np.array_equal(a.population, b.population)
+    assert not np.array_equal(a.population, GA(LAYOUT, GAConfig(), seed=10).population)
+    for bad in (dict(population=1), dict(fittest_fraction=1.0), dict(mutations_per_genome=0), dict(population=2.5)):
+        with pytest.raises(ConfigError):
+            GAConfig(**bad)
