@@ -11,6 +11,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import signal
+import socket
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -114,6 +115,25 @@ class ProcessPoolEvaluator(Evaluator):
         self.pool.join()
 
 
+def check_reachable(address: str, timeout: float = 5.0) -> None:
+    """UserError unless ``host:port`` (or ``ray://host:port``) accepts a TCP connection.
+
+    ``ray.init`` retries an unreachable address for a long time; this answers in
+    at most ``timeout`` s.  ``auto`` and ``local`` are left to Ray.
+    """
+    if address in ("auto", "local"):
+        return
+    hostport = address.split("://", 1)[-1]
+    host, _, port = hostport.rpartition(":")
+    if not host or not port.isdigit():
+        raise UserError(f"bad Ray address {address!r} (expected HOST:PORT, ray://HOST:PORT or auto)")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise UserError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}") from None
+
+
 class RayEvaluator(Evaluator):
     """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
 
@@ -127,6 +147,8 @@ class RayEvaluator(Evaluator):
         self.chunk = int(chunk)
         self._owns = not ray.is_initialized()
         if self._owns:
+            if address:
+                check_reachable(address)
             try:
                 kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
                 ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
