@@ -256,3 +256,17 @@ def test_ctrl_c_stops_at_a_generation_boundary_and_resumes(tmp_path):
     assert 1 <= done < 12 and len(fitness_history(cut)) == done
     assert cli("evolve", "--resume", cut, "--quiet") == 0
     assert fitness_history(cut) == fitness_history(ref)
+    # the run's own recording, restarted on resume with the history so far, holds every generation
+    best = {int(r[0]): float(r[1]) for r in fitness_history(ref)}
+    assert rerun_series(cut / "evolution.rrd", "/evolution/best") == best
+    assert rerun_series(ref / "evolution.rrd", "/evolution/best") == best
+
+
+def rerun_series(path, entity) -> dict[int, float]:
+    rr = pytest.importorskip("rerun")
+    out = {}
+    for c in rr.chunk.RrdReader(path).stream():
+        if c.entity_path == entity and not c.is_static:
+            rb = c.to_record_batch()
+            out.update(zip(rb.column("generation").to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
+    return out
