@@ -66,7 +66,7 @@ def bench(episode: EpisodeConfig | None = None, *, population: int = 50, workers
     ep = serial.episode
     if ep.body.has_custom_forces:
         raise ConfigError(f"bench: body {config.body!r} adds forces in Python between physics steps; (a) cannot replay it open-loop")
-    genomes = GA(ep.controller.layout, GAConfig(population=population), seed=seed).ask()[0]
+    genomes = GA(ep.controller.layout, GAConfig(population=max(2, population)), seed=seed).ask()[0][:population]
     sim_seconds = population * ep.n_ticks * ep.control_dt
 
     say(f"(b) closed-loop evaluation of {population} walkers x {config.seconds:g} s in this process ...")
@@ -125,7 +125,7 @@ def bench(episode: EpisodeConfig | None = None, *, population: int = 50, workers
 
 def format_bench(r: dict) -> str:
     lines = [
-        f"{r['body']}/{r['controller']}: {r['population']} walkers x {r['episode_seconds']:g} s, "
+        f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "
         f"physics step {r['timestep_s'] * 1000:g} ms, control step {r['control_dt_s'] * 1000:g} ms, {r['cpu_count']} cores",
         f"(a) raw MuJoCo stepping (rollout, 1 thread)   {r['raw_sim_s_per_s']:10.1f} sim-s/s",
         f"(b) episode evaluation (1 process)            {r['eval_sim_s_per_s']:10.1f} sim-s/s",
