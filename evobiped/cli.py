@@ -328,6 +328,63 @@ def run_g3_cmd(args) -> int:
     return 0
 
 
+# ---------------------------------------------------------------- study
+def add_study(sub) -> None:
+    p = sub.add_parser("study", help="K evolutionary runs per condition (plain, cyclic): success rates, distances, Fig. 5")
+    p.add_argument("--runs", type=positive_int, default=10, help="runs (seeds) per condition (default 10)")
+    p.add_argument("--conditions", default="plain,cyclic", help="comma-separated: plain, cyclic (default both)")
+    p.add_argument("--config", metavar="FILE.toml", help="base run settings (as for evolve); flags override it")
+    p.add_argument("--population", type=positive_int, help="population size (default 50)")
+    p.add_argument("--generations", type=positive_int, help="generations (default 120)")
+    p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--first-seed", type=int, default=0, help="seeds are FIRST .. FIRST+K-1 (default 0)")
+    p.add_argument("--recheck-seconds", type=positive_float, default=200.0, help="re-simulate stable best walkers this long (default 200)")
+    p.add_argument("--backend", default="process", help="process (default: one run per core), serial or ray")
+    p.add_argument("--workers", type=positive_int, help="runs at once (default: all cores)")
+    p.add_argument("--address", help="Ray cluster address (with --backend ray)")
+    p.add_argument("--replays", action="store_true", help="also write a Rerun recording of each run's best walker")
+    p.add_argument("--out", metavar="DIR", default="runs/study", help="study directory (default runs/study); an existing one is resumed")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_study_cmd)
+
+
+def run_study_cmd(args) -> int:
+    import dataclasses
+    from pathlib import Path
+
+    from .study import StudyConfig, run_study, write_results
+
+    base = evolve_config(argparse.Namespace(
+        config=args.config, body=None, controller=None, task=None, episode_seconds=args.episode_seconds, cyclic=None,
+        population=args.population, generations=args.generations, seed=None, backend=None, workers=None, address=None, initial=None))
+    base = dataclasses.replace(base, seed=0)
+    conditions = tuple(c.strip() for c in args.conditions.split(",") if c.strip())
+    cfg = StudyConfig(run=base, runs=args.runs, conditions=conditions, first_seed=args.first_seed, recheck_seconds=args.recheck_seconds)
+    if args.backend == "ray" and args.address:
+        from .evolution.evaluate import check_reachable
+
+        check_reachable(args.address)
+    say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    try:
+        outcomes = run_study(args.out, cfg, backend=args.backend, workers=args.workers, address=args.address, progress=say)
+    except KeyboardInterrupt:
+        print(f"evobiped: study interrupted; run the same command again to resume (finished runs are kept, the others resume from their checkpoints)", file=sys.stderr)
+        return 130
+    for path in write_results(args.out, cfg, outcomes):
+        say(f"wrote {path}")
+    if args.replays:
+        from .record.replay import replay
+        from .record.source import resolve
+        from .study import run_dir
+
+        for c in cfg.conditions:
+            for k in range(cfg.runs):
+                rep = replay(resolve(run_dir(Path(args.out), c, k, cfg)))
+                say(f"recording: {rep.recording}")
+    print((Path(args.out) / "table.md").read_text(), end="")
+    return 0
+
+
 # ---------------------------------------------------------------- bench
 def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
@@ -351,7 +408,7 @@ def run_bench_cmd(args) -> int:
     return 0
 
 
-SUBCOMMANDS = [add_episode, add_evolve, add_bench, add_replay, add_g3]
+SUBCOMMANDS = [add_episode, add_evolve, add_study, add_bench, add_replay, add_g3]
 
 
 def build_parser() -> argparse.ArgumentParser:

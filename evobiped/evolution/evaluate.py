@@ -150,31 +150,41 @@ def check_reachable(address: str, timeout: float = 5.0) -> None:
         raise UserError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}") from None
 
 
+def init_ray(address: str | None, workers: int | None):
+    """Connect to the cluster at ``address`` or start a local Ray on ``workers`` CPUs.
+
+    Returns ``(ray module, True if we started it and must shut it down)``;
+    UserError (one line) when Ray is missing or the cluster cannot be reached.
+    """
+    try:
+        import ray
+    except ImportError:
+        raise UserError("the ray backend needs Ray: pip install 'evobiped[ray]'") from None
+    if ray.is_initialized():
+        return ray, False
+    if address:
+        check_reachable(address)
+    try:
+        kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
+        with _silenced_stderr():  # Ray's C++ client logs a warning per connection retry
+            ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
+    except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...
+        where = f" at {address}" if address else ""
+        hint = ""
+        if address and os.environ.get("RAY_AUTH_MODE") != "token":
+            hint = " (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and its token: see `ray get-auth-token`)"
+        raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
+    return ray, True
+
+
 class RayEvaluator(Evaluator):
     """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
 
     def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int = 5):
         super().__init__(episode)
-        try:
-            import ray
-        except ImportError:
-            raise UserError("the ray backend needs Ray: pip install 'evobiped[ray]'") from None
+        ray, self._owns = init_ray(address, workers)
         self.ray = ray
         self.chunk = int(chunk)
-        self._owns = not ray.is_initialized()
-        if self._owns:
-            if address:
-                check_reachable(address)
-            try:
-                kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
-                with _silenced_stderr():  # Ray's C++ client logs a warning per connection retry
-                    ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
-            except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...
-                where = f" at {address}" if address else ""
-                hint = ""
-                if address and os.environ.get("RAY_AUTH_MODE") != "token":
-                    hint = " (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and its token: see `ray get-auth-token`)"
-                raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
         n = workers or int(ray.cluster_resources().get("CPU", 1))
 
         @ray.remote(num_cpus=1)

@@ -1,0 +1,292 @@
+"""Many independent evolutionary runs per condition, and their statistics (Reil & Husbands Sect. III).
+
+A study runs K seeds for each condition ("plain" = eq. 4, "cyclic" = eq. 4
+with the cyclic-activity criterion), one whole run per task, spread over
+local processes or a Ray cluster.  Study directory::
+
+    study.json                 the StudyConfig
+    <condition>/seed_NNN/      an ordinary run directory (evobiped evolve's)
+        outcome.json           the run's result, with the long re-check
+    runs.csv                   one row per run
+    table.csv table.md table.json   per condition: success rate (Wilson 95 %),
+                               distances of stable / unstable best walkers, wall time
+    distances.png              Fig. 5: distance histograms, stable and unstable apart
+    fitness_graphs.png         best fitness per generation of every run
+
+"Stable" is the paper's: the run's best walker did not fall within the
+episode (50 s).  Each stable walker is re-simulated for ``recheck_seconds``
+(200 s by default); "walks indefinitely" counts those still up at the end.
+
+Interrupting a study loses at most the generation each run was in: running
+the same command again skips finished runs and resumes the others from their
+checkpoints.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import multiprocessing as mp
+import os
+import signal
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from . import __version__
+from .errors import ConfigError, UserError
+from .evolution.evaluate import SerialEvaluator, init_ray
+from .evolution.run import Run, RunConfig
+from .fileio import atomic_write, read_json, write_json
+from .genome_file import load_genome
+from .stats import histogram_edges, mean_std, wilson_interval
+
+#: task options that define each condition (added to the base run's)
+CONDITIONS = {"plain": {"cyclic_weight": 0.0}, "cyclic": {"cyclic_weight": 1.0}}
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudyConfig:
+    """K runs per condition of one base run config; seeds first_seed .. first_seed + K - 1."""
+
+    run: RunConfig = field(default_factory=RunConfig)
+    runs: int = 10
+    conditions: tuple[str, ...] = ("plain", "cyclic")
+    first_seed: int = 0
+    recheck_seconds: float = 200.0
+
+    def __post_init__(self):
+        if not (isinstance(self.runs, int) and self.runs >= 1):
+            raise ConfigError(f"study runs must be an integer >= 1, got {self.runs!r}")
+        unknown = [c for c in self.conditions if c not in CONDITIONS]
+        if unknown or not self.conditions or len(set(self.conditions)) != len(self.conditions):
+            raise ConfigError(f"study conditions must be distinct names from {', '.join(CONDITIONS)}, got {list(self.conditions)}")
+        if self.run.episode.task != "walk":
+            raise ConfigError(f"a study compares walk-task conditions; the run's task is {self.run.episode.task!r}")
+        if not (isinstance(self.first_seed, int) and self.first_seed >= 0):
+            raise ConfigError(f"first seed must be an integer >= 0, got {self.first_seed!r}")
+        if not self.recheck_seconds > 0:
+            raise ConfigError(f"recheck seconds must be > 0, got {self.recheck_seconds!r}")
+
+    def run_config(self, condition: str, k: int) -> RunConfig:
+        """The run of seed ``first_seed + k`` in ``condition`` (evaluated serially: one run per task)."""
+        ep = self.run.episode
+        episode = dataclasses.replace(ep, task_options={**ep.task_options, **CONDITIONS[condition]})
+        return dataclasses.replace(self.run, episode=episode, seed=self.first_seed + k, backend="serial", workers=None, address=None)
+
+    def identity(self) -> dict:
+        """What must match for a directory to be resumed as this study (K may grow or shrink)."""
+        d = self.to_dict()
+        d.pop("runs")
+        for k in ("backend", "workers", "address"):
+            d["run"].pop(k)
+        return d
+
+    def to_dict(self) -> dict:
+        return {"run": self.run.to_dict(), "runs": self.runs, "conditions": list(self.conditions), "first_seed": self.first_seed, "recheck_seconds": self.recheck_seconds}
+
+    @classmethod
+    def from_dict(cls, d: dict, *, where: str = "study") -> "StudyConfig":
+        d = dict(d)
+        run = RunConfig.from_dict(d.pop("run", {}), where=where)
+        try:
+            return cls(run=run, conditions=tuple(d.pop("conditions", ("plain", "cyclic"))), **d)
+        except TypeError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+
+
+def run_dir(study: Path, condition: str, k: int, cfg: StudyConfig) -> Path:
+    return study / condition / f"seed_{cfg.first_seed + k:03d}"
+
+
+# ---------------------------------------------------------------- one run (in a worker)
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+
+
+def run_one(directory: str, config: dict, condition: str, recheck_seconds: float) -> dict:
+    """Create, resume or skip the run in ``directory``; re-check a stable best walker.  Returns the outcome."""
+    d = Path(directory)
+    if (d / "outcome.json").is_file():
+        return read_json(d / "outcome.json", what="run outcome")
+    run_cfg = RunConfig.from_dict(config)
+    run = Run.resume(d) if (d / "config.json").is_file() else Run.create(d, run_cfg)
+    with SerialEvaluator(run_cfg.episode) as ev:
+        summary = run.evolve(ev)  # a finished run only writes its summary again
+    best = summary["best"]
+    outcome = {
+        "condition": condition,
+        "seed": run_cfg.seed,
+        "fitness": best["fitness"],
+        "fell": best["fell"],
+        "end_time": best["end_time"],
+        "generation": best["generation"],
+        "wall_seconds": summary["wall_seconds"],
+        "recheck_seconds": recheck_seconds,
+        "walks_indefinitely": None,
+        "recheck_end_time": None,
+    }
+    if not best["fell"]:
+        genome, ep_cfg, _ = load_genome(d / "best.json")
+        r = dataclasses.replace(ep_cfg, seconds=float(recheck_seconds)).build().run(genome)
+        outcome["walks_indefinitely"] = not bool(r.fell[0])
+        outcome["recheck_end_time"] = float(r.end_time[0])
+    write_json(d / "outcome.json", outcome)
+    return outcome
+
+
+# ---------------------------------------------------------------- the study
+def open_study(directory: str | Path, config: StudyConfig) -> Path:
+    """A new study directory, or an existing one holding the same study (resume); UserError otherwise."""
+    d = Path(directory)
+    saved = d / "study.json"
+    if saved.is_file():
+        old = read_json(saved, what="study config")
+        old.pop("evobiped", None)
+        if StudyConfig.from_dict(old, where=str(saved)).identity() != config.identity():
+            raise UserError(f"{d} holds a different study (compare {saved}); use another --out")
+    elif d.exists() and (not d.is_dir() or any(d.iterdir())):
+        raise UserError(f"{d} exists and is not a study directory; use another --out")
+    d.mkdir(parents=True, exist_ok=True)
+    write_json(saved, {"evobiped": __version__, **config.to_dict()})
+    return d
+
+
+def run_study(
+    directory: str | Path,
+    config: StudyConfig,
+    *,
+    backend: str = "process",
+    workers: int | None = None,
+    address: str | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> list[dict]:
+    """Run (or finish) every run of the study; returns the outcomes, condition by condition."""
+    say = progress or (lambda msg: None)
+    if backend not in ("process", "serial", "ray"):
+        raise ConfigError(f"unknown study backend {backend!r} (choose from process, serial, ray)")
+    d = open_study(directory, config)
+    tasks = [
+        (str(run_dir(d, c, k, config)), config.run_config(c, k).to_dict(), c, config.recheck_seconds)
+        for c in config.conditions
+        for k in range(config.runs)
+    ]
+    todo = [t for t in tasks if not (Path(t[0]) / "outcome.json").is_file()]
+    say(f"study {d}: {len(config.conditions)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already done, "
+        f"{config.run.ga.population} x {config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
+    t0, done = time.perf_counter(), 0
+
+    def report(o: dict) -> None:
+        nonlocal done
+        done += 1
+        el = time.perf_counter() - t0
+        eta = el / done * (len(todo) - done)
+        state = "stayed up" if not o["fell"] else f"fell at {o['end_time']:.1f} s"
+        say(f"run {done}/{len(todo)}: {o['condition']} seed {o['seed']}: best {o['fitness']:.2f} m ({state})  "
+            f"elapsed {el:.0f} s, left ~{eta:.0f} s")
+
+    if todo and backend == "serial":
+        for t in todo:
+            report(run_one(*t))
+    elif todo and backend == "process":
+        n = min(workers or os.cpu_count() or 1, len(todo))
+        with mp.get_context("spawn").Pool(n, initializer=_ignore_sigint) as pool:
+            for o in pool.imap_unordered(_star_run_one, todo):
+                report(o)
+    elif todo:
+        ray, owns = init_ray(address, workers)
+        try:
+            remote = ray.remote(num_cpus=1)(run_one)
+            pending = [remote.remote(*t) for t in todo]
+            while pending:
+                ready, pending = ray.wait(pending, num_returns=1)
+                report(ray.get(ready[0]))
+        finally:
+            if owns:
+                ray.shutdown()
+    return [read_json(Path(t[0]) / "outcome.json", what="run outcome") for t in tasks]
+
+
+def _star_run_one(args: tuple) -> dict:
+    return run_one(*args)
+
+
+# ---------------------------------------------------------------- statistics and files
+def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
+    """One row per condition: counts, success rate with Wilson 95 % interval, distances, wall time."""
+    rows = []
+    for c in conditions:
+        os_ = [o for o in outcomes if o["condition"] == c]
+        stable = [o["fitness"] for o in os_ if not o["fell"]]
+        unstable = [o["fitness"] for o in os_ if o["fell"]]
+        n, k = len(os_), len(stable)
+        lo, hi = wilson_interval(k, n)
+        sm, ss = mean_std(stable)
+        um, us = mean_std(unstable)
+        rows.append({
+            "condition": c,
+            "runs": n,
+            "stable": k,
+            "success_rate": k / n if n else float("nan"),
+            "ci95_low": lo,
+            "ci95_high": hi,
+            "stable_mean_m": sm,
+            "stable_std_m": ss,
+            "unstable_mean_m": um,
+            "unstable_std_m": us,
+            "walks_indefinitely": sum(1 for o in os_ if o["walks_indefinitely"]),
+            "wall_seconds": float(sum(o["wall_seconds"] for o in os_)),
+        })
+    return rows
+
+
+RUN_COLUMNS = ("condition", "seed", "fitness", "fell", "end_time", "generation", "wall_seconds", "walks_indefinitely", "recheck_end_time")
+
+
+def _csv(rows: list[dict], columns) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n", extrasaction="ignore")
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def _fmt(x: float, spec: str = ".2f") -> str:
+    return "–" if x != x else format(x, spec)
+
+
+def table_markdown(rows: list[dict], recheck_seconds: float) -> str:
+    lines = [
+        f"| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | wall time (s) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['condition']} | {r['runs']} | {r['stable']} | {100 * r['success_rate']:.0f} % [{100 * r['ci95_low']:.0f}, {100 * r['ci95_high']:.0f}] | "
+            f"{_fmt(r['stable_mean_m'])} ± {_fmt(r['stable_std_m'])} | {_fmt(r['unstable_mean_m'])} ± {_fmt(r['unstable_std_m'])} | "
+            f"{r['walks_indefinitely']} | {r['wall_seconds']:.0f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dict]) -> list[Path]:
+    """runs.csv, table.csv/.md/.json and the two figures; returns the paths written."""
+    from .record.source import read_history
+    from .record.study_figures import distance_histograms, fitness_graphs
+
+    d = Path(directory)
+    rows = summarize(outcomes, config.conditions)
+    atomic_write(d / "runs.csv", _csv(outcomes, RUN_COLUMNS))
+    atomic_write(d / "table.csv", _csv(rows, rows[0].keys()))
+    atomic_write(d / "table.md", table_markdown(rows, config.recheck_seconds))
+    write_json(d / "table.json", {"evobiped": __version__, "conditions": rows})
+    edges = histogram_edges([o["fitness"] for o in outcomes])
+    histories = {c: [read_history(run_dir(d, c, k, config) / "history.csv") for k in range(config.runs)] for c in config.conditions}
+    return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
+            distance_histograms(outcomes, config.conditions, edges, d / "distances.png"),
+            fitness_graphs(histories, d / "fitness_graphs.png")]
+
