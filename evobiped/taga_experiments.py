@@ -1,0 +1,263 @@
+"""Taga et al. 1991 experiments: the Taga biped driven by its Matsuoka rhythm generator.
+
+A :class:`TagaWalker` is a batch of P walkers (one genome each, u_0 per walker)
+that can be advanced in pieces, so an experiment can change u_0, push the body,
+or continue from a steady state (the u_0 sweeps of Fig. 11).  Every physics
+step: sensors -> rhythm generator (eq. 6) -> torques -> Appendix A forces ->
+MuJoCo step, exactly the order of :class:`evobiped.episode.Episode` with the
+controller stepped at the physics step.  Trajectories are sampled every
+``record_every`` steps; :func:`metrics` reduces them with :mod:`evobiped.stride`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .bodies.taga import TagaBiped
+from .controllers.matsuoka import Matsuoka
+from .errors import UserError
+from .mapping import to_action
+from .sim import Sims
+from .stride import StrideMetrics, analyse
+
+PRESETS = ("taga",)
+
+
+def check_u0(u0: float) -> float:
+    if not (np.isfinite(u0) and u0 >= 0):
+        raise UserError(f"u0 must be a number >= 0, got {u0}")
+    return float(u0)
+
+
+@dataclass
+class Trace:
+    """Sampled trajectory of P walkers: ``t`` (T,), the rest ``(T, P, ...)``."""
+
+    t: list = field(default_factory=list)
+    hip: list = field(default_factory=list)  # (P, 2) x, height above terrain
+    contact: list = field(default_factory=list)  # (P, 2) right, left
+    ankle: list = field(default_factory=list)  # (P, 2, 2)
+    knee: list = field(default_factory=list)  # (P, 2, 2)
+    hip_z: list = field(default_factory=list)  # (P,) absolute hip z
+    u: list = field(default_factory=list)  # (P, 12) neuron inner states (internal order)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {k: np.array(v) for k, v in self.__dict__.items()}
+
+
+class TagaWalker:
+    """P Taga bipeds with their rhythm generators, advanced piece by piece."""
+
+    def __init__(
+        self,
+        u0,
+        *,
+        preset: str = "taga",
+        feedback: bool = True,
+        timestep: float = 0.0005,
+        record_every: int = 4,
+        **body_options,
+    ):
+        if preset not in PRESETS:
+            raise UserError(f"unknown preset {preset!r} (choose from {', '.join(PRESETS)})")
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        for v in u0:
+            check_u0(v)
+        self.body = TagaBiped(timestep=timestep, **body_options)
+        self.model = self.body.build_model()
+        self.P = len(u0)
+        self.sims = Sims(self.model, self.P)
+        self.body.reset(self.sims)
+        widths = {k: v.shape[1] for k, v in self.body.sensors(self.sims).items()}
+        inputs = {k: widths[k] for k in Matsuoka.body_inputs} if feedback else {}
+        self.ctrl = Matsuoka(n_outputs=6, inputs=inputs, u0=float(u0[0]))
+        self.ctrl.bind_period(timestep)
+        self.params = self.ctrl.decode(np.tile(self.ctrl.preset_genome(preset), (self.P, 1)))
+        self.params["u0"] = u0[:, None].copy()
+        self.state = self.ctrl.initial_state(self.params)
+        self.low, self.high = self.body.action_bounds()
+        self.alive = np.ones(self.P, bool)
+        self.fell_at = np.full(self.P, np.nan)
+        self.unstable = np.zeros(self.P, bool)
+        self.steps = 0
+        self.record_every = int(record_every)
+        self.trace = Trace()
+        self._record()
+
+    @property
+    def time(self) -> float:
+        return self.steps * self.body.timestep
+
+    def set_u0(self, u0) -> None:
+        u0 = np.broadcast_to(np.asarray(u0, float), (self.P,))
+        for v in u0:
+            check_u0(v)
+        self.params["u0"][:, 0] = u0
+
+    def advance(self, seconds: float) -> None:
+        """Simulate ``seconds`` more (walkers that fell stay where they fell)."""
+        body, ctrl, sims = self.body, self.ctrl, self.sims
+        names = ctrl.input_names
+        for _ in range(int(round(seconds / body.timestep))):
+            ids = np.flatnonzero(self.alive)
+            if ids.size == 0:
+                break
+            if names:
+                s = body.sensors(sims)
+                inputs = np.concatenate([s[n] for n in names], 1)
+            else:
+                inputs = np.zeros((self.P, 0))
+            self.state, out = ctrl.step(self.params, self.state, inputs)
+            body.apply(sims, ids, to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)[ids])
+            body.substep(sims, ids)
+            bad = sims.step(ids, 1)
+            self.steps += 1
+            down = bad | body.fallen(sims, ids)
+            if down.any():
+                self.unstable[ids[bad]] = True
+                self.fell_at[ids[down]] = self.time
+                self.alive[ids[down]] = False
+            if self.steps % self.record_every == 0:
+                self._record()
+
+    def _record(self) -> None:
+        k = self.body.links(self.sims)
+        tr = self.trace
+        tr.t.append(self.time)
+        tr.hip.append(np.stack([k["hip"][:, 0], self.body.hip_height(self.sims)], 1))
+        tr.hip_z.append(k["hip"][:, 1].copy())
+        tr.contact.append(self.body.sensors(self.sims)["ground_contact"] > 0)
+        tr.ankle.append(k["ankle"].copy())
+        tr.knee.append(k["knee"].copy())
+        tr.u.append(self.state["u"].copy())
+
+    def metrics(self, *, t_start: float | None = None, t_end: float | None = None) -> list[dict]:
+        """Per walker: fell/when and :class:`~evobiped.stride.StrideMetrics` over the window."""
+        a = self.trace.arrays()
+        out = []
+        for p in range(self.P):
+            m: StrideMetrics = analyse(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0], a["hip"][:, p, 1], t_start=t_start, t_end=t_end)
+            fell = bool(not self.alive[p])
+            d = {"u0": float(self.params["u0"][p, 0]), "fell": fell, "fell_at": float(self.fell_at[p]) if fell else None, "unstable": bool(self.unstable[p])}
+            d.update(m.as_dict())
+            if fell:
+                d["gait"] = "fell"
+            out.append(d)
+        return out
+
+
+def steady(u0, *, seconds: float = 20.0, window: float = 10.0, **options) -> tuple[TagaWalker, list[dict]]:
+    """Run from Appendix E's initial condition; metrics over the last ``window`` s."""
+    w = TagaWalker(u0, **options)
+    w.advance(seconds)
+    return w, w.metrics(t_start=seconds - window)
+
+
+def push(
+    target: str,
+    force: float,
+    *,
+    u0: float = 5.5,
+    before: float = 10.0,
+    duration: float = 0.2,
+    after: float = 10.0,
+    delay: float = 0.05,
+    **options,
+) -> tuple[TagaWalker, dict]:
+    """Fig. 7: walk ``before`` s, push ``target`` forward with ``force`` N for ``duration`` s.
+
+    A shank is pushed ``delay`` s after its foot leaves the ground (during its
+    swing); the hip at the same moment of the right leg's swing.  Returns the
+    walker and a summary: push time, per-stride lengths/durations before and
+    after, and the strides until both are back within 5 % of the pre-push median.
+    """
+    from .stride import per_stride
+
+    w = TagaWalker(u0, **options)
+    w.advance(before)
+    leg = 1 if target == "left_shank" else 0
+    # wait for the liftoff of the pushed leg (the right leg for a hip push)
+    for _ in range(int(2.0 / w.body.timestep)):
+        c0 = w.body.sensors(w.sims)["ground_contact"][0, leg]
+        w.advance(w.body.timestep)
+        if c0 > 0 and w.body.sensors(w.sims)["ground_contact"][0, leg] == 0:
+            break
+    w.advance(delay)
+    t_push = w.time
+    w.body.set_push(w.sims, np.arange(w.P), target, force)
+    w.advance(duration)
+    w.body.set_push(w.sims, np.arange(w.P), "none", 0.0)
+    w.advance(after)
+    a = w.trace.arrays()
+    starts, L, D = per_stride(a["t"], a["contact"][:, 0], a["ankle"][:, 0, :, 0])
+    pre = starts < t_push - 1.5
+    post = starts > t_push
+    refL, refD = np.median(L[pre][-5:]), np.median(D[pre][-5:])
+    ok = (np.abs(L[post] / refL - 1) < 0.05) & (np.abs(D[post] / refD - 1) < 0.05)
+    # strides until every later stride is within 5 %
+    recovered = None
+    for i in range(len(ok)):
+        if ok[i:].all():
+            recovered = i
+            break
+    summary = dict(
+        target=target,
+        force=force,
+        t_push=t_push,
+        fell=bool(not w.alive[0]),
+        fell_at=float(w.fell_at[0]) if not w.alive[0] else None,
+        stride_length_before=float(refL),
+        cycle_duration_before=float(refD),
+        strides_after=[(float(x), float(y)) for x, y in zip(L[post], D[post])],
+        strides_to_recover=recovered,
+    )
+    return w, summary
+
+
+def sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float = 20.0, **options) -> list[dict]:
+    """Fig. 11: step u_0 through ``u0_values``, each step starting from the previous steady state.
+
+    The first value runs ``first`` s from Appendix E's initial condition, every
+    later one ``settle`` s; metrics over the last ``window`` s of each.
+    A fall ends the sweep (later values are reported as fell).
+    """
+    w = TagaWalker(u0_values[0], **options)
+    rows = []
+    for i, u in enumerate(u0_values):
+        w.set_u0(u)
+        dur = first if i == 0 else settle
+        w.advance(dur)
+        m = w.metrics(t_start=w.time - window)[0]
+        m["u0"] = float(u)
+        rows.append(m)
+    return rows
+
+
+def isolated_period(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> float:
+    """Fig. 6B: period (s) of the hip oscillator with Feed = 0 (median interval of u_flexor - u_extensor rising through 0)."""
+    ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u)
+    ctrl.bind_period(timestep)
+    params = ctrl.decode(ctrl.preset_genome()[None])
+    state = ctrl.initial_state(params)
+    n = int(round(seconds / timestep))
+    d = np.empty(n)
+    empty = np.zeros((1, 0))
+    for i in range(n):
+        state, _ = ctrl.step(params, state, empty)
+        d[i] = state["u"][0, 0] - state["u"][0, 1]
+    return period_of(np.arange(1, n + 1) * timestep, d, t_start=seconds / 2)
+
+
+def period_of(t: np.ndarray, x: np.ndarray, *, t_start: float = 0.0) -> float:
+    """Median interval (s) between upward zero crossings of ``x`` after ``t_start``; nan if < 2."""
+    up = np.flatnonzero((x[1:] > 0) & (x[:-1] <= 0)) + 1
+    up = up[t[up] >= t_start]
+    return float(np.median(np.diff(t[up]))) if len(up) > 1 else float("nan")
+
+
+def walking_hip_period(w: TagaWalker, *, t_start: float) -> float:
+    """Period (s) of the right hip oscillator (u_1 - u_2) in a walker's trace."""
+    a = w.trace.arrays()
+    return period_of(a["t"], a["u"][:, 0, 0] - a["u"][:, 0, 1], t_start=t_start)
