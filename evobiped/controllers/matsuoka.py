@@ -19,8 +19,9 @@ Feedback: on a body with the sensors ``link_angles``, ``link_velocities`` and
 (with F_eed6 = a_5 (x_14 - pi/2) h(F_g4): the printed ``a_5(x_14 pi/2)`` is a
 transcription slip), otherwise Feed = 0.  Forward Euler at the control period
 (the physics step by default: tau = 0.025 s over dt = 0.5 ms).  The initial
-state is u = v = 0 (``initial_u`` adds a small asymmetry, e.g. for the
-isolated generator, which from an exactly symmetric state never oscillates).
+state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
+second leg's extensors there, e.g. for the isolated generator, which from an
+exactly symmetric state settles to its fixed point instead of oscillating).
 
 Genome blocks (Taga's values: :meth:`Matsuoka.preset_genome`): per-oscillator
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
@@ -187,7 +188,9 @@ class Matsuoka(Controller):
     def initial_state(self, params: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         P = params["W"].shape[0]
         u = np.zeros((P, self.n))
-        u[:, 0::2] = self.initial_u  # flexors ahead of extensors
+        half = self.n_osc // 2  # first leg's flexors and second leg's extensors ahead
+        u[:, 0 : 2 * half : 2] = self.initial_u
+        u[:, 2 * half + 1 :: 2] = self.initial_u
         return {"u": u, "v": np.zeros((P, self.n))}
 
     def feed(self, params: dict[str, np.ndarray], inputs: np.ndarray) -> np.ndarray:
