@@ -317,8 +317,9 @@ def add_taga(sub) -> None:
     p.add_argument("--kg", type=positive_float, default=1e4, help="ground stiffness N/m (default 1e4)")
     p.add_argument("--bg", type=float, default=1e3, help="ground damping N s/m (default 1e3)")
     p.add_argument("--timestep", type=positive_float, default=0.0005, help="physics step in s (default 0.0005)")
-    p.add_argument("--push", choices=("leg", "hip"), help="Fig. 7: push the swinging right shank (200 N) or the hip (288 N) for 0.2 s after 10 s")
+    p.add_argument("--push", choices=("leg", "hip"), help="Fig. 7: after 10 s push the right shank (200 N) or the hip (288 N) forward for 0.2 s")
     p.add_argument("--push-force", type=float, help="push force in N (default 200 leg, 288 hip)")
+    p.add_argument("--push-delay", type=float, default=0.05, help="push this many s after the right foot lifts off (default 0.05)")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_taga_cmd)
 
@@ -340,7 +341,7 @@ def run_taga_cmd(args) -> int:
             raise UserError("--push takes one --u0 value")
         force = args.push_force if args.push_force is not None else (200.0 if args.push == "leg" else 288.0)
         target = "right_shank" if args.push == "leg" else "hip"
-        _, s = tx.push(target, force, u0=args.u0[0], **opts)
+        _, (s,) = tx.push(target, force, [args.push_delay], u0=args.u0[0], **opts)
         if args.json:
             print(json.dumps(s))
             return 0

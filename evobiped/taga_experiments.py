@@ -158,62 +158,69 @@ def steady(u0, *, seconds: float = 20.0, window: float = 10.0, **options) -> tup
 def push(
     target: str,
     force: float,
+    delays=(0.05,),
     *,
     u0: float = 5.5,
     before: float = 10.0,
     duration: float = 0.2,
-    after: float = 10.0,
-    delay: float = 0.05,
+    after: float = 8.0,
+    tolerance: float = 0.05,
     **options,
-) -> tuple[TagaWalker, dict]:
-    """Fig. 7: walk ``before`` s, push ``target`` forward with ``force`` N for ``duration`` s.
+) -> tuple[TagaWalker, list[dict]]:
+    """Fig. 7: walk ``before`` s, then push ``target`` forward with ``force`` N for ``duration`` s.
 
-    A shank is pushed ``delay`` s after its foot leaves the ground (during its
-    swing); the hip at the same moment of the right leg's swing.  Returns the
-    walker and a summary: push time, per-stride lengths/durations before and
-    after, and the strides until both are back within 5 % of the pre-push median.
+    Walker p is pushed ``delays[p]`` s after the first liftoff of the right
+    foot after ``before`` (a right-shank push with a short delay hits the
+    swinging shank).  Per walker: push time, fell/when, the median stride
+    length and cycle duration of the strides before the push, every stride
+    after it, and the strides until all later ones are within ``tolerance``
+    (relative) of the pre-push values (None if never).
     """
     from .stride import per_stride
 
-    w = TagaWalker(u0, **options)
+    delays = np.asarray(delays, float)
+    w = TagaWalker(np.full(len(delays), u0), **options)
     w.advance(before)
-    leg = 1 if target == "left_shank" else 0
-    # wait for the liftoff of the pushed leg (the right leg for a hip push)
-    for _ in range(int(2.0 / w.body.timestep)):
-        c0 = w.body.sensors(w.sims)["ground_contact"][0, leg]
-        w.advance(w.body.timestep)
-        if c0 > 0 and w.body.sensors(w.sims)["ground_contact"][0, leg] == 0:
+    step = w.body.timestep
+    for _ in range(int(round(2.0 / step))):  # to the right foot's liftoff
+        was = w.body.sensors(w.sims)["ground_contact"][0, 0]
+        w.advance(step)
+        if was > 0 and w.body.sensors(w.sims)["ground_contact"][0, 0] == 0:
             break
-    w.advance(delay)
-    t_push = w.time
-    w.body.set_push(w.sims, np.arange(w.P), target, force)
-    w.advance(duration)
-    w.body.set_push(w.sims, np.arange(w.P), "none", 0.0)
-    w.advance(after)
+    starts = w.time + delays
+    t_end = starts.max() + duration + after
+    on = np.zeros(len(delays), bool)
+    while w.time < t_end - step / 2:
+        t = w.time
+        want = (t >= starts - step / 2) & (t < starts + duration - step / 2)
+        for i in np.flatnonzero(want != on):
+            w.body.set_push(w.sims, np.array([i]), target if want[i] else "none", force if want[i] else 0.0)
+        on = want
+        w.advance(step)
     a = w.trace.arrays()
-    starts, L, D = per_stride(a["t"], a["contact"][:, 0], a["ankle"][:, 0, :, 0])
-    pre = starts < t_push - 1.5
-    post = starts > t_push
-    refL, refD = np.median(L[pre][-5:]), np.median(D[pre][-5:])
-    ok = (np.abs(L[post] / refL - 1) < 0.05) & (np.abs(D[post] / refD - 1) < 0.05)
-    # strides until every later stride is within 5 %
-    recovered = None
-    for i in range(len(ok)):
-        if ok[i:].all():
-            recovered = i
-            break
-    summary = dict(
-        target=target,
-        force=force,
-        t_push=t_push,
-        fell=bool(not w.alive[0]),
-        fell_at=float(w.fell_at[0]) if not w.alive[0] else None,
-        stride_length_before=float(refL),
-        cycle_duration_before=float(refD),
-        strides_after=[(float(x), float(y)) for x, y in zip(L[post], D[post])],
-        strides_to_recover=recovered,
-    )
-    return w, summary
+    rows = []
+    for p in range(w.P):
+        s, L, D = per_stride(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0])
+        pre, post = (s < starts[p] - 1.5) & (s > before - 5.0), s > starts[p]
+        refL, refD = float(np.median(L[pre])), float(np.median(D[pre]))
+        ok = (np.abs(L[post] / refL - 1) < tolerance) & (np.abs(D[post] / refD - 1) < tolerance)
+        fell = bool(not w.alive[p])
+        recovered = None if fell else next((i for i in range(len(ok)) if ok[i:].all() and len(ok) - i >= 3), None)
+        rows.append(
+            dict(
+                target=target,
+                force=float(force),
+                delay=float(delays[p]),
+                t_push=float(starts[p]),
+                fell=fell,
+                fell_at=float(w.fell_at[p]) if fell else None,
+                stride_length_before=refL,
+                cycle_duration_before=refD,
+                strides_after=[(float(x), float(y)) for x, y in zip(L[post], D[post])],
+                strides_to_recover=recovered,
+            )
+        )
+    return w, rows
 
 
 def sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float = 20.0, **options) -> list[dict]:

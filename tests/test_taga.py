@@ -1,0 +1,189 @@
+"""The Taga biped and its Matsuoka rhythm generator against Taga, Yamaguchi & Shimizu 1991
+(issue 5, claims 1, 2, 4, 7), the stride metrics on synthetic contact sequences, and the CLI."""
+
+import numpy as np
+import pytest
+
+from evobiped import stride
+from evobiped import taga_experiments as tx
+from evobiped.bodies.taga import TagaBiped
+from evobiped.cli import main
+from evobiped.controllers.matsuoka import Matsuoka, taga_feedback
+from evobiped.sim import Sims
+
+
+# ---------------------------------------------------------------- structure
+def test_model_masses_and_rod_inertias():
+    body = TagaBiped()
+    m = body.build_model()
+    mass = {m.body(i).name: m.body_mass[i] for i in range(m.nbody)}
+    assert (mass["hip"], mass["right_thigh"], mass["right_shank"]) == (48.0, 7.0, 4.0)
+    assert m.body_inertia[m.body("left_thigh").id][1] == pytest.approx(7 * 0.5**2 / 12)
+    assert m.body_inertia[m.body("left_shank").id][1] == pytest.approx(4 * 0.6**2 / 12)
+    assert m.nv == 6 and m.opt.timestep == 0.0005
+
+
+def test_initial_condition_is_appendix_e():
+    body = TagaBiped()
+    sims = Sims(body.build_model(), 1)
+    body.reset(sims)
+    k = body.links(sims)
+    assert np.allclose(k["thigh"][0], [0.45 * np.pi, 0.57 * np.pi])
+    assert np.allclose(k["shank"][0], k["thigh"][0])
+    # x_10 = x_2 - l1 sin x_5 - (l2/2) sin x_11, so the ankle is l2/2 lower
+    ankle_y = 1.09 - 1.1 * np.sin(np.array([0.45, 0.57]) * np.pi)
+    assert np.allclose(k["ankle"][0, :, 1], ankle_y)
+    assert np.allclose(k["ankle"][0, :, 0], 1.1 * np.cos(np.array([0.45, 0.57]) * np.pi))
+
+
+def test_standing_ground_spring_carries_the_weight():
+    """Legs straight down, no torques: the ground springs settle at m g / (2 k_g) per leg."""
+    body = TagaBiped()
+    sims = Sims(body.build_model(), 1)
+    body.reset(sims)
+    sims.qpos[0, :] = [0, 1.1, 0, 0, 0, 0]
+    sims.forward()
+    for _ in range(6000):  # 3 s
+        body.apply(sims, np.array([0]), np.zeros((1, 6)))
+        body.substep(sims, np.array([0]))
+        sims.step(np.array([0]), 1)
+    total = 48 + 2 * (7 + 4)
+    f = body.sensors(sims)["ground_force"][0]
+    assert f[1] + f[3] == pytest.approx(total * 9.8, rel=1e-3)
+    assert body.hip_height(sims)[0] == pytest.approx(1.1 - total * 9.8 / (2 * 1e4), abs=2e-4)
+
+
+def test_taga_weights_from_j_to_i():
+    c = Matsuoka(n_outputs=6)
+    W = c.decode(c.preset_genome()[None])["W"][0]
+    order = c._taga_order  # Taga's neuron k (0-based) -> internal index
+    Wt = W[np.ix_(order, order)]  # Taga numbering
+    fe = [(1, 2), (2, 1), (3, 4), (4, 3), (5, 6), (6, 5), (7, 8), (8, 7), (9, 10), (10, 9), (11, 12), (12, 11)]
+    rl = [(1, 3), (3, 1), (2, 4), (4, 2)]
+    hka = [(6, 1), (6, 2), (8, 3), (8, 4), (10, 1), (10, 2), (12, 3), (12, 4)]
+    expect = np.zeros((12, 12))
+    for pairs, w in ((fe, -2.0), (rl, -1.0), (hka, -1.0)):
+        for i, j in pairs:
+            expect[i - 1, j - 1] = w
+    assert np.array_equal(Wt, expect)
+
+
+def test_feedback_eed6_reads_x14_minus_half_pi():
+    a = np.array([[1.5, 1.0, 1.5, 1.5, 3.0, 1.5, 3.0, 1.5]])
+    angles = np.array([[1.5, 1.6, 1.7, 1.8]])  # x5, x11, x8, x14
+    f = taga_feedback(a, angles, np.zeros((1, 4)), np.array([[1.0, 1.0]]))[0]
+    assert f[5] == pytest.approx(3.0 * (1.8 - np.pi / 2))
+    assert f[4] == -f[5] and f[6] == -f[7]
+    # flexor and extensor of each hip receive opposite angle feedback; contact terms +-a4
+    assert f[0] + f[1] == pytest.approx(0.0) and f[0] - f[1] == pytest.approx(2 * (1.5 * (1.5 - np.pi / 2) - 1.0 * (1.7 - np.pi / 2) + 1.5 * (1.6 - np.pi / 2) + 1.5))
+
+
+# ---------------------------------------------------------------- stride metrics
+def _sequence(pattern, dt=0.001):
+    """Contacts (T, 2) from [(duration s, right, left), ...] repeated; feet move 0.5 m per touchdown."""
+    rows = [(r, l) for d, r, l in pattern for _ in range(int(round(d / dt)))]
+    c = np.array(rows, bool)
+    t = np.arange(len(c)) * dt
+    td = np.concatenate([[0], np.cumsum(c[1:, 0] & ~c[:-1, 0])])
+    foot = np.stack([td * 1.0, td * 1.0], 1)
+    return t, c, foot, np.full(len(t), 1.0)
+
+
+def test_metrics_walk_synthetic():
+    # 1.0 s cycle: right stance 0.6 s, 0.1 s double support twice
+    cycle = [(0.1, 1, 1), (0.4, 1, 0), (0.1, 1, 1), (0.4, 0, 1)]
+    t, c, x, h = _sequence(cycle * 6)
+    m = stride.analyse(t, c, x, h)
+    assert m.gait == "walk" and m.strides == 4  # 5 touchdowns after t = 0
+    assert m.cycle_duration == pytest.approx(1.0, abs=2e-3)
+    assert m.stride_length == pytest.approx(1.0)
+    assert m.speed == pytest.approx(1.0, abs=3e-3)
+    assert m.double_support == pytest.approx(0.2, abs=0.01) and m.flight == 0.0
+
+
+def test_metrics_run_synthetic_with_touchdown_bounce():
+    # 0.8 s cycle, 0.1 s flight twice; a 3 ms bounce at each right touchdown is removed
+    cycle = [(0.003, 1, 0), (0.003, 0, 0), (0.294, 1, 0), (0.1, 0, 0), (0.3, 0, 1), (0.1, 0, 0)]
+    t, c, x, h = _sequence(cycle * 6)
+    m = stride.analyse(t, c, x, h, min_phase=0.01)
+    assert m.gait == "run" and m.strides == 4
+    assert m.cycle_duration == pytest.approx(0.8, abs=2e-3)
+    assert m.flight == pytest.approx(0.25, abs=0.01) and m.double_support == 0.0
+    raw = stride.analyse(t, c, x, h, min_phase=0.0)
+    assert raw.strides == 10  # the bounces count as touchdowns without cleaning
+
+
+def test_metrics_mixed_and_too_short():
+    walk = [(0.1, 1, 1), (0.4, 1, 0), (0.1, 1, 1), (0.4, 0, 1)]
+    run = [(0.3, 1, 0), (0.1, 0, 0), (0.3, 0, 1), (0.1, 0, 0)]
+    t, c, x, h = _sequence(walk * 3 + run * 3)
+    assert stride.analyse(t, c, x, h).gait == "mixed"
+    t, c, x, h = _sequence(walk)
+    assert stride.analyse(t, c, x, h).gait == "none"
+
+
+# ---------------------------------------------------------------- the paper's claims
+@pytest.fixture(scope="module")
+def walk_and_run():
+    """u0 = 5.5 (walking) and 7.5 (running, the lowest u0 that runs from Appendix E), 20 s."""
+    return tx.steady([5.5, 7.5], seconds=20.0, window=10.0)
+
+
+def test_claim1_walks_20s_with_double_support_and_no_flight(walk_and_run):
+    _, (m, _) = walk_and_run
+    assert not m["fell"] and m["gait"] == "walk"
+    assert m["strides"] >= 8 and m["strides_with_double_support"] == m["strides"]
+    assert m["flight"] == 0.0 and 0.05 < m["double_support"] < 0.3
+    assert 1.0 < m["speed"] < 1.6 and 0.9 < m["cycle_duration"] < 1.3  # Fig. 11 range at u0 = 5.5
+    assert 0.95 < m["hip_min"] < m["hip_max"] < 1.1
+
+
+def test_claim2_larger_u0_runs(walk_and_run):
+    _, (walk, run) = walk_and_run
+    assert not run["fell"] and run["gait"] == "run"
+    assert run["strides_with_flight"] == run["strides"] >= 8 and run["double_support"] == 0.0
+    assert run["flight"] > 0.1
+    assert run["speed"] > walk["speed"] and run["stride_length"] > walk["stride_length"]
+    assert run["cycle_duration"] < walk["cycle_duration"]
+
+
+def test_claim7_isolated_generator_is_slower_than_walking(walk_and_run):
+    w, (m, _) = walk_and_run
+    walking = tx.walking_hip_period(w, t_start=10.0)
+    assert walking == pytest.approx(m["cycle_duration"], abs=0.01)  # the generator is entrained to the stride
+    isolated = tx.isolated_period(5.5)
+    assert np.isfinite(isolated) and isolated > 1.5 * walking
+
+
+@pytest.mark.parametrize("target,force,delay", [("right_shank", 200.0, 0.05), ("hip", 288.0, 0.3)])
+def test_claim4_push_recovery(target, force, delay):
+    _, (r,) = tx.push(target, force, [delay], before=6.0, after=6.0)
+    assert not r["fell"]
+    dev = max(abs(L / r["stride_length_before"] - 1) for L, _ in r["strides_after"][:3])
+    assert dev > 0.05  # the push did disturb the strides
+    assert r["strides_to_recover"] is not None and r["strides_to_recover"] <= 3
+
+
+# ---------------------------------------------------------------- CLI
+@pytest.mark.parametrize(
+    "argv,needle",
+    [
+        (["--preset", "nope"], "unknown preset"),
+        (["--u0", "-1"], "u0 must be"),
+        (["--slope", "60"], "+-50 %"),
+        (["--slope", "-51"], "+-50 %"),
+    ],
+)
+def test_cli_bad_arguments(argv, needle, capsys):
+    assert main(["taga", *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and len(err.splitlines()) == 1
+
+
+def test_cli_json(capsys):
+    import json
+
+    assert main(["taga", "--u0", "5.5", "--seconds", "4", "--window", "3", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    (w,) = out["walkers"]
+    assert w["u0"] == 5.5 and not w["fell"] and w["strides"] >= 2 and w["flight"] == 0.0
