@@ -320,6 +320,7 @@ def add_taga(sub) -> None:
     p.add_argument("--push", choices=("leg", "hip"), help="Fig. 7: after 10 s push the right shank (200 N) or the hip (288 N) forward for 0.2 s")
     p.add_argument("--push-force", type=float, help="push force in N (default 200 leg, 288 hip)")
     p.add_argument("--push-delay", type=float, default=0.05, help="push this many s after the right foot lifts off (default 0.05)")
+    p.add_argument("--save-genome", metavar="FILE.json", help="also write the genome file of the (first) walker, for evobiped replay")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_taga_cmd)
 
@@ -336,6 +337,13 @@ def run_taga_cmd(args) -> int:
     if args.bg < 0:
         raise UserError(f"--bg must be >= 0, got {args.bg:g}")
     opts = dict(preset=args.preset, timestep=args.timestep, kg=args.kg, bg=args.bg, slope=args.slope / 100, slope_start=args.slope_start)
+    if args.save_genome:
+        from .episode import EpisodeConfig
+        from .genome_file import save_genome
+
+        body = {k: v for k, v in opts.items() if k != "preset"}
+        cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=args.seconds, body_options=body, controller_options={"u0": args.u0[0]})
+        save_genome(args.save_genome, cfg.build().controller.preset_genome(args.preset), cfg, preset=args.preset)
     if args.push:
         if len(args.u0) != 1:
             raise UserError("--push takes one --u0 value")

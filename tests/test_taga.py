@@ -180,13 +180,21 @@ def test_cli_bad_arguments(argv, needle, capsys):
     assert needle in err and len(err.splitlines()) == 1
 
 
-def test_cli_json(capsys):
+def test_cli_json_and_genome_file_replays_the_same_walk(capsys, tmp_path):
     import json
 
-    assert main(["taga", "--u0", "5.5", "--seconds", "4", "--window", "3", "--json"]) == 0
+    from evobiped.genome_file import load_genome
+
+    f = tmp_path / "taga.json"
+    assert main(["taga", "--u0", "5.5", "--seconds", "4", "--window", "3", "--json", "--save-genome", str(f)]) == 0
     out = json.loads(capsys.readouterr().out)
     (w,) = out["walkers"]
     assert w["u0"] == 5.5 and not w["fell"] and w["strides"] >= 2 and w["flight"] == 0.0
+    genome, cfg, _ = load_genome(f)
+    r = cfg.build().run(genome)
+    walker = tx.TagaWalker(5.5)
+    walker.advance(4.0)
+    assert r.end_position[0, 0] == walker.body.planar_position(walker.sims)[0, 0]
 
 
 # ---------------------------------------------------------------- pluggability
