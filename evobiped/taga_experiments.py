@@ -242,19 +242,25 @@ def sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float =
     return rows
 
 
-def isolated_period(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> float:
-    """Fig. 6B: period (s) of the hip oscillator with Feed = 0 (median interval of u_flexor - u_extensor rising through 0)."""
+def isolated_activity(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
+    """Fig. 6B: the rhythm generator alone (Feed = 0): times (T,) s and inner states u (T, 12)."""
     ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u)
     ctrl.bind_period(timestep)
     params = ctrl.decode(ctrl.preset_genome()[None])
     state = ctrl.initial_state(params)
     n = int(round(seconds / timestep))
-    d = np.empty(n)
+    u = np.empty((n, ctrl.n))
     empty = np.zeros((1, 0))
     for i in range(n):
         state, _ = ctrl.step(params, state, empty)
-        d[i] = state["u"][0, 0] - state["u"][0, 1]
-    return period_of(np.arange(1, n + 1) * timestep, d, t_start=seconds / 2)
+        u[i] = state["u"][0]
+    return np.arange(1, n + 1) * timestep, u
+
+
+def isolated_period(u0: float = 5.5, *, seconds: float = 10.0, **kw) -> float:
+    """Period (s) of the isolated generator's hip oscillator (u_flexor - u_extensor), second half of the run."""
+    t, u = isolated_activity(u0, seconds=seconds, **kw)
+    return period_of(t, u[:, 0] - u[:, 1], t_start=seconds / 2)
 
 
 def period_of(t: np.ndarray, x: np.ndarray, *, t_start: float = 0.0) -> float:

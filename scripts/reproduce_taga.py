@@ -83,18 +83,13 @@ def main() -> None:
     R["isolated"] = {"walking_hip_period_u5.5": walking, "isolated_hip_period": iso}
     md += [f"## Isolated generator (Feed = 0)\n\nhip-oscillator period walking at u0 = 5.5: {walking:.3f} s; "
            f"isolated: " + ", ".join(f"u0 = {k}: {v:.3f} s" for k, v in iso.items()) + "\n"]
-    iso_w = tx.TagaWalker(5.5, feedback=False)
-    iso_w.ctrl.initial_u = 0.1
-    iso_w.state = iso_w.ctrl.initial_state(iso_w.params)
-    iso_w.body.fall_height = -1.0  # the body is irrelevant here; keep the generator running
-    iso_w.advance(12.0)
-    ti = iso_w.trace.arrays()
+    ti_t, ti_u = tx.isolated_activity(5.5, seconds=12.0)
     order = np.r_[0:6, 6:12]
     sel_w = (tr["t"] >= 16) & (tr["t"] <= 20)
-    sel_i = (ti["t"] >= 8) & (ti["t"] <= 12)
+    sel_i = (ti_t >= 8) & (ti_t <= 12)
     fig.activity_figure(out / "fig6_activity.png", [
         ("A walking, u0 = 5.5", tr["t"][sel_w], tr["u"][sel_w, iw][:, order]),
-        ("B isolated (Feed = 0), u0 = 5.5", ti["t"][sel_i], ti["u"][sel_i, 0][:, order])], NEURONS)
+        ("B isolated (Feed = 0), u0 = 5.5", ti_t[sel_i], ti_u[sel_i][:, order])], NEURONS)
 
     # ---- claim 3: hysteresis sweeps (Fig. 11)
     log("claim 3: u0 sweeps up and down")
