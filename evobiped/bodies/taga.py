@@ -63,8 +63,8 @@ class TagaBiped(Body):
         self,
         *,
         timestep: float = 0.0005,
-        kg: float = APPENDIX_D["kg"],
-        bg: float = APPENDIX_D["bg"],
+        kg=APPENDIX_D["kg"],
+        bg=APPENDIX_D["bg"],
         slope: float = 0.0,
         slope_start: float = 0.0,
         max_torque: float = 2000.0,
@@ -74,13 +74,15 @@ class TagaBiped(Body):
         super().__init__(timestep=timestep, model_file=model_file)
         if not (0 < timestep <= 0.005):
             raise UserError(f"taga body: timestep must be in (0, 0.005] s, got {timestep}")
-        if not (kg > 0 and bg >= 0):
+        kg, bg = np.asarray(kg, float), np.asarray(bg, float)
+        if not (np.all(kg > 0) and np.all(bg >= 0)) or kg.ndim > 1 or bg.ndim > 1:
             raise UserError(f"taga body: ground stiffness kg must be > 0 and damping bg >= 0 (got {kg}, {bg})")
         if not -0.5 <= slope <= 0.5:
             raise UserError(f"taga body: slope must be within +-50 % (got {slope * 100:g} %)")
         if not (max_torque > 0 and fall_height > 0):
             raise UserError("taga body: max_torque and fall_height must be > 0")
-        self.p = dict(APPENDIX_D, kg=float(kg), bg=float(bg))
+        # kg, bg: one value, or one per simulation of the batch (P,)
+        self.p = dict(APPENDIX_D, kg=kg, bg=bg)
         self.slope, self.slope_start = float(slope), float(slope_start)
         self.max_torque, self.fall_height = float(max_torque), float(fall_height)
         self._state: weakref.WeakKeyDictionary[Sims, dict] = weakref.WeakKeyDictionary()
@@ -189,8 +191,10 @@ class TagaBiped(Body):
         rest[..., 1] = np.where(touch, self.terrain(ax), rest[..., 1])
         st["rest"][ids] = rest
         st["contact"][ids] = below
-        fx = np.where(below, -p["kg"] * (ax - rest[..., 0]) - p["bg"] * vx, 0.0)
-        fy = np.where(below, -p["kg"] * (ay - rest[..., 1]) + p["bg"] * np.maximum(-vy, 0.0), 0.0)
+        kg = p["kg"][ids, None] if p["kg"].ndim else p["kg"]
+        bg = p["bg"][ids, None] if p["bg"].ndim else p["bg"]
+        fx = np.where(below, -kg * (ax - rest[..., 0]) - bg * vx, 0.0)
+        fy = np.where(below, -kg * (ay - rest[..., 1]) + bg * np.maximum(-vy, 0.0), 0.0)
         st["force"][ids] = np.stack([fx[:, 0], fy[:, 0], fx[:, 1], fy[:, 1]], 1)
         on = (fy > 0).astype(float)  # h(F_g2), h(F_g4) with h(0) = 0
         T = st["torque"][ids]
