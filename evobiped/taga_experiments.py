@@ -223,6 +223,20 @@ def push(
     return w, rows
 
 
+def ground_switch(kg, bg, *, u0: float = 5.5, before: float = 10.0, after: float = 15.0, window: float = 10.0, **options) -> list[dict]:
+    """Claim 6, second reading: walk ``before`` s on the nominal ground (Appendix D), then
+    switch walker p to ground (kg[p], bg[p]) and walk ``after`` s more; metrics over the last ``window`` s."""
+    kg, bg = np.asarray(kg, float), np.asarray(bg, float)
+    w = TagaWalker(np.full(len(kg), u0), **options)
+    w.advance(before)
+    w.body.p["kg"], w.body.p["bg"] = kg, bg
+    w.advance(after)
+    rows = w.metrics(t_start=w.time - window)
+    for r, k, b in zip(rows, kg, bg):
+        r.update(kg=float(k), bg=float(b))
+    return rows
+
+
 def sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float = 20.0, **options) -> list[dict]:
     """Fig. 11: step u_0 through ``u0_values``, each step starting from the previous steady state.
 
@@ -270,7 +284,7 @@ def period_of(t: np.ndarray, x: np.ndarray, *, t_start: float = 0.0) -> float:
     return float(np.median(np.diff(t[up]))) if len(up) > 1 else float("nan")
 
 
-def walking_hip_period(w: TagaWalker, *, t_start: float) -> float:
-    """Period (s) of the right hip oscillator (u_1 - u_2) in a walker's trace."""
+def walking_hip_period(w: TagaWalker, *, t_start: float, p: int = 0) -> float:
+    """Period (s) of walker p's right hip oscillator (u_1 - u_2) in its trace."""
     a = w.trace.arrays()
-    return period_of(a["t"], a["u"][:, 0, 0] - a["u"][:, 0, 1], t_start=t_start)
+    return period_of(a["t"], a["u"][:, p, 0] - a["u"][:, p, 1], t_start=t_start)
