@@ -144,6 +144,8 @@ class TagaWalker:
             d.update(m.as_dict())
             if fell:
                 d["gait"] = "fell"
+                if t_start is not None and self.fell_at[p] <= t_start:  # down for the whole window
+                    d.update({k: float("nan") for k in ("double_support", "flight", "hip_min", "hip_max")})
             out.append(d)
         return out
 

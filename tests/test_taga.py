@@ -243,3 +243,21 @@ def test_matsuoka_drives_reil_pd_targets_within_range():
     low, high = ep.low, ep.high
     assert (a >= low).all() and (a <= high).all()
     assert (a.max(0) - a.min(0) > 0.2 * (high - low)).all()  # every joint is driven through its range
+
+
+def test_replay_records_the_taga_stick_figure(tmp_path, capsys):
+    import rerun as rr
+
+    from evobiped.episode import EpisodeConfig
+    from evobiped.genome_file import save_genome
+
+    cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=0.5, controller_options={"u0": 5.5})
+    ep = cfg.build()
+    g = ep.controller.preset_genome()
+    save_genome(tmp_path / "taga.json", g, cfg, fitness=float(ep.run(g).fitness[0]))
+    out = tmp_path / "taga.rrd"
+    assert main(["replay", str(tmp_path / "taga.json"), "--out", str(out)]) == 0
+    assert "equals it bit for bit" in capsys.readouterr().out
+    paths = {c.entity_path for c in rr.chunk.RrdReader(out).stream()}
+    for link in ("hip", "right_thigh", "right_shank", "left_thigh", "left_shank"):
+        assert any(link in p for p in paths), link
