@@ -106,6 +106,9 @@ def add_evolve(sub) -> None:
     p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="seed the population with clones of this genome")
     p.add_argument("--out", metavar="DIR", help="run directory (default runs/<body>_<controller>_seed<seed>)")
     p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last checkpoint")
+    p.add_argument("--rerun", nargs="?", const="spawn", metavar="ADDR",
+                   help="also stream fitness per generation to a Rerun viewer: a new one, or the one at ADDR "
+                        "(the run directory's evolution.rrd is written either way)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_evolve_cmd)
 
@@ -145,6 +148,10 @@ def run_evolve_cmd(args) -> int:
     from .evolution.evaluate import make_evaluator
     from .evolution.run import Run, eta_seconds
 
+    if args.rerun not in (None, "spawn"):
+        from .record.viewer import connect_url, require_viewer
+
+        require_viewer(connect_url(args.rerun))  # before anything is written
     if args.resume:
         if any(getattr(args, f) is not None for f in ("config", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
@@ -172,14 +179,18 @@ def run_evolve_cmd(args) -> int:
     say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}', population {c.ga.population}, "
         f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
 
+    log = _evolution_log(run, args.rerun)
+
     def progress(s):
+        log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
+                           evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
         eta = eta_seconds(s, run.history)
         say(f"gen {s.generation + 1:4d}/{s.generations_total}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
             f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
             f"elapsed {_hms(run.wall)}  left ~{_hms(eta)}")
 
     try:
-        with evaluator:
+        with evaluator, log:
             summary = run.evolve(evaluator, progress)
     except KeyboardInterrupt:
         print(f"evobiped: interrupted after generation {run.ga.generation}; checkpoint saved; "
@@ -190,6 +201,18 @@ def run_evolve_cmd(args) -> int:
     print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}); "
           f"{summary['evaluations']} evaluations in {_hms(summary['wall_seconds'])}; results in {run.dir}")
     return 0
+
+
+def _evolution_log(run, rerun: str | None):
+    """The run's evolution.rrd (resumed runs start it with their history so far), plus a viewer if asked."""
+    from .record.evolution_log import EvolutionLog
+    from .record.source import read_history
+
+    kw = {} if rerun is None else {"spawn": True} if rerun == "spawn" else {"connect": rerun}
+    log = EvolutionLog(path=run.dir / "evolution.rrd", **kw)
+    if run.history:
+        log.log_history(read_history(run.dir / "history.csv"))
+    return log
 
 
 def _hms(seconds: float) -> str:
@@ -373,7 +396,30 @@ def run_taga_cmd(args) -> int:
     return 0
 
 
-SUBCOMMANDS = [add_episode, add_evolve, add_replay, add_g3, add_taga]
+# ---------------------------------------------------------------- bench
+def add_bench(sub) -> None:
+    p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
+    p.add_argument("--body", default="reil", help="body (default reil)")
+    p.add_argument("--controller", default="ctrnn", help="controller (default ctrnn)")
+    p.add_argument("--population", type=positive_int, default=50, help="walkers (default 50)")
+    p.add_argument("--seconds", type=positive_float, default=50.0, help="episode length in s (default 50)")
+    p.add_argument("--workers", type=positive_int, help="workers for (c) (default: all cores)")
+    p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.set_defaults(func=run_bench_cmd)
+
+
+def run_bench_cmd(args) -> int:
+    from .bench import bench, format_bench
+    from .episode import EpisodeConfig
+
+    cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=args.seconds)
+    say = (lambda m: None) if args.json else (lambda m: print(m, file=sys.stderr, flush=True))
+    r = bench(cfg, population=args.population, workers=args.workers, progress=say)
+    print(json.dumps(r, indent=2) if args.json else format_bench(r))
+    return 0
+
+
+SUBCOMMANDS = [add_episode, add_evolve, add_bench, add_replay, add_g3, add_taga]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -53,6 +53,7 @@ class EpisodeConfig:
         task = _construct(TASKS[self.task], "task", self.task_options)
         widths = {**_sensor_widths(body), **task.sensor_widths()}
         opts = dict(self.controller_options)
+        genes = opts.pop("genes", None)
         wanted = opts.pop("inputs", None)
         if wanted is None:
             wanted = list(task.sensor_widths())
@@ -62,6 +63,8 @@ class EpisodeConfig:
             raise ConfigError(f"controller inputs {missing} are not sensors of body {self.body!r} / task {self.task!r} (have {sorted(widths)})")
         inputs = {w: widths[w] for w in wanted}
         controller = _construct(CONTROLLERS[self.controller], "controller", dict(opts, n_outputs=len(body.actuator_names), inputs=inputs))
+        if genes is not None:
+            controller.override_genes(genes)
         return Episode(body, controller, task, seconds=float(self.seconds))
 
 

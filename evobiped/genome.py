@@ -7,11 +7,11 @@ Fig. 4 and Table III).  The GA sees only the flat arrays and these vectors.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .errors import GenomeError
+from .errors import ConfigError, GenomeError
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -70,6 +70,33 @@ class GenomeLayout:
     @property
     def mutation_sigma(self) -> np.ndarray:
         return self._per_gene("mutation_sigma")
+
+    def with_overrides(self, genes: dict[str, dict[str, float]]) -> "GenomeLayout":
+        """A copy with some blocks' bounds or distributions replaced.
+
+        ``genes`` maps a block name to new values of ``low``, ``high``,
+        ``init_mean``, ``init_sigma``, ``mutation_sigma``, e.g.
+        ``{"weights": {"init_sigma": 4.0}}`` (ConfigError on an unknown name).
+        """
+        if not isinstance(genes, dict):
+            raise ConfigError("genes must be a table of gene blocks")
+        by_name = {b.name: b for b in self.blocks}
+        settable = [f.name for f in fields(GeneBlock) if f.name not in ("name", "size")]
+        new = dict(by_name)
+        for name, values in genes.items():
+            if name not in by_name:
+                raise ConfigError(f"genes: no gene block {name!r} (have {', '.join(by_name)})")
+            if not isinstance(values, dict) or not set(values) <= set(settable):
+                raise ConfigError(f"genes.{name}: expected a table of {', '.join(settable)}")
+            if not all(isinstance(v, (int, float)) and np.isfinite(v) for v in values.values()):
+                raise ConfigError(f"genes.{name}: values must be finite numbers")
+            try:
+                new[name] = replace(by_name[name], **{k: float(v) for k, v in values.items()})
+            except ValueError as exc:
+                raise ConfigError(f"genes.{name}: {exc}") from None
+            if min(new[name].init_sigma, new[name].mutation_sigma) < 0:
+                raise ConfigError(f"genes.{name}: sigmas must be >= 0")
+        return GenomeLayout(tuple(new[b.name] for b in self.blocks))
 
     def names(self) -> list[str]:
         """One label per gene, e.g. ``weights[3]``."""

@@ -107,3 +107,34 @@ def test_same_seed_same_population_and_bad_configs():
     for bad in (dict(population=1), dict(fittest_fraction=1.0), dict(mutations_per_genome=0), dict(population=2.5)):
         with pytest.raises(ConfigError):
             GAConfig(**bad)
+
+
+def test_table_iii_numbers_are_config_values(tmp_path):
+    """`genes` controller options replace a block's initialisation and mutation (here: fixed weights, frozen taus)."""
+    from evobiped.episode import EpisodeConfig
+    from evobiped.evolution import Run, RunConfig, make_evaluator
+
+    genes = {"weights": {"init_mean": 2.0, "init_sigma": 0.0}, "time_constants": {"mutation_sigma": 0.0, "low": 1.0, "high": 3.0}}
+    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), ga=GAConfig(population=10), generations=3, backend="serial")
+    run = Run.create(tmp_path / "r", cfg)
+    layout = cfg.episode.build().controller.layout
+    s = layout.slices()
+    first = run.ga.ask()[0].copy()
+    assert np.all(first[:, s["weights"]] == 2.0)
+    assert first[:, s["time_constants"]].min() >= 1.0 and first[:, s["time_constants"]].max() <= 3.0
+    with make_evaluator(cfg.episode, "serial") as ev:
+        run.evolve(ev)
+    taus = run.ga.population[:, s["time_constants"]]
+    assert {tuple(t) for t in taus} <= {tuple(t) for t in first[:, s["time_constants"]]}  # never mutated
+
+
+@pytest.mark.parametrize(
+    "genes, words",
+    [({"wieghts": {"init_sigma": 1}}, "no gene block 'wieghts'"), ({"weights": {"sigma": 1}}, "expected a table of"), ({"biases": {"low": 5, "high": 1}}, "bad size or bounds")],
+)
+def test_bad_gene_overrides(genes, words):
+    from evobiped.episode import EpisodeConfig
+    from evobiped.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=words):
+        EpisodeConfig(controller_options={"genes": genes}).build()

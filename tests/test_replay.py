@@ -1,8 +1,7 @@
 """``evobiped replay``: run directories and genome files, bit-exact fitness, bad sources.
 
-The run directory is built the way ``evobiped evolve`` writes it (issue 3's
-contract): ``config.json``, ``history.csv``, ``generations/gen_NNNN.json`` and
-``best.json``, each genome saved with the fitness its episode scored.
+The run directory comes from a real ``evobiped evolve`` run whose genomes were
+evaluated in batches in worker processes; the replay simulates one genome alone.
 """
 
 from __future__ import annotations
@@ -28,25 +27,11 @@ def random_genomes(layout, n, seed):
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
-    """Three 'generations' of 8 random genomes each, evaluated as a batch like the GA does."""
-    cfg = EpisodeConfig(seconds=SECONDS)
-    ep = cfg.build()
+    """A real (small) `evobiped evolve` run: 2 worker processes, chunks of 5 genomes per batch."""
     run = tmp_path_factory.mktemp("runs") / "run"
-    (run / "generations").mkdir(parents=True)
-    (run / "config.json").write_text(json.dumps({"episode": cfg.__dict__, "ga": {"population": 8}, "seed": 7}))
-    rows, best_overall = [], None
-    for gen in range(3):
-        pop = random_genomes(ep.controller.layout, 8, seed=100 + gen)
-        r = ep.run(pop)  # the whole population at once: batch size must not matter for the replay
-        i = int(np.argmax(r.fitness))
-        meta = dict(generation=gen, fitness=r.fitness[i], fell=r.fell[i], seed=7)
-        save_genome(run / "generations" / f"gen_{gen:04d}.json", pop[i], cfg, **meta)
-        if best_overall is None or r.fitness[i] > best_overall[1]["fitness"]:
-            best_overall = (pop[i], meta)
-        f = np.sort(r.fitness)
-        rows.append(f"{gen},{float(f[-1])!r},{float(f.mean())!r},{float(np.median(f))!r},{float(f[0])!r},8,{int(r.fell.sum())},0,0.1")
-    save_genome(run / "best.json", best_overall[0], cfg, **best_overall[1])
-    (run / "history.csv").write_text("generation,best,mean,median,worst,evaluations,falls,unstable,wall_seconds\n" + "\n".join(rows) + "\n")
+    args = ["evolve", "--population", "8", "--generations", "3", "--episode-seconds", str(SECONDS), "--seed", "7",
+            "--backend", "process", "--workers", "2", "--out", str(run), "--quiet"]
+    assert main(args) == 0
     return run
 
 

@@ -41,6 +41,13 @@ class Controller(ABC):
     def layout(self) -> GenomeLayout:
         """The genome layout: blocks, bounds, init and mutation distributions."""
 
+    def override_genes(self, genes: dict) -> None:
+        """Replace bounds/initialisation/mutation of named gene blocks (the ``genes`` controller option).
+
+        Subclasses keep their layout in ``self._layout``.
+        """
+        self._layout = self.layout.with_overrides(genes)
+
     def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
         """``(P, G)`` genomes -> parameter arrays with leading dimension P.
 

@@ -8,9 +8,12 @@ does not depend on the backend or on the number of workers.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
 import os
 import signal
+import socket
+import sys
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -114,6 +117,39 @@ class ProcessPoolEvaluator(Evaluator):
         self.pool.join()
 
 
+@contextlib.contextmanager
+def _silenced_stderr():
+    """Send file descriptor 2 (C/C++ libraries' logs too) to /dev/null for a while."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def check_reachable(address: str, timeout: float = 5.0) -> None:
+    """UserError unless ``host:port`` (or ``ray://host:port``) accepts a TCP connection.
+
+    ``ray.init`` retries an unreachable address for a long time; this answers in
+    at most ``timeout`` s.  ``auto`` and ``local`` are left to Ray.
+    """
+    if address in ("auto", "local"):
+        return
+    hostport = address.split("://", 1)[-1]
+    host, _, port = hostport.rpartition(":")
+    if not host or not port.isdigit():
+        raise UserError(f"bad Ray address {address!r} (expected HOST:PORT, ray://HOST:PORT or auto)")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise UserError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}") from None
+
+
 class RayEvaluator(Evaluator):
     """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
 
@@ -127,12 +163,18 @@ class RayEvaluator(Evaluator):
         self.chunk = int(chunk)
         self._owns = not ray.is_initialized()
         if self._owns:
+            if address:
+                check_reachable(address)
             try:
                 kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
-                ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
+                with _silenced_stderr():  # Ray's C++ client logs a warning per connection retry
+                    ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
             except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...
                 where = f" at {address}" if address else ""
-                raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+                hint = ""
+                if address and os.environ.get("RAY_AUTH_MODE") != "token":
+                    hint = " (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and its token: see `ray get-auth-token`)"
+                raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
         n = workers or int(ray.cluster_resources().get("CPU", 1))
 
         @ray.remote(num_cpus=1)

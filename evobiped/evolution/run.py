@@ -172,8 +172,20 @@ class Run:
         if len(history) != ga.generation:
             raise UserError(f"checkpoint {directory / 'checkpoint.json'} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
         run = cls(directory, config, ga, history, best, wall)
+        run._discard_uncheckpointed()
         run._outcome = {k: np.array(v, dtype=float if k == "end_time" else bool) for k, v in ck.get("outcome", {}).items()}
         return run
+
+    def _discard_uncheckpointed(self) -> None:
+        """Undo files of a generation that was interrupted before its checkpoint."""
+        for f in (self.dir / "generations").glob("gen_*.json"):
+            if int(f.stem[4:]) >= self.ga.generation:
+                f.unlink()
+        if self.best is not None:
+            src = self.dir / "generations" / f"gen_{self.best['generation']:04d}.json"
+            best = self.dir / "best.json"
+            if src.is_file() and (not best.is_file() or best.read_text() != src.read_text()):
+                atomic_write(best, src.read_text())
 
     @property
     def done(self) -> bool:

@@ -1,0 +1,272 @@
+"""Evolution runs: backends agree, resume equals uninterrupted, bad input, blow-ups.
+
+Tiny populations and 1-2 s episodes keep these fast; the paper's sizes are
+measured by ``evobiped bench`` and real runs.
+"""
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evobiped.cli import main
+from evobiped.episode import EpisodeConfig
+from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
+from evobiped.evolution.run import HISTORY_COLUMNS
+
+SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAConfig(population=8), generations=3, seed=7, backend="serial")
+
+
+def fitness_history(run_dir) -> list[list[str]]:
+    """history.csv without the wall-clock column."""
+    with open(Path(run_dir) / "history.csv") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == list(HISTORY_COLUMNS)
+    wall = HISTORY_COLUMNS.index("wall_seconds")
+    return [r[:wall] + r[wall + 1 :] for r in rows[1:]]
+
+
+def evolve_with(tmp_path, name, backend, workers=None, config=SMALL):
+    run = Run.create(tmp_path / name, config)
+    with make_evaluator(config.episode, backend, workers) as ev:
+        run.evolve(ev)
+    return fitness_history(run.dir), json.loads((run.dir / "best.json").read_text())
+
+
+def test_history_identical_on_every_backend(tmp_path):
+    """Seeds come from (run seed, generation, index): serial = 1 worker = 2 workers = Ray."""
+    ref, best = evolve_with(tmp_path, "serial", "serial")
+    assert len(ref) == SMALL.generations
+    assert float(ref[-1][1]) > 0  # somebody moved
+    runs = [evolve_with(tmp_path, "p1", "process", 1), evolve_with(tmp_path, "p2", "process", 2)]
+    pytest.importorskip("ray")
+    runs.append(evolve_with(tmp_path, "ray", "ray", 2))
+    for hist, b in runs:
+        assert hist == ref
+        assert b["genome"] == best["genome"] and b["fitness"] == best["fitness"]
+
+
+class Stop(Exception):
+    pass
+
+
+def test_resume_equals_uninterrupted(tmp_path):
+    config = RunConfig(**{**SMALL.__dict__, "generations": 5})
+    ref, ref_best = evolve_with(tmp_path, "whole", "serial", config=config)
+
+    run = Run.create(tmp_path / "cut", config)
+
+    def stop_after_two(stats):
+        if stats.generation == 1:
+            raise Stop
+
+    with make_evaluator(config.episode, "serial") as ev, pytest.raises(Stop):
+        run.evolve(ev, stop_after_two)
+    assert len(fitness_history(run.dir)) == 2 and not (run.dir / "summary.json").exists()
+    resumed = Run.resume(run.dir)
+    assert resumed.ga.generation == 2
+    with make_evaluator(config.episode, "process", 2) as ev:
+        summary = resumed.evolve(ev)
+    assert fitness_history(run.dir) == ref
+    best = json.loads((run.dir / "best.json").read_text())
+    assert best["genome"] == ref_best["genome"] and summary["best"]["fitness"] == ref_best["fitness"]
+    assert sorted(p.name for p in (run.dir / "generations").iterdir()) == [f"gen_{g:04d}.json" for g in range(5)]
+
+
+def test_resume_discards_files_of_an_unfinished_generation(tmp_path):
+    """A kill between a generation's genome files and its checkpoint leaves no trace after resume."""
+    run = Run.create(tmp_path / "r", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        run.step(ev)
+        run.checkpoint()
+        kept = (run.dir / "best.json").read_text()
+        run.ga.population[:] = run.ga.population[::-1]  # a different generation 1...
+        run.step(ev)  # ...whose files are written, but no checkpoint
+    (run.dir / "best.json").write_text(kept.replace('"generation": 0', '"generation": 1'))
+    resumed = Run.resume(run.dir)
+    assert not (run.dir / "generations" / "gen_0001.json").exists()
+    assert (run.dir / "best.json").read_text() == kept
+    assert resumed.ga.generation == 1
+
+
+def cli(*args) -> int:
+    """Exit status of ``evobiped ARGS`` (argument errors exit via SystemExit)."""
+    try:
+        return main(list(map(str, args)))
+    except SystemExit as exc:
+        return exc.code
+
+
+def snapshot(d: Path) -> dict:
+    return {p.relative_to(d): (p.stat().st_mtime_ns, p.read_bytes()) for p in d.rglob("*") if p.is_file()}
+
+
+@pytest.fixture
+def finished_run(tmp_path):
+    d = tmp_path / "done"
+    assert cli("evolve", "--population", 4, "--generations", 1, "--episode-seconds", 0.5, "--backend", "serial", "--out", d, "--quiet") == 0
+    return d
+
+
+BAD_FLAGS = [
+    (["--body", "quadruped"], "unknown body 'quadruped'"),
+    (["--controller", "lstm"], "unknown controller 'lstm'"),
+    (["--task", "swim"], "unknown task 'swim'"),
+    (["--backend", "mpi"], "unknown backend 'mpi'"),
+    (["--population", "0"], "--population: must be > 0"),
+    (["--generations", "-3"], "--generations: must be > 0"),
+    (["--workers", "0"], "--workers: must be > 0"),
+    (["--episode-seconds", "nan"], "--episode-seconds: must be > 0"),
+    (["--seed", "-1"], "seed must be an integer >= 0"),
+    (["--population", "1"], "population"),
+    (["--backend", "ray", "--address", "127.0.0.1:1"], "cannot reach a Ray cluster at 127.0.0.1:1"),
+    (["--backend", "ray", "--address", "no-port"], "bad Ray address"),
+    (["--from", "/nonexistent/run"], "not found"),
+]
+
+
+@pytest.mark.parametrize("flags, words", BAD_FLAGS, ids=[" ".join(f) for f, _ in BAD_FLAGS])
+def test_bad_flags_one_line_exit_2_nothing_written(tmp_path, capsys, flags, words):
+    out = tmp_path / "run"
+    assert cli("evolve", *flags, "--out", out, "--quiet") == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+BAD_TOML = [
+    ("generations = [", "is not valid TOML"),
+    ("generatons = 3", "unknown setting 'generatons'"),
+    ("[episode]\nbody = 'nope'", "unknown body 'nope'"),
+    ("[ga]\nfittest_fraction = 1.5", "fittest_fraction"),
+    ("[ga]\nmutations_per_genome = -1", "mutations_per_genome"),
+    ("episode = 3", "[episode] must be a table"),
+    ("[episode.body_options]\nkp = -5", "kp must be > 0"),
+    ("[episode.body_options]\nwheels = 4", "bad body option"),
+]
+
+
+@pytest.mark.parametrize("text, words", BAD_TOML, ids=[w for _, w in BAD_TOML])
+def test_bad_config_file(tmp_path, capsys, text, words):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    out = tmp_path / "run"
+    assert cli("evolve", "--config", cfg, "--out", out, "--quiet") == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_flags_override_config_file(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("generations = 9\nseed = 3\n[ga]\npopulation = 6\n[episode]\nseconds = 0.5\n")
+    out = tmp_path / "run"
+    assert cli("evolve", "--config", cfg, "--generations", 1, "--backend", "serial", "--out", out, "--quiet") == 0
+    saved = json.loads((out / "config.json").read_text())
+    assert (saved["generations"], saved["seed"], saved["ga"]["population"], saved["episode"]["seconds"]) == (1, 3, 6, 0.5)
+    assert len(fitness_history(out)) == 1
+
+
+def test_existing_run_directory_is_left_untouched(finished_run, capsys):
+    before = snapshot(finished_run)
+    assert cli("evolve", "--generations", 1, "--out", finished_run, "--quiet") == 2
+    assert "exists and is not empty" in capsys.readouterr().err
+    assert snapshot(finished_run) == before
+
+
+@pytest.mark.parametrize(
+    "damage, words",
+    [
+        (lambda d: (d / "checkpoint.json").write_text('{"ga": {"generation": 1, "popul'), "not valid JSON"),
+        (lambda d: (d / "checkpoint.json").write_text('{"ga": {}, "history": []}'), "malformed"),
+        (lambda d: (d / "config.json").write_text('{"generations": "many"}'), "generations must be an integer"),
+        (lambda d: (d / "config.json").unlink(), "run config not found"),
+    ],
+    ids=["truncated checkpoint", "checkpoint without state", "bad config", "no config"],
+)
+def test_damaged_run_directory_on_resume(finished_run, capsys, damage, words):
+    damage(finished_run)
+    before = snapshot(finished_run)
+    assert cli("evolve", "--resume", finished_run) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+    assert snapshot(finished_run) == before
+
+
+def test_mismatched_checkpoint(finished_run, capsys):
+    """A checkpoint from a run with another population size does not load."""
+    cfg = json.loads((finished_run / "config.json").read_text())
+    cfg["ga"]["population"] = 6
+    (finished_run / "config.json").write_text(json.dumps(cfg))
+    assert cli("evolve", "--resume", finished_run) == 2
+    assert "checkpoint population has shape (4, 120), the config needs (6, 120)" in capsys.readouterr().err
+
+
+def test_resume_of_a_complete_run_changes_nothing(finished_run, capsys):
+    before = snapshot(finished_run)
+    assert cli("evolve", "--resume", finished_run) == 0
+    assert "already complete" in capsys.readouterr().out
+    assert snapshot(finished_run) == before
+
+
+def test_unstable_simulation_scores_as_a_fall(tmp_path):
+    """PD gains far beyond what the 20 ms step can integrate blow every walker up: the run goes on."""
+    cfg = RunConfig(
+        episode=EpisodeConfig(seconds=1.0, body_options={"timestep": 0.02, "kp": 1e6, "kv": 0.0}),
+        ga=GAConfig(population=6),
+        generations=2,
+        backend="serial",
+    )
+    run = Run.create(tmp_path / "r", cfg)
+    with make_evaluator(cfg.episode, "serial") as ev:
+        summary = run.evolve(ev)
+    rows = [dict(zip(HISTORY_COLUMNS, map(float, r))) for r in run.history]
+    assert rows[0]["unstable"] > 0 and rows[0]["falls"] >= rows[0]["unstable"]
+    assert all(np.isfinite([r["best"], r["mean"], r["worst"]]).all() for r in rows)
+    assert summary["generations"] == 2 and summary["best"]["fell"]
+
+
+def test_ctrl_c_stops_at_a_generation_boundary_and_resumes(tmp_path):
+    """SIGINT to a real `evobiped evolve`: exit 130, a valid checkpoint, and --resume finishes the same history."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[episode.body_options]\nfall_height = 0.01\n")  # no early ends: ~0.2 s per generation
+    args = ["--config", str(cfg), "--population", "6", "--generations", "12", "--episode-seconds", "3", "--seed", "4", "--backend", "serial"]
+    ref = tmp_path / "ref"
+    assert cli("evolve", *args, "--out", ref, "--quiet") == 0
+    cut = tmp_path / "cut"
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped.cli", "evolve", *args, "--out", str(cut)], stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.time() + 60
+    while time.time() < deadline and not (cut / "checkpoint.json").exists():
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    if proc.returncode == 0:
+        pytest.skip("the run finished before the signal arrived")
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and f"evobiped evolve --resume {cut}" in err
+    done = len(json.loads((cut / "checkpoint.json").read_text())["history"])
+    assert 1 <= done < 12 and len(fitness_history(cut)) == done
+    assert cli("evolve", "--resume", cut, "--quiet") == 0
+    assert fitness_history(cut) == fitness_history(ref)
+    # the run's own recording, restarted on resume with the history so far, holds every generation
+    best = {int(r[0]): float(r[1]) for r in fitness_history(ref)}
+    assert rerun_series(cut / "evolution.rrd", "/evolution/best") == best
+    assert rerun_series(ref / "evolution.rrd", "/evolution/best") == best
+
+
+def rerun_series(path, entity) -> dict[int, float]:
+    rr = pytest.importorskip("rerun")
+    out = {}
+    for c in rr.chunk.RrdReader(path).stream():
+        if c.entity_path == entity and not c.is_static:
+            rb = c.to_record_batch()
+            out.update(zip(rb.column("generation").to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
+    return out
