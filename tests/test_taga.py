@@ -53,6 +53,64 @@ def test_standing_ground_spring_carries_the_weight():
     assert body.hip_height(sims)[0] == pytest.approx(1.1 - total * 9.8 / (2 * 1e4), abs=2e-4)
 
 
+def _step(body, sims, torque, n):
+    ids = np.arange(sims.n)
+    for _ in range(n):
+        body.apply(sims, ids, np.broadcast_to(torque, (sims.n, 6)))
+        body.substep(sims, ids)
+        sims.step(ids, 1)
+
+
+def test_ankle_torque_acts_only_in_contact_and_rest_point_is_the_touchdown_point():
+    body = TagaBiped()
+    sims = Sims(body.build_model(), 2)
+    body.reset(sims)
+    sims.qpos[:, :2] = [0.0, 1.2]  # both ankles ~0.1 m above the ground
+    sims.qvel[:, 0] = 1.0  # moving forward
+    sims.forward()
+    ankle_torque = np.array([0, 0, 300.0, 0, 0, 300.0])
+    body.apply(sims, np.array([0]), ankle_torque[None])
+    body.apply(sims, np.array([1]), np.zeros((1, 6)))
+    _step(body, sims, np.zeros(6), 0)
+    ids = np.arange(2)
+    for _ in range(20):  # 10 ms in the air: the ankle torque does nothing
+        body.apply(sims, ids[:1], ankle_torque[None])
+        body.apply(sims, ids[1:], np.zeros((1, 6)))
+        body.substep(sims, ids)
+        sims.step(ids, 1)
+    assert np.array_equal(sims.qpos[0], sims.qpos[1])
+    st = body._ground(sims)
+    while not st["contact"][1].any():  # fall to the ground
+        x_before = body.links(sims)["ankle"][1, :, 0].copy()
+        _step(body, sims, np.zeros(6), 1)
+    leg = int(np.flatnonzero(st["contact"][1])[0])
+    k = body.links(sims)
+    # the rest point is where this ankle first went below the ground, not the origin
+    # (contact is tested on the state before each physics step, the one x_before saw)
+    assert st["rest"][1, leg, 0] == pytest.approx(x_before[leg], abs=1e-12) and x_before[leg] > 0.2
+    assert abs(k["ankle"][1, leg, 0] - x_before[leg]) < 1e-3
+    assert st["rest"][1, leg, 1] == 0.0
+    _step(body, sims, np.zeros(6), 10)
+    f = body.sensors(sims)["ground_force"][1]
+    assert f[2 * leg] < 0  # the horizontal spring-damper resists the forward slide
+    assert f[2 * leg + 1] > 0
+
+
+def test_knee_stop_is_a_one_sided_spring():
+    """A hyperextended knee (x5 - x11 = 0.02 rad) feels k_k * 0.02 = 200 N m back towards flexion."""
+    body = TagaBiped()
+    sims = Sims(body.build_model(), 1)
+    body.reset(sims)
+    sims.qpos[0] = [0, 2.0, 0, -0.02, 0, 0.02]  # right knee hyperextended, left flexed; far above the ground
+    sims.forward()
+    body.apply(sims, np.array([0]), np.zeros((1, 6)))
+    body.substep(sims, np.array([0]))
+    q = sims.qfrc_applied[0]
+    assert q[3] == pytest.approx(10000.0 * 0.02)  # right knee: pushed back (towards flexion)
+    assert q[5] == 0.0  # left knee flexed: no stop force
+    assert q[2] == 0.0 and q[4] == 0.0  # thighs vertical and at rest: no hip friction
+
+
 def test_taga_weights_from_j_to_i():
     c = Matsuoka(n_outputs=6)
     W = c.decode(c.preset_genome()[None])["W"][0]
