@@ -384,7 +384,8 @@ def run_taga_cmd(args) -> int:
         return 0
     _, rows = tx.steady(args.u0, seconds=args.seconds, window=min(args.window, args.seconds), **opts)
     if args.json:
-        print(json.dumps({"settings": {k: v for k, v in vars(args).items() if k != "func"}, "walkers": rows}, default=float))
+        nan_to_null = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items()} for r in rows]
+        print(json.dumps({"settings": {k: v for k, v in vars(args).items() if k != "func"}, "walkers": nan_to_null}, allow_nan=False))
         return 0
     print(f"Taga biped, preset {args.preset}, slope {args.slope:g} %, kg {args.kg:g}, bg {args.bg:g}; "
           f"metrics over the last {min(args.window, args.seconds):g} of {args.seconds:g} s")
