@@ -382,6 +382,72 @@ def run_study_cmd(args) -> int:
                 rep = replay(resolve(run_dir(Path(args.out), c, k, cfg)))
                 say(f"recording: {rep.recording}")
     print((Path(args.out) / "table.md").read_text(), end="")
+# ---------------------------------------------------------------- taga
+def add_taga(sub) -> None:
+    p = sub.add_parser("taga", help="run the Taga biped with its rhythm generator (Taga et al. 1991); gait metrics table")
+    p.add_argument("--u0", type=float, nargs="+", default=[5.5], metavar="U", help="tonic input(s) u0, one walker each (default 5.5)")
+    p.add_argument("--preset", default="taga", help="rhythm-generator parameters (default taga: Appendix D)")
+    p.add_argument("--seconds", type=positive_float, default=20.0, help="simulated time in s from Appendix E's initial state (default 20)")
+    p.add_argument("--window", type=positive_float, default=10.0, help="metrics over the last WINDOW s (default 10)")
+    p.add_argument("--slope", type=float, default=0.0, metavar="PCT", help="terrain slope in %% (uphill > 0; default 0)")
+    p.add_argument("--slope-start", type=float, default=0.0, metavar="X", help="x (m) where the slope begins (default 0)")
+    p.add_argument("--kg", type=positive_float, default=1e4, help="ground stiffness N/m (default 1e4)")
+    p.add_argument("--bg", type=float, default=1e3, help="ground damping N s/m (default 1e3)")
+    p.add_argument("--timestep", type=positive_float, default=0.0005, help="physics step in s (default 0.0005)")
+    p.add_argument("--push", choices=("leg", "hip"), help="Fig. 7: after 10 s push the right shank (200 N) or the hip (288 N) forward for 0.2 s")
+    p.add_argument("--push-force", type=float, help="push force in N (default 200 leg, 288 hip)")
+    p.add_argument("--push-delay", type=float, default=0.05, help="push this many s after the right foot lifts off (default 0.05)")
+    p.add_argument("--save-genome", metavar="FILE.json", help="also write the genome file of the (first) walker, for evobiped replay")
+    p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.set_defaults(func=run_taga_cmd)
+
+
+def run_taga_cmd(args) -> int:
+    from . import taga_experiments as tx
+
+    if args.preset not in tx.PRESETS:
+        raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")
+    for u in args.u0:
+        tx.check_u0(u)
+    if not -50 <= args.slope <= 50:
+        raise UserError(f"--slope must be within +-50 %, got {args.slope:g}")
+    if args.bg < 0:
+        raise UserError(f"--bg must be >= 0, got {args.bg:g}")
+    opts = dict(preset=args.preset, timestep=args.timestep, kg=args.kg, bg=args.bg, slope=args.slope / 100, slope_start=args.slope_start)
+    if args.save_genome:
+        from .episode import EpisodeConfig
+        from .genome_file import save_genome
+
+        body = {k: v for k, v in opts.items() if k != "preset"}
+        cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=args.seconds, body_options=body, controller_options={"u0": args.u0[0]})
+        save_genome(args.save_genome, cfg.build().controller.preset_genome(args.preset), cfg, preset=args.preset)
+    if args.push:
+        if len(args.u0) != 1:
+            raise UserError("--push takes one --u0 value")
+        force = args.push_force if args.push_force is not None else (200.0 if args.push == "leg" else 288.0)
+        target = "right_shank" if args.push == "leg" else "hip"
+        _, (s,) = tx.push(target, force, [args.push_delay], u0=args.u0[0], **opts)
+        if args.json:
+            print(json.dumps(s))
+            return 0
+        print(f"push {target} {force:g} N for 0.2 s at t = {s['t_push']:.2f} s (u0 = {args.u0[0]:g}): "
+              + (f"fell at {s['fell_at']:.2f} s" if s["fell"] else f"recovered after {s['strides_to_recover']} strides"))
+        print(f"before: stride {s['stride_length_before']:.3f} m, cycle {s['cycle_duration_before']:.3f} s")
+        for i, (L, D) in enumerate(s["strides_after"]):
+            print(f"  stride {i + 1:2d} after: {L:.3f} m  {D:.3f} s")
+        return 0
+    _, rows = tx.steady(args.u0, seconds=args.seconds, window=min(args.window, args.seconds), **opts)
+    if args.json:
+        nan_to_null = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items()} for r in rows]
+        print(json.dumps({"settings": {k: v for k, v in vars(args).items() if k != "func"}, "walkers": nan_to_null}, allow_nan=False))
+        return 0
+    print(f"Taga biped, preset {args.preset}, slope {args.slope:g} %, kg {args.kg:g}, bg {args.bg:g}; "
+          f"metrics over the last {min(args.window, args.seconds):g} of {args.seconds:g} s")
+    print(f"{'u0':>6} {'gait':<6} {'fell at':>7} {'strides':>7} {'stride m':>8} {'cycle s':>7} {'speed':>6} {'double':>6} {'flight':>6} {'hip min-max m':>14}")
+    for r in rows:
+        fell = f"{r['fell_at']:.2f}" if r["fell"] else "-"
+        print(f"{r['u0']:6.2f} {r['gait']:<6} {fell:>7} {r['strides']:7d} {r['stride_length']:8.3f} {r['cycle_duration']:7.3f} "
+              f"{r['speed']:6.3f} {r['double_support']:6.3f} {r['flight']:6.3f} {r['hip_min']:6.3f}-{r['hip_max']:.3f}")
     return 0
 
 
@@ -408,7 +474,7 @@ def run_bench_cmd(args) -> int:
     return 0
 
 
-SUBCOMMANDS = [add_episode, add_evolve, add_study, add_bench, add_replay, add_g3]
+SUBCOMMANDS = [add_episode, add_evolve, add_study, add_bench, add_replay, add_taga, add_g3]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -57,6 +57,7 @@ class EpisodeConfig:
         wanted = opts.pop("inputs", None)
         if wanted is None:
             wanted = list(task.sensor_widths())
+            wanted += [s for s in CONTROLLERS[self.controller].body_inputs if s in widths and s not in wanted]
         missing = [w for w in wanted if w not in widths]
         if missing:
             raise ConfigError(f"controller inputs {missing} are not sensors of body {self.body!r} / task {self.task!r} (have {sorted(widths)})")
@@ -113,6 +114,7 @@ class Episode:
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
         self.control_dt = dt
+        controller.bind_period(dt)
         self.substeps = int(round(ratio))
         self._sims: dict[int, Sims] = {}
 

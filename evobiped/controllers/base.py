@@ -30,6 +30,12 @@ class Controller(ABC):
     #: control period in s, or None to step at every physics step
     dt: float | None
 
+    #: body sensors an episode passes as inputs by default, where the body has them
+    body_inputs: ClassVar[tuple[str, ...]] = ()
+
+    def bind_period(self, dt: float) -> None:
+        """Told the control period (s) once the episode knows it (the physics step when ``dt`` is None)."""
+
     @property
     @abstractmethod
     def layout(self) -> GenomeLayout:

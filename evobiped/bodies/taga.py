@@ -1,0 +1,276 @@
+"""The sagittal biped of Taga, Yamaguchi & Shimizu 1991 (``models/taga_biped.xml``).
+
+MuJoCo integrates the rigid links (hip point mass on slide x/z, hinge hips and
+knees, uniform rods); this module adds, before every physics step, the forces
+of Appendix A that MJCF cannot express, as generalized forces in
+``qfrc_applied`` computed for the whole batch at once:
+
+* the ground: a 2D spring-damper at each ankle, active while the ankle is below
+  the terrain y_g(x), whose rest point (x_r0, y_r0) is reset to the point where
+  the ankle first touches (Raibert 1984)::
+
+      F_x = -k_g (x_r - x_r0) - b_g dx_r/dt
+      F_y = -k_g (y_r - y_r0) + b_g max(0, -dy_r/dt)
+
+* hip friction -b_1 |x_5 - pi/2| dx_5/dt on each thigh;
+* knee friction -(b_2 + b_k f(x_5 - x_11)) (dx_5/dt - dx_11/dt) and the knee's
+  elastic stop, read as the one-sided linear spring k_k max(0, x_5 - x_11)
+  (the literal k_k h(x_5 - x_11) is a constant 1e4 N m step, numerically
+  ill-posed; see DESIGN.md section 4);
+* the joint torques T_r1..T_r6 (actions, N m), the ankle torques only while
+  that ankle is in contact (h(F_g2), h(F_g4) with h(0) = 0);
+* optional horizontal pushes on the hip or a shank's centre (Fig. 7).
+
+Angles are Taga's inertial angles from the horizontal (pi/2 = vertical,
+increasing as the distal end swings backward): thigh x_5 = pi/2 + hip,
+shank x_11 = x_5 + knee.  The forces are explicit, so the physics step is
+small (0.5 ms; halving it changes the walking metrics by < 1 %, see
+docs/taga.md).
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import ClassVar
+
+import mujoco
+import numpy as np
+
+from ..errors import UserError
+from ..sim import Sims
+from .base import Body
+
+#: actions in this order (N m); T_r1, T_r3, T_r5 (right) and T_r2, T_r4, T_r6 (left)
+ACTUATORS = ("right_hip", "right_knee", "right_ankle", "left_hip", "left_knee", "left_ankle")
+#: Appendix D, musculo-skeletal system (SI units)
+APPENDIX_D = dict(l1=0.5, l2=0.6, b1=10.0, b2=10.0, bk=1000.0, kk=10000.0, kg=10000.0, bg=1000.0)
+#: Appendix E: hip (x_1, x_2) in m, thigh and shank angles (rad) of the right and left legs
+INITIAL_HIP = (0.0, 1.09)
+INITIAL_ANGLES = {"right": 0.45 * np.pi, "left": 0.57 * np.pi}
+#: pushes: where a horizontal force may act
+PUSH_TARGETS = ("none", "hip", "right_shank", "left_shank")
+
+
+class TagaBiped(Body):
+    """Taga's 5-link sagittal walker with the Appendix A ground and joint forces."""
+
+    name: ClassVar[str] = "taga"
+    model_name: ClassVar[str] = "taga_biped"
+    action_kind: ClassVar[str] = "torque"
+    has_custom_forces: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        *,
+        timestep: float = 0.0005,
+        kg=APPENDIX_D["kg"],
+        bg=APPENDIX_D["bg"],
+        slope: float = 0.0,
+        slope_start: float = 0.0,
+        max_torque: float = 2000.0,
+        fall_height: float = 0.7,
+        model_file: str | None = None,
+    ):
+        super().__init__(timestep=timestep, model_file=model_file)
+        if not (0 < timestep <= 0.005):
+            raise UserError(f"taga body: timestep must be in (0, 0.005] s, got {timestep}")
+        kg, bg = np.asarray(kg, float), np.asarray(bg, float)
+        if not (np.all(kg > 0) and np.all(bg >= 0)) or kg.ndim > 1 or bg.ndim > 1:
+            raise UserError(f"taga body: ground stiffness kg must be > 0 and damping bg >= 0 (got {kg}, {bg})")
+        if not -0.5 <= slope <= 0.5:
+            raise UserError(f"taga body: slope must be within +-50 % (got {slope * 100:g} %)")
+        if not (max_torque > 0 and fall_height > 0):
+            raise UserError("taga body: max_torque and fall_height must be > 0")
+        # kg, bg: one value, or one per simulation of the batch (P,)
+        self.p = dict(APPENDIX_D, kg=kg, bg=bg)
+        self.slope, self.slope_start = float(slope), float(slope_start)
+        self.max_torque, self.fall_height = float(max_torque), float(fall_height)
+        self._state: weakref.WeakKeyDictionary[Sims, dict] = weakref.WeakKeyDictionary()
+
+    # ------------------------------------------------------------ structure
+    @property
+    def actuator_names(self) -> tuple[str, ...]:
+        return ACTUATORS
+
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``+-max_torque`` N m (2000 by default: never reached by Taga's generator)."""
+        h = np.full(len(ACTUATORS), self.max_torque)
+        return -h, h
+
+    def bind_model(self, model: mujoco.MjModel) -> None:
+        try:
+            joints = ("root_x", "root_z", "right_hip", "right_knee", "left_hip", "left_knee")
+            self._qadr = np.array([model.joint(j).qposadr[0] for j in joints])
+            self._dadr = np.array([model.joint(j).dofadr[0] for j in joints])
+            self._hip = model.body("hip").id
+        except KeyError as exc:
+            raise UserError(f"taga body: the model lacks {exc}") from None
+        if model.nv != 6:
+            raise UserError(f"taga body: expected 6 degrees of freedom, the model has {model.nv}")
+
+    def terrain(self, x: np.ndarray) -> np.ndarray:
+        """y_g(x) in m: level, then a constant slope from ``slope_start`` on."""
+        return self.slope * np.maximum(np.asarray(x, float) - self.slope_start, 0.0)
+
+    # ------------------------------------------------------------ state
+    def _ground(self, sims: Sims) -> dict:
+        st = self._state.get(sims)
+        if st is None:
+            n = sims.n
+            st = self._state[sims] = dict(
+                rest=np.zeros((n, 2, 2)),  # (P, leg, xy) rest points
+                contact=np.zeros((n, 2), bool),  # ankle below the terrain (right, left)
+                force=np.zeros((n, 4)),  # F_g1..F_g4 (N)
+                torque=np.zeros((n, 6)),  # commanded T_r (ACTUATORS order)
+                push_target=np.zeros(n, int),  # index into PUSH_TARGETS
+                push_force=np.zeros(n),  # N, forward positive
+            )
+        return st
+
+    def reset(self, sims: Sims) -> None:
+        """Appendix E: hip at (0, 1.09) m, straight legs at 0.45 pi (right) and 0.57 pi (left), at rest."""
+        sims.reset()
+        q = sims.qpos
+        q[:, self._qadr[0]], q[:, self._qadr[1]] = INITIAL_HIP
+        q[:, self._qadr[2]] = INITIAL_ANGLES["right"] - np.pi / 2
+        q[:, self._qadr[3]] = 0.0
+        q[:, self._qadr[4]] = INITIAL_ANGLES["left"] - np.pi / 2
+        q[:, self._qadr[5]] = 0.0
+        sims.qvel[:] = 0.0
+        sims.qfrc_applied[:] = 0.0
+        sims.forward()
+        self._state.pop(sims, None)
+        self._ground(sims)
+
+    def set_push(self, sims: Sims, ids: np.ndarray, target: str, force: float) -> None:
+        """Apply a horizontal force (N, forward > 0) to ``target`` from now on (``"none"`` stops it)."""
+        if target not in PUSH_TARGETS:
+            raise UserError(f"push target must be one of {PUSH_TARGETS}, got {target!r}")
+        st = self._ground(sims)
+        st["push_target"][ids] = PUSH_TARGETS.index(target)
+        st["push_force"][ids] = float(force)
+
+    # ------------------------------------------------------------ kinematics
+    def links(self, sims: Sims) -> dict[str, np.ndarray]:
+        """Taga's coordinates, each ``(P,)`` or ``(P, 2)`` (right, left leg).
+
+        ``hip`` (P, 2) position, ``dhip`` velocity; ``thigh``/``shank`` inertial
+        angles and ``dthigh``/``dshank`` rates (P, 2); ``knee``/``ankle`` (P, 2, 2)
+        positions and ``dankle`` (P, 2, 2) velocities.
+        """
+        q, v = sims.qpos[:, self._qadr], sims.qvel[:, self._dadr]
+        l1, l2 = self.p["l1"], self.p["l2"]
+        hip, dhip = q[:, :2], v[:, :2]
+        thigh = np.pi / 2 + q[:, [2, 4]]
+        shank = thigh + q[:, [3, 5]]
+        dthigh = v[:, [2, 4]]
+        dshank = dthigh + v[:, [3, 5]]
+        ut = np.stack([np.cos(thigh), -np.sin(thigh)], -1)  # (P, 2, 2) unit vectors hip->knee
+        us = np.stack([np.cos(shank), -np.sin(shank)], -1)
+        knee = hip[:, None, :] + l1 * ut
+        ankle = knee + l2 * us
+        dt_ = np.stack([-np.sin(thigh), -np.cos(thigh)], -1) * dthigh[..., None]
+        ds_ = np.stack([-np.sin(shank), -np.cos(shank)], -1) * dshank[..., None]
+        dankle = dhip[:, None, :] + l1 * dt_ + l2 * ds_
+        return dict(hip=hip, dhip=dhip, thigh=thigh, shank=shank, dthigh=dthigh, dshank=dshank, knee=knee, ankle=ankle, dankle=dankle)
+
+    # ------------------------------------------------------------ forces
+    def apply(self, sims: Sims, ids: np.ndarray, action: np.ndarray) -> None:
+        self._ground(sims)["torque"][ids] = action
+
+    def substep(self, sims: Sims, ids: np.ndarray) -> None:
+        st = self._ground(sims)
+        p = self.p
+        k = self.links(sims)
+        ax, ay = k["ankle"][ids, :, 0], k["ankle"][ids, :, 1]
+        vx, vy = k["dankle"][ids, :, 0], k["dankle"][ids, :, 1]
+        below = ay - self.terrain(ax) < 0
+        touch = below & ~st["contact"][ids]
+        rest = st["rest"][ids]
+        rest[..., 0] = np.where(touch, ax, rest[..., 0])
+        rest[..., 1] = np.where(touch, self.terrain(ax), rest[..., 1])
+        st["rest"][ids] = rest
+        st["contact"][ids] = below
+        kg = p["kg"][ids, None] if p["kg"].ndim else p["kg"]
+        bg = p["bg"][ids, None] if p["bg"].ndim else p["bg"]
+        fx = np.where(below, -kg * (ax - rest[..., 0]) - bg * vx, 0.0)
+        fy = np.where(below, -kg * (ay - rest[..., 1]) + bg * np.maximum(-vy, 0.0), 0.0)
+        st["force"][ids] = np.stack([fx[:, 0], fy[:, 0], fx[:, 1], fy[:, 1]], 1)
+        on = (fy > 0).astype(float)  # h(F_g2), h(F_g4) with h(0) = 0
+        T = st["torque"][ids]
+        t_hip, t_knee, t_ankle = T[:, [0, 3]], T[:, [1, 4]], T[:, [2, 5]] * on
+        thigh, shank = k["thigh"][ids], k["shank"][ids]
+        dthigh, dshank = k["dthigh"][ids], k["dshank"][ids]
+        over = np.maximum(thigh - shank, 0.0)  # knee hyperextension x5 - x11 (rad)
+        knee_rel = dshank - dthigh
+        # link torques (in the sense of increasing inertial angle)
+        tau_shank = -(p["b2"] + p["bk"] * over) * knee_rel + p["kk"] * over - t_knee - t_ankle
+        q_hip = -p["b1"] * np.abs(thigh - np.pi / 2) * dthigh + t_hip - t_ankle  # thigh + shank torques
+        q_knee = tau_shank
+        # the ground force at the ankle: generalized forces r x F about each joint's y axis
+        hip, knee = k["hip"][ids][:, None, :], k["knee"][ids]
+        ankle = k["ankle"][ids]
+
+        def moment(r, fx_, fz_):
+            return r[..., 1] * fx_ - r[..., 0] * fz_
+
+        q_hip = q_hip + moment(ankle - hip, fx, fy)
+        q_knee = q_knee + moment(ankle - knee, fx, fy)
+        qf = np.zeros((len(ids), 6))
+        qf[:, 0] = fx.sum(1)
+        qf[:, 1] = fy.sum(1)
+        qf[:, [2, 4]] = q_hip
+        qf[:, [3, 5]] = q_knee
+        self._add_push(st, ids, k, qf)
+        out = sims.qfrc_applied
+        out[np.ix_(ids, self._dadr)] = qf
+
+    def _add_push(self, st: dict, ids: np.ndarray, k: dict, qf: np.ndarray) -> None:
+        target, f = st["push_target"][ids], st["push_force"][ids]
+        if not target.any():
+            return
+        qf[:, 0] += np.where(target > 0, f, 0.0)  # any horizontal force moves the root
+        for leg, name in enumerate(("right_shank", "left_shank")):
+            sel = (target == PUSH_TARGETS.index(name)) * f
+            centre = 0.5 * (k["knee"][ids, leg] + k["ankle"][ids, leg])
+            qf[:, 2 + 2 * leg] += (centre - k["hip"][ids])[:, 1] * sel
+            qf[:, 3 + 2 * leg] += (centre - k["knee"][ids, leg])[:, 1] * sel
+
+    # ------------------------------------------------------------ observations
+    def com(self, sims: Sims) -> np.ndarray:
+        return sims.subtree_com[:, self._hip]
+
+    def planar_position(self, sims: Sims) -> np.ndarray:
+        """The hip's (x, y) on the ground plane (y = 0: the walker stays in its plane)."""
+        return sims.xpos[:, self._hip, :2]
+
+    def heading(self, sims: Sims) -> np.ndarray:
+        out = np.zeros((sims.n, 2))
+        out[:, 0] = 1.0
+        return out
+
+    def hip_height(self, sims: Sims) -> np.ndarray:
+        """Hip height above the terrain under it, ``(P,)`` m."""
+        x, z = sims.qpos[:, self._qadr[0]], sims.qpos[:, self._qadr[1]]
+        return z - self.terrain(x)
+
+    def fallen(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
+        return self.hip_height(sims)[ids] < self.fall_height
+
+    def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
+        """Feedback of Appendix C and more; leg order (right, left).
+
+        ``link_angles`` (P, 4): inertial angles x5, x11, x8, x14 (right thigh,
+        right shank, left thigh, left shank; rad from the horizontal);
+        ``link_velocities`` (P, 4): their rates (rad/s); ``ground_contact``
+        (P, 2): h(F_g2), h(F_g4); ``ground_force`` (P, 4): F_g1..F_g4 (N).
+        """
+        k = self.links(sims)
+        st = self._ground(sims)
+        order = lambda a, b: np.stack([a[:, 0], b[:, 0], a[:, 1], b[:, 1]], 1)  # noqa: E731
+        return {
+            "link_angles": order(k["thigh"], k["shank"]),
+            "link_velocities": order(k["dthigh"], k["dshank"]),
+            "ground_contact": (st["force"][:, [1, 3]] > 0).astype(float),
+            "ground_force": st["force"].copy(),
+        }

@@ -1,0 +1,230 @@
+"""Matsuoka's neural rhythm generator as used by Taga, Yamaguchi & Shimizu 1991 (eqs. 5-6).
+
+    tau_i  du_i/dt = -u_i + sum_j w_ij y_j - beta v_i + u_0 + Feed_i
+    tau'_i dv_i/dt = -v_i + y_i,          y_i = max(0, u_i)
+
+One unit oscillator (a flexor and an extensor neuron) per actuated joint, in
+the body's actuator order; joint torque (or signed output) ``p_e y_e - p_f y_f``.
+w_ij is the weight *from* neuron j *to* neuron i.  The body's actuators are two
+legs of equal length (first half one leg, second half the other), the first
+joint of each leg its hip.  Connections (Appendix D, Fig. 3):
+
+* w_fe between the flexor and the extensor of every oscillator;
+* w_rl between the two hips, flexor-flexor and extensor-extensor;
+* w_hka from both neurons of a leg's hip to the extensor of every other joint of
+  that leg (Taga: knee and ankle extensors).
+
+Feedback: on a body with the sensors ``link_angles``, ``link_velocities`` and
+``ground_contact`` (the Taga biped) the Appendix C pathways Feed_1..Feed_12
+(with F_eed6 = a_5 (x_14 - pi/2) h(F_g4): the printed ``a_5(x_14 pi/2)`` is a
+transcription slip), otherwise Feed = 0.  Forward Euler at the control period
+(the physics step by default: tau = 0.025 s over dt = 0.5 ms).  The initial
+state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
+second leg's extensors there, e.g. for the isolated generator, which from an
+exactly symmetric state settles to its fixed point instead of oscillating).
+
+Genome blocks (Taga's values: :meth:`Matsuoka.preset_genome`): per-oscillator
+``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
+``w_hka``; with feedback, ``feedback`` = a_1..a_8.  The tonic input u_0 is a
+structure option (the experiments' control parameter), not a gene.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..genome import GeneBlock, GenomeLayout
+from .base import Controller
+
+#: sensors the Appendix C feedback needs (provided by the Taga body)
+FEEDBACK_SENSORS = ("link_angles", "link_velocities", "ground_contact")
+#: Appendix D, by joint role within a leg (hip, knee, ankle): tau, tau', p_e, p_f
+TAGA_ROLE = {
+    "tau": (0.05, 0.025, 0.025),
+    "tau_adapt": (0.60, 0.30, 0.30),
+    "p_e": (85.0, 15.0, 75.0),
+    "p_f": (15.0, 15.0, 100.0),
+}
+TAGA_SCALARS = {"beta": 2.5, "w_fe": -2.0, "w_rl": -1.0, "w_hka": -1.0}
+#: a_1..a_8 (Appendix D, feedback)
+TAGA_FEEDBACK = (1.5, 1.0, 1.5, 1.5, 3.0, 1.5, 3.0, 1.5)
+#: gene ranges and GA distributions
+BLOCKS = {
+    "tau": dict(low=0.005, high=1.0, init_mean=0.05, init_sigma=0.02, mutation_sigma=0.02),
+    "tau_adapt": dict(low=0.02, high=5.0, init_mean=0.4, init_sigma=0.2, mutation_sigma=0.2),
+    "p_e": dict(low=0.0, high=200.0, init_mean=50.0, init_sigma=30.0, mutation_sigma=20.0),
+    "p_f": dict(low=0.0, high=200.0, init_mean=50.0, init_sigma=30.0, mutation_sigma=20.0),
+    "beta": dict(low=0.0, high=10.0, init_mean=2.5, init_sigma=1.0, mutation_sigma=0.5),
+    "w_fe": dict(low=-10.0, high=0.0, init_mean=-2.0, init_sigma=1.0, mutation_sigma=0.5),
+    "w_rl": dict(low=-10.0, high=0.0, init_mean=-1.0, init_sigma=0.5, mutation_sigma=0.5),
+    "w_hka": dict(low=-10.0, high=0.0, init_mean=-1.0, init_sigma=0.5, mutation_sigma=0.5),
+    "feedback": dict(low=0.0, high=10.0, init_mean=2.0, init_sigma=1.0, mutation_sigma=0.5),
+}
+
+
+def taga_feedback(a: np.ndarray, angles: np.ndarray, rates: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    """Appendix C: Feed_1..Feed_12 ``(P, 12)`` in Taga's neuron numbering.
+
+    ``a`` (P, 8) = a_1..a_8; ``angles``/``rates`` (P, 4) = x5, x11, x8, x14 and
+    their rates (right thigh, right shank, left thigh, left shank); ``contact``
+    (P, 2) = h(F_g2), h(F_g4).
+    """
+    h = np.pi / 2
+    x5, x11, x8, x14 = (angles[:, i] for i in range(4))
+    dx11, dx14 = rates[:, 1], rates[:, 3]
+    cr, cl = contact[:, 0], contact[:, 1]
+    a1, a2, a3, a4, a5, a6, a7, a8 = (a[:, i] for i in range(8))
+    f = np.empty((angles.shape[0], 12))
+    f[:, 0] = a1 * (x5 - h) - a2 * (x8 - h) + a3 * (x11 - h) * cr + a4 * cl
+    f[:, 1] = a1 * (h - x5) - a2 * (h - x8) + a3 * (h - x11) * cr - a4 * cl
+    f[:, 2] = a1 * (x8 - h) - a2 * (x5 - h) + a3 * (x14 - h) * cl + a4 * cr
+    f[:, 3] = a1 * (h - x8) - a2 * (h - x5) + a3 * (h - x14) * cl - a4 * cr
+    f[:, 4] = a5 * (h - x14) * cl
+    f[:, 5] = a5 * (x14 - h) * cl  # the printed "a5(x14 pi/2)" read as a5(x14 - pi/2)
+    f[:, 6] = a5 * (h - x11) * cr
+    f[:, 7] = a5 * (x11 - h) * cr
+    f[:, 8] = a6 * (h - x11) * cr + a7 * (h - x14) * cl - a8 * dx11 * cr
+    f[:, 9] = a6 * (x11 - h) * cr + a7 * (x14 - h) * cl + a8 * dx11 * cr
+    f[:, 10] = a6 * (h - x14) * cl + a7 * (h - x11) * cr - a8 * dx14 * cl
+    f[:, 11] = a6 * (x14 - h) * cl + a7 * (x11 - h) * cr + a8 * dx14 * cl
+    return f
+
+
+class Matsuoka(Controller):
+    """Matsuoka oscillators, one per actuator; Taga's rhythm generator on the Taga body."""
+
+    name: ClassVar[str] = "matsuoka"
+    output_kind: ClassVar[str] = "signed"
+    #: body sensors an episode passes by default when the body has them
+    body_inputs: ClassVar[tuple[str, ...]] = FEEDBACK_SENSORS
+
+    def __init__(
+        self,
+        *,
+        n_outputs: int,
+        inputs: dict[str, int] | None = None,
+        u0: float = 5.5,
+        feedback: str = "auto",
+        initial_u: float = 0.0,
+        dt: float | None = None,
+    ):
+        inputs = dict(inputs or {})
+        if n_outputs < 2 or n_outputs % 2:
+            raise ConfigError(f"matsuoka: needs two legs with the same joints (an even number of actuators), got {n_outputs}")
+        if not (np.isfinite(u0) and u0 >= 0):
+            raise ConfigError(f"matsuoka: the tonic input u0 must be >= 0, got {u0}")
+        if feedback not in ("auto", "taga", "none"):
+            raise ConfigError(f"matsuoka: feedback must be auto, taga or none, got {feedback!r}")
+        if dt is not None and not dt > 0:
+            raise ConfigError(f"matsuoka: dt must be > 0 (or None: the physics step), got {dt}")
+        has = all(s in inputs for s in FEEDBACK_SENSORS)
+        if feedback == "taga" and not (has and n_outputs == 6):
+            raise ConfigError(f"matsuoka: Taga feedback needs 6 actuators and the inputs {FEEDBACK_SENSORS}")
+        self.feedback = "taga" if (feedback == "taga" or (feedback == "auto" and has and n_outputs == 6)) else "none"
+        self.n_outputs = self.n_osc = int(n_outputs)
+        self.n = 2 * self.n_osc
+        self.u0, self.initial_u = float(u0), float(initial_u)
+        self.input_names = tuple(inputs)
+        self._widths = dict(inputs)
+        self.dt = None if dt is None else float(dt)
+        self.period = self.dt
+        n_osc = self.n_osc
+        blocks = [GeneBlock(name=b, size=n_osc, **BLOCKS[b]) for b in ("tau", "tau_adapt", "p_e", "p_f")]
+        blocks += [GeneBlock(name=b, size=1, **BLOCKS[b]) for b in ("beta", "w_fe", "w_rl", "w_hka")]
+        if self.feedback == "taga":
+            blocks.append(GeneBlock(name="feedback", size=8, **BLOCKS["feedback"]))
+        self._layout = GenomeLayout(tuple(blocks))
+        # Taga's neuron k (0-based) sits at internal index _taga_order[k]
+        half = n_osc // 2
+        taga_osc = [0, half, 1, half + 1, 2, half + 2] if n_osc == 6 else []
+        self._taga_order = np.array([2 * o + s for o in taga_osc for s in (0, 1)], int)
+
+    # ------------------------------------------------------------ genome
+    @property
+    def layout(self) -> GenomeLayout:
+        return self._layout
+
+    def roles(self) -> np.ndarray:
+        """Joint role of each oscillator within its leg: 0 hip, 1 knee, 2 ankle, ..."""
+        return np.arange(self.n_osc) % (self.n_osc // 2)
+
+    def preset_genome(self, name: str = "taga") -> np.ndarray:
+        """Taga's Appendix D values as a genome ``(G,)`` (roles beyond the ankle take the ankle's)."""
+        if name != "taga":
+            raise ConfigError(f"matsuoka: unknown preset {name!r} (choose from taga)")
+        r = np.minimum(self.roles(), 2)
+        parts = {b: np.array(v)[r] for b, v in TAGA_ROLE.items()}
+        parts.update({b: np.array([v]) for b, v in TAGA_SCALARS.items()})
+        parts["feedback"] = np.array(TAGA_FEEDBACK)
+        return np.concatenate([parts[b.name] for b in self.layout.blocks])
+
+    def bind_period(self, dt: float) -> None:
+        """The control period in s (the physics step when ``dt`` is None)."""
+        self.period = float(dt)
+
+    def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
+        g = super().decode(genomes)
+        P, n = g["beta"].shape[0], self.n
+        rep = lambda x: np.repeat(x, 2, axis=1)  # noqa: E731  per-oscillator -> per-neuron
+        W = np.zeros((P, n, n))
+        f, e = 2 * np.arange(self.n_osc), 2 * np.arange(self.n_osc) + 1
+        W[:, f, e] = W[:, e, f] = g["w_fe"]
+        half = self.n_osc // 2
+        hips = (0, half)
+        W[:, 2 * hips[0], 2 * hips[1]] = W[:, 2 * hips[1], 2 * hips[0]] = g["w_rl"][:, 0]
+        W[:, 2 * hips[0] + 1, 2 * hips[1] + 1] = W[:, 2 * hips[1] + 1, 2 * hips[0] + 1] = g["w_rl"][:, 0]
+        for hip in hips:
+            for o in range(hip + 1, hip + half):
+                W[:, 2 * o + 1, 2 * hip] = W[:, 2 * o + 1, 2 * hip + 1] = g["w_hka"][:, 0]
+        out = dict(W=W, tau=rep(g["tau"]), tau_adapt=rep(g["tau_adapt"]), beta=g["beta"], p_e=g["p_e"], p_f=g["p_f"])
+        out["u0"] = np.full((P, 1), self.u0)
+        out["a"] = g["feedback"] if self.feedback == "taga" else np.zeros((P, 8))
+        return out
+
+    # ------------------------------------------------------------ dynamics
+    def initial_state(self, params: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        P = params["W"].shape[0]
+        u = np.zeros((P, self.n))
+        half = self.n_osc // 2  # first leg's flexors and second leg's extensors ahead
+        u[:, 0 : 2 * half : 2] = self.initial_u
+        u[:, 2 * half + 1 :: 2] = self.initial_u
+        return {"u": u, "v": np.zeros((P, self.n))}
+
+    def feed(self, params: dict[str, np.ndarray], inputs: np.ndarray) -> np.ndarray:
+        """Feed_i ``(P, n)`` in internal neuron order (0 without feedback)."""
+        P = inputs.shape[0]
+        out = np.zeros((P, self.n))
+        if self.feedback != "taga":
+            return out
+        cols, start = {}, 0
+        for name, w in self._widths.items():
+            cols[name] = inputs[:, start : start + w]
+            start += w
+        f = taga_feedback(params["a"], cols["link_angles"], cols["link_velocities"], cols["ground_contact"])
+        out[:, self._taga_order] = f
+        return out
+
+    def torques(self, params: dict[str, np.ndarray], y: np.ndarray) -> np.ndarray:
+        """``p_e y_e - p_f y_f`` per oscillator ``(P, n_osc)``."""
+        return params["p_e"] * y[:, 1::2] - params["p_f"] * y[:, 0::2]
+
+    def step(self, params, state, inputs):
+        if self.period is None:
+            raise ConfigError("matsuoka: the control period is unknown (call bind_period or give dt)")
+        u, v = state["u"], state["v"]
+        y = np.maximum(u, 0.0)
+        out = self.torques(params, y)
+        net = (params["W"] * y[:, None, :]).sum(axis=2)
+        du = (-u + net - params["beta"] * v + params["u0"] + self.feed(params, inputs)) / params["tau"]
+        dv = (-v + y) / params["tau_adapt"]
+        h = self.period
+        return {"u": u + h * du, "v": v + h * dv}, out
+
+    def neuron_outputs(self, params, state):
+        return np.maximum(state["u"], 0.0)
+
+    def describe(self) -> dict:
+        return {"name": self.name, "u0": self.u0, "feedback": self.feedback, "initial_u": self.initial_u, "dt": self.dt}

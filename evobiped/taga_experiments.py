@@ -1,0 +1,292 @@
+"""Taga et al. 1991 experiments: the Taga biped driven by its Matsuoka rhythm generator.
+
+A :class:`TagaWalker` is a batch of P walkers (one genome each, u_0 per walker)
+that can be advanced in pieces, so an experiment can change u_0, push the body,
+or continue from a steady state (the u_0 sweeps of Fig. 11).  Every physics
+step: sensors -> rhythm generator (eq. 6) -> torques -> Appendix A forces ->
+MuJoCo step, exactly the order of :class:`evobiped.episode.Episode` with the
+controller stepped at the physics step.  Trajectories are sampled every
+``record_every`` steps; :func:`metrics` reduces them with :mod:`evobiped.stride`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .bodies.taga import TagaBiped
+from .controllers.matsuoka import Matsuoka
+from .errors import UserError
+from .mapping import to_action
+from .sim import Sims
+from .stride import StrideMetrics, analyse
+
+PRESETS = ("taga",)
+
+
+def check_u0(u0: float) -> float:
+    if not (np.isfinite(u0) and u0 >= 0):
+        raise UserError(f"u0 must be a number >= 0, got {u0}")
+    return float(u0)
+
+
+@dataclass
+class Trace:
+    """Sampled trajectory of P walkers: ``t`` (T,), the rest ``(T, P, ...)``."""
+
+    t: list = field(default_factory=list)
+    hip: list = field(default_factory=list)  # (P, 2) x, height above terrain
+    contact: list = field(default_factory=list)  # (P, 2) right, left
+    ankle: list = field(default_factory=list)  # (P, 2, 2)
+    knee: list = field(default_factory=list)  # (P, 2, 2)
+    hip_z: list = field(default_factory=list)  # (P,) absolute hip z
+    u: list = field(default_factory=list)  # (P, 12) neuron inner states (internal order)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {k: np.array(v) for k, v in self.__dict__.items()}
+
+
+class TagaWalker:
+    """P Taga bipeds with their rhythm generators, advanced piece by piece."""
+
+    def __init__(
+        self,
+        u0,
+        *,
+        preset: str = "taga",
+        feedback: bool = True,
+        timestep: float = 0.0005,
+        record_every: int = 4,
+        **body_options,
+    ):
+        if preset not in PRESETS:
+            raise UserError(f"unknown preset {preset!r} (choose from {', '.join(PRESETS)})")
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        for v in u0:
+            check_u0(v)
+        self.body = TagaBiped(timestep=timestep, **body_options)
+        self.model = self.body.build_model()
+        self.P = len(u0)
+        self.sims = Sims(self.model, self.P)
+        self.body.reset(self.sims)
+        widths = {k: v.shape[1] for k, v in self.body.sensors(self.sims).items()}
+        inputs = {k: widths[k] for k in Matsuoka.body_inputs} if feedback else {}
+        self.ctrl = Matsuoka(n_outputs=6, inputs=inputs, u0=float(u0[0]))
+        self.ctrl.bind_period(timestep)
+        self.params = self.ctrl.decode(np.tile(self.ctrl.preset_genome(preset), (self.P, 1)))
+        self.params["u0"] = u0[:, None].copy()
+        self.state = self.ctrl.initial_state(self.params)
+        self.low, self.high = self.body.action_bounds()
+        self.alive = np.ones(self.P, bool)
+        self.fell_at = np.full(self.P, np.nan)
+        self.unstable = np.zeros(self.P, bool)
+        self.steps = 0
+        self.record_every = int(record_every)
+        self.trace = Trace()
+        self._record()
+
+    @property
+    def time(self) -> float:
+        return self.steps * self.body.timestep
+
+    def set_u0(self, u0) -> None:
+        u0 = np.broadcast_to(np.asarray(u0, float), (self.P,))
+        for v in u0:
+            check_u0(v)
+        self.params["u0"][:, 0] = u0
+
+    def advance(self, seconds: float) -> None:
+        """Simulate ``seconds`` more (walkers that fell stay where they fell)."""
+        body, ctrl, sims = self.body, self.ctrl, self.sims
+        names = ctrl.input_names
+        for _ in range(int(round(seconds / body.timestep))):
+            ids = np.flatnonzero(self.alive)
+            if ids.size == 0:
+                break
+            if names:
+                s = body.sensors(sims)
+                inputs = np.concatenate([s[n] for n in names], 1)
+            else:
+                inputs = np.zeros((self.P, 0))
+            self.state, out = ctrl.step(self.params, self.state, inputs)
+            body.apply(sims, ids, to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)[ids])
+            body.substep(sims, ids)
+            bad = sims.step(ids, 1)
+            self.steps += 1
+            down = bad | body.fallen(sims, ids)
+            if down.any():
+                self.unstable[ids[bad]] = True
+                self.fell_at[ids[down]] = self.time
+                self.alive[ids[down]] = False
+            if self.steps % self.record_every == 0:
+                self._record()
+
+    def _record(self) -> None:
+        k = self.body.links(self.sims)
+        tr = self.trace
+        tr.t.append(self.time)
+        tr.hip.append(np.stack([k["hip"][:, 0], self.body.hip_height(self.sims)], 1))
+        tr.hip_z.append(k["hip"][:, 1].copy())
+        tr.contact.append(self.body.sensors(self.sims)["ground_contact"] > 0)
+        tr.ankle.append(k["ankle"].copy())
+        tr.knee.append(k["knee"].copy())
+        tr.u.append(self.state["u"].copy())
+
+    def metrics(self, *, t_start: float | None = None, t_end: float | None = None) -> list[dict]:
+        """Per walker: fell/when and :class:`~evobiped.stride.StrideMetrics` over the window."""
+        a = self.trace.arrays()
+        out = []
+        for p in range(self.P):
+            m: StrideMetrics = analyse(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0], a["hip"][:, p, 1], t_start=t_start, t_end=t_end)
+            fell = bool(not self.alive[p])
+            d = {"u0": float(self.params["u0"][p, 0]), "fell": fell, "fell_at": float(self.fell_at[p]) if fell else None, "unstable": bool(self.unstable[p])}
+            d.update(m.as_dict())
+            if fell:
+                d["gait"] = "fell"
+                if t_start is not None and self.fell_at[p] <= t_start:  # down for the whole window
+                    d.update({k: float("nan") for k in ("double_support", "flight", "hip_min", "hip_max")})
+            out.append(d)
+        return out
+
+
+def steady(u0, *, seconds: float = 20.0, window: float = 10.0, **options) -> tuple[TagaWalker, list[dict]]:
+    """Run from Appendix E's initial condition; metrics over the last ``window`` s."""
+    w = TagaWalker(u0, **options)
+    w.advance(seconds)
+    return w, w.metrics(t_start=seconds - window)
+
+
+def push(
+    target: str,
+    force: float,
+    delays=(0.05,),
+    *,
+    u0: float = 5.5,
+    before: float = 10.0,
+    duration: float = 0.2,
+    after: float = 8.0,
+    tolerance: float = 0.05,
+    **options,
+) -> tuple[TagaWalker, list[dict]]:
+    """Fig. 7: walk ``before`` s, then push ``target`` forward with ``force`` N for ``duration`` s.
+
+    Walker p is pushed ``delays[p]`` s after the first liftoff of the right
+    foot after ``before`` (a right-shank push with a short delay hits the
+    swinging shank).  Per walker: push time, fell/when, the median stride
+    length and cycle duration of the strides before the push, every stride
+    after it, and the strides until all later ones are within ``tolerance``
+    (relative) of the pre-push values (None if never).
+    """
+    from .stride import per_stride
+
+    delays = np.asarray(delays, float)
+    w = TagaWalker(np.full(len(delays), u0), **options)
+    w.advance(before)
+    step = w.body.timestep
+    for _ in range(int(round(2.0 / step))):  # to the right foot's liftoff
+        was = w.body.sensors(w.sims)["ground_contact"][0, 0]
+        w.advance(step)
+        if was > 0 and w.body.sensors(w.sims)["ground_contact"][0, 0] == 0:
+            break
+    starts = w.time + delays
+    t_end = starts.max() + duration + after
+    on = np.zeros(len(delays), bool)
+    while w.time < t_end - step / 2:
+        t = w.time
+        want = (t >= starts - step / 2) & (t < starts + duration - step / 2)
+        for i in np.flatnonzero(want != on):
+            w.body.set_push(w.sims, np.array([i]), target if want[i] else "none", force if want[i] else 0.0)
+        on = want
+        w.advance(step)
+    a = w.trace.arrays()
+    rows = []
+    for p in range(w.P):
+        s, L, D = per_stride(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0])
+        pre, post = (s < starts[p] - 1.5) & (s > before - 5.0), s > starts[p]
+        refL, refD = float(np.median(L[pre])), float(np.median(D[pre]))
+        ok = (np.abs(L[post] / refL - 1) < tolerance) & (np.abs(D[post] / refD - 1) < tolerance)
+        fell = bool(not w.alive[p])
+        recovered = None if fell else next((i for i in range(len(ok)) if ok[i:].all() and len(ok) - i >= 3), None)
+        rows.append(
+            dict(
+                target=target,
+                force=float(force),
+                delay=float(delays[p]),
+                t_push=float(starts[p]),
+                fell=fell,
+                fell_at=float(w.fell_at[p]) if fell else None,
+                stride_length_before=refL,
+                cycle_duration_before=refD,
+                strides_after=[(float(x), float(y)) for x, y in zip(L[post], D[post])],
+                strides_to_recover=recovered,
+            )
+        )
+    return w, rows
+
+
+def ground_switch(kg, bg, *, u0: float = 5.5, before: float = 10.0, after: float = 15.0, window: float = 10.0, **options) -> list[dict]:
+    """Claim 6, second reading: walk ``before`` s on the nominal ground (Appendix D), then
+    switch walker p to ground (kg[p], bg[p]) and walk ``after`` s more; metrics over the last ``window`` s."""
+    kg, bg = np.asarray(kg, float), np.asarray(bg, float)
+    w = TagaWalker(np.full(len(kg), u0), **options)
+    w.advance(before)
+    w.body.p["kg"], w.body.p["bg"] = kg, bg
+    w.advance(after)
+    rows = w.metrics(t_start=w.time - window)
+    for r, k, b in zip(rows, kg, bg):
+        r.update(kg=float(k), bg=float(b))
+    return rows
+
+
+def sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float = 20.0, **options) -> list[dict]:
+    """Fig. 11: step u_0 through ``u0_values``, each step starting from the previous steady state.
+
+    The first value runs ``first`` s from Appendix E's initial condition, every
+    later one ``settle`` s; metrics over the last ``window`` s of each.
+    A fall ends the sweep (later values are reported as fell).
+    """
+    w = TagaWalker(u0_values[0], **options)
+    rows = []
+    for i, u in enumerate(u0_values):
+        w.set_u0(u)
+        dur = first if i == 0 else settle
+        w.advance(dur)
+        m = w.metrics(t_start=w.time - window)[0]
+        m["u0"] = float(u)
+        rows.append(m)
+    return rows
+
+
+def isolated_activity(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
+    """Fig. 6B: the rhythm generator alone (Feed = 0): times (T,) s and inner states u (T, 12)."""
+    ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u)
+    ctrl.bind_period(timestep)
+    params = ctrl.decode(ctrl.preset_genome()[None])
+    state = ctrl.initial_state(params)
+    n = int(round(seconds / timestep))
+    u = np.empty((n, ctrl.n))
+    empty = np.zeros((1, 0))
+    for i in range(n):
+        state, _ = ctrl.step(params, state, empty)
+        u[i] = state["u"][0]
+    return np.arange(1, n + 1) * timestep, u
+
+
+def isolated_period(u0: float = 5.5, *, seconds: float = 10.0, **kw) -> float:
+    """Period (s) of the isolated generator's hip oscillator (u_flexor - u_extensor), second half of the run."""
+    t, u = isolated_activity(u0, seconds=seconds, **kw)
+    return period_of(t, u[:, 0] - u[:, 1], t_start=seconds / 2)
+
+
+def period_of(t: np.ndarray, x: np.ndarray, *, t_start: float = 0.0) -> float:
+    """Median interval (s) between upward zero crossings of ``x`` after ``t_start``; nan if < 2."""
+    up = np.flatnonzero((x[1:] > 0) & (x[:-1] <= 0)) + 1
+    up = up[t[up] >= t_start]
+    return float(np.median(np.diff(t[up]))) if len(up) > 1 else float("nan")
+
+
+def walking_hip_period(w: TagaWalker, *, t_start: float, p: int = 0) -> float:
+    """Period (s) of walker p's right hip oscillator (u_1 - u_2) in its trace."""
+    a = w.trace.arrays()
+    return period_of(a["t"], a["u"][:, p, 0] - a["u"][:, p, 1], t_start=t_start)
