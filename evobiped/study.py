@@ -13,6 +13,7 @@ local processes or a Ray cluster.  Study directory::
     distances.png              Fig. 5: distance histograms, stable and unstable apart
     fitness_graphs.png         best fitness per generation of every run
 
+Distances are eq. 4's (for the cyclic condition the fitness is larger).
 "Stable" is the paper's: the run's best walker did not fall within the
 episode (50 s).  Each stable walker is re-simulated for ``recheck_seconds``
 (200 s by default); "walks indefinitely" counts those still up at the end.
@@ -118,10 +119,13 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
     with SerialEvaluator(run_cfg.episode) as ev:
         summary = run.evolve(ev)  # a finished run only writes its summary again
     best = summary["best"]
+    genome, ep_cfg, _ = load_genome(d / "best.json")
+    again = ep_cfg.build().run(genome)  # eq. 4's distance (the cyclic criterion's fitness is more than that)
     outcome = {
         "condition": condition,
         "seed": run_cfg.seed,
         "fitness": best["fitness"],
+        "distance": float(np.linalg.norm(again.end_position[0] - again.start_position[0])),
         "fell": best["fell"],
         "end_time": best["end_time"],
         "generation": best["generation"],
@@ -130,8 +134,9 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         "walks_indefinitely": None,
         "recheck_end_time": None,
     }
+    if again.fitness[0] != best["fitness"]:
+        raise RuntimeError(f"{d}: the best walker's fitness does not reproduce ({again.fitness[0]!r} != {best['fitness']!r})")
     if not best["fell"]:
-        genome, ep_cfg, _ = load_genome(d / "best.json")
         r = dataclasses.replace(ep_cfg, seconds=float(recheck_seconds)).build().run(genome)
         outcome["walks_indefinitely"] = not bool(r.fell[0])
         outcome["recheck_end_time"] = float(r.end_time[0])
@@ -221,8 +226,8 @@ def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
     rows = []
     for c in conditions:
         os_ = [o for o in outcomes if o["condition"] == c]
-        stable = [o["fitness"] for o in os_ if not o["fell"]]
-        unstable = [o["fitness"] for o in os_ if o["fell"]]
+        stable = [o["distance"] for o in os_ if not o["fell"]]
+        unstable = [o["distance"] for o in os_ if o["fell"]]
         n, k = len(os_), len(stable)
         lo, hi = wilson_interval(k, n)
         sm, ss = mean_std(stable)
@@ -244,7 +249,7 @@ def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
     return rows
 
 
-RUN_COLUMNS = ("condition", "seed", "fitness", "fell", "end_time", "generation", "wall_seconds", "walks_indefinitely", "recheck_end_time")
+RUN_COLUMNS = ("condition", "seed", "distance", "fitness", "fell", "end_time", "generation", "wall_seconds", "walks_indefinitely", "recheck_end_time")
 
 
 def _csv(rows: list[dict], columns) -> str:
@@ -284,7 +289,7 @@ def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dic
     atomic_write(d / "table.csv", _csv(rows, rows[0].keys()))
     atomic_write(d / "table.md", table_markdown(rows, config.recheck_seconds))
     write_json(d / "table.json", {"evobiped": __version__, "conditions": rows})
-    edges = histogram_edges([o["fitness"] for o in outcomes])
+    edges = histogram_edges([o["distance"] for o in outcomes])
     histories = {c: [read_history(run_dir(d, c, k, config) / "history.csv") for k in range(config.runs)] for c in config.conditions}
     return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
             distance_histograms(outcomes, config.conditions, edges, d / "distances.png"),

@@ -45,10 +45,10 @@ def test_histogram_edges_cover_every_value_in_metre_bins():
 
 def test_summarize_synthetic_outcomes():
     """10 plain runs, 1 stable (the paper's 10 %); 5 cyclic runs, 4 stable."""
-    outs = [{"condition": "plain", "fitness": 7.0 + i, "fell": True, "walks_indefinitely": None, "wall_seconds": 10.0} for i in range(9)]
-    outs.append({"condition": "plain", "fitness": 20.5, "fell": False, "walks_indefinitely": True, "wall_seconds": 100.0})
-    outs += [{"condition": "cyclic", "fitness": f, "fell": False, "walks_indefinitely": f > 20, "wall_seconds": 50.0} for f in (19.0, 20.0, 21.0, 22.0)]
-    outs.append({"condition": "cyclic", "fitness": 3.0, "fell": True, "walks_indefinitely": None, "wall_seconds": 5.0})
+    outs = [{"condition": "plain", "distance": 7.0 + i, "fell": True, "walks_indefinitely": None, "wall_seconds": 10.0} for i in range(9)]
+    outs.append({"condition": "plain", "distance": 20.5, "fell": False, "walks_indefinitely": True, "wall_seconds": 100.0})
+    outs += [{"condition": "cyclic", "distance": f, "fell": False, "walks_indefinitely": f > 20, "wall_seconds": 50.0} for f in (19.0, 20.0, 21.0, 22.0)]
+    outs.append({"condition": "cyclic", "distance": 3.0, "fell": True, "walks_indefinitely": None, "wall_seconds": 5.0})
     plain, cyclic = summarize(outs, ("plain", "cyclic"))
     assert (plain["runs"], plain["stable"], plain["success_rate"]) == (10, 1, 0.1)
     assert (plain["ci95_low"], plain["ci95_high"]) == pytest.approx((0.0179, 0.4042), abs=5e-5)
@@ -79,6 +79,8 @@ def test_tiny_study_end_to_end(tmp_path, capsys):
         d = out / r["condition"] / f"seed_{int(r['seed']):03d}"
         best = json.loads((d / "best.json").read_text())
         assert float(r["fitness"]) == best["fitness"] and (r["fell"] == "True") == best["fell"]
+        if r["condition"] == "plain":  # eq. 4: fitness is the distance
+            assert float(r["distance"]) == best["fitness"]
         assert len((d / "history.csv").read_text().splitlines()) == 3
         assert json.loads((d / "config.json").read_text())["episode"]["task_options"]["cyclic_weight"] == (1.0 if r["condition"] == "cyclic" else 0.0)
     t = {row["condition"]: row for row in json.loads((out / "table.json").read_text())["conditions"]}

@@ -18,7 +18,7 @@ def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, pat
     width = (edges[1] - edges[0]) / (len(conditions) + 1)
     for ax, stable, title in ((axes[0], False, "(a) unstable: fell within the episode"), (axes[1], True, "(b) stable: did not fall")):
         for i, c in enumerate(conditions):
-            d = [o["fitness"] for o in outcomes if o["condition"] == c and o["fell"] != stable]
+            d = [o["distance"] for o in outcomes if o["condition"] == c and o["fell"] != stable]
             counts, _ = np.histogram(d, bins=edges)
             ax.bar(edges[:-1] + (i + 0.5) * width, counts, width=width, align="edge", color=_COLORS.get(c), label=f"{c} ({len(d)} runs)")
         ax.set_title(title, fontsize=10)
