@@ -44,7 +44,14 @@ def _evaluate(episode: Episode, genomes: np.ndarray) -> Evaluation:
     return Evaluation(r.fitness, r.fell, r.unstable, r.end_time)
 
 
-def chunks(n: int, size: int) -> list[slice]:
+def chunks(n: int, size: int | None, workers: int = 1) -> list[slice]:
+    """Slices of at most ``size`` genomes; ``size=None``: about two batches per worker.
+
+    Bigger batches share the per-tick Python work among more simulations;
+    several per worker still balance the load when walkers fall early.
+    """
+    if size is None:
+        size = max(1, -(-n // (2 * workers)))
     return [slice(i, min(i + size, n)) for i in range(0, n, size)]
 
 
@@ -95,21 +102,21 @@ def _work(genomes: np.ndarray) -> Evaluation:
 class ProcessPoolEvaluator(Evaluator):
     """A persistent pool of ``workers`` processes; genomes go out in small batches.
 
-    Batches of ``chunk`` genomes balance the load (walkers that fall early cost
+    Batches of ``chunk`` genomes (default: about two per worker) balance the load (walkers that fall early cost
     little, stable walkers the full episode).
     """
 
-    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int = 5):
+    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None):
         super().__init__(episode)
         if workers < 1:
             raise ConfigError(f"workers must be >= 1, got {workers}")
-        self.workers, self.chunk = int(workers), int(chunk)
+        self.workers, self.chunk = int(workers), chunk
         ctx = mp.get_context("spawn")
         self.pool = ctx.Pool(self.workers, initializer=_init_worker, initargs=(episode,))
 
     def evaluate(self, genomes):
         genomes = np.asarray(genomes, float)
-        parts = self.pool.map(_work, [genomes[s] for s in chunks(len(genomes), self.chunk)])
+        parts = self.pool.map(_work, [genomes[s] for s in chunks(len(genomes), self.chunk, self.workers)], chunksize=1)
         return Evaluation.concat(parts)
 
     def close(self):
@@ -180,11 +187,11 @@ def init_ray(address: str | None, workers: int | None):
 class RayEvaluator(Evaluator):
     """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
 
-    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int = 5):
+    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None):
         super().__init__(episode)
         ray, self._owns = init_ray(address, workers)
         self.ray = ray
-        self.chunk = int(chunk)
+        self.chunk = chunk
         n = workers or int(ray.cluster_resources().get("CPU", 1))
 
         @ray.remote(num_cpus=1)
@@ -199,7 +206,7 @@ class RayEvaluator(Evaluator):
 
     def evaluate(self, genomes):
         genomes = np.asarray(genomes, float)
-        pieces = [genomes[s] for s in chunks(len(genomes), self.chunk)]
+        pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
         return Evaluation.concat(list(pool.map(lambda a, g: a.evaluate.remote(g), pieces)))
 
