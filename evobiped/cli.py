@@ -104,6 +104,8 @@ def add_evolve(sub) -> None:
     p.add_argument("--workers", type=positive_int, help="worker processes / Ray actors (default: all cores)")
     p.add_argument("--address", help="Ray cluster address (with --backend ray; default: start a local Ray)")
     p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="seed the population with clones of this genome")
+    p.add_argument("--freeze", metavar="BLOCKS", help="gene blocks the GA must not change, comma-separated "
+                   "(e.g. weights,time_constants,biases: evolve only a CTRNN's input weights)")
     p.add_argument("--out", metavar="DIR", help="run directory (default runs/<body>_<controller>_seed<seed>)")
     p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last checkpoint")
     p.add_argument("--rerun", nargs="?", const="spawn", metavar="ADDR",
@@ -130,6 +132,8 @@ def evolve_config(args):
     for flag in ("generations", "seed", "backend", "workers", "address", "initial"):
         if getattr(args, flag) is not None:
             d[flag] = getattr(args, flag)
+    if getattr(args, "freeze", None):
+        d["frozen_blocks"] = [b.strip() for b in args.freeze.split(",") if b.strip()]
     return RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=args.config or "settings")
 
 
@@ -153,7 +157,7 @@ def run_evolve_cmd(args) -> int:
 
         require_viewer(connect_url(args.rerun))  # before anything is written
     if args.resume:
-        if any(getattr(args, f) is not None for f in ("config", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic")):
+        if any(getattr(args, f) is not None for f in ("config", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
         run = Run.resume(args.resume)
         if run.done:

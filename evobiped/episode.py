@@ -83,7 +83,7 @@ def _sensor_widths(body: Body) -> dict[str, int]:
 
 @dataclass
 class EpisodeResult:
-    """Per-individual outcome, every array ``(P,)`` (positions ``(P, 2)``)."""
+    """Per-individual outcome, every array ``(P,)`` (positions ``(P, 2)``, or ``(P, S, 2)`` for S presentations)."""
 
     fitness: np.ndarray
     fell: np.ndarray
@@ -91,6 +91,20 @@ class EpisodeResult:
     end_time: np.ndarray
     start_position: np.ndarray
     end_position: np.ndarray
+
+
+    def per_genome(self, S: int, combine) -> "EpisodeResult":
+        """Rows p * S + j -> one entry per genome: fitness combined by the task, fell/unstable
+        if any presentation did, the earliest end; positions become ``(P, S, 2)``."""
+        by = lambda a: a.reshape(-1, S, *a.shape[1:])  # noqa: E731
+        return EpisodeResult(
+            fitness=combine(by(self.fitness)),
+            fell=by(self.fell).any(axis=1),
+            unstable=by(self.unstable).any(axis=1),
+            end_time=by(self.end_time).min(axis=1),
+            start_position=by(self.start_position),
+            end_position=by(self.end_position),
+        )
 
 
 class Listener(Protocol):
@@ -108,6 +122,7 @@ class Episode:
         self.body, self.controller, self.task = body, controller, task
         self.seconds = float(seconds)
         self.model = body.build_model()
+        task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
         dt = controller.dt if controller.dt is not None else body.timestep
         ratio = dt / body.timestep
@@ -129,8 +144,15 @@ class Episode:
         return self._sims[n]
 
     def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None) -> EpisodeResult:
-        """Simulate every genome ``(P, G)`` (or one ``(G,)``); returns fitness and outcome."""
+        """Simulate every genome ``(P, G)`` (or one ``(G,)``); returns fitness and outcome.
+
+        A task with S presentations runs each genome S times side by side
+        (rows p * S + j); the listener sees all rows, the result one per genome.
+        """
         params = self.controller.decode(genomes)
+        S = self.task.presentations
+        if S > 1:
+            params = {k: np.repeat(v, S, axis=0) for k, v in params.items()}
         P = next(iter(params.values())).shape[0]
         n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
         body, ctrl, task = self.body, self.controller, self.task
@@ -172,6 +194,8 @@ class Episode:
             start_position=start,
             end_position=tstate.get("position", body.planar_position(sims)).copy(),
         )
+        if S > 1:
+            result = result.per_genome(S, task.combine)
         if listener is not None:
             listener.end(result)
         return result

@@ -17,6 +17,15 @@ class Task:
     """Base class: no sensors, no bookkeeping; subclasses define fitness."""
 
     name = "task"
+    #: full episodes per genome, each from the initial state (e.g. one per sound source)
+    presentations: int = 1
+
+    def presentation_of(self, n_rows: int) -> np.ndarray:
+        """Presentation of each simulation row ``(n_rows,)``: genome p's presentation j is row p * S + j."""
+        return np.arange(n_rows) % self.presentations
+
+    def bind_model(self, model) -> None:
+        """Look up what the task needs in the compiled model (ConfigError if missing)."""
 
     def sensor_widths(self) -> dict[str, int]:
         """Widths of the sensor arrays this task provides, by name."""
@@ -36,6 +45,10 @@ class Task:
     def fitness(self, state: dict[str, Any]) -> np.ndarray:
         """``(P,)`` fitness at the end of the episode."""
         raise NotImplementedError
+
+    def combine(self, fitness: np.ndarray) -> np.ndarray:
+        """A genome's fitness from its presentations' ``(P, S)`` -> ``(P,)``."""
+        return fitness[:, 0]
 
     def describe(self) -> dict:
         return {"name": self.name}

@@ -1,0 +1,88 @@
+"""Sound-source steering (Reil & Husbands Sect. IV, Figs. 9-13).
+
+Ears.  Two ears at the ends of the pelvis (sites ``left_ear``, ``right_ear`` of
+the body's model).  A source on the ground plane at ``q`` is heard by an ear
+at ground position ``e`` with the free-field intensity of a point source,
+``I = 1 / |e - q|^2`` (inverse-square law; the loudness scale cancels below).
+The preprocessed signal of Fig. 9 is
+
+    s = (a - b) / (a + b),   a = I_left,  b = I_right,
+
+so s > 0 when the source is on the walker's left, s < 0 on its right, s = 0
+when it faces the source (or has it straight behind), and |s| grows as the
+walker gets nearer: for ears at +-e from the pelvis centre and a source at
+distance D and bearing theta (left positive), s = 2 D e sin(theta) / (D^2 + e^2).
+s is the task sensor ``sound`` (width 1), fed to every CTRNN neuron through
+its own evolved weight (Fig. 10).
+
+Presentations.  Each genome is evaluated once per source (default (-3, -10)
+and (3, -10) m), every time from the default start; the episode runs them
+side by side in one batch.  Fitness of a presentation = -(planar distance of
+the pelvis centre to that source) when it ends (time limit or fall);
+a genome's fitness is the mean over its presentations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConfigError
+from .base import Task
+
+DEFAULT_SOURCES = ((-3.0, -10.0), (3.0, -10.0))
+
+
+def ear_signal(left: np.ndarray, right: np.ndarray, source: np.ndarray) -> np.ndarray:
+    """s = (a - b) / (a + b) for ear ground positions ``(n, 2)`` and sources ``(n, 2)`` -> ``(n,)``."""
+    a = 1.0 / np.maximum(np.sum((left - source) ** 2, axis=1), 1e-12)
+    b = 1.0 / np.maximum(np.sum((right - source) ** 2, axis=1), 1e-12)
+    return (a - b) / (a + b)
+
+
+def parse_sources(sources) -> np.ndarray:
+    """``[[x, y], ...]`` in m -> ``(S, 2)``; ConfigError for anything else (e.g. a lone number)."""
+    try:
+        arr = np.array(sources, dtype=float)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0 or not np.isfinite(arr).all():
+        raise ConfigError(f"steer task: sources must be a list of [x, y] positions in m, e.g. [[-3, -10], [3, -10]]; got {sources!r}")
+    return arr
+
+
+class SteerTask(Task):
+    name = "steer"
+
+    def __init__(self, *, sources=DEFAULT_SOURCES):
+        self.sources = parse_sources(sources)
+        self.presentations = len(self.sources)
+
+    def bind_model(self, model) -> None:
+        try:
+            self._ears = (model.site("left_ear").id, model.site("right_ear").id)
+        except KeyError:
+            raise ConfigError("steer task: the body has no ears (sites 'left_ear' and 'right_ear')") from None
+
+    def sensor_widths(self):
+        return {"sound": 1}
+
+    def start(self, body, sims):
+        p0 = body.planar_position(sims).copy()
+        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)], "sources": self.sources}
+
+    def sensors(self, body, sims, state):
+        left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
+        return {"sound": ear_signal(left, right, state["source"])[:, None]}
+
+    def on_tick(self, body, sims, state, ids, healthy, neurons):
+        ok = ids[healthy]
+        state["position"][ok] = body.planar_position(sims)[ok]
+
+    def fitness(self, state):
+        return -np.linalg.norm(state["position"] - state["source"], axis=1)
+
+    def combine(self, fitness: np.ndarray) -> np.ndarray:
+        return fitness.mean(axis=1)
+
+    def describe(self):
+        return {"name": self.name, "sources": self.sources.tolist()}

@@ -1,0 +1,129 @@
+"""Sound-source steering: the ear model, presentations, clamped CPG weights, bad input."""
+
+import json
+
+import numpy as np
+import pytest
+
+from evobiped.cli import main
+from evobiped.episode import EpisodeConfig
+from evobiped.tasks.steer import ear_signal
+
+E = 0.25  # the Reil pelvis: ears 0.25 m either side of its centre
+
+
+def ears_facing_x(centre=(0.0, 0.0)):
+    c = np.array(centre, float)
+    return (c + [0, E])[None], (c - [0, E])[None]  # left ear at +y when facing +x
+
+
+@pytest.mark.parametrize("D", [0.5, 1.0, 3.0, 10.0, 30.0])
+@pytest.mark.parametrize("theta", [-2.0, -0.7, -0.1, 0.3, 1.2, 2.5])
+def test_signal_equals_the_closed_form(D, theta):
+    """s = 2 D e sin(theta) / (D^2 + e^2) for a source at distance D, bearing theta (left > 0)."""
+    left, right = ears_facing_x()
+    src = np.array([[D * np.cos(theta), D * np.sin(theta)]])
+    assert ear_signal(left, right, src)[0] == pytest.approx(2 * D * E * np.sin(theta) / (D**2 + E**2), rel=1e-12)
+
+
+def test_signal_vanishes_facing_the_source_flips_across_the_midline_and_grows_nearer():
+    left, right = ears_facing_x()
+    assert ear_signal(left, right, np.array([[10.0, 0.0]]))[0] == 0.0
+    assert ear_signal(left, right, np.array([[10.0, 1.0]]))[0] > 0 > ear_signal(left, right, np.array([[10.0, -1.0]]))[0]
+    near = [abs(ear_signal(left, right, np.array([[d * np.cos(0.5), d * np.sin(0.5)]]))[0]) for d in (20, 10, 5, 2, 1)]
+    assert all(a < b for a, b in zip(near, near[1:]))
+
+
+def test_the_walker_hears_with_its_pelvis_ears():
+    """At the start (facing +x): a source ahead gives 0, on the left > 0, on the right < 0."""
+    ep = EpisodeConfig(task="steer", task_options={"sources": [[10, 0], [0, 10], [0, -10]]}).build()
+    sims = ep.sims(3)
+    ep.body.reset(sims)
+    sims.forward()
+    state = ep.task.start(ep.body, sims)
+    s = ep.task.sensors(ep.body, sims, state)["sound"][:, 0]
+    assert abs(s[0]) < 1e-12 and s[1] > 0.04 and s[2] == pytest.approx(-s[1])
+    assert s[1] == pytest.approx(2 * 10 * E / (100 + E**2), rel=1e-6)  # theta = 90 degrees, D = 10 m
+
+
+def test_fitness_is_the_mean_over_presentations_of_minus_the_distance():
+    """Two sources side by side in one batch = each source alone; fitness = -(distance to the source)."""
+    genomes = np.random.default_rng(3).uniform(-1, 1, (3, 130))
+    genomes[:, 100:110] = np.random.default_rng(4).uniform(0.5, 5, (3, 10))
+    both = EpisodeConfig(task="steer", seconds=2.0).build()
+    a = EpisodeConfig(task="steer", seconds=2.0, task_options={"sources": [[-3, -10]]}).build()
+    b = EpisodeConfig(task="steer", seconds=2.0, task_options={"sources": [[3, -10]]}).build()
+    r, ra, rb = both.run(genomes), a.run(genomes), b.run(genomes)
+    assert np.array_equal(r.fitness, (ra.fitness + rb.fitness) / 2)
+    assert np.array_equal(r.fell, ra.fell | rb.fell)
+    assert np.array_equal(ra.fitness, -np.linalg.norm(ra.end_position - [-3, -10], axis=1))
+    assert r.end_position.shape == (3, 2, 2)
+
+
+def cli(*args) -> int:
+    try:
+        return main([str(a) for a in args])
+    except SystemExit as exc:
+        return exc.code
+
+
+CPG = "weights,time_constants,biases"
+SMALL = ["--population", 6, "--generations", 3, "--episode-seconds", 1.5, "--backend", "serial", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def walker(tmp_path_factory):
+    d = tmp_path_factory.mktemp("walker") / "run"
+    assert cli("evolve", "--population", 6, "--generations", 2, "--episode-seconds", 1.5, "--backend", "serial", "--out", d, "--quiet") == 0
+    return d
+
+
+def test_clamped_cpg_weights_never_change(walker, tmp_path):
+    out = tmp_path / "steer"
+    assert cli("evolve", "--task", "steer", "--from", walker, "--freeze", CPG, *SMALL, "--out", out) == 0
+    cpg = json.loads((walker / "best.json").read_text())["genome"]
+    assert len(cpg) == 120
+    pop = np.array(json.loads((out / "checkpoint.json").read_text())["ga"]["population"])
+    assert pop.shape == (6, 130)
+    assert np.all(pop[:, :120] == cpg)  # every individual keeps the walker's CPG
+    assert np.any(pop[:, 120:] != 0)  # while the 10 sensory weights evolved
+    for f in (out / "generations").iterdir():
+        assert json.loads(f.read_text())["genome"][:120] == cpg
+
+
+def test_unclamped_cpg_weights_do_change(walker, tmp_path):
+    out = tmp_path / "free"
+    assert cli("evolve", "--task", "steer", "--from", walker, *SMALL, "--generations", 6, "--out", out) == 0
+    cpg = np.array(json.loads((walker / "best.json").read_text())["genome"])
+    pop = np.array(json.loads((out / "checkpoint.json").read_text())["ga"]["population"])
+    assert np.any(pop[:, :120] != cpg)
+
+
+@pytest.mark.parametrize(
+    "setup, words",
+    [
+        ("g3-walker", "is a reil/g3 genome; this run needs reil/ctrnn"),
+        ("one-number-source", "sources must be a list of [x, y] positions"),
+        ("taga", "the body has no ears"),
+        ("bad-freeze", "frozen_blocks ['wings'] are not gene blocks"),
+    ],
+)
+def test_bad_input(tmp_path, capsys, setup, words):
+    args = ["evolve", "--task", "steer", *SMALL, "--out", tmp_path / "out"]
+    if setup == "g3-walker":
+        g3 = tmp_path / "g3"
+        assert cli("evolve", "--controller", "g3", "--population", 4, "--generations", 1, "--episode-seconds", 0.5, "--backend", "serial", "--out", g3, "--quiet") == 0
+        capsys.readouterr()
+        args += ["--from", g3]
+    elif setup == "one-number-source":
+        cfg = tmp_path / "c.toml"
+        cfg.write_text("[episode.task_options]\nsources = 3\n")
+        args += ["--config", cfg]
+    elif setup == "taga":
+        args += ["--body", "taga"]
+    else:
+        args += ["--freeze", "wings"]
+    assert cli(*args) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
