@@ -91,6 +91,8 @@ class EpisodeResult:
     end_time: np.ndarray
     start_position: np.ndarray
     end_position: np.ndarray
+    #: per simulation row (one per genome and presentation) when the task has several presentations
+    rows: "EpisodeResult | None" = None
 
 
     def per_genome(self, S: int, combine) -> "EpisodeResult":
@@ -104,6 +106,7 @@ class EpisodeResult:
             end_time=by(self.end_time).min(axis=1),
             start_position=by(self.start_position),
             end_position=by(self.end_position),
+            rows=self,
         )
 
 
@@ -113,6 +116,25 @@ class Listener(Protocol):
     def start(self, episode: "Episode", sims: Sims) -> None: ...
     def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: dict) -> None: ...
     def end(self, result: EpisodeResult) -> None: ...
+
+
+class Listeners:
+    """Several listeners as one (e.g. one recorder per presentation)."""
+
+    def __init__(self, *listeners: Listener):
+        self.listeners = listeners
+
+    def start(self, episode, sims):
+        for x in self.listeners:
+            x.start(episode, sims)
+
+    def tick(self, t, sims, ids, neurons, action, task_state):
+        for x in self.listeners:
+            x.tick(t, sims, ids, neurons, action, task_state)
+
+    def end(self, result):
+        for x in self.listeners:
+            x.end(result)
 
 
 class Episode:

@@ -51,12 +51,12 @@ def test_fitness_is_the_mean_over_presentations_of_minus_the_distance():
     genomes = np.random.default_rng(3).uniform(-1, 1, (3, 130))
     genomes[:, 100:110] = np.random.default_rng(4).uniform(0.5, 5, (3, 10))
     both = EpisodeConfig(task="steer", seconds=2.0).build()
-    a = EpisodeConfig(task="steer", seconds=2.0, task_options={"sources": [[-3, -10]]}).build()
-    b = EpisodeConfig(task="steer", seconds=2.0, task_options={"sources": [[3, -10]]}).build()
+    a = EpisodeConfig(task="steer", seconds=2.0, task_options={"sources": [[10, 3]]}).build()
+    b = EpisodeConfig(task="steer", seconds=2.0, task_options={"sources": [[10, -3]]}).build()
     r, ra, rb = both.run(genomes), a.run(genomes), b.run(genomes)
     assert np.array_equal(r.fitness, (ra.fitness + rb.fitness) / 2)
     assert np.array_equal(r.fell, ra.fell | rb.fell)
-    assert np.array_equal(ra.fitness, -np.linalg.norm(ra.end_position - [-3, -10], axis=1))
+    assert np.array_equal(ra.fitness, -np.linalg.norm(ra.end_position - [10, 3], axis=1))
     assert r.end_position.shape == (3, 2, 2)
 
 
@@ -127,3 +127,17 @@ def test_bad_input(tmp_path, capsys, setup, words):
     err = capsys.readouterr().err
     assert words in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_replay_records_every_presentation_and_draws_figs_12_13(walker, tmp_path, capsys):
+    out = tmp_path / "steer"
+    assert cli("evolve", "--task", "steer", "--from", walker, "--freeze", CPG, *SMALL, "--out", out) == 0
+    assert cli("replay", out, "--figures", tmp_path / "figs") == 0
+    text = capsys.readouterr().out
+    assert "equals it bit for bit" in text
+    names = sorted(p.name for p in (tmp_path / "figs").iterdir())
+    assert "steering_trajectories.png" in names and "steering_neuron.png" in names
+    import rerun as rr
+
+    paths = {c.entity_path for c in rr.chunk.RrdReader(out / "replay_best.rrd").stream()}
+    assert {"/sensors/sound", "/world/source", "/world/sources"} <= paths

@@ -208,3 +208,28 @@ def replay_figures(traj: Trajectory, out_dir: str | Path, *, history: dict[str, 
     paths.append(stick_figure(traj, out / "stick_figure.png"))
     paths.append(ground_trajectory(traj, out / "ground_trajectory.png"))
     return paths
+
+
+def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int = 3, labels: list[str] | None = None) -> Path:
+    """One motor neuron's output per presentation (Fig. 13: right hip sagittal = neuron 4, index 3)."""
+    plt = _plt()
+    fig, axes = plt.subplots(len(trajs), 1, figsize=(7.0, 1.2 + 1.3 * len(trajs)), sharex=True, squeeze=False)
+    name = trajs[0].actuator_names[neuron] if neuron < len(trajs[0].actuator_names) else f"neuron {neuron + 1}"
+    for ax, tr, label in zip(axes[:, 0], trajs, labels or [None] * len(trajs)):
+        ax.plot(tr.command_time, tr.neurons[:, neuron], color="black", lw=1.0)
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_ylabel("output")
+        ax.set_title(label or "", fontsize=9)
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.suptitle(f"Motor neuron {neuron + 1} ({name}) per sound source", fontsize=10)
+    return _save(fig, path)
+
+
+def steering_figures(trajs: list[Trajectory], out_dir: str | Path) -> list[Path]:
+    """Fig. 12 (paths toward every source) and Fig. 13 (right-hip sagittal neuron per source)."""
+    out = Path(out_dir)
+    labels = [f"source {i + 1} at ({tr.source[0, 0]:g}, {tr.source[0, 1]:g}) m" for i, tr in enumerate(trajs)]
+    return [
+        ground_trajectory(trajs, out / "steering_trajectories.png", labels=labels),
+        steering_neuron(trajs, out / "steering_neuron.png", labels=labels),
+    ]

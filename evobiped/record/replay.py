@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .source import Source, read_history
-from .trajectory import Trajectory
+from .trajectory import Trajectory, TrajectoryRecorder
 
 
 @dataclass
@@ -59,7 +59,8 @@ def replay(
     import rerun as rr
 
     from .evolution_log import log_history
-    from .figures import replay_figures
+    from ..episode import Listeners
+    from .figures import replay_figures, steering_figures
     from .rerun_recorder import RerunRecorder, blueprint
     from .viewer import connect_url, flush, require_viewer
 
@@ -86,7 +87,8 @@ def replay(
     try:
         rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
         listener = RerunRecorder(rec)
-        result = episode.run(source.genome[None, :], listener=listener)
+        others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)]  # one walker per sound source
+        result = episode.run(source.genome[None, :], listener=Listeners(listener, *others) if others else listener)
         traj = listener.trajectory
         if history is not None:
             log_history(rec, history)
@@ -97,7 +99,11 @@ def replay(
     finally:
         if tmp is not None and tmp.exists():
             tmp.unlink()
-    figs = replay_figures(traj, figures_dir, history=history) if figures_dir is not None else []
+    figs = []
+    if figures_dir is not None:
+        figs = replay_figures(traj, figures_dir, history=history)
+        if others:
+            figs += steering_figures([traj] + [o.trajectory for o in others], figures_dir)
     stored = source.meta.get("fitness")
     return ReplayReport(
         fitness=float(result.fitness[0]),

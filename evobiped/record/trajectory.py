@@ -106,6 +106,7 @@ class TrajectoryRecorder:
 
     def end(self, result) -> None:
         ep, p = self._episode, self.index
+        result = result.rows if result.rows is not None else result  # this row's own presentation
         st, cmd, tk = self._rows["state"], self._rows["command"], self._rows["tick"]
         n_act = len(ep.body.actuator_names)
         K = len(self._touch_names)

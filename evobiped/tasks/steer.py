@@ -15,8 +15,13 @@ distance D and bearing theta (left positive), s = 2 D e sin(theta) / (D^2 + e^2)
 s is the task sensor ``sound`` (width 1), fed to every CTRNN neuron through
 its own evolved weight (Fig. 10).
 
-Presentations.  Each genome is evaluated once per source (default (-3, -10)
-and (3, -10) m), every time from the default start; the episode runs them
+Sources are world (x, y) positions in m; the walker starts at the origin
+facing +x with its left ear towards +y.  The default sources (10, 3) and
+(10, -3) are the paper's (-3, -10) and (3, -10) (Fig. 12): there the walker
+walks towards -z in an x-z ground plane and x = -3 is its left.
+
+Presentations.  Each genome is evaluated once per source, every time from the
+default start; the episode runs them
 side by side in one batch.  Fitness of a presentation = -(planar distance of
 the pelvis centre to that source) when it ends (time limit or fall);
 a genome's fitness is the mean over its presentations.
@@ -29,7 +34,8 @@ import numpy as np
 from ..errors import ConfigError
 from .base import Task
 
-DEFAULT_SOURCES = ((-3.0, -10.0), (3.0, -10.0))
+#: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
+DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
 
 
 def ear_signal(left: np.ndarray, right: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -46,7 +52,7 @@ def parse_sources(sources) -> np.ndarray:
     except (TypeError, ValueError):
         arr = None
     if arr is None or arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0 or not np.isfinite(arr).all():
-        raise ConfigError(f"steer task: sources must be a list of [x, y] positions in m, e.g. [[-3, -10], [3, -10]]; got {sources!r}")
+        raise ConfigError(f"steer task: sources must be a list of [x, y] positions in m, e.g. [[10, 3], [10, -3]]; got {sources!r}")
     return arr
 
 
