@@ -27,7 +27,7 @@ def random_genomes(layout, n, seed):
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
-    """A real (small) `evobiped evolve` run: 2 worker processes, chunks of 5 genomes per batch."""
+    """A real (small) `evobiped evolve` run: 2 worker processes, each evaluating batches of genomes."""
     run = tmp_path_factory.mktemp("runs") / "run"
     args = ["evolve", "--population", "8", "--generations", "3", "--episode-seconds", str(SECONDS), "--seed", "7",
             "--backend", "process", "--workers", "2", "--out", str(run), "--quiet"]
