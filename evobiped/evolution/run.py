@@ -142,7 +142,9 @@ class Run:
     def create(cls, directory: str | Path, config: RunConfig) -> "Run":
         """Validate everything first; only then create the (new or empty) directory."""
         directory = Path(directory)
-        if directory.exists() and (not directory.is_dir() or any(directory.iterdir())):
+        if directory.exists() and not directory.is_dir():
+            raise UserError(f"run directory {directory} exists and is a file; give another --out")
+        if directory.exists() and any(directory.iterdir()):
             raise UserError(f"run directory {directory} exists and is not empty (use --resume {directory} or another --out)")
         ga = make_ga(config)
         directory.mkdir(parents=True, exist_ok=True)
