@@ -15,10 +15,13 @@ uninterrupted run with the same config produces (wall times aside).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
 import io
 import math
+import signal
+import threading
 import time
 import tomllib
 from dataclasses import dataclass, field
@@ -254,13 +257,14 @@ class Run:
 
     # ---- files
     def checkpoint(self) -> None:
-        """GA state + history, then history.csv; each file atomic."""
+        """GA state + history, then history.csv; each file atomic, and Ctrl-C waits until both are written."""
         outcome = {k: v.tolist() for k, v in self._outcome.items()}
-        write_json(
-            self.dir / "checkpoint.json",
-            {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "wall_seconds": self.wall, "outcome": outcome},
-        )
-        self._write_history()
+        with _sigint_deferred():
+            write_json(
+                self.dir / "checkpoint.json",
+                {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "wall_seconds": self.wall, "outcome": outcome},
+            )
+            self._write_history()
 
     def _write_history(self) -> None:
         buf = io.StringIO()
@@ -280,6 +284,19 @@ class Run:
         }
         write_json(self.dir / "summary.json", summary)
         return summary
+
+
+@contextlib.contextmanager
+def _sigint_deferred():
+    """Hold SIGINT (Ctrl-C) back for the duration; it arrives right after (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def make_ga(config: RunConfig) -> GA:
