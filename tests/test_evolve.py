@@ -270,3 +270,22 @@ def rerun_series(path, entity) -> dict[int, float]:
             rb = c.to_record_batch()
             out.update(zip(rb.column("generation").to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
     return out
+
+
+def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
+    """SIGINT between writing checkpoint.json and history.csv is raised only after both are written."""
+    import evobiped.evolution.run as runmod
+
+    run = Run.create(tmp_path / "r", SMALL)
+    write = runmod.write_json
+
+    def write_then_interrupt(path, obj):
+        write(path, obj)
+        if Path(path).name == "checkpoint.json":
+            os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(runmod, "write_json", write_then_interrupt)
+    with make_evaluator(SMALL.episode, "serial") as ev, pytest.raises(KeyboardInterrupt):
+        run.evolve(ev)
+    ck = json.loads((run.dir / "checkpoint.json").read_text())
+    assert len(ck["history"]) == len(fitness_history(run.dir)) == 1

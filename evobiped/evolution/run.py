@@ -288,15 +288,22 @@ class Run:
 
 @contextlib.contextmanager
 def _sigint_deferred():
-    """Hold SIGINT (Ctrl-C) back for the duration; it arrives right after (main thread only)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
+    """Hold Ctrl-C back for the duration and raise it right after (main thread only).
+
+    A Python-level handler, not a signal mask: the signal may be delivered to
+    any thread (Rerun's, for one), but Python handlers always run in the main thread.
+    """
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield  # another thread, or a process that ignores or handles Ctrl-C itself (pool workers)
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    caught = []
+    old = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        signal.signal(signal.SIGINT, old)
+    if caught:
+        raise KeyboardInterrupt
 
 
 def make_ga(config: RunConfig) -> GA:
