@@ -8,8 +8,8 @@ Three measurements in one process, on the same model, time step and genomes:
     Python/numpy, ``mujoco.batch`` stepping in C) in this process, one thread;
 (c) the process-pool evaluator with 1 worker and with ``workers`` workers.
 
-Episodes run to the full length (early termination is switched off by a fall
-height of 1 µm) so that (a), (b) and (c) integrate exactly the same physics.
+Episodes run to the full length (``EpisodeConfig.stop_on_fall=False``) so that (a), (b)
+and (c) integrate exactly the same physics.
 Every figure is simulated seconds per wall-clock second (sim-s/s), summed
 over all walkers.
 """
@@ -26,12 +26,8 @@ from mujoco import rollout
 
 from .episode import EpisodeConfig
 from .errors import ConfigError
-from .evolution.evaluate import ProcessPoolEvaluator, SerialEvaluator
+from .evolution.evaluate import ProcessPoolEvaluator
 from .evolution.ga import GA, GAConfig
-
-#: fall height that never triggers (m): every episode runs its full length
-NO_FALL = 1e-6
-
 
 class _ControlRecorder:
     """Listener: the actuator controls of every walker at every tick, ``(ticks, P, nu)``."""
@@ -60,10 +56,8 @@ def bench(episode: EpisodeConfig | None = None, *, population: int = 50, workers
     workers = workers or os.cpu_count() or 1
     if population < 1 or workers < 1:
         raise ConfigError("bench: population and workers must be >= 1")
-    body_options = {**episode.body_options, "fall_height": NO_FALL} if episode.body == "reil" else episode.body_options
-    config = replace(episode, body_options=body_options)
-    serial = SerialEvaluator(config)
-    ep = serial.episode
+    config = replace(episode, stop_on_fall=False)
+    ep = config.build()
     if ep.body.has_custom_forces:
         raise ConfigError(f"bench: body {config.body!r} adds forces in Python between physics steps; (a) cannot replay it open-loop")
     genomes = GA(ep.controller.layout, GAConfig(population=max(2, population)), seed=seed).ask()[0][:population]
@@ -77,8 +71,8 @@ def bench(episode: EpisodeConfig | None = None, *, population: int = 50, workers
     result = ep.run(genomes, listener=rec)
     ctrl = np.repeat(np.stack(rec.ctrl, axis=1), ep.substeps, axis=1)  # (P, nstep, nu)
     model, data = ep.model, mujoco.MjData(ep.model)
-    ep.body.reset(ep.sims(1))
     sims = ep.sims(1)
+    ep.body.reset(sims)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     initial = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_resetData(model, data)

@@ -34,6 +34,8 @@ class EpisodeConfig:
     controller: str = "ctrnn"
     task: str = "walk"
     seconds: float = 50.0
+    #: end a walker's episode when it falls (False: run to the end; only blow-ups stop, e.g. for benchmarks)
+    stop_on_fall: bool = True
     body_options: dict = field(default_factory=dict)
     controller_options: dict = field(default_factory=dict)
     task_options: dict = field(default_factory=dict)
@@ -65,7 +67,7 @@ class EpisodeConfig:
         controller = _construct(CONTROLLERS[self.controller], "controller", dict(opts, n_outputs=len(body.actuator_names), inputs=inputs))
         if genes is not None:
             controller.override_genes(genes)
-        return Episode(body, controller, task, seconds=float(self.seconds))
+        return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall))
 
 
 def _construct(cls, kind: str, options: dict):
@@ -140,9 +142,10 @@ class Listeners:
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
-    def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float):
+    def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True):
         self.body, self.controller, self.task = body, controller, task
         self.seconds = float(seconds)
+        self.stop_on_fall = stop_on_fall
         self.model = body.build_model()
         task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
@@ -203,7 +206,7 @@ class Episode:
             task.on_tick(body, sims, tstate, ids, ~bad, neurons)
             if listener is not None:
                 listener.tick(t, sims, ids, neurons, action, tstate)
-            down = bad | body.fallen(sims, ids)
+            down = bad | body.fallen(sims, ids) if self.stop_on_fall else bad
             unstable[ids[bad]] = True
             fell[ids[down]] = True
             alive[ids[down]] = False
@@ -226,7 +229,9 @@ class Episode:
         names = self.controller.input_names
         if not names:
             return np.zeros((P, 0))
-        available = {**self.body.sensors(sims), **self.task.sensors(self.body, sims, tstate)}
+        available = self.task.sensors(self.body, sims, tstate)
+        if any(n not in available for n in names):  # body sensors only when the controller reads one
+            available = {**self.body.sensors(sims), **available}
         return np.concatenate([available[n] for n in names], axis=1)
 
     def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:

@@ -225,10 +225,10 @@ def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
     """One row per condition: counts, success rate with Wilson 95 % interval, distances, wall time."""
     rows = []
     for c in conditions:
-        os_ = [o for o in outcomes if o["condition"] == c]
-        stable = [o["distance"] for o in os_ if not o["fell"]]
-        unstable = [o["distance"] for o in os_ if o["fell"]]
-        n, k = len(os_), len(stable)
+        runs = [o for o in outcomes if o["condition"] == c]
+        stable = [o["distance"] for o in runs if not o["fell"]]
+        unstable = [o["distance"] for o in runs if o["fell"]]
+        n, k = len(runs), len(stable)
         lo, hi = wilson_interval(k, n)
         sm, ss = mean_std(stable)
         um, us = mean_std(unstable)
@@ -243,8 +243,8 @@ def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
             "stable_std_m": ss,
             "unstable_mean_m": um,
             "unstable_std_m": us,
-            "walks_indefinitely": sum(1 for o in os_ if o["walks_indefinitely"]),
-            "wall_seconds": float(sum(o["wall_seconds"] for o in os_)),
+            "walks_indefinitely": sum(1 for o in runs if o["walks_indefinitely"]),
+            "wall_seconds": float(sum(o["wall_seconds"] for o in runs)),
         })
     return rows
 
