@@ -4,6 +4,11 @@ A thin layer over :class:`mujoco.batch.Batch` (persistent, one ``MjData`` per
 simulation): live ``(P, ...)`` numpy views of the state and derived fields,
 stepping of a subset of simulations, and detection of numerical blow-ups so
 that an unstable simulation is reported (and scored as a fall), never raised.
+
+A blow-up is a MuJoCo error or warning (bad qpos/qvel/qacc), a non-finite
+state, or any generalised velocity beyond ``MAX_SPEED``: MuJoCo warns only at
+1e10, and a simulation on its way there can carry a walker hundreds of metres
+in one control tick while still looking finite, which a GA would exploit.
 """
 
 from __future__ import annotations
@@ -15,6 +20,8 @@ from mujoco.batch import Batch, SimulationError
 _VEL = mujoco.mjtStage.mjSTAGE_VEL
 # warnings that mean the state blew up: BADQPOS, BADQVEL, BADQACC, BADCTRL
 _FIRST_BAD = int(mujoco.mjtWarning.mjWARN_BADQPOS)
+#: m/s or rad/s; no part of a walker moves this fast (a 0.5 m link at 100 rad/s: 50 m/s at its tip)
+MAX_SPEED = 100.0
 
 
 class Sims:
@@ -48,7 +55,8 @@ class Sims:
         """Advance simulations ``ids`` by ``nstep`` physics steps.
 
         Returns a bool mask over ``ids`` of simulations that became unstable
-        (MuJoCo error, warning such as bad QACC, or non-finite state).
+        (MuJoCo error, warning such as bad QACC, non-finite state, or a
+        velocity beyond ``MAX_SPEED``).
         Derived fields (xpos, subtree_com, sensordata) are current afterwards.
         """
         failed = np.zeros(len(ids), bool)
@@ -59,5 +67,7 @@ class Sims:
         except SimulationError as exc:
             failed |= np.isin(ids, exc.ids)
         warn = self.batch.warning[ids, _FIRST_BAD:, 0].any(axis=1)
-        nonfinite = ~np.isfinite(self.qpos[ids]).all(axis=1) | ~np.isfinite(self.qvel[ids]).all(axis=1)
-        return failed | warn | nonfinite
+        qvel = self.qvel[ids]
+        # NaN fails the comparison, so "not below the bound" catches it too
+        wild = ~(np.abs(qvel) < MAX_SPEED).all(axis=1) | ~np.isfinite(self.qpos[ids]).all(axis=1)
+        return failed | warn | wild

@@ -161,3 +161,24 @@ def test_cli_episode_prints_fitness(capsys):
     lay = ep.controller.layout
     g = np.clip(np.random.default_rng(1).normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
     assert out["fitness"] == ep.run(g).fitness[0]
+
+
+class Launched(ReilBiped):
+    """Test double: walker 0 starts with its pelvis thrown forward at 300 m/s (finite, but no walker's speed)."""
+
+    def reset(self, sims):
+        super().reset(sims)
+        sims.qvel[0, 0] = 300.0
+        sims.forward()
+
+
+def test_a_runaway_simulation_is_unstable_and_keeps_its_last_plausible_distance():
+    """MuJoCo warns only at 1e10: a state running away at 300 m/s would carry the walker 6 m
+    in one control tick.  It is flagged unstable, ends as a fall, and scores where it was before."""
+    ep = Episode(Launched(), Constant(), WalkTask(), seconds=1.0)
+    r = ep.run(np.array([NEUTRAL, NEUTRAL]))
+    assert ep.sims(2).qpos[0, 0] > 5.0  # the physics really did carry it off, and MuJoCo said nothing
+    assert not ep.sims(2).batch.warning[0, :, 0].any()
+    assert r.unstable.tolist() == [True, False] and r.fell.tolist() == [True, False]
+    assert r.end_time[0] == pytest.approx(0.02)
+    assert r.fitness[0] == 0.0 and r.fitness[1] < 1e-9
