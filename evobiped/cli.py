@@ -463,6 +463,7 @@ def add_bench(sub) -> None:
     p.add_argument("--population", type=positive_int, default=50, help="walkers (default 50)")
     p.add_argument("--seconds", type=positive_float, default=50.0, help="episode length in s (default 50)")
     p.add_argument("--workers", type=positive_int, help="workers for (c) (default: all cores)")
+    p.add_argument("--repeats", type=positive_int, default=3, help="interleaved repeats of each measurement; the fastest counts (default 3)")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_bench_cmd)
 
@@ -473,7 +474,7 @@ def run_bench_cmd(args) -> int:
 
     cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=args.seconds)
     say = (lambda m: None) if args.json else (lambda m: print(m, file=sys.stderr, flush=True))
-    r = bench(cfg, population=args.population, workers=args.workers, progress=say)
+    r = bench(cfg, population=args.population, workers=args.workers, repeats=args.repeats, progress=say)
     print(json.dumps(r, indent=2) if args.json else format_bench(r))
     return 0
 
