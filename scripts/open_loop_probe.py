@@ -10,6 +10,7 @@ It prints the longest survival found per round.
 
     python scripts/open_loop_probe.py --seed 0 --rounds 15
     python scripts/open_loop_probe.py --body-option kp=5 --body-option kv=4
+    python scripts/open_loop_probe.py --body-option inertia=karma
 """
 
 from __future__ import annotations
@@ -72,7 +73,10 @@ def main() -> None:
     opts = {}
     for kv in args.body_option:
         k, v = kv.split("=", 1)
-        opts[k] = v if k == "model_file" else float(v)
+        try:
+            opts[k] = float(v)
+        except ValueError:
+            opts[k] = v  # model_file=..., inertia=karma
     body = ReilBiped(**opts)
     low, high = body.action_bounds()
     episode = Episode(body, SineGait(low, high), WalkTask(), seconds=args.seconds)

@@ -95,3 +95,31 @@ def test_sign_conventions(model):
 
 def test_model_file_is_found():
     assert model_path("reil_biped").is_file()
+
+
+def test_karma_inertia_reading():
+    """inertia="karma": 0.4 kg m^2 per MathEngine body; the knee's joint-space inertia matches
+    the hand calculation I_shank + m_shank d^2 + armature, ~100 times the geoms' value."""
+    m = ReilBiped(inertia="karma").build_model()
+    g = ReilBiped().build_model()
+    assert np.allclose(m.body_inertia[m.body("pelvis").id], 0.4)
+    for b in ("left_thigh", "right_thigh", "left_shank", "right_shank"):
+        assert np.allclose(m.body_inertia[m.body(b).id], 1.2)
+    assert np.array_equal(m.body_mass, g.body_mass) and np.array_equal(m.body_ipos, g.body_ipos)
+    shank = m.body("left_shank").id
+    d = np.linalg.norm(m.body_ipos[shank])  # knee to the shank's centre of mass, m
+    for model, I in ((m, 1.2), (g, g.body_inertia[shank][0])):
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        M = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, M)
+        dof = model.joint("left_knee").dofadr[0]
+        assert M[dof, dof] == pytest.approx(I + 0.6 * d**2 + model.dof_armature[dof], rel=1e-9)
+    assert m.body_inertia[shank][0] > 60 * g.body_inertia[shank][0]
+
+
+def test_unknown_inertia_reading_is_refused():
+    from evobiped.errors import UserError
+
+    with pytest.raises(UserError, match="inertia must be 'geoms' or 'karma'"):
+        ReilBiped(inertia="ode")

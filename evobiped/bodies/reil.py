@@ -12,6 +12,18 @@ natural frequency ~1.8 Hz, the range of a walking step) and
 k_d = 2 N m s/rad (damping ratio ~0.2 for the whole leg about the hip and ~0.6
 for the shank about the knee: under-damped but without ringing).
 Both are config values (``kp``, ``kv``).
+
+Rotational inertia (``inertia``).  ``"geoms"`` (default): MuJoCo computes each
+link's inertia from its capsule and sphere with Table I's mass (the thigh
+about its centre ~0.013 kg m^2).  ``"karma"``: a reading of how the paper's
+body may have been built.  MathEngine's Karma gives a new body mass 1 and the
+inertia of a unit sphere, 0.4 kg m^2 on each axis, and ``MdtBodySetMass``
+changes the mass only; the paper gives masses and nothing else.  If the
+inertia tensors were never set, each of the 13 MathEngine bodies (Sect.
+II-A1) kept 0.4 kg m^2: the pelvis link 0.4, and each leg link, a composite
+of two spheres and a link, 1.2 about its centre of mass (the parallel-axis
+terms of its parts are below 0.03 and unknown, so left out).  Limbs then turn
+~100 times more sluggishly than their masses alone imply.
 """
 
 from __future__ import annotations
@@ -34,6 +46,8 @@ ACTUATORS = (
     "right_hip_roll",
     "right_knee",
 )
+#: kg m^2 about each axis through the link's centre of mass, under inertia = "karma"
+KARMA_INERTIA = {"pelvis": 0.4, "thigh": 1.2, "shank": 1.2}
 TABLE_II = {
     "knee": (-1.4, 0.0),
     "hip_roll": (-0.8, 0.8),
@@ -59,12 +73,16 @@ class ReilBiped(Body):
         kp: float = 50.0,
         kv: float = 2.0,
         fall_height: float = 0.5,
+        inertia: str = "geoms",
         model_file: str | None = None,
     ):
         super().__init__(timestep=timestep, model_file=model_file)
         if not (kp > 0 and kv >= 0 and fall_height > 0):
             raise UserError("reil body: kp must be > 0, kv >= 0 and fall_height > 0")
+        if inertia not in ("geoms", "karma"):
+            raise UserError(f"reil body: inertia must be 'geoms' or 'karma', got {inertia!r}")
         self.kp, self.kv, self.fall_height = float(kp), float(kv), float(fall_height)
+        self.inertia = inertia
 
     @property
     def actuator_names(self) -> tuple[str, ...]:
@@ -83,6 +101,9 @@ class ReilBiped(Body):
             model.actuator_biasprm[i, 1] = -self.kp
             model.actuator_biasprm[i, 2] = -self.kv
         m = model
+        if self.inertia == "karma":
+            for b in range(1, m.nbody):
+                m.body_inertia[b] = KARMA_INERTIA[m.body(b).name.split("_")[-1]]
         self._pelvis = m.body("pelvis").id
         self._qadr = np.array([m.joint(a).qposadr[0] for a in ACTUATORS])
         self._dadr = np.array([m.joint(a).dofadr[0] for a in ACTUATORS])
