@@ -15,15 +15,15 @@ Both are config values (``kp``, ``kv``).
 
 Rotational inertia (``inertia``).  ``"geoms"`` (default): MuJoCo computes each
 link's inertia from its capsule and sphere with Table I's mass (the thigh
-about its centre ~0.013 kg m^2).  ``"karma"``: a reading of how the paper's
+about its centre 0.016 kg m^2).  ``"karma"``: a reading of how the paper's
 body may have been built.  MathEngine's Karma gives a new body mass 1 and the
 inertia of a unit sphere, 0.4 kg m^2 on each axis, and ``MdtBodySetMass``
 changes the mass only; the paper gives masses and nothing else.  If the
 inertia tensors were never set, each of the 13 MathEngine bodies (Sect.
 II-A1) kept 0.4 kg m^2: the pelvis link 0.4, and each leg link, a composite
 of two spheres and a link, 1.2 about its centre of mass (the parallel-axis
-terms of its parts are below 0.03 and unknown, so left out).  Limbs then turn
-~100 times more sluggishly than their masses alone imply.
+terms of its parts are below 0.03 and unknown, so left out): about 80 times
+the inertia its mass and length alone imply.
 """
 
 from __future__ import annotations
@@ -103,7 +103,10 @@ class ReilBiped(Body):
         m = model
         if self.inertia == "karma":
             for b in range(1, m.nbody):
-                m.body_inertia[b] = KARMA_INERTIA[m.body(b).name.split("_")[-1]]
+                part = m.body(b).name.split("_")[-1]
+                if part not in KARMA_INERTIA:
+                    raise UserError(f"reil body: inertia 'karma' knows the links {sorted(KARMA_INERTIA)}, not {m.body(b).name!r}")
+                m.body_inertia[b] = KARMA_INERTIA[part]
         self._pelvis = m.body("pelvis").id
         self._qadr = np.array([m.joint(a).qposadr[0] for a in ACTUATORS])
         self._dadr = np.array([m.joint(a).dofadr[0] for a in ACTUATORS])
