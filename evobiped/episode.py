@@ -149,6 +149,8 @@ class Episode:
         self.model = body.build_model()
         task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
+        if controller.output_kind == "angle" and body.action_kind != "position":
+            raise ConfigError(f"controller {controller.name!r} gives joint target angles; body {body.name!r} takes {body.action_kind}s")
         dt = controller.dt if controller.dt is not None else body.timestep
         ratio = dt / body.timestep
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:

@@ -113,7 +113,7 @@ def test_fitness_is_eq4_from_an_independent_loop():
             d.ctrl[:] = lo + O[:6] * (hi - lo)
             mujoco.mj_step(model, d, nstep=4)
             mujoco.mj_forward(model, d)
-            if d.subtree_com[pelvis, 2] < 0.5:
+            if d.subtree_com[pelvis, 2] < 0.5 or d.xmat[pelvis, 8] < 0:  # fallen: COM low, or pelvis past 90 degrees
                 t_end = (tick + 1) * 0.02
                 break
         W4 = np.hypot(*(d.xpos[pelvis, :2] - start))

@@ -236,7 +236,7 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
 def test_ctrl_c_stops_at_a_generation_boundary_and_resumes(tmp_path):
     """SIGINT to a real `evobiped evolve`: exit 130, a valid checkpoint, and --resume finishes the same history."""
     cfg = tmp_path / "c.toml"
-    cfg.write_text("[episode.body_options]\nfall_height = 0.01\n")  # no early ends: ~0.2 s per generation
+    cfg.write_text("[episode.body_options]\nfall_height = 0.01\nfall_tilt = 3.14159\n")  # no early ends: ~0.2 s per generation
     args = ["--config", str(cfg), "--population", "6", "--generations", "12", "--episode-seconds", "3", "--seed", "4", "--backend", "serial"]
     ref = tmp_path / "ref"
     assert cli("evolve", *args, "--out", ref, "--quiet") == 0

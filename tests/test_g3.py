@@ -141,7 +141,7 @@ def test_g3_controller_drives_reil_body_at_the_network_frequency():
     the GO knob from 0.1 to 0.2 at t = 10 s speeds the rhythm up as predicted."""
     from evobiped.episode import EpisodeConfig
 
-    cfg = EpisodeConfig(body="reil", controller="g3", seconds=20.0, body_options={"fall_height": 1e-3},
+    cfg = EpisodeConfig(body="reil", controller="g3", seconds=20.0, body_options={"fall_height": 1e-3, "fall_tilt": np.pi},
                         controller_options={"go": [[0.0, 0.1], [10.0, 0.2]]})
     ep = cfg.build()
     ctrl = ep.controller

@@ -73,15 +73,17 @@ class ReilBiped(Body):
         kp: float = 50.0,
         kv: float = 2.0,
         fall_height: float = 0.5,
+        fall_tilt: float = 1.5707963267948966,
         inertia: str = "geoms",
         model_file: str | None = None,
     ):
         super().__init__(timestep=timestep, model_file=model_file)
-        if not (kp > 0 and kv >= 0 and fall_height > 0):
-            raise UserError("reil body: kp must be > 0, kv >= 0 and fall_height > 0")
+        if not (kp > 0 and kv >= 0 and fall_height > 0 and 0 < fall_tilt <= np.pi):
+            raise UserError("reil body: kp must be > 0, kv >= 0, fall_height > 0 and 0 < fall_tilt <= pi")
         if inertia not in ("geoms", "karma"):
             raise UserError(f"reil body: inertia must be 'geoms' or 'karma', got {inertia!r}")
         self.kp, self.kv, self.fall_height = float(kp), float(kv), float(fall_height)
+        self.fall_tilt = float(fall_tilt)
         self.inertia = inertia
 
     @property
@@ -108,6 +110,7 @@ class ReilBiped(Body):
                     raise UserError(f"reil body: inertia 'karma' knows the links {sorted(KARMA_INERTIA)}, not {m.body(b).name!r}")
                 m.body_inertia[b] = KARMA_INERTIA[part]
         self._pelvis = m.body("pelvis").id
+        self._feet = np.array([m.site("left_foot").id, m.site("right_foot").id])
         self._qadr = np.array([m.joint(a).qposadr[0] for a in ACTUATORS])
         self._dadr = np.array([m.joint(a).dofadr[0] for a in ACTUATORS])
         self._touch = np.concatenate(
@@ -129,11 +132,36 @@ class ReilBiped(Body):
         return fwd / np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-12)
 
     def fallen(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
-        return sims.subtree_com[ids, self._pelvis, 2] < self.fall_height
+        """Centre of mass below ``fall_height`` (m), or the pelvis's up axis tilted beyond
+        ``fall_tilt`` (rad; default 90 degrees: on its side or upside down, e.g. a walker
+        that cartwheels with its centre of mass still high)."""
+        up = sims.xmat[ids, self._pelvis, 8]  # z component of the pelvis z axis
+        return (sims.subtree_com[ids, self._pelvis, 2] < self.fall_height) | (up < np.cos(self.fall_tilt))
 
     def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
+        """Joint angles and velocities (rad, rad/s; actuator order), foot contacts (0/1, left, right),
+        and the vestibular and proprioceptive readings a balance controller needs, in the heading
+        frame (forward = the pelvis x axis on the ground, left = 90 degrees anticlockwise):
+
+        * ``pelvis_tilt`` ``(P, 2)``: pitch (rad, + nose down), roll (rad, + left side up);
+        * ``pelvis_tilt_rate`` ``(P, 2)``: their rates (rad/s);
+        * ``com_from_feet`` ``(P, 4)``: centre of mass minus left foot (forward, left), minus right foot (m);
+        * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s).
+        """
+        R = sims.xmat[:, self._pelvis].reshape(-1, 3, 3)
+        fwd = self.heading(sims)
+        left = np.stack([-fwd[:, 1], fwd[:, 0]], axis=1)
+        frame = np.stack([fwd, left], axis=1)  # (P, 2, 2): rows forward, left
+        tilt = np.stack([-np.arcsin(np.clip(R[:, 2, 0], -1, 1)), np.arcsin(np.clip(R[:, 2, 1], -1, 1))], axis=1)
+        omega = sims.cvel[:, self._pelvis, :2]  # world angular velocity, x and y
+        com = sims.subtree_com[:, self._pelvis, None, :2] - sims.site_xpos[:, self._feet, :2]  # (P, 2 feet, 2)
         return {
             "joint_angles": sims.qpos[:, self._qadr],
             "joint_velocities": sims.qvel[:, self._dadr],
             "foot_contact": (sims.sensordata[:, self._touch] > 0).astype(float),
+            "pelvis_tilt": tilt,
+            # pitch is a rotation about the left axis, roll about the forward axis
+            "pelvis_tilt_rate": np.einsum("pij,pj->pi", frame, omega)[:, ::-1],
+            "com_from_feet": np.einsum("pij,pfj->pfi", frame, com).reshape(-1, 4),
+            "com_velocity": np.einsum("pij,pj->pi", frame, sims.subtree_linvel[:, self._pelvis, :2]),
         }

@@ -4,12 +4,14 @@ from .base import Controller
 from .ctrnn import CTRNN
 from .g3 import G3Controller
 from .matsuoka import Matsuoka
+from .simbicon import Simbicon
 
 #: name -> Controller class; constructed as cls(n_outputs=..., inputs={name: width}, **options)
 CONTROLLERS: dict[str, type[Controller]] = {
     CTRNN.name: CTRNN,
     G3Controller.name: G3Controller,
     Matsuoka.name: Matsuoka,
+    Simbicon.name: Simbicon,
 }
 
-__all__ = ["CONTROLLERS", "CTRNN", "Controller", "G3Controller", "Matsuoka"]
+__all__ = ["CONTROLLERS", "CTRNN", "Controller", "G3Controller", "Matsuoka", "Simbicon"]

@@ -20,8 +20,8 @@ class Controller(ABC):
     """Base class; subclasses are registered in :data:`evobiped.controllers.CONTROLLERS`."""
 
     name: ClassVar[str]
-    #: "unit": outputs in [0, 1]; "signed": real-valued outputs centred on 0
-    output_kind: ClassVar[Literal["unit", "signed"]]
+    #: "unit": outputs in [0, 1]; "signed": real-valued outputs centred on 0; "angle": joint targets in rad
+    output_kind: ClassVar[Literal["unit", "signed", "angle"]]
 
     #: number of motor outputs (= the body's actuators)
     n_outputs: int

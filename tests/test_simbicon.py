@@ -1,0 +1,189 @@
+"""The SIMBICON-style balance controller and the Reil body's balance sensors."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from evobiped.bodies import ReilBiped, TagaBiped
+from evobiped.controllers.simbicon import RANGES, SENSORS, Simbicon
+from evobiped.episode import Episode, EpisodeConfig, build_episode
+from evobiped.errors import ConfigError
+from evobiped.sim import Sims
+from evobiped.tasks import WalkTask
+
+
+def _sims(body, qpos=None, qvel=None):
+    sims = Sims(body.build_model(), 1)
+    body.reset(sims)
+    if qpos is not None:
+        sims.qpos[0] = qpos
+    if qvel is not None:
+        sims.qvel[0] = qvel
+    sims.forward()
+    return sims
+
+
+def _quat(axis, angle):
+    q = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(q, np.asarray(axis, float), angle)
+    return q
+
+
+def _mul(a, b):
+    q = np.zeros(4)
+    mujoco.mju_mulQuat(q, a, b)
+    return q
+
+
+def test_pelvis_tilt_and_rates_in_the_heading_frame():
+    """Yaw 90 degrees (facing +y), then pitch 0.2 nose down and roll 0.1 left side up."""
+    body = ReilBiped()
+    m = body.build_model()
+    q0 = m.qpos0.copy()
+    q0[2] = 2.0
+    # intrinsic: yaw about z, then pitch about the body's y (nose down), then roll about its x
+    q0[3:7] = _mul(_mul(_quat([0, 0, 1], np.pi / 2), _quat([0, 1, 0], 0.2)), _quat([1, 0, 0], 0.1))
+    v = np.zeros(m.nv)
+    v[3:6] = [0.3, -0.5, 0.0]  # free joint: angular velocity in the body frame (roll rate, pitch rate)
+    s = body.sensors(_sims(body, q0, v))
+    np.testing.assert_allclose(body.heading(_sims(body, q0))[0], [0, 1], atol=1e-12)
+    # independently: the pelvis's x and y axes rotated by the quaternion; pitch from x, roll from y
+    axes = [np.zeros(3), np.zeros(3)]
+    mujoco.mju_rotVecQuat(axes[0], np.array([1.0, 0, 0]), q0[3:7])
+    mujoco.mju_rotVecQuat(axes[1], np.array([0, 1.0, 0]), q0[3:7])
+    assert -np.arcsin(axes[0][2]) == pytest.approx(0.2)
+    np.testing.assert_allclose(s["pelvis_tilt"][0], [0.2, np.arcsin(axes[1][2])], atol=1e-12)
+    assert s["pelvis_tilt"][0, 1] == pytest.approx(0.1, abs=0.005)
+    # the body's y axis differs from the heading's left axis by the 0.1 rad roll: rates to first order
+    np.testing.assert_allclose(s["pelvis_tilt_rate"][0], [-0.5, 0.3], atol=0.06)
+
+
+def test_com_from_feet_and_velocity_against_the_model():
+    """Facing -x (yaw 180 degrees), translating at (1, 2) m/s in the world: forward -1, left -2."""
+    body = ReilBiped()
+    m = body.build_model()
+    q0 = m.qpos0.copy()
+    q0[3:7] = _quat([0, 0, 1], np.pi)
+    v = np.zeros(m.nv)
+    v[:3] = [1.0, 2.0, 0.0]
+    sims = _sims(body, q0, v)
+    s = body.sensors(sims)
+    np.testing.assert_allclose(s["com_velocity"][0], [-1.0, -2.0], atol=1e-9)
+    # standing straight: the centre of mass lies midway between the feet, 0.25 m from each
+    d = mujoco.MjData(m)
+    d.qpos[:] = q0
+    mujoco.mj_forward(m, d)
+    com = d.subtree_com[m.body("pelvis").id]
+    assert com[0] == pytest.approx(d.site_xpos[m.site("left_foot").id][0])
+    # facing -x, the left foot lies at -y: the centre of mass is to its right (left = -0.25)
+    np.testing.assert_allclose(s["com_from_feet"][0], [0.0, -0.25, 0.0, 0.25], atol=1e-9)
+
+
+def test_an_upside_down_walker_has_fallen_even_with_its_centre_of_mass_high():
+    body = ReilBiped()
+    m = body.build_model()
+    q0 = m.qpos0.copy()
+    q0[2] = 3.0
+    ids = np.array([0])
+    assert not body.fallen(_sims(body, q0), ids)[0]
+    q0[3:7] = _quat([1, 0, 0], 1.6)  # on its side and a little past
+    assert body.fallen(_sims(body, q0), ids)[0]
+    q0[3:7] = _quat([1, 0, 0], 1.5)
+    assert not body.fallen(_sims(body, q0), ids)[0]
+    strict = ReilBiped(fall_tilt=1.0)
+    assert strict.fallen(_sims(strict, q0), ids)[0]
+
+
+def _genome(ctrl, **values):
+    lay = ctrl.layout
+    g = lay.init_mean.copy()
+    for k, v in values.items():
+        g[lay.slices()[k]] = v
+    return g
+
+
+def _inputs(ctrl, **x):
+    out = np.zeros((1, sum(SENSORS.values())))
+    for k, v in x.items():
+        out[0, ctrl._at[k]] = v
+    return out
+
+
+def test_swing_and_stance_targets_by_hand():
+    """Left stance, early swing: every target from the module docstring's formulas."""
+    ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
+    g = _genome(ctrl, step_time=0.3, hip_early=0.5, knee_early=-1.0, stance_knee=-0.1, cd=0.4, cv=0.2,
+                roll_offset=0.05, cd_lateral=0.5, cv_lateral=0.3, pelvis_gain=0.6, pelvis_damping=0.1)
+    params = ctrl.decode(g)
+    q = np.array([0.1, 0.02, -0.05, -0.2, 0.03, -0.3])
+    x = _inputs(ctrl, joint_angles=q, foot_contact=[1, 1], pelvis_tilt=[0.05, -0.04], pelvis_tilt_rate=[0.2, 0.1],
+                com_from_feet=[0.1, -0.2, 0.0, 0.3], com_velocity=[0.5, -0.1])
+    state, out = ctrl.step(params, ctrl.initial_state(params), x)
+    assert state["stance"][0] == 0 and state["t"][0] == pytest.approx(0.02)  # no switch before step_time
+    d_fwd, d_left = 0.1, -0.2  # centre of mass from the left (stance) foot
+    want = np.empty(6)
+    want[3] = 0.5 + 0.4 * d_fwd + 0.2 * 0.5 + 0.05  # right swing hip: world angle + pelvis pitch
+    out_right = -1.0  # the right leg's outward direction is -left
+    want[4] = 0.05 + out_right * (0.5 * d_left + 0.3 * -0.1) - out_right * -0.04
+    want[5] = -1.0
+    want[2] = -0.1
+    want[0] = 0.1 - (0.6 * 0.05 + 0.1 * 0.2)
+    want[1] = 0.02 + (0.6 * -0.04 + 0.1 * 0.1)
+    np.testing.assert_allclose(out[0], want, atol=1e-12)
+
+
+def test_the_legs_swap_when_the_swing_foot_lands_after_step_time():
+    ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
+    params = ctrl.decode(_genome(ctrl, step_time=0.3))
+    st = ctrl.initial_state(params)
+    touching = _inputs(ctrl, foot_contact=[1, 1])
+    airborne = _inputs(ctrl, foot_contact=[1, 0])
+    for _ in range(15):  # 0.3 s: not yet past step_time
+        st, _ = ctrl.step(params, st, touching)
+    assert st["stance"][0] == 0
+    st, _ = ctrl.step(params, st, airborne)  # past step_time, but the swing foot is up
+    assert st["stance"][0] == 0
+    st, _ = ctrl.step(params, st, touching)
+    assert st["stance"][0] == 1 and st["t"][0] == 0.0
+    for _ in range(45):  # 3 step_time with the (now left) swing foot never landing: forced swap
+        st, _ = ctrl.step(params, st, airborne)
+    assert st["stance"][0] == 0
+
+
+def test_the_stance_hip_turns_a_tilted_pelvis_back():
+    """In zero gravity with the left foot standing, the stance hip's new target accelerates the pelvis against its tilt."""
+    ep = build_episode(body="reil", controller="simbicon", seconds=1.0)
+    body, ctrl = ep.body, ep.controller
+    m = ep.model
+    m.opt.gravity[:] = 0
+    params = ctrl.decode(_genome(ctrl, pelvis_gain=0.8, pelvis_damping=0.0))
+    for axis, k in (([0, 1, 0], 0), ([1, 0, 0], 1)):  # pitch nose down, roll left side up
+        q0 = m.qpos0.copy()
+        q0[2] = 2.0
+        q0[3:7] = _quat(axis, 0.1)
+        sims = _sims(body, q0)
+        x = ep._inputs(sims, {}, 1)
+        _, out = ctrl.step(params, ctrl.initial_state(params), x)
+        sims.ctrl[0] = np.clip(out[0], ep.low, ep.high)
+        sims.ctrl[0, 2:] = sims.qpos[0, body._qadr[2:]]  # hold the knees and the swing leg: only the stance hip acts
+        sims.forward()
+        d = mujoco.MjData(m)
+        d.qpos[:], d.ctrl[:] = sims.qpos[0], sims.ctrl[0]
+        mujoco.mj_forward(m, d)
+        # the tilt grows along +axis; the pelvis must accelerate about -axis
+        assert d.qacc[3 + (1 if k == 0 else 0)] < -1.0
+
+
+def test_bad_pairings_are_one_clear_error():
+    with pytest.raises(ConfigError, match="needs the body sensors"):
+        EpisodeConfig(body="taga", controller="simbicon").build()
+    with pytest.raises(ConfigError, match="gives joint target angles; body 'taga' takes torques"):
+        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=SENSORS), WalkTask(), seconds=1.0)
+    with pytest.raises(ConfigError, match="needs the body sensors"):
+        EpisodeConfig(controller="simbicon", controller_options={"inputs": ["joint_angles"]}).build()
+
+
+def test_genes_and_layout():
+    ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
+    assert ctrl.layout.size == len(RANGES) == 13
+    assert np.all(ctrl.layout.low < ctrl.layout.init_mean) and np.all(ctrl.layout.init_mean < ctrl.layout.high)
