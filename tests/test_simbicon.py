@@ -187,3 +187,33 @@ def test_genes_and_layout():
     ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
     assert ctrl.layout.size == len(RANGES) == 13
     assert np.all(ctrl.layout.low < ctrl.layout.init_mean) and np.all(ctrl.layout.init_mean < ctrl.layout.high)
+
+
+def test_the_evolved_walker_in_docs_walks_50_s_and_10_m():
+    """The best of `evobiped evolve --controller simbicon --seed 1` (docs/walkers): no fall in 50 s, >= 10 m
+    (issue 3's target), with steps: the feet take turns on the ground."""
+    from pathlib import Path
+
+    from evobiped.genome_file import load_genome
+
+    genome, cfg, meta = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "simbicon_seed1.json")
+    ep = cfg.build()
+    contacts = []
+
+    class Feet:
+        def start(self, episode, sims):
+            self.body = episode.body
+
+        def tick(self, t, sims, ids, neurons, action, task_state):
+            contacts.append(self.body.sensors(sims)["foot_contact"][0].copy())
+
+        def end(self, result): ...
+
+    r = ep.run(genome, listener=Feet())
+    assert not r.fell[0] and not r.unstable[0] and r.end_time[0] == 50.0
+    assert r.fitness[0] >= 10.0
+    assert r.fitness[0] == pytest.approx(meta["fitness"], rel=0.05)
+    c = np.array(contacts)
+    single = (c.sum(axis=1) == 1)
+    swaps = np.count_nonzero(np.diff(np.argmax(c[single], axis=1)))
+    assert swaps > 50  # more than 50 changes of the standing foot in 50 s

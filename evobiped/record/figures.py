@@ -67,17 +67,20 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
     n = traj.n_motor
     t = traj.command_time
     keep = t <= seconds if seconds else np.ones(len(t), bool)
+    motor = traj.neurons[:, :n]
+    unit = motor.size == 0 or (np.nanmin(motor) >= 0.0 and np.nanmax(motor) <= 1.0)  # else e.g. angles, torques
     fig, axes = plt.subplots(n, 1, figsize=(7.0, 1.0 + 0.85 * n), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
         ax.plot(t[keep], traj.neurons[keep, i], color="black", lw=1.0)
         name = traj.actuator_names[i] if i < len(traj.actuator_names) else f"output {i + 1}"
         ax.set_ylabel(f"M{i + 1}", rotation=0, ha="right", va="center")
         ax.text(1.0, 0.5, f" {name}", transform=ax.transAxes, va="center", fontsize=8)
-        lo, hi = np.nanmin(traj.neurons[keep, i], initial=0.0), np.nanmax(traj.neurons[keep, i], initial=1.0)
-        ax.set_ylim(min(0.0, lo) - 0.05, max(1.0, hi) + 0.05)
-        ax.set_yticks([0, 1] if traj.neurons.max() <= 1.0 else ax.get_yticks())
+        if unit:
+            ax.set_ylim(-0.05, 1.05)
+            ax.set_yticks([0, 1])
     axes[-1, 0].set_xlabel("time (s)")
-    axes[0, 0].set_title(f"Motor neuron outputs ({traj.body_name}; fitness {traj.final_fitness:.3f} m)")
+    what = "Motor neuron outputs" if unit else "Motor outputs"
+    axes[0, 0].set_title(f"{what} ({traj.body_name}; fitness {traj.final_fitness:.3f} m)")
     return _save(fig, path)
 
 
