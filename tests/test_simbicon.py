@@ -217,3 +217,22 @@ def test_the_evolved_walker_in_docs_walks_50_s_and_10_m():
     single = (c.sum(axis=1) == 1)
     swaps = np.count_nonzero(np.diff(np.argmax(c[single], axis=1)))
     assert swaps > 50  # more than 50 changes of the standing foot in 50 s
+
+
+def test_com_velocity_equals_mujocos_subtree_velocity_in_motion():
+    """A walker mid-stride (spinning, legs swinging): the sensor against mj_subtreeVel, rotated into the heading frame."""
+    body = ReilBiped()
+    m = body.build_model()
+    rng = np.random.default_rng(5)
+    q0 = m.qpos0.copy()
+    q0[3:7] = _quat([0.3, 0.2, 1.0], 0.8)
+    v = rng.normal(0, 1.0, m.nv)
+    s = body.sensors(_sims(body, q0, v))
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = q0, v
+    mujoco.mj_forward(m, d)
+    mujoco.mj_subtreeVel(m, d)
+    want = d.subtree_linvel[m.body("pelvis").id, :2]
+    fwd = body.heading(_sims(body, q0))[0]
+    left = np.array([-fwd[1], fwd[0]])
+    np.testing.assert_allclose(s["com_velocity"][0], [want @ fwd, want @ left], atol=1e-10)
