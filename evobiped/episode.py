@@ -20,7 +20,7 @@ from .bodies.base import Body
 from .controllers import CONTROLLERS
 from .controllers.base import Controller
 from .errors import ConfigError, UserError
-from .mapping import to_action
+from .mapping import MAPS, to_action
 from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
@@ -149,8 +149,10 @@ class Episode:
         self.model = body.build_model()
         task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
-        if controller.output_kind == "angle" and body.action_kind != "position":
-            raise ConfigError(f"controller {controller.name!r} gives joint target angles; body {body.name!r} takes {body.action_kind}s")
+        if (controller.output_kind, body.action_kind) not in MAPS:
+            raise ConfigError(
+                f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} cannot take as {body.action_kind}s"
+            )
         dt = controller.dt if controller.dt is not None else body.timestep
         ratio = dt / body.timestep
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:

@@ -18,14 +18,28 @@ from __future__ import annotations
 import numpy as np
 
 
+def _unit(low, high, o):
+    return low + o * (high - low)
+
+
+def _clip(low, high, y):
+    return np.clip(y, low, high)
+
+
+def _tanh(low, high, y):
+    return 0.5 * (low + high) + 0.5 * (high - low) * np.tanh(y)
+
+
+#: (controller output kind, body action kind) -> map; a pair not here is not allowed
+MAPS = {
+    ("unit", "position"): _unit,
+    ("unit", "torque"): _unit,
+    ("signed", "torque"): _clip,
+    ("signed", "position"): _tanh,
+    ("angle", "position"): _clip,
+}
+
+
 def to_action(output_kind: str, low: np.ndarray, high: np.ndarray, action_kind: str, outputs: np.ndarray) -> np.ndarray:
     """Map controller outputs ``(P, n)`` onto actions ``(P, n)`` within ``[low, high]``."""
-    if output_kind == "unit":
-        return low + outputs * (high - low)
-    if output_kind == "angle" and action_kind == "position":
-        return np.clip(outputs, low, high)
-    if output_kind == "signed":
-        if action_kind == "torque":
-            return np.clip(outputs, low, high)
-        return 0.5 * (low + high) + 0.5 * (high - low) * np.tanh(outputs)
-    raise ValueError(f"unknown controller output kind {output_kind!r}")
+    return MAPS[output_kind, action_kind](low, high, outputs)

@@ -177,7 +177,7 @@ def test_the_stance_hip_turns_a_tilted_pelvis_back():
 def test_bad_pairings_are_one_clear_error():
     with pytest.raises(ConfigError, match="needs the body sensors"):
         EpisodeConfig(body="taga", controller="simbicon").build()
-    with pytest.raises(ConfigError, match="gives joint target angles; body 'taga' takes torques"):
+    with pytest.raises(ConfigError, match="gives angle outputs, which body 'taga' cannot take as torques"):
         Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=SENSORS), WalkTask(), seconds=1.0)
     with pytest.raises(ConfigError, match="needs the body sensors"):
         EpisodeConfig(controller="simbicon", controller_options={"inputs": ["joint_angles"]}).build()
