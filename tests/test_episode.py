@@ -121,8 +121,10 @@ def test_fitness_is_eq4_from_an_independent_loop():
         assert res.fitness[k] == pytest.approx(W4, rel=1e-6, abs=1e-9)
 
 
-def test_same_genome_same_fitness_any_batch():
-    ep = build_episode(seconds=6.0)
+@pytest.mark.parametrize("controller", ["ctrnn", "simbicon"])
+def test_same_genome_same_fitness_any_batch(controller):
+    """Bit for bit, whatever else is in the batch (so a run never depends on how genomes are split over workers)."""
+    ep = build_episode(controller=controller, seconds=6.0)
     g = random_genomes(ep.controller.layout, 8, seed=3)
     a = ep.run(g)
     b = ep.run(g)
