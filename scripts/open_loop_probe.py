@@ -50,9 +50,9 @@ FOURIER_HZ = (0.3, 2.5)
 
 
 class OpenLoop(Controller):
-    """Targets as a function of time only; "signed" outputs (the body maps y to mid + half tanh(y))."""
+    """PD targets (rad) as a function of time only; the episode clips them to Table II's ranges."""
 
-    output_kind = "signed"
+    output_kind = "angle"
     dt = 0.02
     n_params = 0
 
@@ -70,8 +70,7 @@ class OpenLoop(Controller):
         return np.zeros((len(t), 6))
 
     def step(self, params, t, inputs):
-        u = self.unit_targets(params["p"], t)  # (P, 6) in [-1, 1] of each joint's Table II range
-        return t + self.dt, np.arctanh(np.clip(u, -0.999, 0.999))
+        return t + self.dt, self.targets(params["p"], t)  # (P, 6) rad
 
 
 class SineGait(OpenLoop):
@@ -80,27 +79,27 @@ class SineGait(OpenLoop):
     name = "sine-gait"
     n_params = 9
 
-    def unit_targets(self, p, t):
+    def targets(self, p, t):
         q = LOW + p * (HIGH - LOW)
         w = 2 * np.pi * q[:, 0] * t
         hip = lambda ph: q[:, 2] + q[:, 1] * np.sin(w + ph)  # noqa: E731
         knee = lambda ph: np.minimum(0.0, q[:, 4] + q[:, 3] * np.sin(w + ph + q[:, 5]))  # noqa: E731
         roll = lambda ph: q[:, 7] + q[:, 6] * np.sin(w + ph + q[:, 8])  # noqa: E731
-        target = np.stack([hip(0), roll(0), knee(0), hip(np.pi), roll(np.pi), knee(np.pi)], axis=1)
-        return (target - self.mid) / self.half
+        return np.stack([hip(0), roll(0), knee(0), hip(np.pi), roll(np.pi), knee(np.pi)], axis=1)
 
 
 class FourierGait(OpenLoop):
-    """Genome = frequency coordinate, then per joint (offset, sin, cos, sin 2, cos 2) in unit-range units."""
+    """Genome = frequency coordinate, then per joint (offset, sin, cos, sin 2, cos 2) in half-ranges from its mid-range."""
 
     name = "fourier-gait"
     n_params = 31
 
-    def unit_targets(self, p, t):
+    def targets(self, p, t):
         f = FOURIER_HZ[0] + (FOURIER_HZ[1] - FOURIER_HZ[0]) / (1 + np.exp(-p[:, 0]))
         w = (2 * np.pi * f * t)[:, None]
         c = p[:, 1:].reshape(-1, 6, 5)
-        return c[..., 0] + c[..., 1] * np.sin(w) + c[..., 2] * np.cos(w) + c[..., 3] * np.sin(2 * w) + c[..., 4] * np.cos(2 * w)
+        u = c[..., 0] + c[..., 1] * np.sin(w) + c[..., 2] * np.cos(w) + c[..., 3] * np.sin(2 * w) + c[..., 4] * np.cos(2 * w)
+        return self.mid + self.half * u
 
 
 def planar_model() -> str:
