@@ -91,7 +91,10 @@ def run_episode_cmd(args) -> int:
 # ---------------------------------------------------------------- evolve
 def add_evolve(sub) -> None:
     p = sub.add_parser("evolve", help="evolve controllers with the GA of Reil & Husbands (defaults: the paper's)")
+    p.add_argument("--preset", metavar="NAME", help="named settings shipped with evobiped (`evobiped presets` lists them); "
+                   "--config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
+    p.add_argument("--optimizer", choices=("ga", "cma"), help="ga (Reil & Husbands' GA, default) or cma (CMA-ES)")
     p.add_argument("--body", help="body (default reil)")
     p.add_argument("--controller", help="controller (default ctrnn)")
     p.add_argument("--task", help="task (default walk)")
@@ -119,7 +122,11 @@ def evolve_config(args):
     """RunConfig from --config and the flags (flags win)."""
     from .evolution.run import RunConfig, load_toml
 
-    d = load_toml(args.config) if args.config else {}
+    from .presets import merge, path
+
+    d = load_toml(path(args.preset)) if getattr(args, "preset", None) else {}
+    if args.config:
+        d = merge(d, load_toml(args.config))
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
     ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
     for flag, key in (("body", "body"), ("controller", "controller"), ("task", "task"), ("episode_seconds", "seconds")):
@@ -127,14 +134,19 @@ def evolve_config(args):
             ep[key] = getattr(args, flag)
     if args.cyclic:
         ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
-    if args.population is not None:
-        ga["population"] = args.population
-    for flag in ("generations", "seed", "backend", "workers", "address", "initial"):
+    optimizer = args.optimizer or d.get("optimizer", "ga")
+    if args.population is not None:  # the population of whichever optimizer runs
+        if optimizer == "cma":
+            d["cma"] = {**(d.get("cma") or {}), "population": args.population}
+        else:
+            ga["population"] = args.population
+    for flag in ("optimizer", "generations", "seed", "backend", "workers", "address", "initial"):
         if getattr(args, flag) is not None:
             d[flag] = getattr(args, flag)
     if getattr(args, "freeze", None):
         d["frozen_blocks"] = [b.strip() for b in args.freeze.split(",") if b.strip()]
-    return RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=args.config or "settings")
+    where = args.config or (f"preset {args.preset}" if getattr(args, "preset", None) else "settings")
+    return RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
 
 
 def default_run_dir(config) -> str:
@@ -157,7 +169,7 @@ def run_evolve_cmd(args) -> int:
 
         require_viewer(connect_url(args.rerun))  # before anything is written
     if args.resume:
-        if any(getattr(args, f) is not None for f in ("config", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze")):
+        if any(getattr(args, f) is not None for f in ("preset", "config", "optimizer", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
         run = Run.resume(args.resume)
         if run.done:
@@ -180,7 +192,8 @@ def run_evolve_cmd(args) -> int:
         evaluator = make_evaluator(run.config.episode, backend, workers, address)
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     c = run.config
-    say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}', population {c.ga.population}, "
+    population = len(run.ga.ask()[0])
+    say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
         f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
 
     log = _evolution_log(run, args.rerun)
@@ -226,6 +239,20 @@ def _hms(seconds: float) -> str:
     return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
 
+def add_presets(sub) -> None:
+    p = sub.add_parser("presets", help="list the named run settings for `evolve --preset NAME`")
+    p.set_defaults(func=run_presets_cmd)
+
+
+def run_presets_cmd(args) -> int:
+    from .presets import describe, names
+
+    width = max(map(len, names()))
+    for name in names():
+        print(f"{name:<{width}}  {describe(name)}")
+    return 0
+
+
 # ---------------------------------------------------------------- replay
 def add_replay(sub) -> None:
     p = sub.add_parser("replay", help="re-simulate a stored genome into a Rerun recording (and figures)")
@@ -255,7 +282,9 @@ def run_replay_cmd(args) -> int:
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r} m; {state}")
     if not r.compared:
-        print("stored fitness not compared: --seconds changed the episode length")
+        why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
+               if source.config.perturbations else "--seconds changed the episode length")
+        print(f"stored fitness not compared: {why}")
     elif r.stored_fitness is None:
         print("stored fitness: none in the genome file")
     else:
@@ -265,6 +294,52 @@ def run_replay_cmd(args) -> int:
     for f in r.figures:
         print(f"figure: {f}")
     return 0 if (r.matches or not r.compared or r.stored_fitness is None) else 1
+
+
+# ---------------------------------------------------------------- robustness
+def add_robustness(sub) -> None:
+    p = sub.add_parser("robustness", help="the robustness battery (pushes, target offsets, friction, slopes) for any Reil walker")
+    p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
+    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
+    p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
+                   help="pushes fall in the first stride after S s (default 10)")
+    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or beside the genome file)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=run_robustness_cmd)
+
+
+def run_robustness_cmd(args) -> int:
+    import dataclasses
+    from pathlib import Path
+
+    from .fileio import write_json
+    from .record.robustness_figure import robustness_figure
+    from .record.source import resolve
+    from .robustness import battery, summarise, table
+
+    if args.push_after >= args.seconds:
+        raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
+    source = resolve(args.source, args.generation)
+    out = Path(args.out) if args.out else (source.run_dir or source.genome_path.parent)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {out} exists and is not a directory")
+    stem = "robustness" if source.run_dir is None or source.label == "best" else f"robustness_{source.label}"
+    if source.run_dir is None:
+        stem = f"{source.genome_path.stem}_robustness"
+    trials = battery(source.config.nominal().build(), source.genome, seconds=args.seconds, push_after=args.push_after)
+    rows = summarise(trials)
+    out.mkdir(parents=True, exist_ok=True)
+    report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after,
+              "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
+    write_json(out / f"{stem}.json", report)
+    png = robustness_figure(trials, out / f"{stem}.png", title=f"Robustness battery: {source.genome_path}")
+    if args.json:
+        print(json.dumps(rows))
+    else:
+        print(table(rows))
+        print(f"results: {out / (stem + '.json')}\nfigure: {png}")
+    return 0
 
 
 # ---------------------------------------------------------------- g3
@@ -479,7 +554,7 @@ def run_bench_cmd(args) -> int:
     return 0
 
 
-SUBCOMMANDS = [add_episode, add_evolve, add_study, add_bench, add_replay, add_taga, add_g3]
+SUBCOMMANDS = [add_episode, add_evolve, add_presets, add_robustness, add_study, add_bench, add_replay, add_taga, add_g3]
 
 
 def build_parser() -> argparse.ArgumentParser:

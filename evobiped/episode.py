@@ -10,6 +10,8 @@ bit-identical fitness alone or inside any batch.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -21,6 +23,7 @@ from .controllers import CONTROLLERS
 from .controllers.base import Controller
 from .errors import ConfigError, UserError
 from .mapping import MAPS, to_action
+from .perturb import PerturbationConfig, Trials
 from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
@@ -39,6 +42,8 @@ class EpisodeConfig:
     body_options: dict = field(default_factory=dict)
     controller_options: dict = field(default_factory=dict)
     task_options: dict = field(default_factory=dict)
+    #: how an evolutionary run perturbs each generation (see evobiped.perturb); {} = none
+    perturbations: dict = field(default_factory=dict)
 
     def __post_init__(self):
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
@@ -49,6 +54,11 @@ class EpisodeConfig:
         for opt in ("body_options", "controller_options", "task_options"):
             if not isinstance(getattr(self, opt), dict):
                 raise ConfigError(f"{opt} must be a table of options")
+        PerturbationConfig.from_dict(self.perturbations)
+
+    def nominal(self) -> "EpisodeConfig":
+        """The same episode without perturbations (replays, the robustness battery)."""
+        return dataclasses.replace(self, perturbations={})
 
     def build(self) -> "Episode":
         body = _construct(BODIES[self.body], "body", self.body_options)
@@ -67,7 +77,9 @@ class EpisodeConfig:
         controller = _construct(CONTROLLERS[self.controller], "controller", dict(opts, n_outputs=len(body.actuator_names), inputs=inputs))
         if genes is not None:
             controller.override_genes(genes)
-        return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall))
+        perturbations = PerturbationConfig.from_dict(self.perturbations)
+        return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
+                       perturbations=perturbations if perturbations.active else None)
 
 
 def _construct(cls, kind: str, options: dict):
@@ -98,8 +110,8 @@ class EpisodeResult:
 
 
     def per_genome(self, S: int, combine) -> "EpisodeResult":
-        """Rows p * S + j -> one entry per genome: fitness combined by the task, fell/unstable
-        if any presentation did, the earliest end; positions become ``(P, S, 2)``."""
+        """Rows p * S + j -> one entry per genome: fitness combined by ``combine`` ``(P, S) -> (P,)``,
+        fell/unstable if any presentation did, the earliest end; positions become ``(P, S, 2)``."""
         by = lambda a: a.reshape(-1, S, *a.shape[1:])  # noqa: E731
         return EpisodeResult(
             fitness=combine(by(self.fitness)),
@@ -142,10 +154,12 @@ class Listeners:
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
-    def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True):
+    def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True,
+                 perturbations: PerturbationConfig | None = None):
         self.body, self.controller, self.task = body, controller, task
         self.seconds = float(seconds)
         self.stop_on_fall = stop_on_fall
+        self.perturbations = perturbations
         self.model = body.build_model()
         task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
@@ -160,33 +174,65 @@ class Episode:
         self.control_dt = dt
         controller.bind_period(dt)
         self.substeps = int(round(ratio))
-        self._sims: dict[int, Sims] = {}
+        self._sims: dict[tuple, Sims] = {}
+        self._trunk = self.model.body(body.trunk).id
+        # qpos address of each actuated joint, in action order (initial-pose noise)
+        self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
 
     @property
     def n_ticks(self) -> int:
         return int(round(self.seconds / self.control_dt))
 
-    def sims(self, n: int) -> Sims:
-        """A batch of ``n`` simulations, created once per size and reused."""
-        if n not in self._sims:
-            self._sims[n] = Sims(self.model, n)
-        return self._sims[n]
+    def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0) -> Sims:
+        """A batch of ``n`` simulations, created once per size (and ground) and reused."""
+        key = (n, friction, slope)
+        if key not in self._sims:
+            model = self.model
+            if friction is not None or slope:
+                model = copy.deepcopy(self.model)
+                if friction is not None:
+                    if self.body.floor_geom is None:
+                        raise ConfigError(f"body {self.body.name!r} has no MuJoCo ground whose friction a trial could change")
+                    model.geom_friction[model.geom(self.body.floor_geom).id, 0] = friction
+                if slope:  # an inclined plane: gravity tilted backwards along +x
+                    g = float(np.linalg.norm(self.model.opt.gravity))
+                    a = np.arctan(slope)
+                    model.opt.gravity[:] = (-g * np.sin(a), 0.0, -g * np.cos(a))
+            self._sims[key] = Sims(model, n)
+        return self._sims[key]
 
-    def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None) -> EpisodeResult:
+    def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
+        """The perturbed presentations of generation key = (run seed, generation); None: nominal."""
+        if key is None or self.perturbations is None:
+            return None
+        return self.perturbations.draw(key, seconds=self.seconds, n_actuators=len(self.body.actuator_names))
+
+    def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
+            trials: Trials | None = None) -> EpisodeResult:
         """Simulate every genome ``(P, G)`` (or one ``(G,)``); returns fitness and outcome.
 
-        A task with S presentations runs each genome S times side by side
-        (rows p * S + j); the listener sees all rows, the result one per genome.
+        A task with S presentations runs each genome S times side by side, and
+        ``trials`` (R perturbed presentations) multiply them: row
+        (p * R + r) * S + j is genome p under trial r and task presentation j.
+        The listener sees all rows; the result has one entry per genome, its
+        fitness combined over j by the task, then over r by the trials' aggregate.
         """
         params = self.controller.decode(genomes)
         S = self.task.presentations
-        if S > 1:
-            params = {k: np.repeat(v, S, axis=0) for k, v in params.items()}
+        R = 1 if trials is None else trials.R
+        if S * R > 1:
+            params = {k: np.repeat(v, S * R, axis=0) for k, v in params.items()}
         P = next(iter(params.values())).shape[0]
         n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
         body, ctrl, task = self.body, self.controller, self.task
-        sims = self.sims(P)
+        sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope)
         body.reset(sims)
+        trial = np.arange(P) // S % R  # each row's trial
+        if trials is not None and trials.pose_offset is not None and trials.pose_offset.any():
+            sims.qpos[:, self._act_qadr] += trials.pose_offset[trial]
+            sims.forward()
+        noise = trials.noise() if trials is not None else None
+        pushing = trials is not None and trials.push_start.size > 0
         state = ctrl.initial_state(params)
         tstate = task.start(body, sims)
         alive = np.ones(P, bool)
@@ -204,6 +250,14 @@ class Episode:
             inputs = self._inputs(sims, tstate, P)
             state, out = ctrl.step(params, state, inputs)
             action = to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)
+            if trials is not None:
+                disturbed = action + trials.target_offset[trial]
+                jitter = noise.next()
+                if jitter is not None:
+                    disturbed += jitter[trial]
+                action = np.clip(disturbed, self.low, self.high)
+            if pushing:
+                sims.xfrc_applied[:, self._trunk, :3] = trials.push_at(k * self.control_dt)[trial]
             body.apply(sims, ids, action[ids])
             bad = self._advance(sims, ids)
             t = (k + 1) * self.control_dt
@@ -215,6 +269,7 @@ class Episode:
             fell[ids[down]] = True
             alive[ids[down]] = False
             end_time[ids[down]] = t
+        tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
         result = EpisodeResult(
             fitness=task.fitness(tstate),
             fell=fell,
@@ -223,7 +278,9 @@ class Episode:
             start_position=start,
             end_position=tstate.get("position", body.planar_position(sims)).copy(),
         )
-        if S > 1:
+        if trials is not None:
+            result = result.per_genome(S * R, lambda f: trials.combine(task.combine(f.reshape(-1, S)).reshape(-1, R)))
+        elif S > 1:
             result = result.per_genome(S, task.combine)
         if listener is not None:
             listener.end(result)

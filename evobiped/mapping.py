@@ -6,6 +6,7 @@ controller output  body takes        action
 =================  ================  ==============================================
 unit  [0, 1]       PD target (rad)   low + o (high - low)   (Reil & Husbands Sect. II-B)
 unit  [0, 1]       torque (N m)      low + o (high - low)   (low = -high: o = 0.5 is 0 N m)
+centred [0, 1]     PD target (rad)   clip((o - 1/2)(high - low), low, high)  (o = 0.5 is 0 rad: standing)
 signed             torque (N m)      clip(y, low, high)     (e.g. Matsuoka p_e y_e - p_f y_f)
 signed             PD target (rad)   mid + half tanh(y)     (saturating, centred on the range)
 angle  (rad)       PD target (rad)   clip(y, low, high)     (e.g. SIMBICON's joint targets)
@@ -26,6 +27,10 @@ def _clip(low, high, y):
     return np.clip(y, low, high)
 
 
+def _centred(low, high, o):
+    return np.clip((o - 0.5) * (high - low), low, high)
+
+
 def _tanh(low, high, y):
     return 0.5 * (low + high) + 0.5 * (high - low) * np.tanh(y)
 
@@ -34,6 +39,7 @@ def _tanh(low, high, y):
 MAPS = {
     ("unit", "position"): _unit,
     ("unit", "torque"): _unit,
+    ("centred", "position"): _centred,
     ("signed", "torque"): _clip,
     ("signed", "position"): _tanh,
     ("angle", "position"): _clip,

@@ -28,6 +28,10 @@ class Body(ABC):
     action_kind: ClassVar[Literal["position", "torque"]]
     #: True if :meth:`substep` must run before every physics step
     has_custom_forces: ClassVar[bool] = False
+    #: the MJCF body that pushes act on (its centre of mass)
+    trunk: ClassVar[str]
+    #: the MJCF geom of the ground whose friction a trial may change (None: no MuJoCo ground contact)
+    floor_geom: ClassVar[str | None] = None
 
     def __init__(self, *, timestep: float, model_file: str | None = None):
         self.timestep = float(timestep)

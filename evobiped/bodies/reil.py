@@ -65,6 +65,8 @@ class ReilBiped(Body):
     name: ClassVar[str] = "reil"
     model_name: ClassVar[str] = "reil_biped"
     action_kind: ClassVar[str] = "position"
+    trunk: ClassVar[str] = "pelvis"
+    floor_geom: ClassVar[str | None] = "floor"
 
     def __init__(
         self,

@@ -57,6 +57,7 @@ class TagaBiped(Body):
     name: ClassVar[str] = "taga"
     model_name: ClassVar[str] = "taga_biped"
     action_kind: ClassVar[str] = "torque"
+    trunk: ClassVar[str] = "hip"
     has_custom_forces: ClassVar[bool] = True
 
     def __init__(

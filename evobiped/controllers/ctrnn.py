@@ -9,6 +9,12 @@ At each tick the motor outputs are O(t) = sigma(A(t) - alpha); A then advances
 to t + dt.  Neurons 1..n_outputs are the motor neurons, in the body's actuator
 order.
 
+Motor map (``motor``).  ``"range"`` (the paper's, default): a motor output o in
+[0, 1] is the PD target low + o (high - low) in the joint's Table II range, so
+o = 0.5 is mid-range (a 0.7 rad crouch for the knee).  ``"centred"`` (beyond
+the paper): target = (o - 0.5)(high - low) clipped to the range, so a network
+at rest (o = 0.5) stands straight; the slope is the same.
+
 Genome (Fig. 4): n*n weights, then n time constants, then n biases (120 values
 for n = 10), then, if the controller has external inputs, k*n input weights.
 Weight w_ij (from neuron i to neuron j) is gene i*n + j.
@@ -30,6 +36,10 @@ TAU = dict(low=0.5, high=5.0, init_mean=2.75, init_sigma=1.5, mutation_sigma=1.5
 BIAS = dict(low=-4.0, high=4.0, init_mean=0.0, init_sigma=3.0, mutation_sigma=3.0)
 
 
+#: motor map name -> output kind (see evobiped.mapping)
+MOTOR_MAPS = {"range": "unit", "centred": "centred"}
+
+
 def sigmoid(x: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-x))
 
@@ -40,8 +50,12 @@ class CTRNN(Controller):
     name: ClassVar[str] = "ctrnn"
     output_kind: ClassVar[str] = "unit"
 
-    def __init__(self, *, n_outputs: int, n_neurons: int = 10, inputs: dict[str, int] | None = None, dt: float = 0.02):
+    def __init__(self, *, n_outputs: int, n_neurons: int = 10, inputs: dict[str, int] | None = None, dt: float = 0.02, motor: str = "range"):
         inputs = dict(inputs or {})
+        if motor not in MOTOR_MAPS:
+            raise ConfigError(f"ctrnn: unknown motor map {motor!r} (choose from {', '.join(MOTOR_MAPS)})")
+        self.motor = motor
+        self.output_kind = MOTOR_MAPS[motor]
         if n_neurons < 1 or n_neurons < n_outputs:
             raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
         if not dt > 0:
@@ -92,4 +106,4 @@ class CTRNN(Controller):
         return self.outputs_of(params, state)
 
     def describe(self) -> dict:
-        return {"name": self.name, "n_neurons": self.n, "dt": self.dt}
+        return {"name": self.name, "n_neurons": self.n, "dt": self.dt, "motor": self.motor}

@@ -39,8 +39,9 @@ class Evaluation:
         return Evaluation(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("fitness", "fell", "unstable", "end_time")))
 
 
-def _evaluate(episode: Episode, genomes: np.ndarray) -> Evaluation:
-    r = episode.run(genomes)
+def _evaluate(episode: Episode, genomes: np.ndarray, key: tuple[int, int] | None = None) -> Evaluation:
+    """Run ``genomes`` under the perturbed presentations of ``key`` = (run seed, generation), or nominally (None)."""
+    r = episode.run(genomes, trials=episode.trials_for(key))
     return Evaluation(r.fitness, r.fell, r.unstable, r.end_time)
 
 
@@ -62,7 +63,8 @@ class Evaluator(ABC):
         self.config = episode
 
     @abstractmethod
-    def evaluate(self, genomes: np.ndarray) -> Evaluation: ...
+    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None) -> Evaluation:
+        """Fitness and outcome of ``genomes``; ``key`` = (run seed, generation) draws the episode's perturbations."""
 
     def close(self) -> None:
         pass
@@ -81,8 +83,8 @@ class SerialEvaluator(Evaluator):
         super().__init__(episode)
         self.episode = episode.build()
 
-    def evaluate(self, genomes):
-        return _evaluate(self.episode, genomes)
+    def evaluate(self, genomes, key=None):
+        return _evaluate(self.episode, genomes, key)
 
 
 # ---- process pool: one Episode per worker process, built by the initializer
@@ -95,8 +97,8 @@ def _init_worker(config: EpisodeConfig) -> None:
     _worker_episode = config.build()
 
 
-def _work(genomes: np.ndarray) -> Evaluation:
-    return _evaluate(_worker_episode, genomes)
+def _work(job: tuple[np.ndarray, tuple[int, int] | None]) -> Evaluation:
+    return _evaluate(_worker_episode, *job)
 
 
 class ProcessPoolEvaluator(Evaluator):
@@ -114,9 +116,9 @@ class ProcessPoolEvaluator(Evaluator):
         ctx = mp.get_context("spawn")
         self.pool = ctx.Pool(self.workers, initializer=_init_worker, initargs=(episode,))
 
-    def evaluate(self, genomes):
+    def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
-        parts = self.pool.map(_work, [genomes[s] for s in chunks(len(genomes), self.chunk, self.workers)], chunksize=1)
+        parts = self.pool.map(_work, [(genomes[s], key) for s in chunks(len(genomes), self.chunk, self.workers)], chunksize=1)
         return Evaluation.concat(parts)
 
     def close(self):
@@ -199,16 +201,16 @@ class RayEvaluator(Evaluator):
             def __init__(self, config):
                 self.episode = config.build()
 
-            def evaluate(self, genomes):
-                return _evaluate(self.episode, genomes)
+            def evaluate(self, genomes, key):
+                return _evaluate(self.episode, genomes, key)
 
         self.actors = [_Worker.remote(episode) for _ in range(max(1, n))]
 
-    def evaluate(self, genomes):
+    def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
-        return Evaluation.concat(list(pool.map(lambda a, g: a.evaluate.remote(g), pieces)))
+        return Evaluation.concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
 
     def close(self):
         for a in self.actors:

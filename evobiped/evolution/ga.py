@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 
 
@@ -56,12 +56,14 @@ def generation_rng(seed: int, generation: int) -> np.random.Generator:
 
 
 class GA:
-    """Ask/tell truncation GA.
+    """Ask/tell truncation GA (the optimizer named ``ga``).
 
     ``ask()`` returns the current population ``(P, G)`` and a bool mask of the
     individuals whose fitness is unknown; ``tell(fitness)`` takes the fitness of
     those ``(n_unknown,)`` and builds the next generation.
     """
+
+    name = "ga"
 
     def __init__(
         self,
@@ -110,6 +112,16 @@ class GA:
         """Indices best first; ties keep population order (stable)."""
         return np.argsort(-self.fitness, kind="stable")
 
+    def carried(self) -> np.ndarray:
+        """After :meth:`next_generation`: for each row, the previous row whose outcome it keeps (-1: none).
+
+        The survivors (rows ``:k``, parents first, best first) keep theirs.
+        """
+        k = self.config.n_survivors
+        out = np.full(self.config.population, -1)
+        out[:k] = self._parents
+        return out
+
     def next_generation(self) -> None:
         """Truncation selection + mutation; call after the population is fully told."""
         if np.isnan(self.fitness).any():
@@ -117,6 +129,7 @@ class GA:
         P, k = self.config.population, self.config.n_survivors
         order = self.ranking()
         parents = order[:k]
+        self._parents = parents
         children_of = parents[np.arange(P - k) % k]
         self.generation += 1
         rng = generation_rng(self.seed, self.generation)
@@ -136,12 +149,15 @@ class GA:
     # ---- checkpointing
     def state_dict(self) -> dict:
         return {
+            "optimizer": self.name,
             "generation": self.generation,
             "population": self.population.tolist(),
             "fitness": [None if np.isnan(f) else float(f) for f in self.fitness],
         }
 
     def load_state_dict(self, state: dict) -> None:
+        if isinstance(state, dict) and state.get("optimizer", self.name) != self.name:
+            raise UserError(f"the checkpoint was written by the {state['optimizer']!r} optimizer; this run's config uses {self.name!r}")
         pop = np.array(state["population"], float)
         if pop.shape != self.population.shape:
             raise ConfigError(f"checkpoint population has shape {pop.shape}, the config needs {self.population.shape}")

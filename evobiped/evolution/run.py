@@ -36,7 +36,11 @@ from ..errors import ConfigError, UserError
 from ..fileio import atomic_write, read_json, write_json
 from ..genome_file import load_genome, save_genome
 from .evaluate import BACKENDS, Evaluator, make_evaluator
+from .cma import CMAES, CMAConfig
 from .ga import GA, GAConfig
+
+#: optimizer name -> class; each has the GA's ask/tell/ranking/next_generation/carried/state_dict interface
+OPTIMIZERS = {"ga": GA, "cma": CMAES}
 
 HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
 
@@ -46,7 +50,10 @@ class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
+    #: "ga" (Reil & Husbands' GA, the default) or "cma" (CMA-ES)
+    optimizer: str = "ga"
     ga: GAConfig = field(default_factory=GAConfig)
+    cma: CMAConfig = field(default_factory=CMAConfig)
     generations: int = 120
     seed: int = 0
     backend: str = "process"
@@ -62,6 +69,8 @@ class RunConfig:
             raise ConfigError(f"generations must be an integer >= 1, got {self.generations!r}")
         if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
             raise ConfigError(f"seed must be an integer >= 0, got {self.seed!r}")
+        if self.optimizer not in OPTIMIZERS:
+            raise ConfigError(f"unknown optimizer {self.optimizer!r} (choose from {', '.join(OPTIMIZERS)})")
         if self.backend not in BACKENDS:
             raise ConfigError(f"unknown backend {self.backend!r} (choose from {', '.join(BACKENDS)})")
         if self.workers is not None and not (isinstance(self.workers, int) and self.workers >= 1):
@@ -80,9 +89,10 @@ class RunConfig:
         try:
             episode = EpisodeConfig(**_table(d.pop("episode", {}), f"{where} [episode]"))
             ga = GAConfig(**_table(d.pop("ga", {}), f"{where} [ga]"))
+            cma = CMAConfig(**_table(d.pop("cma", {}), f"{where} [cma]"))
             if "frozen_blocks" in d:
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
-            return cls(episode=episode, ga=ga, **d)
+            return cls(episode=episode, ga=ga, cma=cma, **d)
         except TypeError as exc:
             raise ConfigError(f"{where}: {_type_error(exc)}") from None
 
@@ -215,7 +225,7 @@ class Run:
         """Evaluate the unknown individuals of this generation and record it."""
         ga = self.ga
         pop, unknown = ga.ask()
-        ev = evaluator.evaluate(pop[unknown])
+        ev = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
         ga.tell(ev.fitness)
         P = len(pop)
         for key, vals, default in (("fell", ev.fell, False), ("unstable", ev.unstable, False), ("end_time", ev.end_time, np.nan)):
@@ -245,13 +255,12 @@ class Run:
             self.best = meta
             save_genome(self.dir / "best.json", pop[b], self.config.episode, **meta)
         self.history.append(stats.row())
-        # survivors keep their outcome; children's are filled in next generation
-        order = ga.ranking()
+        # individuals the optimizer carries over keep their outcome; the others' are filled in next generation
         ga.next_generation()
-        k = ga.config.n_survivors
+        carried = ga.carried()
         for key, arr in self._outcome.items():
-            new = np.zeros_like(arr)
-            new[:k] = arr[order[:k]]
+            new = np.zeros(len(carried), dtype=arr.dtype)
+            new[carried >= 0] = arr[carried[carried >= 0]]
             self._outcome[key] = new
         return stats
 
@@ -306,8 +315,8 @@ def _sigint_deferred():
         raise KeyboardInterrupt
 
 
-def make_ga(config: RunConfig) -> GA:
-    """Build the GA (and the episode, to learn the genome layout): fails before any file is written."""
+def make_ga(config: RunConfig):
+    """Build the optimizer (GA or CMA-ES; the episode too, to learn the genome layout): fails before any file is written."""
     episode = config.episode.build()
     layout = episode.controller.layout
     initial = None
@@ -322,6 +331,8 @@ def make_ga(config: RunConfig) -> GA:
         mutable = np.ones(layout.size, bool)
         for b in config.frozen_blocks:
             mutable[slices[b]] = False
+    if config.optimizer == "cma":
+        return CMAES(layout, config.cma, seed=config.seed, initial=initial, mutable=mutable)
     return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
 
 

@@ -26,7 +26,7 @@ class ReplayReport:
 
     fitness: float
     stored_fitness: float | None  # None if the source has none
-    compared: bool  # False when --seconds changed the episode length
+    compared: bool  # False when --seconds changed the episode length, or the stored fitness is over perturbed presentations
     fell: bool
     end_time: float
     recording: Path | None
@@ -108,7 +108,7 @@ def replay(
     return ReplayReport(
         fitness=float(result.fitness[0]),
         stored_fitness=float(stored) if isinstance(stored, (int, float)) else None,
-        compared=cfg.seconds == source.config.seconds,
+        compared=cfg.seconds == source.config.seconds and not source.config.perturbations,
         fell=bool(result.fell[0]),
         end_time=float(result.end_time[0]),
         recording=target,

@@ -19,6 +19,17 @@ so c in [0, 1] grows with sustained oscillation of every motor neuron and
 vanishes for a network that settles to a fixed point; it multiplies distance,
 so oscillating in place earns nothing.  ``cyclic_weight`` = 0 (default) is the
 paper's plain eq. 4; ``evobiped evolve --cyclic`` sets it to 1.
+
+Forward progress (``fitness = "forward"``, beyond the paper).  Eq. 4 pays a
+2-3 m lunge that falls more than a shuffle that stays up, and pays walking
+backwards as much as forwards.  The forward fitness is
+
+    F = (d_fwd + survival_credit) * t_up / T
+
+with d_fwd the displacement (m) along the direction the walker faced at the
+start (negative when it walks backwards), t_up the time it stayed up and T
+the episode length (s).  Staying up is paid first (F grows with t_up even
+before the walker moves), then distance forward.
 """
 
 from __future__ import annotations
@@ -49,19 +60,31 @@ def count_cycles(series: np.ndarray, lengths: np.ndarray, band: float) -> np.nda
     return count
 
 
+#: fitness name -> what it pays (see the module docstring)
+FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T"}
+
+
 class WalkTask(Task):
     name = "walk"
 
-    def __init__(self, *, cyclic_weight: float = 0.0, cyclic_cycles: int = 25, cyclic_band: float = 0.05):
-        if cyclic_weight < 0 or cyclic_cycles < 1 or cyclic_band <= 0:
-            raise ConfigError("walk task: cyclic_weight >= 0, cyclic_cycles >= 1 and cyclic_band > 0 required")
+    def __init__(self, *, fitness: str = "distance", survival_credit: float = 5.0, cyclic_weight: float = 0.0, cyclic_cycles: int = 25, cyclic_band: float = 0.05):
+        if fitness not in FITNESS:
+            raise ConfigError(f"walk task: unknown fitness {fitness!r} (choose from {', '.join(FITNESS)})")
+        if not (isinstance(survival_credit, (int, float)) and np.isfinite(survival_credit) and survival_credit >= 0):
+            raise ConfigError(f"walk task: survival_credit must be a finite number >= 0 (m), got {survival_credit!r}")
+        if not (np.isfinite(cyclic_weight) and cyclic_weight >= 0) or cyclic_cycles < 1 or not cyclic_band > 0:
+            raise ConfigError("walk task: cyclic_weight >= 0 (finite), cyclic_cycles >= 1 and cyclic_band > 0 required")
+        if fitness != "distance" and cyclic_weight:
+            raise ConfigError("walk task: the cyclic criterion multiplies eq. 4; use it with fitness = 'distance'")
+        self.fitness_name = fitness
+        self.survival_credit = float(survival_credit)
         self.cyclic_weight = float(cyclic_weight)
         self.cyclic_cycles = int(cyclic_cycles)
         self.cyclic_band = float(cyclic_band)
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        state = {"start": p0, "position": p0.copy(), "n_motor": len(body.actuator_names)}
+        state = {"start": p0, "position": p0.copy(), "facing": body.heading(sims).copy(), "n_motor": len(body.actuator_names)}
         if self.cyclic_weight:
             state["motor"] = []
             state["ticks"] = np.zeros(sims.n, int)
@@ -85,11 +108,18 @@ class WalkTask(Task):
         n = count_cycles(np.stack(state["motor"]), state["ticks"], self.cyclic_band)
         return (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1)
 
+    def forward(self, state) -> np.ndarray:
+        """Displacement along the initial facing, ``(P,)`` m (negative: backwards)."""
+        return np.einsum("pi,pi->p", state["position"] - state["start"], state["facing"])
+
     def fitness(self, state):
+        if self.fitness_name == "forward":
+            up = state["end_time"] / state["seconds"]
+            return (self.forward(state) + self.survival_credit) * up
         W = self.distance(state)
         if not self.cyclic_weight:
             return W
         return W * (1.0 + self.cyclic_weight * self.cyclicity(state))
 
     def describe(self):
-        return {"name": self.name, "cyclic_weight": self.cyclic_weight}
+        return {"name": self.name, "fitness": self.fitness_name, "cyclic_weight": self.cyclic_weight}

@@ -1,0 +1,3 @@
+from evobiped.cli import main
+import sys
+sys.exit(main())

@@ -1,0 +1,210 @@
+"""CMA-ES beside the paper's GA, behind the same ask/tell seam (pycma).
+
+The library is ``cma`` (pycma, Hansen's reference implementation): maintained
+by the method's author, pure Python + numpy, with bound handling, the standard
+(mu/mu_w, lambda) update and its stopping rules.  Only the random numbers are
+ours: every generation's samples come from (run seed, generation) through a
+normal generator handed to pycma as its ``randn`` option.  The strategy is
+then a pure function of the run seed and the fitness told so far, so the
+checkpoint stores those numbers (not a pickle, which a tampered file could
+abuse) and a resume replays them: it asks exactly the solutions an
+uninterrupted run asks.
+
+Search space.  CMA-ES runs in coordinates normalised to each gene's range,
+z = (gene - low) / (high - low) in [0, 1]^G, bounded there by pycma's
+``BoundTransform``; the initial mean is the layout's ``init_mean`` (for the
+CTRNN: zero weights, mid time constants, zero biases) and the initial step
+``sigma0`` is a fraction of every gene's range.
+
+Restarts (``restarts`` > 0): when pycma's own stopping rules fire (e.g. the
+step size collapsed or the fitness went flat), the strategy starts again from
+the initial mean with twice the population (IPOP-CMA-ES, Auger & Hansen 2005).
+The population size changes at a restart.
+
+Fitness is higher-is-better, as everywhere in evobiped (pycma minimises -f).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError, UserError
+from ..genome import GenomeLayout
+from .ga import generation_rng
+
+
+@dataclass(frozen=True, kw_only=True)
+class CMAConfig:
+    """CMA-ES settings."""
+
+    #: lambda, offspring per generation; 0 = pycma's default 4 + floor(3 ln G)
+    population: int = 0
+    #: initial step size as a fraction of every gene's range (0 < sigma0 <= 1)
+    sigma0: float = 0.1
+    #: IPOP restarts allowed (population doubles at each)
+    restarts: int = 0
+
+    def __post_init__(self):
+        p = self.population
+        if not (isinstance(p, int) and not isinstance(p, bool) and (p == 0 or p >= 2)):
+            raise ConfigError(f"cma.population must be an integer >= 2 (or 0 for the default), got {p!r}")
+        s = self.sigma0
+        if not (isinstance(s, (int, float)) and not isinstance(s, bool) and math.isfinite(s) and 0 < s <= 1):
+            raise ConfigError(f"cma.sigma0 must be in (0, 1] (a fraction of each gene's range), got {s!r}")
+        r = self.restarts
+        if not (isinstance(r, int) and not isinstance(r, bool) and 0 <= r <= 10):
+            raise ConfigError(f"cma.restarts must be an integer in [0, 10], got {r!r}")
+
+    def lam(self, n_genes: int) -> int:
+        """Offspring per generation for ``n_genes`` genes."""
+        return self.population or 4 + int(3 * math.log(n_genes))
+
+
+class GenerationNormal:
+    """pycma's ``randn``: standard normal samples from a generator that the optimiser re-seeds every generation."""
+
+    def __init__(self):
+        self.rng = np.random.default_rng(0)
+
+    def __call__(self, *shape):
+        return self.rng.standard_normal(shape)
+
+
+class CMAES:
+    """Ask/tell CMA-ES over a :class:`GenomeLayout` with the GA's interface.
+
+    ``ask()`` -> ``(population (P, G), unknown (P,) bool)``; ``tell(fitness (n_unknown,))``;
+    ``ranking()`` best first; ``next_generation()``; ``carried()`` (nothing is carried);
+    ``state_dict()`` / ``load_state_dict()`` for the checkpoint.
+    """
+
+    name = "cma"
+
+    def __init__(self, layout: GenomeLayout, config: CMAConfig, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
+        try:
+            import cma  # noqa: F401
+        except ImportError:  # pragma: no cover - a core dependency
+            raise UserError("the cma optimizer needs pycma: pip install cma") from None
+        self.layout, self.config, self.seed = layout, config, int(seed)
+        self.low, self.high = layout.low, layout.high
+        self.span = np.where(self.high > self.low, self.high - self.low, 1.0)
+        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
+        if self.mutable.shape != (layout.size,) or not self.mutable.any():
+            raise ConfigError("the mutable-gene mask must have one entry per gene and at least one True")
+        if initial is not None:
+            initial = layout.validate(initial, what="initial genome")[0]
+        self.x0 = np.clip(layout.init_mean if initial is None else initial, self.low, self.high)
+        self._rewind()
+
+    def _rewind(self) -> None:
+        self.generation = 0
+        self.restart = 0
+        #: the fitness told at each generation, ``(lam,)`` each: the strategy's whole history
+        self.told: list[np.ndarray] = []
+        self._start(self.restart)
+        self._sample()
+
+    # ---- pycma
+    def _start(self, restart: int) -> None:
+        import cma
+
+        n = int(self.mutable.sum())
+        self.normal = GenerationNormal()
+        z0 = self._z(self.x0)[self.mutable]
+        opts = {
+            "bounds": [0.0, 1.0],
+            "popsize": self.config.lam(n) * 2**restart,
+            "randn": self.normal,
+            "verbose": -9,
+            "verb_disp": 0,
+            "verb_log": 0,
+        }
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self.es = cma.CMAEvolutionStrategy(z0, self.config.sigma0, opts)
+
+    def _z(self, genes: np.ndarray) -> np.ndarray:
+        return (genes - self.low) / self.span
+
+    def _genes(self, z: np.ndarray) -> np.ndarray:
+        """Normalised mutable coordinates ``(n, G_mutable)`` -> genomes ``(n, G)`` within bounds."""
+        g = np.tile(self.x0, (len(z), 1))
+        g[:, self.mutable] = self.low[self.mutable] + np.clip(z, 0.0, 1.0) * self.span[self.mutable]
+        return np.clip(g, self.low, self.high)
+
+    def _sample(self) -> None:
+        self.normal.rng = generation_rng(self.seed, self.generation)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self._asked = self.es.ask()
+        self.population = self._genes(np.array(self._asked))
+        self.fitness = np.full(len(self.population), np.nan)
+
+    # ---- the GA's interface
+    def ask(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.population, np.isnan(self.fitness)
+
+    def tell(self, fitness: np.ndarray) -> None:
+        _, unknown = self.ask()
+        fitness = np.asarray(fitness, float)
+        if fitness.shape != (int(unknown.sum()),):
+            raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
+        f = np.where(np.isfinite(fitness), fitness, -np.inf)
+        self.fitness[unknown] = f
+
+    def ranking(self) -> np.ndarray:
+        return np.argsort(-self.fitness, kind="stable")
+
+    def carried(self) -> np.ndarray:
+        """For each row of the new population, the row of the previous one whose outcome it keeps (-1: none)."""
+        return np.full(len(self.population), -1)
+
+    def next_generation(self) -> None:
+        if np.isnan(self.fitness).any():
+            raise RuntimeError("next_generation before every individual was evaluated")
+        self._advance(self.fitness.copy())
+
+    def _advance(self, f: np.ndarray) -> None:
+        self.told.append(f)
+        finite = np.isfinite(f)
+        # pycma needs numbers: an unstable individual ranks below every finite one
+        f = np.where(finite, f, (f[finite].min() if finite.any() else 0.0) - 1e6)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self.es.tell(self._asked, list(-f))
+        self.generation += 1
+        if self.restart < self.config.restarts and self.es.stop():
+            self.restart += 1
+            self._start(self.restart)
+        self._sample()
+
+    # ---- checkpointing
+    def state_dict(self) -> dict:
+        plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
+        return {"optimizer": self.name, "generation": self.generation, "told": [plain(f) for f in self.told], "fitness": plain(self.fitness)}
+
+    def load_state_dict(self, state: dict) -> None:
+        """Replay the told fitness from generation 0 (UserError on a checkpoint that does not fit this run)."""
+        if not isinstance(state, dict) or state.get("optimizer", "ga") != self.name:
+            got = state.get("optimizer", "ga") if isinstance(state, dict) else type(state).__name__
+            raise UserError(f"the checkpoint was written by the {got!r} optimizer; this run's config uses {self.name!r}")
+        told, fitness, generation = state.get("told"), state.get("fitness"), state.get("generation")
+        if not (isinstance(told, list) and isinstance(generation, int) and generation == len(told) and isinstance(fitness, list)):
+            raise UserError("checkpoint: the CMA-ES state needs 'told' (one list per generation), 'generation' and 'fitness'")
+        self._rewind()
+        for g, f in enumerate(told):
+            values = _numbers(f, len(self.population), f"told[{g}]")
+            self._advance(values)
+        # a restart may have happened after the last generation told: the population matches the state
+        current = _numbers(fitness, len(self.population), "fitness", allow_nan=True)
+        self.fitness = current
+
+def _numbers(values, n: int, what: str, *, allow_nan: bool = False) -> np.ndarray:
+    """A checkpoint list of ``n`` numbers (None: an unstable -inf, or unknown with ``allow_nan``)."""
+    if not isinstance(values, list) or len(values) != n or not all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)) for v in values):
+        raise UserError(f"checkpoint: CMA-ES {what} must be a list of {n} finite numbers or nulls")
+    return np.array([(np.nan if allow_nan else -np.inf) if v is None else float(v) for v in values])

@@ -1,0 +1,188 @@
+"""Perturbed presentations: evolution under disturbance, and the trials of the robustness battery.
+
+A genome can be evaluated on R presentations side by side in one batch, each
+with its own disturbances (:class:`Trials`, one row per presentation):
+
+* **pushes**: a horizontal force (N) on the walker's trunk (the Reil pelvis)
+  for a duration (s), starting at given times;
+* **target offsets**: a constant angle (rad) added to each PD target;
+* **target noise**: Gaussian noise (rad) on each PD target, new every control tick;
+* **initial-pose noise**: Gaussian noise (rad) on each actuated joint's angle at t = 0;
+* **ground**: the floor's sliding friction and a slope (grade, rise over run,
+  uphill along +x, the walker's initial facing), the same for every row of a batch.
+
+:class:`PerturbationConfig` (``[episode.perturbations]`` in a config) says how
+the trials of an evolutionary run are drawn: from (run seed, generation) only,
+so every genome of a generation meets the same disturbances (common random
+numbers: selection compares like with like), and neither a resume nor the
+number of workers changes anything.  A genome's fitness is the ``aggregate``
+of its presentations' fitness:
+
+* ``mean``: the mean over the R presentations;
+* ``worst``: the minimum (a walker is as good as its worst trial);
+* ``q25``: the lower quartile (linear interpolation), between the two.
+
+Replays, episodes and the robustness battery run the nominal (unperturbed)
+episode unless trials are given explicitly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from .errors import ConfigError
+
+#: aggregate name -> ``(P, R) -> (P,)``
+AGGREGATES = {
+    "mean": lambda f: f.mean(axis=1),
+    "worst": lambda f: f.min(axis=1),
+    "q25": lambda f: np.quantile(f, 0.25, axis=1),
+}
+
+
+def _number(name: str, value, *, low: float = 0.0, strict: bool = False, integer: bool = False) -> None:
+    ok = isinstance(value, int if integer else (int, float)) and not isinstance(value, bool)
+    ok = ok and math.isfinite(value) and (value > low if strict else value >= low)
+    if not ok:
+        kind = "an integer" if integer else "a finite number"
+        raise ConfigError(f"episode.perturbations.{name}: must be {kind} {'>' if strict else '>='} {low:g}, got {value!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class PerturbationConfig:
+    """How an evolutionary run draws each generation's perturbed presentations."""
+
+    #: R, presentations per genome (each with its own draws)
+    presentations: int = 1
+    #: pushes per presentation; each at a uniform random time in [push_after, T - push_duration] s
+    pushes: int = 0
+    #: N, magnitude of each push (horizontal, uniform random direction)
+    push_force: float = 10.0
+    #: s, duration of each push
+    push_duration: float = 0.1
+    #: s, no push before this time
+    push_after: float = 2.0
+    #: rad, standard deviation of a constant offset on each PD target, one per presentation
+    target_offset: float = 0.0
+    #: rad, standard deviation of the noise on each PD target at every control tick
+    target_noise: float = 0.0
+    #: rad, standard deviation of the noise on each actuated joint's initial angle
+    pose_noise: float = 0.0
+    #: [low, high] floor friction, one uniform draw per generation; [] keeps the model's
+    friction: tuple[float, ...] = ()
+    #: how presentations combine into a genome's fitness: mean, worst or q25
+    aggregate: str = "mean"
+
+    def __post_init__(self):
+        _number("presentations", self.presentations, low=1, integer=True)
+        if self.presentations > 64:
+            raise ConfigError(f"episode.perturbations.presentations: at most 64, got {self.presentations}")
+        _number("pushes", self.pushes, integer=True)
+        _number("push_force", self.push_force, strict=True)
+        _number("push_duration", self.push_duration, strict=True)
+        _number("push_after", self.push_after)
+        for name in ("target_offset", "target_noise", "pose_noise"):
+            _number(name, getattr(self, name))
+        fr = tuple(self.friction) if isinstance(self.friction, (list, tuple)) else None
+        if fr is None or len(fr) not in (0, 2) or any(not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0 for v in fr) or (fr and fr[0] > fr[1]):
+            raise ConfigError(f"episode.perturbations.friction: must be [] or [low, high] with 0 < low <= high, got {self.friction!r}")
+        object.__setattr__(self, "friction", tuple(float(v) for v in fr))
+        if self.aggregate not in AGGREGATES:
+            raise ConfigError(f"episode.perturbations.aggregate: unknown {self.aggregate!r} (choose from {', '.join(AGGREGATES)})")
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "PerturbationConfig":
+        if not isinstance(d, dict):
+            raise ConfigError("episode.perturbations must be a table")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(d) - known)
+        if unknown:
+            raise ConfigError(f"episode.perturbations: unknown setting {unknown[0]!r} (choose from {', '.join(sorted(known))})")
+        return cls(**d)
+
+    @property
+    def active(self) -> bool:
+        """Anything to perturb (or several presentations to aggregate)."""
+        return self.presentations > 1 or self.pushes > 0 or bool(self.friction) or any(
+            getattr(self, n) > 0 for n in ("target_offset", "target_noise", "pose_noise")
+        )
+
+    def draw(self, key: tuple[int, int], *, seconds: float, n_actuators: int) -> "Trials":
+        """The trials of one generation, from ``key`` = (run seed, generation) only."""
+        rng = np.random.default_rng([int(key[0]), int(key[1]), 0x7E57])
+        R, k = self.presentations, self.pushes
+        last = max(self.push_after, seconds - self.push_duration)
+        angle = rng.uniform(0.0, 2 * np.pi, (R, k))
+        force = np.zeros((R, k, 3))
+        force[..., 0], force[..., 1] = self.push_force * np.cos(angle), self.push_force * np.sin(angle)
+        return Trials(
+            push_start=rng.uniform(self.push_after, last, (R, k)),
+            push_force=force,
+            push_duration=self.push_duration,
+            target_offset=rng.normal(0.0, self.target_offset, (R, n_actuators)) if self.target_offset else np.zeros((R, n_actuators)),
+            target_noise=self.target_noise,
+            noise_seed=int(rng.integers(2**63)),
+            pose_offset=rng.normal(0.0, self.pose_noise, (R, n_actuators)) if self.pose_noise else np.zeros((R, n_actuators)),
+            friction=float(rng.uniform(*self.friction)) if self.friction else None,
+            aggregate=self.aggregate,
+        )
+
+
+@dataclass
+class Trials:
+    """R presentations' disturbances; arrays have R rows (``k`` pushes each)."""
+
+    #: s, ``(R, k)``
+    push_start: np.ndarray
+    #: N, world frame, ``(R, k, 3)``
+    push_force: np.ndarray
+    #: s
+    push_duration: float
+    #: rad, ``(R, n_act)``
+    target_offset: np.ndarray
+    #: rad, standard deviation per tick
+    target_noise: float = 0.0
+    noise_seed: int = 0
+    #: rad, ``(R, n_act)`` added to the actuated joints' initial angles
+    pose_offset: np.ndarray | None = None
+    #: floor sliding friction (None: the model's)
+    friction: float | None = None
+    #: grade (rise over run), uphill along +x
+    slope: float = 0.0
+    aggregate: str = "mean"
+
+    @property
+    def R(self) -> int:
+        return len(self.target_offset)
+
+    @classmethod
+    def nominal(cls, R: int, n_actuators: int, **kw) -> "Trials":
+        """R undisturbed presentations; keywords set the fields to change."""
+        base = dict(push_start=np.zeros((R, 0)), push_force=np.zeros((R, 0, 3)), push_duration=0.1, target_offset=np.zeros((R, n_actuators)))
+        return cls(**{**base, **kw})
+
+    def noise(self) -> "TargetNoise":
+        return TargetNoise(self.target_noise, self.noise_seed, self.target_offset.shape)
+
+    def push_at(self, t: float) -> np.ndarray:
+        """The force on each presentation's trunk during the control period starting at ``t`` s: ``(R, 3)`` N."""
+        on = (self.push_start <= t + 1e-9) & (t + 1e-9 < self.push_start + self.push_duration)
+        return (self.push_force * on[..., None]).sum(axis=1)
+
+    def combine(self, fitness: np.ndarray) -> np.ndarray:
+        """``(P, R)`` presentation fitness -> ``(P,)`` by the aggregate."""
+        return AGGREGATES[self.aggregate](fitness)
+
+
+class TargetNoise:
+    """Noise on the PD targets: one ``(R, n_act)`` draw per control tick, shared by every genome."""
+
+    def __init__(self, sigma: float, seed: int, shape: tuple[int, int]):
+        self.sigma, self.shape = float(sigma), shape
+        self.rng = np.random.default_rng(seed)
+
+    def next(self) -> np.ndarray | None:
+        return self.rng.normal(0.0, self.sigma, self.shape) if self.sigma > 0 else None

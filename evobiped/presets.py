@@ -1,0 +1,40 @@
+"""Named run settings shipped with the package (``evobiped evolve --preset NAME``).
+
+Each preset is a TOML file in ``evobiped/presets/`` in the format of
+``evobiped evolve --config``; its first line is a ``#`` comment that says
+what it is.  A ``--config`` file and command-line flags override a preset.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .errors import UserError
+
+DIRECTORY = Path(__file__).with_name("presets")
+
+
+def names() -> list[str]:
+    """The shipped presets, sorted."""
+    return sorted(p.stem for p in DIRECTORY.glob("*.toml"))
+
+
+def path(name: str) -> Path:
+    """The preset's file (UserError naming the choices for an unknown name)."""
+    if name not in names():
+        raise UserError(f"unknown preset {name!r} (choose from {', '.join(names())}; `evobiped presets` describes them)")
+    return DIRECTORY / f"{name}.toml"
+
+
+def describe(name: str) -> str:
+    """The preset's one-line description (its first comment line)."""
+    first = path(name).read_text().splitlines()[0]
+    return first.lstrip("#").strip()
+
+
+def merge(base: dict, over: dict) -> dict:
+    """``over`` on top of ``base``, tables merged key by key."""
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
