@@ -1,0 +1,128 @@
+"""CMA-ES behind the GA's seam: it optimises, resumes exactly, keeps to the bounds, refuses bad input."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from evobiped.cli import main
+from evobiped.episode import EpisodeConfig
+from evobiped.errors import ConfigError, UserError
+from evobiped.evolution import Run, RunConfig, make_evaluator
+from evobiped.evolution.cma import CMAES, CMAConfig
+from evobiped.genome import GeneBlock, GenomeLayout
+
+from .test_evolve import fitness_history
+
+LAYOUT = GenomeLayout((GeneBlock(name="x", size=10, low=-5.0, high=5.0, init_mean=3.0, init_sigma=1.0, mutation_sigma=1.0),))
+
+
+def optimise(opt, f, generations):
+    for _ in range(generations):
+        pop, unknown = opt.ask()
+        opt.tell(f(pop[unknown]))
+        opt.next_generation()
+    return opt
+
+
+def test_minimises_a_sphere_inside_the_bounds():
+    """-|x - c|^2 with c inside the box: the mean reaches c; every sample stays within the bounds."""
+    c = np.linspace(-4, 4, 10)
+    seen = []
+
+    def f(pop):
+        seen.append(pop.copy())
+        return -((pop - c) ** 2).sum(axis=1)
+
+    opt = optimise(CMAES(LAYOUT, CMAConfig(sigma0=0.3), seed=1), f, 150)
+    best = opt.population[opt.ranking()[0]] if not np.isnan(opt.fitness).all() else None
+    assert best is None  # a fresh, not yet evaluated generation
+    pop, _ = opt.ask()
+    assert np.abs(pop.mean(axis=0) - c).max() < 1e-3
+    allpop = np.concatenate(seen)
+    assert allpop.min() >= -5 and allpop.max() <= 5
+    assert len(seen[0]) == 4 + int(3 * np.log(10))  # pycma's default population
+
+
+def test_state_round_trip_asks_the_same():
+    """A checkpointed strategy replays its told fitness and asks the identical next population."""
+    f = lambda pop: -np.abs(pop).sum(axis=1)  # noqa: E731
+    a = optimise(CMAES(LAYOUT, CMAConfig(population=6, restarts=1), seed=3), f, 12)
+    state = json.loads(json.dumps(a.state_dict()))
+    b = CMAES(LAYOUT, CMAConfig(population=6, restarts=1), seed=3)
+    b.load_state_dict(state)
+    assert b.generation == 12 and np.array_equal(a.ask()[0], b.ask()[0])
+    optimise(a, f, 3)
+    optimise(b, f, 3)
+    assert np.array_equal(a.ask()[0], b.ask()[0])
+
+
+def test_ipop_restart_doubles_the_population():
+    """A flat fitness stops pycma (tolflatfitness); the restart doubles lambda."""
+    opt = optimise(CMAES(LAYOUT, CMAConfig(population=4, restarts=1), seed=0), lambda pop: np.zeros(len(pop)), 40)
+    assert opt.restart == 1 and len(opt.ask()[0]) == 8
+
+
+@pytest.mark.parametrize("bad", [dict(population=1), dict(sigma0=0.0), dict(sigma0=float("nan")), dict(sigma0=2.0), dict(restarts=-1), dict(population=True)])
+def test_bad_settings(bad):
+    with pytest.raises(ConfigError):
+        CMAConfig(**bad)
+
+
+def test_tampered_state_is_refused():
+    opt = CMAES(LAYOUT, CMAConfig(population=4), seed=0)
+    good = optimise(CMAES(LAYOUT, CMAConfig(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state_dict()
+    for bad in ({**good, "told": [[1.0] * 3, [1.0] * 4]}, {**good, "generation": 5}, {**good, "told": "x"}, {"optimizer": "ga"}):
+        with pytest.raises(UserError):
+            opt.load_state_dict(bad)
+
+
+SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task_options={"fitness": "forward"}),
+                  optimizer="cma", cma=CMAConfig(population=6), generations=4, seed=2, backend="serial")
+
+
+def test_cma_run_resumes_bit_identically(tmp_path):
+    """An interrupted CMA-ES run resumed (on 2 workers) gives the uninterrupted history and best genome."""
+    whole = Run.create(tmp_path / "whole", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        whole.evolve(ev)
+    cut = Run.create(tmp_path / "cut", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        cut.step(ev)
+        cut.checkpoint()
+    resumed = Run.resume(tmp_path / "cut")
+    with make_evaluator(SMALL.episode, "process", 2) as ev:
+        resumed.evolve(ev)
+    assert fitness_history(tmp_path / "cut") == fitness_history(tmp_path / "whole")
+    a, b = (json.loads((tmp_path / d / "best.json").read_text()) for d in ("whole", "cut"))
+    assert a["genome"] == b["genome"] and a["fitness"] == b["fitness"]
+    # CMA-ES improves on its first generation in this small run (the forward fitness is positive)
+    hist = fitness_history(tmp_path / "whole")
+    assert float(hist[-1][1]) > 0
+
+
+def test_resume_with_another_optimizer_is_refused(tmp_path, capsys):
+    run = Run.create(tmp_path / "r", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        run.step(ev)
+        run.checkpoint()
+    cfg = json.loads((tmp_path / "r" / "config.json").read_text())
+    cfg["optimizer"] = "ga"
+    (tmp_path / "r" / "config.json").write_text(json.dumps(cfg))
+    assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'cma' optimizer" in err[0]
+
+
+def test_cli_optimizer_flag_and_population(tmp_path, capsys):
+    out = tmp_path / "c"
+    assert main(["evolve", "--optimizer", "cma", "--controller", "simbicon", "--population", "5", "--generations", "2",
+                 "--episode-seconds", "0.5", "--backend", "serial", "--out", str(out), "--quiet"]) == 0
+    cfg = json.loads((out / "config.json").read_text())
+    assert cfg["optimizer"] == "cma" and cfg["cma"]["population"] == 5
+    assert int(fitness_history(out)[0][5]) == 5  # five evaluations in generation 0
+    with pytest.raises(SystemExit) as exc:
+        main(["evolve", "--optimizer", "nope", "--out", str(tmp_path / "x")])
+    assert exc.value.code == 2
+    assert not (tmp_path / "x").exists()
