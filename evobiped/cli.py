@@ -98,7 +98,7 @@ def add_evolve(sub) -> None:
     p.add_argument("--body", help="body (default reil)")
     p.add_argument("--controller", help="controller (default ctrnn)")
     p.add_argument("--task", help="task (default walk)")
-    p.add_argument("--population", type=positive_int, help="population size (default 50)")
+    p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A)")
@@ -134,14 +134,11 @@ def evolve_config(args):
             ep[key] = getattr(args, flag)
     if args.cyclic:
         ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
-    optimizer = args.optimizer or d.get("optimizer", "ga")
-    if args.population is not None:  # the population of whichever optimizer runs
-        if optimizer == "cma":
-            d["cma"] = {**(d.get("cma") or {}), "population": args.population}
-        else:
-            ga["population"] = args.population
+    if args.population is not None:  # the population of either optimizer
+        ga["population"] = args.population
+        d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": args.population}
     for flag in ("optimizer", "generations", "seed", "backend", "workers", "address", "initial"):
-        if getattr(args, flag) is not None:
+        if getattr(args, flag, None) is not None:
             d[flag] = getattr(args, flag)
     if getattr(args, "freeze", None):
         d["frozen_blocks"] = [b.strip() for b in args.freeze.split(",") if b.strip()]
@@ -411,7 +408,11 @@ def run_g3_cmd(args) -> int:
 def add_study(sub) -> None:
     p = sub.add_parser("study", help="K evolutionary runs per condition (plain, cyclic): success rates, distances, Fig. 5")
     p.add_argument("--runs", type=positive_int, default=10, help="runs (seeds) per condition (default 10)")
-    p.add_argument("--conditions", default="plain,cyclic", help="comma-separated: plain, cyclic (default both)")
+    p.add_argument("--conditions", default="plain,cyclic", help="fitness criteria, comma-separated: plain (eq. 4), cyclic, "
+                   "forward (forward progress x time up) (default plain,cyclic)")
+    p.add_argument("--controllers", help="controller axis, comma-separated (e.g. ctrnn,simbicon; default: the base run's)")
+    p.add_argument("--optimizers", help="optimizer axis, comma-separated: ga, cma (default: the base run's)")
+    p.add_argument("--preset", metavar="NAME", help="base run settings shipped with evobiped (`evobiped presets`)")
     p.add_argument("--config", metavar="FILE.toml", help="base run settings (as for evolve); flags override it")
     p.add_argument("--population", type=positive_int, help="population size (default 50)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
@@ -434,11 +435,13 @@ def run_study_cmd(args) -> int:
     from .study import StudyConfig, run_study, write_results
 
     base = evolve_config(argparse.Namespace(
-        config=args.config, body=None, controller=None, task=None, episode_seconds=args.episode_seconds, cyclic=None,
+        preset=args.preset, config=args.config, body=None, controller=None, task=None, episode_seconds=args.episode_seconds, cyclic=None,
         population=args.population, generations=args.generations, seed=None, backend=None, workers=None, address=None, initial=None))
     base = dataclasses.replace(base, seed=0)
     conditions = tuple(c.strip() for c in args.conditions.split(",") if c.strip())
-    cfg = StudyConfig(run=base, runs=args.runs, conditions=conditions, first_seed=args.first_seed, recheck_seconds=args.recheck_seconds)
+    axis = lambda text: tuple(x.strip() for x in (text or "").split(",") if x.strip())  # noqa: E731
+    cfg = StudyConfig(run=base, runs=args.runs, conditions=conditions, controllers=axis(args.controllers), optimizers=axis(args.optimizers),
+                      first_seed=args.first_seed, recheck_seconds=args.recheck_seconds)
     if args.backend == "ray" and args.address:
         from .evolution.evaluate import check_reachable
 
@@ -456,7 +459,7 @@ def run_study_cmd(args) -> int:
         from .record.source import resolve
         from .study import run_dir
 
-        for c in cfg.conditions:
+        for c in cfg.condition_names:
             for k in range(cfg.runs):
                 rep = replay(resolve(run_dir(Path(args.out), c, k, cfg)))
                 say(f"recording: {rep.recording}")

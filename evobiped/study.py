@@ -41,13 +41,21 @@ import numpy as np
 from . import __version__
 from .errors import ConfigError, UserError
 from .evolution.evaluate import SerialEvaluator, init_ray
-from .evolution.run import Run, RunConfig
+from .controllers import CONTROLLERS
+from .evolution.run import OPTIMIZERS, Run, RunConfig
 from .fileio import atomic_write, read_json, write_json
 from .genome_file import load_genome
 from .stats import histogram_edges, mean_std, wilson_interval
 
-#: task options that define each condition (added to the base run's)
-CONDITIONS = {"plain": {"cyclic_weight": 0.0}, "cyclic": {"cyclic_weight": 1.0}}
+#: walk-task options that define each fitness criterion (added to the base run's)
+CONDITIONS = {
+    "plain": {"fitness": "distance", "cyclic_weight": 0.0},
+    "cyclic": {"fitness": "distance", "cyclic_weight": 1.0},
+    "forward": {"fitness": "forward", "cyclic_weight": 0.0},
+}
+#: a walker in the sense of the walker targets: up for the whole re-check, at least this far (m) in
+#: the episode, within this angle (degrees) of the direction it faced at the start
+WALKER_DISTANCE, WALKER_ANGLE = 20.0, 30.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -57,6 +65,9 @@ class StudyConfig:
     run: RunConfig = field(default_factory=RunConfig)
     runs: int = 10
     conditions: tuple[str, ...] = ("plain", "cyclic")
+    #: controller and optimizer axes (empty: the base run's); conditions are their product with ``conditions``
+    controllers: tuple[str, ...] = ()
+    optimizers: tuple[str, ...] = ()
     first_seed: int = 0
     recheck_seconds: float = 200.0
 
@@ -66,6 +77,9 @@ class StudyConfig:
         unknown = [c for c in self.conditions if c not in CONDITIONS]
         if unknown or not self.conditions or len(set(self.conditions)) != len(self.conditions):
             raise ConfigError(f"study conditions must be distinct names from {', '.join(CONDITIONS)}, got {list(self.conditions)}")
+        for axis, names, registry in (("controllers", self.controllers, CONTROLLERS), ("optimizers", self.optimizers, OPTIMIZERS)):
+            if any(n not in registry for n in names) or len(set(names)) != len(names):
+                raise ConfigError(f"study {axis} must be distinct names from {', '.join(registry)}, got {list(names)}")
         if self.run.episode.task != "walk":
             raise ConfigError(f"a study compares walk-task conditions; the run's task is {self.run.episode.task!r}")
         if not (isinstance(self.first_seed, int) and self.first_seed >= 0):
@@ -73,11 +87,30 @@ class StudyConfig:
         if not self.recheck_seconds > 0:
             raise ConfigError(f"recheck seconds must be > 0, got {self.recheck_seconds!r}")
 
+    @property
+    def cells(self) -> dict[str, tuple[str, str, str]]:
+        """Condition name -> (controller, optimizer, criterion), in order.  Without axes the names are
+        the criteria (plain, cyclic, forward); with them ``controller-optimizer-criterion``."""
+        ctrls = self.controllers or (self.run.episode.controller,)
+        opts = self.optimizers or (self.run.optimizer,)
+        axes = bool(self.controllers or self.optimizers)
+        return {(f"{c}-{o}-{k}" if axes else k): (c, o, k) for c in ctrls for o in opts for k in self.conditions}
+
+    @property
+    def condition_names(self) -> tuple[str, ...]:
+        return tuple(self.cells)
+
     def run_config(self, condition: str, k: int) -> RunConfig:
-        """The run of seed ``first_seed + k`` in ``condition`` (evaluated serially: one run per task)."""
+        """The run of seed ``first_seed + k`` in ``condition`` (evaluated serially: one run per task).
+
+        A controller on the axis other than the base run's gets its default options."""
+        controller, optimizer, criterion = self.cells[condition]
         ep = self.run.episode
-        episode = dataclasses.replace(ep, task_options={**ep.task_options, **CONDITIONS[condition]})
-        return dataclasses.replace(self.run, episode=episode, seed=self.first_seed + k, backend="serial", workers=None, address=None)
+        options = ep.controller_options if controller == ep.controller else {}
+        episode = dataclasses.replace(ep, controller=controller, controller_options=options,
+                                      task_options={**ep.task_options, **CONDITIONS[criterion]})
+        return dataclasses.replace(self.run, episode=episode, optimizer=optimizer, seed=self.first_seed + k,
+                                   backend="serial", workers=None, address=None)
 
     def identity(self) -> dict:
         """What must match for a directory to be resumed as this study (K may grow or shrink)."""
@@ -88,14 +121,16 @@ class StudyConfig:
         return d
 
     def to_dict(self) -> dict:
-        return {"run": self.run.to_dict(), "runs": self.runs, "conditions": list(self.conditions), "first_seed": self.first_seed, "recheck_seconds": self.recheck_seconds}
+        return {"run": self.run.to_dict(), "runs": self.runs, "conditions": list(self.conditions), "controllers": list(self.controllers),
+                "optimizers": list(self.optimizers), "first_seed": self.first_seed, "recheck_seconds": self.recheck_seconds}
 
     @classmethod
     def from_dict(cls, d: dict, *, where: str = "study") -> "StudyConfig":
         d = dict(d)
         run = RunConfig.from_dict(d.pop("run", {}), where=where)
         try:
-            return cls(run=run, conditions=tuple(d.pop("conditions", ("plain", "cyclic"))), **d)
+            axes = {k: tuple(d.pop(k, ())) for k in ("controllers", "optimizers")}
+            return cls(run=run, conditions=tuple(d.pop("conditions", ("plain", "cyclic"))), **axes, **d)
         except TypeError as exc:
             raise ConfigError(f"{where}: {exc}") from None
 
@@ -120,12 +155,16 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         summary = run.evolve(ev)  # a finished run only writes its summary again
     best = summary["best"]
     genome, ep_cfg, _ = load_genome(d / "best.json")
-    again = ep_cfg.build().run(genome)  # eq. 4's distance (the cyclic criterion's fitness is more than that)
+    ep_cfg = ep_cfg.nominal()
+    again = ep_cfg.build().run(genome)  # eq. 4's distance (the other criteria's fitness is not that)
+    disp = again.end_position[0] - again.start_position[0]
     outcome = {
         "condition": condition,
         "seed": run_cfg.seed,
         "fitness": best["fitness"],
-        "distance": float(np.linalg.norm(again.end_position[0] - again.start_position[0])),
+        "distance": float(np.linalg.norm(again.end_position - again.start_position, axis=1)[0]),
+        # the Reil and Taga walkers face +x at the start
+        "heading_deg": float(np.degrees(np.arctan2(disp[1], disp[0]))),
         "fell": best["fell"],
         "end_time": best["end_time"],
         "generation": best["generation"],
@@ -134,12 +173,14 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         "walks_indefinitely": None,
         "recheck_end_time": None,
     }
-    if again.fitness[0] != best["fitness"]:
+    if again.fitness[0] != best["fitness"] and not run_cfg.episode.perturbations:
         raise RuntimeError(f"{d}: the best walker's fitness does not reproduce ({again.fitness[0]!r} != {best['fitness']!r})")
     if not best["fell"]:
         r = dataclasses.replace(ep_cfg, seconds=float(recheck_seconds)).build().run(genome)
         outcome["walks_indefinitely"] = not bool(r.fell[0])
         outcome["recheck_end_time"] = float(r.end_time[0])
+    outcome["forward_walker"] = bool(outcome["walks_indefinitely"] and not again.fell[0] and outcome["distance"] >= WALKER_DISTANCE
+                                     and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
     write_json(d / "outcome.json", outcome)
     return outcome
 
@@ -177,12 +218,12 @@ def run_study(
     d = open_study(directory, config)
     tasks = [
         (str(run_dir(d, c, k, config)), config.run_config(c, k).to_dict(), c, config.recheck_seconds)
-        for c in config.conditions
+        for c in config.condition_names
         for k in range(config.runs)
     ]
     todo = [t for t in tasks if not (Path(t[0]) / "outcome.json").is_file()]
-    say(f"study {d}: {len(config.conditions)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already done, "
-        f"{config.run.ga.population} x {config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
+    say(f"study {d}: {len(config.condition_names)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already done, "
+        f"{config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
     t0, done = time.perf_counter(), 0
 
     def report(o: dict) -> None:
@@ -244,12 +285,14 @@ def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
             "unstable_mean_m": um,
             "unstable_std_m": us,
             "walks_indefinitely": sum(1 for o in runs if o["walks_indefinitely"]),
+            "forward_walkers": sum(1 for o in runs if o.get("forward_walker")),
             "wall_seconds": float(sum(o["wall_seconds"] for o in runs)),
         })
     return rows
 
 
-RUN_COLUMNS = ("condition", "seed", "distance", "fitness", "fell", "end_time", "generation", "wall_seconds", "walks_indefinitely", "recheck_end_time")
+RUN_COLUMNS = ("condition", "seed", "distance", "heading_deg", "fitness", "fell", "end_time", "generation", "wall_seconds",
+               "walks_indefinitely", "recheck_end_time", "forward_walker")
 
 
 def _csv(rows: list[dict], columns) -> str:
@@ -266,14 +309,14 @@ def _fmt(x: float, spec: str = ".2f") -> str:
 
 def table_markdown(rows: list[dict], recheck_seconds: float) -> str:
     lines = [
-        f"| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | wall time (s) |",
-        "|---|---|---|---|---|---|---|---|",
+        f"| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | forward walkers | wall time (s) |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
             f"| {r['condition']} | {r['runs']} | {r['stable']} | {100 * r['success_rate']:.0f} % [{100 * r['ci95_low']:.0f}, {100 * r['ci95_high']:.0f}] | "
             f"{_fmt(r['stable_mean_m'])} ± {_fmt(r['stable_std_m'])} | {_fmt(r['unstable_mean_m'])} ± {_fmt(r['unstable_std_m'])} | "
-            f"{r['walks_indefinitely']} | {r['wall_seconds']:.0f} |"
+            f"{r['walks_indefinitely']} | {r['forward_walkers']} | {r['wall_seconds']:.0f} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -284,14 +327,14 @@ def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dic
     from .record.study_figures import distance_histograms, fitness_graphs
 
     d = Path(directory)
-    rows = summarize(outcomes, config.conditions)
+    rows = summarize(outcomes, config.condition_names)
     atomic_write(d / "runs.csv", _csv(outcomes, RUN_COLUMNS))
     atomic_write(d / "table.csv", _csv(rows, rows[0].keys()))
     atomic_write(d / "table.md", table_markdown(rows, config.recheck_seconds))
     write_json(d / "table.json", {"evobiped": __version__, "conditions": rows})
     edges = histogram_edges([o["distance"] for o in outcomes])
-    histories = {c: [read_history(run_dir(d, c, k, config) / "history.csv") for k in range(config.runs)] for c in config.conditions}
+    histories = {c: [read_history(run_dir(d, c, k, config) / "history.csv") for k in range(config.runs)] for c in config.condition_names}
     return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
-            distance_histograms(outcomes, config.conditions, edges, d / "distances.png"),
+            distance_histograms(outcomes, config.condition_names, edges, d / "distances.png"),
             fitness_graphs(histories, d / "fitness_graphs.png")]
 

@@ -152,3 +152,23 @@ def test_a_different_study_in_the_directory_is_refused(tmp_path, capsys):
     assert cli("study", "--runs", 1, "--conditions", "plain", *TINY, "--first-seed", 5, "--out", out) == 2
     assert "holds a different study" in capsys.readouterr().err
     assert (out / "study.json").read_text() == before
+
+
+def test_controller_and_optimizer_axes(tmp_path, capsys):
+    """One command compares controllers and optimizers: one run directory per cell, each with its settings."""
+    out = tmp_path / "axes"
+    assert cli("study", "--runs", 1, "--controllers", "ctrnn,simbicon", "--optimizers", "ga,cma", "--conditions", "forward",
+               *TINY, "--out", out) == 0
+    table = capsys.readouterr().out
+    cells = ["ctrnn-ga-forward", "ctrnn-cma-forward", "simbicon-ga-forward", "simbicon-cma-forward"]
+    for c in cells:
+        assert f"| {c} | 1 |" in table
+        cfg = json.loads((out / c / "seed_000" / "config.json").read_text())
+        controller, optimizer, _ = c.split("-")
+        assert (cfg["episode"]["controller"], cfg["optimizer"], cfg["episode"]["task_options"]["fitness"]) == (controller, optimizer, "forward")
+    runs = list(csv.DictReader(open(out / "runs.csv")))
+    assert [r["condition"] for r in runs] == cells
+    for r in runs:  # heading of the displacement, in degrees from the initial facing
+        assert -180 <= float(r["heading_deg"]) <= 180 and r["forward_walker"] in ("True", "False")
+    assert cli("study", "--runs", 1, "--optimizers", "ga,nope", *TINY, "--out", tmp_path / "bad") == 2
+    assert not (tmp_path / "bad").exists()
