@@ -1,0 +1,76 @@
+"""The robustness battery: its trial set, its numbers against direct episodes, and bad input."""
+
+import json
+
+import numpy as np
+import pytest
+
+from evobiped.cli import main
+from evobiped.genome_file import load_genome, save_genome
+from evobiped.perturb import Trials
+from evobiped.robustness import battery, summarise
+
+WALKER = "docs/walkers/simbicon_seed1.json"
+
+
+@pytest.fixture(scope="module")
+def trials():
+    g, cfg, _ = load_genome(WALKER)
+    return battery(cfg.nominal().build(), g, seconds=12.0, push_after=6.0)
+
+
+def test_the_battery_has_the_documented_trials(trials):
+    rows = {r["family"]: r["trials"] for r in summarise(trials)}
+    assert rows == {"push 5 N": 32, "push 10 N": 32, "push 15 N": 32, "offset 0.05 rad": 8, "offset 0.1 rad": 8, "friction": 3, "slope": 2}
+    labels = [t.label for t in trials if t.family == "offset 0.05 rad"]
+    assert len(set(labels)) == 8 and "roll opposite -" in labels
+
+
+def test_a_trial_equals_the_same_disturbance_run_on_its_own(trials):
+    """The batched battery row for 'offset 0.05 rad, pitch opposite +' is the episode with that offset alone."""
+    g, cfg, _ = load_genome(WALKER)
+    ep = cfg.nominal().build()
+    off = np.zeros(6)
+    off[0], off[3] = 0.05, -0.05  # left hip pitch +, right hip pitch -
+    r = ep.run(g, seconds=12.0, trials=Trials.nominal(1, 6, target_offset=off[None])).rows
+    t = next(t for t in trials if t.family == "offset 0.05 rad" and t.label == "pitch opposite +")
+    assert t.survived == (not r.fell[0]) and t.end_time == r.end_time[0]
+    assert t.forward == r.end_position[0, 0] - r.start_position[0, 0]
+    # and a friction trial is the episode on a floor of that friction
+    r = ep.run(g, seconds=12.0, trials=Trials.nominal(1, 6, friction=0.5)).rows
+    t = next(t for t in trials if t.label == "mu = 0.5")
+    assert t.end_time == r.end_time[0]
+
+
+def test_cli_writes_table_json_and_png(tmp_path, capsys):
+    g, cfg, meta = load_genome(WALKER)
+    save_genome(tmp_path / "w.json", g, cfg, **{k: v for k, v in meta.items() if k in ("fitness", "fell", "seed")})
+    assert main(["robustness", str(tmp_path / "w.json"), "--seconds", "8", "--push-after", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "push 10 N" in out and "offset 0.05 rad" in out
+    report = json.loads((tmp_path / "w_robustness.json").read_text())
+    assert len(report["trials"]) == 117 and report["seconds"] == 8.0
+    assert (tmp_path / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("args, msg", [
+    (["--seconds", "5", "--push-after", "6"], "--push-after"),
+    (["--generation", "3"], "--generation needs a run directory"),
+])
+def test_bad_arguments_one_line(tmp_path, capsys, args, msg):
+    assert main(["robustness", WALKER, "--out", str(tmp_path / "o"), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and msg in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_body_without_pd_targets_is_refused(tmp_path, capsys):
+    from evobiped.episode import EpisodeConfig
+
+    cfg = EpisodeConfig(body="taga", controller="ctrnn", seconds=2.0)
+    ep = cfg.build()
+    save_genome(tmp_path / "t.json", ep.controller.layout.init_mean, cfg)
+    assert main(["robustness", str(tmp_path / "t.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "PD targets" in err[0]
+    assert not (tmp_path / "t_robustness.json").exists()
