@@ -297,13 +297,7 @@ class Episode:
 
     def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         """One control period of physics for ``ids``; bool mask of blow-ups."""
-        if not self.body.has_custom_forces:
-            return sims.step(ids, self.substeps)
-        bad = np.zeros(len(ids), bool)
-        for _ in range(self.substeps):
-            self.body.substep(sims, ids)
-            bad |= sims.step(ids, 1)
-        return bad
+        return self.body.advance(sims, ids, self.substeps)
 
 
 def build_episode(**config: Any) -> Episode:

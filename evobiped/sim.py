@@ -42,10 +42,10 @@ class Sims:
             arr = self._fields[name] = self.batch.bind(name)
         return arr
 
-    def reset(self) -> None:
-        """All simulations to the model's initial state, derived fields current."""
-        self.batch.reset()
-        self.batch.forward(stage=_VEL)
+    def reset(self, ids: np.ndarray | None = None) -> None:
+        """Simulations ``ids`` (default all) to the model's initial state, derived fields current."""
+        self.batch.reset(ids=ids)
+        self.batch.forward(ids=ids, stage=_VEL)
 
     def forward(self, ids: np.ndarray | None = None) -> None:
         """Recompute derived fields after the caller wrote qpos/qvel."""

@@ -56,9 +56,9 @@ class Body(ABC):
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """``(low, high)``, each ``(n_actuators,)``: rad for targets, N m for torques."""
 
-    def reset(self, sims: Sims) -> None:
-        """Put every simulation in the body's initial state (default: the model's)."""
-        sims.reset()
+    def reset(self, sims: Sims, ids: np.ndarray | None = None) -> None:
+        """Put simulations ``ids`` (default all) in the body's initial state (default: the model's)."""
+        sims.reset(ids)
 
     @abstractmethod
     def apply(self, sims: Sims, ids: np.ndarray, action: np.ndarray) -> None:
@@ -66,6 +66,17 @@ class Body(ABC):
 
     def substep(self, sims: Sims, ids: np.ndarray) -> None:
         """Custom forces before each physics step (only if ``has_custom_forces``)."""
+
+    def advance(self, sims: Sims, ids: np.ndarray, nstep: int) -> np.ndarray:
+        """``nstep`` physics steps of simulations ``ids`` (custom forces before each one);
+        bool mask over ``ids`` of blow-ups (see :meth:`Sims.step`)."""
+        if not self.has_custom_forces:
+            return sims.step(ids, nstep)
+        bad = np.zeros(len(ids), bool)
+        for _ in range(nstep):
+            self.substep(sims, ids)
+            bad |= sims.step(ids, 1)
+        return bad
 
     @abstractmethod
     def com(self, sims: Sims) -> np.ndarray:

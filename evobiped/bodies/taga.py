@@ -128,20 +128,24 @@ class TagaBiped(Body):
             )
         return st
 
-    def reset(self, sims: Sims) -> None:
-        """Appendix E: hip at (0, 1.09) m, straight legs at 0.45 pi (right) and 0.57 pi (left), at rest."""
-        sims.reset()
+    def reset(self, sims: Sims, ids: np.ndarray | None = None) -> None:
+        """Appendix E: hip at (0, 1.09) m, straight legs at 0.45 pi (right) and 0.57 pi (left), at rest;
+        simulations ``ids`` (default all), their ground contacts and pushes cleared."""
+        rows = slice(None) if ids is None else ids
+        sims.reset(ids)
         q = sims.qpos
-        q[:, self._qadr[0]], q[:, self._qadr[1]] = INITIAL_HIP
-        q[:, self._qadr[2]] = INITIAL_ANGLES["right"] - np.pi / 2
-        q[:, self._qadr[3]] = 0.0
-        q[:, self._qadr[4]] = INITIAL_ANGLES["left"] - np.pi / 2
-        q[:, self._qadr[5]] = 0.0
-        sims.qvel[:] = 0.0
-        sims.qfrc_applied[:] = 0.0
-        sims.forward()
-        self._state.pop(sims, None)
-        self._ground(sims)
+        q[rows, self._qadr[0]], q[rows, self._qadr[1]] = INITIAL_HIP
+        q[rows, self._qadr[2]] = INITIAL_ANGLES["right"] - np.pi / 2
+        q[rows, self._qadr[3]] = 0.0
+        q[rows, self._qadr[4]] = INITIAL_ANGLES["left"] - np.pi / 2
+        q[rows, self._qadr[5]] = 0.0
+        sims.qvel[rows] = 0.0
+        sims.qfrc_applied[rows] = 0.0
+        sims.forward(ids)
+        if ids is None:
+            self._state.pop(sims, None)
+        for a in self._ground(sims).values():
+            a[rows] = 0
 
     def set_push(self, sims: Sims, ids: np.ndarray, target: str, force: float) -> None:
         """Apply a horizontal force (N, forward > 0) to ``target`` from now on (``"none"`` stops it)."""

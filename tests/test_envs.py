@@ -1,0 +1,182 @@
+"""The Gymnasium environments: the checker, seeding, the vector env against single envs, rewards, bad input."""
+
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+gymnasium = pytest.importorskip("gymnasium")
+
+import evobiped.envs  # noqa: E402,F401  (registers the environments)
+from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402
+from evobiped.errors import ConfigError  # noqa: E402
+
+IDS = ["evobiped/ReilBiped-v0", "evobiped/TagaBiped-v0"]
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_gymnasium_env_checker_passes(env_id):
+    from gymnasium.utils.env_checker import check_env
+
+    env = gymnasium.make(env_id, seconds=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # advice only: unbounded observations, unnormalised actions
+        check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def _episode(env, seed, steps):
+    """Observations and rewards of ``steps`` steps of a seeded reset with seeded random actions."""
+    obs, _ = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    out, rewards = [obs], []
+    for _ in range(steps):
+        obs, r, te, tr, _ = env.step(env.action_space.sample())
+        out.append(obs)
+        rewards.append(r)
+        if te or tr:
+            break
+    return np.array(out), np.array(rewards)
+
+
+@pytest.mark.parametrize("cls", [ReilBipedEnv, TagaBipedEnv])
+def test_a_seeded_reset_gives_the_same_episode_twice(cls):
+    env = cls(seconds=0.3)
+    a, ra = _episode(env, 7, 30)
+    b, rb = _episode(env, 7, 30)
+    c, _ = _episode(env, 8, 30)
+    assert a.shape == b.shape and np.array_equal(a, b) and np.array_equal(ra, rb)
+    assert not np.array_equal(a[0], c[0])  # the reset noise follows the seed
+
+
+def _single_runs(cls, n, seed, actions, **kw):
+    """n single envs seeded seed + i, with next-step autoreset as the vector env does it."""
+    obs, rew, term, trunc = [], [], [], []
+    for i in range(n):
+        env = cls(**kw)
+        o, _ = env.reset(seed=seed + i)
+        rows = [(o, 0.0, False, False)]
+        done = False
+        for a in actions[:, i]:
+            if done:
+                o, _ = env.reset()
+                rows.append((o, 0.0, False, False))
+                done = False
+                continue
+            o, r, te, tr, _ = env.step(a)
+            rows.append((o, r, te, tr))
+            done = te or tr
+        obs.append([x[0] for x in rows])
+        rew.append([x[1] for x in rows])
+        term.append([x[2] for x in rows])
+        trunc.append([x[3] for x in rows])
+    return tuple(np.swapaxes(np.array(x), 0, 1) for x in (obs, rew, term, trunc))
+
+
+@pytest.mark.parametrize("single, vector, steps, kw", [
+    (ReilBipedEnv, ReilBipedVectorEnv, 60, dict(seconds=0.8, alive_bonus=0.1)),
+    (TagaBipedEnv, TagaBipedVectorEnv, 12, dict(seconds=0.1)),
+])
+def test_the_vector_env_gives_the_trajectories_of_single_envs(single, vector, steps, kw):
+    n, seed = 3, 11
+    venv = vector(n, **kw)
+    rng = np.random.default_rng(0)
+    lo, hi = venv.single_action_space.low, venv.single_action_space.high
+    actions = rng.uniform(lo, hi, size=(steps, n, len(lo))).astype(np.float32)
+    o, _ = venv.reset(seed=seed)
+    got = [(o, np.zeros(n), np.zeros(n, bool), np.zeros(n, bool))]
+    for a in actions:
+        o, r, te, tr, _ = venv.step(a)
+        got.append((o, r, te, tr))
+    got = tuple(np.array([g[k] for g in got]) for k in range(4))
+    want = _single_runs(single, n, seed, actions, **kw)
+    for g, w in zip(got, want):
+        assert np.array_equal(g, w.astype(g.dtype))
+    ends = got[2] | got[3]
+    assert (ends.sum(axis=0) >= 1).all()  # every walker's episode ended (a fall or the time limit) and restarted
+
+
+def test_rewards_sum_to_the_forward_progress_and_the_alive_bonus():
+    env = ReilBipedEnv(seconds=2.0, alive_bonus=0.5, reset_noise_scale=0.0)
+    env.reset(seed=0)
+    start = env.walkers.position[0].copy()
+    facing = env.walkers.facing[0].copy()
+    lean = np.array([0.4, 0, -0.2, 0.4, 0, -0.2], np.float32)  # both hips flexed: it topples forward
+    total, steps, up = 0.0, 0, 0
+    while True:
+        _, r, te, tr, info = env.step(lean)
+        total += r
+        steps += 1
+        up += not te
+        if te or tr:
+            break
+    assert te and not tr and steps < 100  # it fell before the end
+    progress = float(np.dot(info["position"] - start, facing))
+    assert total == pytest.approx(progress + 0.5 * up, abs=1e-12)
+    assert abs(progress) > 0.05
+
+
+def test_truncated_at_the_episode_length_while_standing():
+    env = ReilBipedEnv(seconds=0.2, reset_noise_scale=0.0)
+    env.reset(seed=0)
+    stand = np.zeros(6, np.float32)  # straight legs, hips level
+    flags = [env.step(stand)[2:4] for _ in range(10)]
+    assert flags[:9] == [(False, False)] * 9 and flags[9] == (False, True)
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(stand)
+
+
+@pytest.mark.parametrize("bad, words", [(np.zeros(5), "shape"), (np.full(6, np.nan), "NaN"), ("left", "float array")])
+def test_a_bad_action_raises_and_leaves_the_simulation_untouched(bad, words):
+    env = ReilBipedEnv()
+    env.reset(seed=0)
+    qpos = env.walkers.sims.qpos.copy()
+    with pytest.raises(ValueError, match=words):
+        env.step(bad)
+    venv = ReilBipedVectorEnv(2)
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        venv.step(np.zeros((3, 6)))
+    assert np.array_equal(env.walkers.sims.qpos, qpos) and env.walkers.steps[0] == 0
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(stiffness=3), "unknown option"),
+    (dict(seconds=-1), "bad seconds"),
+    (dict(control_dt=0.007), "not a multiple"),
+    (dict(render_mode="human"), "render_mode"),
+])
+def test_bad_options_raise_one_clear_error(kw, words):
+    with pytest.raises(ConfigError, match=words):
+        gymnasium.make("evobiped/ReilBiped-v0", **kw) if "render_mode" not in kw else ReilBipedEnv(**kw)
+    with pytest.raises(ConfigError, match=words):
+        ReilBipedVectorEnv(2, **kw)
+
+
+def _python(code: str, **env) -> subprocess.CompletedProcess:
+    e = dict(os.environ, PYTHONPATH=ROOT, **env)
+    e.pop("DISPLAY", None)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=e, timeout=120)
+
+
+def test_rendering_without_an_opengl_context_is_one_clear_error():
+    code = "import gymnasium, evobiped.envs\ntry:\n    gymnasium.make('evobiped/ReilBiped-v0', render_mode='rgb_array')\nexcept Exception as e:\n    print(type(e).__name__, e)"
+    out = _python(code, MUJOCO_GL="glfw").stdout
+    assert out.startswith("ConfigError rgb_array rendering needs an OpenGL context") and out.count("\n") == 1
+
+
+def test_rgb_array_frames_where_egl_exists():
+    code = (
+        "import gymnasium, numpy as np, evobiped.envs\n"
+        "for i in ('evobiped/ReilBiped-v0', 'evobiped/TagaBiped-v0'):\n"
+        "    e = gymnasium.make(i, render_mode='rgb_array', width=64, height=48); e.reset(seed=0)\n"
+        "    f = e.render(); print(f.shape, f.dtype, int(f.std() > 5))\n"
+    )
+    r = _python(code, MUJOCO_GL="egl")
+    if "OpenGL context" in r.stderr:
+        pytest.skip("no EGL on this machine")
+    assert r.stdout.split("\n")[:2] == ["(48, 64, 3) uint8 1"] * 2, r.stderr
