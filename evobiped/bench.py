@@ -1,24 +1,25 @@
-"""``evobiped bench``: evaluation speed as ratios against raw MuJoCo stepping.
+"""``evobiped bench``: evaluation speed as ratios against raw MuJoCo stepping on the same cores.
 
-Three measurements in one process, on the same model, time step and genomes:
+Measurements in one process, on the same model, time step and genomes:
 
-(a) raw: ``mujoco.rollout`` replays the controls recorded from (b) open-loop,
-    one thread, no Python between physics steps: the limit to measure against;
+(a) raw: ``mujoco.rollout`` replays the controls recorded from (b) open-loop, no
+    Python between physics steps: the limit to measure against; on one thread
+    (a 1) and with one thread per worker (a N);
 (b) evaluation: the full episode (controller in the loop, every tick through
     Python/numpy, ``mujoco.batch`` stepping in C) in this process, one thread;
-(c) the process-pool evaluator with 1 worker and with ``workers`` workers.
+(c) the process-pool evaluator with 1 worker and with ``workers`` workers;
+(d) the thread evaluator with ``workers`` threads (one Episode each).
 
-Episodes run to the full length (``EpisodeConfig.stop_on_fall=False``) so that (a), (b)
-and (c) integrate exactly the same physics.
-Every figure is simulated seconds per wall-clock second (sim-s/s), summed
-over all walkers.
+Episodes run to the full length (``EpisodeConfig.stop_on_fall=False``) so that every
+measurement integrates exactly the same physics.  Every figure is simulated seconds per
+wall-clock second (sim-s/s), summed over all walkers.
 
-Each measurement is repeated ``repeats`` times, interleaved ((a), (b), (a), (b),
-...; then (c 1), (c all), (c 1), ...), and reported as its fastest repeat, as
-``timeit`` does: on a shared machine other jobs only ever slow a measurement
-down, so the fastest repeat is the closest to the machine's own speed, and
-interleaving exposes both sides of a ratio to the same background.  The
-slowest repeat is reported too.
+Each measurement is repeated ``repeats`` times, interleaved ((a 1), (b), (a N), (c N),
+(d N), (c 1), then again ...), and reported as its median: interleaving exposes both
+sides of a ratio to the same background, and the median neither rewards a lucky
+repeat nor punishes one disturbed by another job.  The efficiencies are
+(b) / (a 1) for one core and (c N) / (a N), (d N) / (a N) for all; the scaling is
+(a N) / (a 1) and (c N) / (c 1).
 """
 
 from __future__ import annotations
@@ -33,8 +34,12 @@ from mujoco import rollout
 
 from .episode import EpisodeConfig
 from .errors import ConfigError
-from .evolution.evaluate import ProcessPoolEvaluator
+from .evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
 from .evolution.ga import GA, GAConfig
+
+#: ``bench(..., **QUICK)``: a run of well under 30 s
+QUICK = dict(population=16, seconds=4.0, repeats=5)
+
 
 class _ControlRecorder:
     """Listener: the actuator controls of every walker at every tick, ``(ticks, P, nu)``."""
@@ -65,11 +70,11 @@ def bench(
     *,
     population: int = 50,
     workers: int | None = None,
-    repeats: int = 3,
+    repeats: int = 5,
     seed: int = 0,
     progress=None,
 ) -> dict:
-    """Measure (a), (b), (c) for ``population`` random genomes (Table III initialisation)."""
+    """Measure (a)-(d) for ``population`` random genomes (Table III initialisation)."""
     say = progress or (lambda msg: None)
     episode = episode or EpisodeConfig()
     workers = workers or os.cpu_count() or 1
@@ -86,44 +91,55 @@ def bench(
     rec = _ControlRecorder()
     result = ep.run(genomes, listener=rec)
     ctrl = np.repeat(np.stack(rec.ctrl, axis=1), ep.substeps, axis=1)  # (P, nstep, nu)
-    model, data = ep.model, mujoco.MjData(ep.model)
+    model = ep.model
     sims = ep.sims(1)
     ep.body.reset(sims)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     initial = np.empty(mujoco.mj_stateSize(model, spec))
-    mujoco.mj_resetData(model, data)
-    data.qpos[:], data.qvel[:] = sims.qpos[0], sims.qvel[0]
-    mujoco.mj_getState(model, data, initial, spec)
+    data = [mujoco.MjData(model) for _ in range(workers)]
+    mujoco.mj_resetData(model, data[0])
+    data[0].qpos[:], data[0].qvel[:] = sims.qpos[0], sims.qvel[0]
+    mujoco.mj_getState(model, data[0], initial, spec)
     nstep = ctrl.shape[1]
     finals = np.empty((population, model.nq))
+    threads = rollout.Rollout(nthread=workers) if workers > 1 else None
 
-    def raw():
-        for p in range(population):  # one walker at a time keeps the output buffer small
-            state, _ = rollout.rollout(model, data, initial[None], ctrl[p : p + 1], nstep=nstep)
-            finals[p] = state[0, -1, 1 : 1 + model.nq]
+    def raw(n: int):
+        """Groups of n walkers, one per thread (a group's whole trajectory is held in memory)."""
+        def go():
+            for p in range(0, population, n):
+                if n == 1:
+                    state, _ = rollout.rollout(model, data[0], initial[None], ctrl[p : p + 1], nstep=nstep)
+                else:
+                    state, _ = threads.rollout(model, data[:n], initial[None], ctrl[p : p + n], nstep=nstep, chunk_size=1)
+                finals[p : p + len(state)] = state[:, -1, 1 : 1 + model.nq]
+        return go
 
-    say(
-        f"(a) raw MuJoCo stepping (mujoco.rollout of the same controls) and (b) closed-loop evaluation "
-        f"of {population} walkers x {config.seconds:g} s in this process, {repeats} time(s) each ..."
-    )
-    walls = _walls({"raw": raw, "eval": lambda: ep.run(genomes)}, repeats)
-    end_gap = float(np.max(np.abs(finals[:, :2] - result.end_position))) if population else 0.0
-
+    say(f"{population} walkers x {config.seconds:g} s, {repeats} interleaved repeat(s) of: raw stepping (mujoco.rollout) on 1 and "
+        f"{workers} thread(s), evaluation in this process, process pools of 1 and {workers}, {workers} thread(s) ...")
     sizes = sorted({1, workers})
-    say(f"(c) process pools with {' and '.join(map(str, sizes))} worker(s), {repeats} time(s) each ...")
-    pools = [ProcessPoolEvaluator(config, n) for n in sizes]
+    pools = {n: ProcessPoolEvaluator(config, n) for n in sizes}
+    thread_ev = ThreadEvaluator(config, workers)
     try:
-        for n, pool in zip(sizes, pools):
-            pool.evaluate(genomes[: min(population, n)])  # start the workers, build their models
-        walls.update(_walls({n: (lambda p=pool: p.evaluate(genomes)) for n, pool in zip(sizes, pools)}, repeats))
+        for pool in (*pools.values(), thread_ev):
+            pool.evaluate(genomes[: min(population, workers)])  # start the workers, build their models
+        fns = {"raw 1": raw(1), "eval": lambda: ep.run(genomes)}
+        if workers > 1:
+            fns[f"raw {workers}"] = raw(workers)
+        fns[f"pool {workers}"] = lambda: pools[workers].evaluate(genomes)
+        fns[f"threads {workers}"] = lambda: thread_ev.evaluate(genomes)
+        if workers > 1:
+            fns["pool 1"] = lambda: pools[1].evaluate(genomes)
+        walls = _walls(fns, repeats)
+        end_gap = float(np.max(np.abs(finals[:, :2] - result.end_position)))
     finally:
-        for pool in pools:
+        for pool in (*pools.values(), thread_ev):
             pool.close()
-    best = {k: sim_seconds / min(v) for k, v in walls.items()}
-    worst = {k: sim_seconds / max(v) for k, v in walls.items()}
-    rate_a, rate_b = best["raw"], best["eval"]
-    rates_c = {n: best[n] for n in sizes}
-
+        if threads is not None:
+            threads.close()
+    median = {k: sim_seconds / float(np.median(v)) for k, v in walls.items()}
+    raw_n = median[f"raw {workers}"] if workers > 1 else median["raw 1"]
+    pool_1 = median["pool 1"] if workers > 1 else median[f"pool {workers}"]
     return {
         "body": config.body,
         "controller": config.controller,
@@ -133,32 +149,37 @@ def bench(
         "episode_seconds": config.seconds,
         "simulated_seconds": sim_seconds,
         "repeats": repeats,
-        "raw_sim_s_per_s": rate_a,
-        "eval_sim_s_per_s": rate_b,
-        "pool_sim_s_per_s": {str(k): v for k, v in rates_c.items()},
-        "slowest_repeat_sim_s_per_s": {str(k): v for k, v in worst.items()},
         "workers": workers,
         "cpu_count": os.cpu_count(),
-        "ratio_eval_over_raw": rate_b / rate_a,
-        "speedup_all_over_1": rates_c[workers] / rates_c[1],
+        "median_sim_s_per_s": median,
+        "efficiency_one_core": median["eval"] / median["raw 1"],
+        "efficiency_pool": median[f"pool {workers}"] / raw_n,
+        "efficiency_threads": median[f"threads {workers}"] / raw_n,
+        "scaling_raw": raw_n / median["raw 1"],
+        "scaling_pool": median[f"pool {workers}"] / pool_1,
         "replay_end_position_gap_m": end_gap,
-        "wall_seconds": {str(k): v for k, v in walls.items()},
+        "wall_seconds": walls,
     }
 
 
 def format_bench(r: dict) -> str:
-    slow = r["slowest_repeat_sim_s_per_s"]
+    m, w = r["median_sim_s_per_s"], r["workers"]
+    spread = {k: (r["simulated_seconds"] / max(v), r["simulated_seconds"] / min(v)) for k, v in r["wall_seconds"].items()}
+    names = {"raw 1": "(a) raw stepping, rollout 1 thread", f"raw {w}": f"(a) raw stepping, rollout {w} threads",
+             "eval": "(b) evaluation, 1 process", "pool 1": "(c) process pool, 1 worker", f"pool {w}": f"(c) process pool, {w} workers",
+             f"threads {w}": f"(d) thread evaluator, {w} threads"}
     lines = [
         f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "
         f"physics step {r['timestep_s'] * 1000:g} ms, control step {r['control_dt_s'] * 1000:g} ms, {r['cpu_count']} cores",
-        f"fastest of {r['repeats']} interleaved repeat(s), sim-s/s (slowest repeat in brackets)",
-        f"(a) raw MuJoCo stepping (rollout, 1 thread)   {r['raw_sim_s_per_s']:10.1f}  ({slow['raw']:.1f})",
-        f"(b) episode evaluation (1 process)            {r['eval_sim_s_per_s']:10.1f}  ({slow['eval']:.1f})",
+        f"median of {r['repeats']} interleaved repeat(s), sim-s/s [slowest, fastest repeat]",
     ]
-    for n, v in r["pool_sim_s_per_s"].items():
-        lines.append(f"(c) process pool, {n:>2} worker(s)               {v:10.1f}  ({slow[n]:.1f})")
+    for k in names:
+        if k in m:
+            lines.append(f"{names[k]:<40} {m[k]:9.1f}  [{spread[k][0]:.1f}, {spread[k][1]:.1f}]")
     lines += [
-        f"b/a = {r['ratio_eval_over_raw']:.3f}   (c {r['workers']})/(c 1) = {r['speedup_all_over_1']:.2f}x",
+        f"efficiency: 1 core (b)/(a 1) = {r['efficiency_one_core']:.3f}   {w} cores: pool (c {w})/(a {w}) = {r['efficiency_pool']:.3f}, "
+        f"threads (d {w})/(a {w}) = {r['efficiency_threads']:.3f}",
+        f"scaling 1 -> {w}: raw {r['scaling_raw']:.2f}x, pool {r['scaling_pool']:.2f}x",
         f"open-loop replay of (b)'s controls ends within {r['replay_end_position_gap_m']:.2g} m of (b)",
     ]
     return "\n".join(lines)

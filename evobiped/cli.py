@@ -103,7 +103,7 @@ def add_evolve(sub) -> None:
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A)")
     p.add_argument("--seed", type=int, help="run seed (default 0)")
-    p.add_argument("--backend", help="serial, process (default) or ray")
+    p.add_argument("--backend", help="serial, process (default), thread or ray")
     p.add_argument("--workers", type=positive_int, help="worker processes / Ray actors (default: all cores)")
     p.add_argument("--address", help="Ray cluster address (with --backend ray; default: start a local Ray)")
     p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="seed the population with clones of this genome")
@@ -538,21 +538,24 @@ def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
     p.add_argument("--body", default="reil", help="body (default reil)")
     p.add_argument("--controller", default="ctrnn", help="controller (default ctrnn)")
-    p.add_argument("--population", type=positive_int, default=50, help="walkers (default 50)")
-    p.add_argument("--seconds", type=positive_float, default=50.0, help="episode length in s (default 50)")
-    p.add_argument("--workers", type=positive_int, help="workers for (c) (default: all cores)")
-    p.add_argument("--repeats", type=positive_int, default=3, help="interleaved repeats of each measurement; the fastest counts (default 3)")
+    p.add_argument("--population", type=positive_int, help="walkers (default 50; --quick 16)")
+    p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50; --quick 4)")
+    p.add_argument("--workers", type=positive_int, help="threads for raw stepping, workers for the pools (default: all cores)")
+    p.add_argument("--repeats", type=positive_int, help="interleaved repeats of each measurement; the median counts (default 5)")
+    p.add_argument("--quick", action="store_true", help="a small run (under 30 s): 16 walkers x 4 s, 5 repeats")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_bench_cmd)
 
 
 def run_bench_cmd(args) -> int:
-    from .bench import bench, format_bench
+    from .bench import QUICK, bench, format_bench
     from .episode import EpisodeConfig
 
-    cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=args.seconds)
+    size = dict(QUICK) if args.quick else dict(population=50, seconds=50.0, repeats=5)
+    size.update({k: getattr(args, k) for k in size if getattr(args, k) is not None})
+    cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=size["seconds"])
     say = (lambda m: None) if args.json else (lambda m: print(m, file=sys.stderr, flush=True))
-    r = bench(cfg, population=args.population, workers=args.workers, repeats=args.repeats, progress=say)
+    r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"], progress=say)
     print(json.dumps(r, indent=2) if args.json else format_bench(r))
     return 0
 

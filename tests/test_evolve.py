@@ -41,11 +41,11 @@ def evolve_with(tmp_path, name, backend, workers=None, config=SMALL):
 
 
 def test_history_identical_on_every_backend(tmp_path):
-    """Seeds come from (run seed, generation, index): serial = 1 worker = 2 workers = Ray."""
+    """Seeds come from (run seed, generation, index): serial = 1 worker = 2 workers = 3 threads = Ray."""
     ref, best = evolve_with(tmp_path, "serial", "serial")
     assert len(ref) == SMALL.generations
     assert float(ref[-1][1]) > 0  # somebody moved
-    runs = [evolve_with(tmp_path, "p1", "process", 1), evolve_with(tmp_path, "p2", "process", 2)]
+    runs = [evolve_with(tmp_path, "p1", "process", 1), evolve_with(tmp_path, "p2", "process", 2), evolve_with(tmp_path, "t3", "thread", 3)]
     pytest.importorskip("ray")
     runs.append(evolve_with(tmp_path, "ray", "ray", 2))
     for hist, b in runs:
