@@ -3,8 +3,8 @@
 For the same batch of N walkers: (env) ``BipedVectorEnv.step`` (action check, clip, actuators,
 one control period of physics, sensors, reward, fall test) against (sims) ``Sims.step`` of the
 same control period alone (``Body.advance``: for Taga, its ground forces before every physics step),
-interleaved repeats, medians.  Falls are switched off (``fall_height`` ~ 0) so that every walker is
-stepped in every call of both.
+interleaved repeats, medians.  Falls are switched off (``fall_height`` ~ 0) and the reset noise, so that every walker is
+stepped in every call of both, from the same initial pose.
 
     python scripts/gym_step_cost.py --body reil --num-envs 64 --steps 200 --repeats 7
 """
@@ -17,7 +17,7 @@ import numpy as np
 from evobiped.envs import ReilBipedVectorEnv, TagaBipedVectorEnv
 from evobiped.sim import Sims
 
-ENVS = {"reil": (ReilBipedVectorEnv, dict(fall_height=1e-6, fall_tilt=np.pi)), "taga": (TagaBipedVectorEnv, dict(fall_height=-1e3))}
+ENVS = {"reil": (ReilBipedVectorEnv, dict(fall_height=1e-6, fall_tilt=np.pi)), "taga": (TagaBipedVectorEnv, dict(fall_height=1e-9))}
 
 
 def main() -> None:
@@ -28,7 +28,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=7)
     a = ap.parse_args()
     cls, no_falls = ENVS[a.body]
-    venv = cls(a.num_envs, seconds=1e6, **no_falls)
+    venv = cls(a.num_envs, seconds=1e6, reset_noise_scale=0.0, **no_falls)  # both start from the same pose
     w = venv.walkers
     sims = Sims(w.model, a.num_envs)
     ids = np.arange(a.num_envs)
