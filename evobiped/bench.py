@@ -105,13 +105,16 @@ def bench(
     threads = rollout.Rollout(nthread=workers) if workers > 1 else None
 
     def raw(n: int):
-        """Groups of n walkers, one per thread (a group's whole trajectory is held in memory)."""
+        """1 thread: one walker at a time; n threads: groups of 4 n walkers shared out one at a time
+        (a group's whole trajectory is held in memory; several walkers per thread balance the load)."""
+        group = 1 if n == 1 else 4 * n
+
         def go():
-            for p in range(0, population, n):
+            for p in range(0, population, group):
                 if n == 1:
                     state, _ = rollout.rollout(model, data[0], initial[None], ctrl[p : p + 1], nstep=nstep)
                 else:
-                    state, _ = threads.rollout(model, data[:n], initial[None], ctrl[p : p + n], nstep=nstep, chunk_size=1)
+                    state, _ = threads.rollout(model, data[:n], initial[None], ctrl[p : p + group], nstep=nstep, chunk_size=1)
                 finals[p : p + len(state)] = state[:, -1, 1 : 1 + model.nq]
         return go
 
