@@ -79,13 +79,22 @@ def run_episode_cmd(args) -> int:
         "fell": bool(r.fell[0]),
         "unstable": bool(r.unstable[0]),
         "end_time": float(r.end_time[0]),
+        **r.walk(),
     }
     if args.json:
         print(json.dumps(out))
     else:
         state = f"fell at t = {out['end_time']:.2f} s" if out["fell"] else f"stayed up for {out['end_time']:.1f} s"
-        print(f"fitness (distance from start) = {out['fitness']:.3f} m; {state}")
+        print(f"fitness = {out['fitness']:.3f}; {state}; {walk_line(out)}")
     return 0
+
+
+def walk_line(walk: dict) -> str:
+    """'walked 38.7 m, -165 deg from the initial facing: backwards' from ``EpisodeResult.walk()``."""
+    from .tasks.walk import direction_words
+
+    heading = walk["heading_deg"] if walk["heading_deg"] is not None else float("nan")
+    return f"walked {walk['distance']:.2f} m, {direction_words(heading)}"
 
 
 # ---------------------------------------------------------------- evolve
@@ -199,7 +208,7 @@ def run_evolve_cmd(args) -> int:
         log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
                            evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
         eta = eta_seconds(s, run.history)
-        say(f"gen {s.generation + 1:4d}/{s.generations_total}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
+        say(f"gen {s.generation:4d}/{s.generations_total - 1}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
             f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
             f"elapsed {_hms(run.wall)}  left ~{_hms(eta)}")
 
@@ -207,12 +216,13 @@ def run_evolve_cmd(args) -> int:
         with evaluator, log:
             summary = run.evolve(evaluator, progress)
     except KeyboardInterrupt:
-        print(f"evobiped: interrupted after generation {run.ga.generation}; checkpoint saved; "
+        print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in history.csv); checkpoint saved; "
               f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
         return 130
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
-    print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}); "
+    walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
+    print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
           f"{summary['evaluations']} evaluations in {_hms(summary['wall_seconds'])}; results in {run.dir}")
     return 0
 
@@ -277,7 +287,7 @@ def run_replay_cmd(args) -> int:
         figures = base / f"figures_{source.label}"
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures)
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
-    print(f"replayed fitness = {r.fitness!r} m; {state}")
+    print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
         why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
                if source.config.perturbations else "--seconds changed the episode length")
@@ -286,7 +296,7 @@ def run_replay_cmd(args) -> int:
         print("stored fitness: none in the genome file")
     else:
         verdict = "equals it bit for bit" if r.matches else f"DIFFERS by {r.fitness - r.stored_fitness:.3g}"
-        print(f"stored fitness   = {r.stored_fitness!r} m: the replay {verdict}")
+        print(f"stored fitness   = {r.stored_fitness!r}: the replay {verdict}")
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")

@@ -97,7 +97,7 @@ def _sensor_widths(body: Body) -> dict[str, int]:
 
 @dataclass
 class EpisodeResult:
-    """Per-individual outcome, every array ``(P,)`` (positions ``(P, 2)``, or ``(P, S, 2)`` for S presentations)."""
+    """Per-individual outcome, every array ``(P,)`` (positions and facings ``(P, 2)``, or ``(P, S, 2)`` for S presentations)."""
 
     fitness: np.ndarray
     fell: np.ndarray
@@ -105,9 +105,25 @@ class EpisodeResult:
     end_time: np.ndarray
     start_position: np.ndarray
     end_position: np.ndarray
+    #: the direction each walker faced at the start, unit vectors on the ground plane (``Body.heading`` after reset)
+    start_facing: np.ndarray
     #: per simulation row (one per genome and presentation) when the task has several presentations
     rows: "EpisodeResult | None" = None
 
+
+    def walk(self, i: int = 0) -> dict:
+        """Where walker ``i`` went (its first presentation when there are several): distance (m) and
+        direction (``heading_deg``, see :func:`evobiped.tasks.walk.displacement_heading`; None: it did not move)
+        and displacement (x, y) in m."""
+        from .tasks.walk import displacement_heading
+
+        rows = self.rows if self.rows is not None else self
+        S = len(rows.fitness) // len(self.fitness)
+        j = i * S
+        a, b, f = rows.start_position[j : j + 1], rows.end_position[j : j + 1], rows.start_facing[j : j + 1]
+        heading = float(displacement_heading(a, b, f)[0])
+        return {"distance": float(np.linalg.norm(b - a, axis=1)[0]), "heading_deg": None if not np.isfinite(heading) else round(heading, 2),
+                "displacement": [round(float(v), 4) for v in (b - a)[0]]}
 
     def per_genome(self, S: int, combine) -> "EpisodeResult":
         """Rows p * S + j -> one entry per genome: fitness combined by ``combine`` ``(P, S) -> (P,)``,
@@ -120,6 +136,7 @@ class EpisodeResult:
             end_time=by(self.end_time).min(axis=1),
             start_position=by(self.start_position),
             end_position=by(self.end_position),
+            start_facing=by(self.start_facing),
             rows=self,
         )
 
@@ -240,6 +257,7 @@ class Episode:
         unstable = np.zeros(P, bool)
         end_time = np.full(P, n_ticks * self.control_dt)
         start = body.planar_position(sims).copy()
+        facing = body.heading(sims).copy()
         if listener is not None:
             listener.start(self, sims)
         for k in range(n_ticks):
@@ -277,6 +295,7 @@ class Episode:
             end_time=end_time,
             start_position=start,
             end_position=tstate.get("position", body.planar_position(sims)).copy(),
+            start_facing=facing,
         )
         if trials is not None:
             result = result.per_genome(S * R, lambda f: trials.combine(task.combine(f.reshape(-1, S)).reshape(-1, R)))

@@ -157,14 +157,13 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
     genome, ep_cfg, _ = load_genome(d / "best.json")
     ep_cfg = ep_cfg.nominal()
     again = ep_cfg.build().run(genome)  # eq. 4's distance (the other criteria's fitness is not that)
-    disp = again.end_position[0] - again.start_position[0]
+    walk = again.walk()
     outcome = {
         "condition": condition,
         "seed": run_cfg.seed,
         "fitness": best["fitness"],
-        "distance": float(np.linalg.norm(again.end_position - again.start_position, axis=1)[0]),
-        # the Reil and Taga walkers face +x at the start
-        "heading_deg": float(np.degrees(np.arctan2(disp[1], disp[0]))),
+        "distance": walk["distance"],
+        "heading_deg": walk["heading_deg"],
         "fell": best["fell"],
         "end_time": best["end_time"],
         "generation": best["generation"],
@@ -180,7 +179,7 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         outcome["walks_indefinitely"] = not bool(r.fell[0])
         outcome["recheck_end_time"] = float(r.end_time[0])
     outcome["forward_walker"] = bool(outcome["walks_indefinitely"] and not again.fell[0] and outcome["distance"] >= WALKER_DISTANCE
-                                     and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
+                                     and outcome["heading_deg"] is not None and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
     write_json(d / "outcome.json", outcome)
     return outcome
 

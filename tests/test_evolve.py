@@ -254,6 +254,8 @@ def test_ctrl_c_stops_at_a_generation_boundary_and_resumes(tmp_path):
     assert "Traceback" not in err and f"evobiped evolve --resume {cut}" in err
     done = len(json.loads((cut / "checkpoint.json").read_text())["history"])
     assert 1 <= done < 12 and len(fitness_history(cut)) == done
+    # generations are numbered from 0 everywhere: the last one the message names is the last row of history.csv
+    assert f"interrupted after generation {done - 1} " in err and fitness_history(cut)[-1][0] == str(done - 1)
     assert cli("evolve", "--resume", cut, "--quiet") == 0
     assert fitness_history(cut) == fitness_history(ref)
     # the run's own recording, restarted on resume with the history so far, holds every generation

@@ -41,7 +41,7 @@ def stored(path):
 
 def replayed(out: str) -> float:
     line = next(l for l in out.splitlines() if l.startswith("replayed fitness = "))
-    return float(line.split("= ")[1].split(" ")[0])
+    return float(line.split("= ")[1].split(" ")[0].rstrip(";:"))
 
 
 def test_replay_of_a_run_directory_reproduces_the_stored_fitness_bit_for_bit(run_dir, capsys):

@@ -7,7 +7,7 @@ Run directory (every file written atomically)::
     generations/gen_NNNN.json   best genome of each generation (genome-file format)
     best.json              best genome of the run so far
     checkpoint.json        GA state after the last completed generation
-    summary.json           written when the run ends
+    summary.json           written when the run ends: the best walker, its distance and walking direction
 
 ``resume`` continues from checkpoint.json and yields exactly the history an
 uninterrupted run with the same config produces (wall times aside).
@@ -282,6 +282,14 @@ class Run:
         w.writerows(self.history)
         atomic_write(self.dir / "history.csv", buf.getvalue())
 
+    def _best_walk(self) -> dict | None:
+        """Distance and walking direction of the best walker, re-simulated on the nominal episode
+        (``EpisodeResult.walk``; the fitness of a perturbed run aggregates other presentations)."""
+        if self.best is None or not (self.dir / "best.json").is_file():
+            return None
+        genome, cfg, _ = load_genome(self.dir / "best.json")
+        return cfg.nominal().build().run(genome).walk()
+
     def finish(self) -> dict:
         summary = {
             "evobiped": __version__,
@@ -290,6 +298,7 @@ class Run:
             "wall_seconds": round(self.wall, 3),
             "evaluations": int(sum(r[HISTORY_COLUMNS.index("evaluations")] for r in self.history)),
             "stable": self.best is not None and not self.best["fell"],
+            "best_walk": self._best_walk(),
         }
         write_json(self.dir / "summary.json", summary)
         return summary

@@ -29,6 +29,8 @@ class ReplayReport:
     compared: bool  # False when --seconds changed the episode length, or the stored fitness is over perturbed presentations
     fell: bool
     end_time: float
+    #: distance and walking direction (``EpisodeResult.walk``)
+    walk: dict
     recording: Path | None
     figures: list[Path]
     trajectory: Trajectory
@@ -111,6 +113,7 @@ def replay(
         compared=cfg.seconds == source.config.seconds and not source.config.perturbations,
         fell=bool(result.fell[0]),
         end_time=float(result.end_time[0]),
+        walk=result.walk(),
         recording=target,
         figures=figs,
         trajectory=traj,

@@ -60,6 +60,31 @@ def count_cycles(series: np.ndarray, lengths: np.ndarray, band: float) -> np.nda
     return count
 
 
+def displacement_heading(start_xy: np.ndarray, end_xy: np.ndarray, start_facing: np.ndarray) -> np.ndarray:
+    """Direction of walking: the heading of the displacement relative to the initial facing.
+
+    ``start_xy``, ``end_xy`` ``(P, 2)`` m, ``start_facing`` ``(P, 2)`` (any length) -> ``(P,)``
+    degrees in (-180, 180]: 0 = straight ahead, +90 = to the walker's left, -90 = to its
+    right, +-180 = straight backwards; NaN for a walker that did not move (under 1 mm).
+    """
+    d = np.asarray(end_xy, float) - np.asarray(start_xy, float)
+    f = np.asarray(start_facing, float)
+    deg = np.degrees(np.arctan2(f[:, 0] * d[:, 1] - f[:, 1] * d[:, 0], np.einsum("pi,pi->p", f, d)))
+    deg = np.where(deg == -180.0, 180.0, deg)
+    return np.where(np.linalg.norm(d, axis=1) < 1e-3, np.nan, deg)
+
+
+def direction_words(heading_deg: float) -> str:
+    """``displacement_heading`` of one walker in words, e.g. "-172 deg: backwards"."""
+    if not np.isfinite(heading_deg):
+        return "did not move"
+    a = abs(heading_deg)
+    side = "left" if heading_deg > 0 else "right"
+    words = ("forwards" if a <= 30 else f"forwards and to the {side}" if a < 60 else f"to the {side}" if a <= 120
+             else f"backwards and to the {side}" if a < 150 else "backwards")
+    return f"{heading_deg:+.0f} deg from the initial facing: {words}"
+
+
 #: fitness name -> what it pays (see the module docstring)
 FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T"}
 
