@@ -100,7 +100,7 @@ class Walkers:
     def observe(self) -> np.ndarray:
         """``(n, obs_size)``: the body's sensors, concatenated in :attr:`sensor_names` order (blown-up rows: 0)."""
         obs = np.concatenate(list(self.body.sensors(self.sims).values()), axis=1)
-        return np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
+        return obs if np.isfinite(obs).all() else np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
 
     def check_action(self, action, shape: tuple[int, ...]) -> np.ndarray:
         """The action as a float array of ``shape``; ValueError (one line) for a wrong shape or a non-finite value."""
@@ -281,7 +281,8 @@ class BipedVectorEnv(VectorEnv):
         if resetting.size:
             self.walkers.reset(resetting, self._rngs)
         self._needs_reset = terminated | truncated
-        info = {"unstable": unstable, "position": self.walkers.position.copy()}
+        every = np.ones(n, bool)  # Gymnasium's vector info convention: "_key" marks the rows that have "key"
+        info = {"unstable": unstable, "_unstable": every, "position": self.walkers.position.copy(), "_position": every}
         return self.walkers.observe(), reward, terminated, truncated, info
 
     def render(self):
