@@ -180,3 +180,13 @@ def test_rgb_array_frames_where_egl_exists():
     if "OpenGL context" in r.stderr:
         pytest.skip("no EGL on this machine")
     assert r.stdout.split("\n")[:2] == ["(48, 64, 3) uint8 1"] * 2, r.stderr
+
+
+def test_a_blow_up_ends_the_episode_and_the_next_reset_is_clean():
+    """PD gains far beyond what a 5 ms step can integrate: the first step blows up."""
+    env = ReilBipedEnv(kp=1e7, kv=0.0, reset_noise_scale=0.0)
+    first, _ = env.reset(seed=0)
+    obs, r, te, tr, info = env.step(np.array([1.6, 0.8, -1.4, -1.3, -0.8, 0.0], np.float32))
+    assert te and not tr and info["unstable"] and r == 0.0 and np.isfinite(obs).all()
+    again, _ = env.reset(seed=0)
+    assert np.array_equal(again, first) and np.isfinite(env.walkers.sims.qpos).all()
