@@ -48,6 +48,8 @@ def main() -> None:
     ap.add_argument("--sigma", type=float, default=0.1, help="CMA-ES initial step")
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args()
+    if a.generations < 1 or a.popsize < 2 or not a.seconds > 0 or not a.sigma > 0:
+        ap.error("--generations must be >= 1, --popsize >= 2, --seconds and --sigma > 0")
     venv = ReilBipedVectorEnv(a.popsize, seconds=a.seconds, alive_bonus=a.alive_bonus)
     n_params = (venv.walkers.obs_size + 1) * len(venv.walkers.low)
     es = cma.CMAEvolutionStrategy(np.zeros(n_params), a.sigma, {"popsize": a.popsize, "seed": a.seed + 1, "verbose": -9})

@@ -27,6 +27,8 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=200, help="env steps per repeat")
     ap.add_argument("--repeats", type=int, default=7)
     a = ap.parse_args()
+    if a.num_envs < 1 or a.steps < 1 or a.repeats < 1:
+        ap.error("--num-envs, --steps and --repeats must be >= 1")
     cls, no_falls = ENVS[a.body]
     venv = cls(a.num_envs, seconds=1e6, reset_noise_scale=0.0, **no_falls)  # both start from the same pose
     w = venv.walkers
