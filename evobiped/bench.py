@@ -36,6 +36,7 @@ from .episode import EpisodeConfig
 from .errors import ConfigError
 from .evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
 from .evolution.ga import GA, GAConfig
+from .progress import Progress
 
 #: ``bench(..., **QUICK)``: a run of well under 30 s
 QUICK = dict(population=16, seconds=4.0, repeats=5)
@@ -54,14 +55,16 @@ class _ControlRecorder:
         pass
 
 
-def _walls(fns: dict, repeats: int) -> dict:
+def _walls(fns: dict, repeats: int, progress: Progress | None = None) -> dict:
     """Wall seconds of each callable, ``repeats`` times in turn: ``{name: [s, ...]}``."""
     walls = {k: [] for k in fns}
-    for _ in range(repeats):
-        for k, fn in fns.items():
+    for r in range(repeats):
+        for i, (k, fn) in enumerate(fns.items()):
             t0 = time.perf_counter()
             fn()
             walls[k].append(time.perf_counter() - t0)
+            if progress is not None:
+                progress.update(r * len(fns) + i + 1, f"{k} took {walls[k][-1]:.1f} s")
     return walls
 
 
@@ -72,10 +75,11 @@ def bench(
     workers: int | None = None,
     repeats: int = 5,
     seed: int = 0,
-    progress=None,
+    progress: Progress | None = None,
 ) -> dict:
-    """Measure (a)-(d) for ``population`` random genomes (Table III initialisation)."""
-    say = progress or (lambda msg: None)
+    """Measure (a)-(d) for ``population`` random genomes (Table III initialisation); ``progress``
+    (optional) hears each finished measurement."""
+    say = progress.say if progress is not None else (lambda msg: None)
     episode = episode or EpisodeConfig()
     workers = workers or os.cpu_count() or 1
     if population < 1 or workers < 1 or repeats < 1:
@@ -133,7 +137,10 @@ def bench(
         fns[f"threads {workers}"] = lambda: thread_ev.evaluate(genomes)
         if workers > 1:
             fns["pool 1"] = lambda: pools[1].evaluate(genomes)
-        walls = _walls(fns, repeats)
+        if progress is not None:
+            progress.total = float(len(fns) * repeats)
+            progress.unit = "measurements"
+        walls = _walls(fns, repeats, progress)
         end_gap = float(np.max(np.abs(finals[:, :2] - result.end_position)))
     finally:
         for pool in (*pools.values(), thread_ev):

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import __version__
 from .errors import UserError
+from .progress import Progress, hms
 
 
 class _Parser(argparse.ArgumentParser):
@@ -42,14 +43,52 @@ def positive_int(text: str) -> int:
     return v
 
 
+def names(kind: str) -> str:
+    """The valid names of a name-valued option, for its help text: ``names("body")`` -> ``"reil, taga"``."""
+    if kind == "body":
+        from .bodies import BODIES as reg
+    elif kind == "controller":
+        from .controllers import CONTROLLERS as reg
+    elif kind == "task":
+        from .tasks import TASKS as reg
+    elif kind == "backend":
+        from .evolution.evaluate import BACKENDS as reg
+    elif kind == "preset":
+        from .presets import names as preset_names
+
+        reg = preset_names()
+    else:
+        raise ValueError(kind)
+    return ", ".join(reg)
+
+
+def refuse(flags: str, why: str) -> None:
+    """A flag that does not apply here: one line, exit 2."""
+    raise UserError(f"{flags}: {why}")
+
+
+def check_workers(backend: str, workers: int | None, address: str | None) -> None:
+    """--workers and --address must apply to the backend; more local workers than cores earns a warning line."""
+    import os
+
+    if address is not None and backend != "ray":
+        refuse("--address", f"only a Ray backend connects to a cluster (use --backend ray; the backend here is {backend})")
+    if workers is not None and backend == "serial":
+        refuse("--workers", "the serial backend runs in this process (use --backend process, thread or ray for workers)")
+    cores = os.cpu_count() or 1
+    if workers is not None and workers > cores and address is None:
+        print(f"evobiped: warning: --workers {workers} on {cores} cores: the extra workers share cores and do not run faster",
+              file=sys.stderr)
+
+
 # ---------------------------------------------------------------- episode
 def add_episode(sub) -> None:
     p = sub.add_parser("episode", help="run one episode and print its fitness")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--genome", metavar="FILE", help="genome JSON file (default: a random genome)")
     src.add_argument("--seed", type=int, default=0, help="seed of the random genome (default 0)")
-    p.add_argument("--body", default="reil", help="body name (default reil)")
-    p.add_argument("--controller", default="ctrnn", help="controller name (default ctrnn)")
+    p.add_argument("--body", help=f"body: {names('body')} (default reil; not with --genome, whose file names it)")
+    p.add_argument("--controller", help=f"controller: {names('controller')} (default ctrnn; not with --genome)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_episode_cmd)
@@ -60,9 +99,11 @@ def run_episode_cmd(args) -> int:
     from .genome_file import load_genome
 
     if args.genome:
+        if args.body or args.controller:
+            refuse("--body/--controller", "a genome file names its own body and controller; give them without --genome")
         genome, cfg, _ = load_genome(args.genome)
     else:
-        cfg = EpisodeConfig(body=args.body, controller=args.controller)
+        cfg = EpisodeConfig(body=args.body or "reil", controller=args.controller or "ctrnn")
         genome = None
     if args.seconds:
         cfg = EpisodeConfig(**{**cfg.__dict__, "seconds": args.seconds})
@@ -100,21 +141,22 @@ def walk_line(walk: dict) -> str:
 # ---------------------------------------------------------------- evolve
 def add_evolve(sub) -> None:
     p = sub.add_parser("evolve", help="evolve controllers with the GA of Reil & Husbands (defaults: the paper's)")
-    p.add_argument("--preset", metavar="NAME", help="named settings shipped with evobiped (`evobiped presets` lists them); "
-                   "--config and flags override it")
+    p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {names('preset')} "
+                   "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
     p.add_argument("--optimizer", choices=("ga", "cma"), help="ga (Reil & Husbands' GA, default) or cma (CMA-ES)")
-    p.add_argument("--body", help="body (default reil)")
-    p.add_argument("--controller", help="controller (default ctrnn)")
-    p.add_argument("--task", help="task (default walk)")
+    p.add_argument("--body", help=f"body: {names('body')} (default reil)")
+    p.add_argument("--controller", help=f"controller: {names('controller')} (default ctrnn)")
+    p.add_argument("--task", help=f"task: {names('task')} (default walk)")
     p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A)")
     p.add_argument("--seed", type=int, help="run seed (default 0)")
-    p.add_argument("--backend", help="serial, process (default), thread or ray")
-    p.add_argument("--workers", type=positive_int, help="worker processes / Ray actors (default: all cores)")
-    p.add_argument("--address", help="Ray cluster address (with --backend ray; default: start a local Ray)")
+    p.add_argument("--backend", help=f"backend: {names('backend')} (default process)")
+    p.add_argument("--workers", type=positive_int, help="worker processes / threads / Ray actors (default: all cores; "
+                   "more than the cores earns a warning; not with the serial backend)")
+    p.add_argument("--address", help="Ray cluster address (only with --backend ray; default: start a local Ray)")
     p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="seed the population with clones of this genome")
     p.add_argument("--freeze", metavar="BLOCKS", help="gene blocks the GA must not change, comma-separated "
                    "(e.g. weights,time_constants,biases: evolve only a CTRNN's input weights)")
@@ -170,10 +212,10 @@ def run_evolve_cmd(args) -> int:
     from .evolution.evaluate import make_evaluator
     from .evolution.run import Run, eta_seconds
 
-    if args.rerun not in (None, "spawn"):
-        from .record.viewer import connect_url, require_viewer
+    if args.rerun is not None:  # before anything is written
+        from .record.viewer import connect_url, require_display, require_viewer
 
-        require_viewer(connect_url(args.rerun))  # before anything is written
+        require_display() if args.rerun == "spawn" else require_viewer(connect_url(args.rerun))
     if args.resume:
         if any(getattr(args, f) is not None for f in ("preset", "config", "optimizer", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
@@ -184,9 +226,11 @@ def run_evolve_cmd(args) -> int:
         backend = args.backend or run.config.backend
         workers = args.workers or run.config.workers
         address = args.address or run.config.address
+        check_workers(backend, workers, address)
     else:
         config = evolve_config(args)
         backend, workers, address = config.backend, config.workers, config.address
+        check_workers(backend, workers, address)
         out = args.out or default_run_dir(config)
         evaluator = make_evaluator(config.episode, backend, workers, address)  # fails before any file is written
         try:
@@ -210,7 +254,7 @@ def run_evolve_cmd(args) -> int:
         eta = eta_seconds(s, run.history)
         say(f"gen {s.generation:4d}/{s.generations_total - 1}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
             f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
-            f"elapsed {_hms(run.wall)}  left ~{_hms(eta)}")
+            f"elapsed {hms(run.wall)}  left ~{hms(eta)}")
 
     try:
         with evaluator, log:
@@ -223,7 +267,7 @@ def run_evolve_cmd(args) -> int:
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
     print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
-          f"{summary['evaluations']} evaluations in {_hms(summary['wall_seconds'])}; results in {run.dir}")
+          f"{summary['evaluations']} evaluations in {hms(summary['wall_seconds'])}; results in {run.dir}")
     return 0
 
 
@@ -237,13 +281,6 @@ def _evolution_log(run, rerun: str | None):
     if run.history:
         log.log_history(read_history(run.dir / "history.csv"))
     return log
-
-
-def _hms(seconds: float) -> str:
-    if not np.isfinite(seconds):
-        return "?"
-    s = int(round(seconds))
-    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
 
 def add_presets(sub) -> None:
@@ -271,6 +308,7 @@ def add_replay(sub) -> None:
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_replay_cmd)
 
 
@@ -285,7 +323,10 @@ def run_replay_cmd(args) -> int:
     if figures == "":
         base = Path(args.out).parent if args.out else default_out(source).parent
         figures = base / f"figures_{source.label}"
-    r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures)
+    seconds = args.seconds or source.config.seconds
+    progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
+    r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
+               listener=progress.listener())
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
@@ -352,17 +393,19 @@ def run_robustness_cmd(args) -> int:
 # ---------------------------------------------------------------- g3
 def add_g3(sub) -> None:
     p = sub.add_parser("g3", help="run the G3 gait generator (Pribe et al. 1997) at GO levels; gait table and PNGs")
-    p.add_argument("preset", help="parameter set: fig4, fig5a, fig5b, fig7, fig8a, human, human-lagged")
+    from .g3 import PRESETS
+
+    p.add_argument("preset", help=f"parameter set: {', '.join(PRESETS)}")
     lv = p.add_mutually_exclusive_group()
     lv.add_argument("--go", type=float, nargs="+", metavar="I", help="GO level(s) (default: the preset's)")
     lv.add_argument("--sweep", type=float, nargs=3, metavar=("START", "STOP", "STEP"), help="GO levels START..STOP (inclusive)")
     p.add_argument("--continue", dest="mode", action="store_const", const="continue", default="reset",
                    help="one run through the levels keeping the state (default: reset to zero per level)")
     p.add_argument("--from-go", type=float, metavar="I0", help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
-    p.add_argument("--switch-at", type=positive_float, default=30.0, help="time of the switch from --from-go (default 30)")
+    p.add_argument("--switch-at", type=positive_float, help="time of the switch from --from-go (default 30; only with --from-go)")
     p.add_argument("--t-run", type=positive_float, help="time units per level (default: the preset's, 120)")
     p.add_argument("--dt", type=positive_float, default=0.005, help="RK4 step in model time units (default 0.005)")
-    p.add_argument("--channels", default="LF,RF,LH,RH", help="channels drawn in the diagrams, names or 0-3 (default all)")
+    p.add_argument("--channels", help="channels drawn in the diagrams, names or 0-3 (default all: LF,RF,LH,RH; only with --out)")
     p.add_argument("--out", metavar="DIR", help="write PNG gait diagrams and the frequency plot here")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_g3_cmd)
@@ -373,7 +416,12 @@ def run_g3_cmd(args) -> int:
     from .errors import ConfigError
 
     pre = g3.preset(args.preset)
-    channels = [c.strip() for c in args.channels.split(",") if c.strip()]
+    if args.switch_at is not None and args.from_go is None:
+        refuse("--switch-at", "it times the switch from --from-go; give --from-go too")
+    if args.channels is not None and not args.out:
+        refuse("--channels", "it picks the channels of the diagrams; give --out DIR to draw them")
+    switch_at = 30.0 if args.switch_at is None else args.switch_at
+    channels = [c.strip() for c in (args.channels or "LF,RF,LH,RH").split(",") if c.strip()]
     if not channels:
         raise ConfigError("--channels: the channel list is empty")
     idx = []
@@ -393,7 +441,7 @@ def run_g3_cmd(args) -> int:
         levels = np.array(args.go if args.go else pre.go, float)
     if (levels < 0).any() or (args.from_go is not None and args.from_go < 0):
         raise ConfigError(f"GO levels must be >= 0, got {min(levels.min(), args.from_go or 0):g}")
-    s = g3.sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=args.switch_at, dt=args.dt)
+    s = g3.sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
     files = []
     if args.out:
@@ -403,7 +451,7 @@ def run_g3_cmd(args) -> int:
     if args.json:
         print(json.dumps({"preset": pre.name, "source": pre.source, "mode": args.mode, "levels": rows, "files": files}))
         return 0
-    print(f"G3 {pre.name}: {pre.source}; {args.mode}" + (f" from I = {args.from_go:g} at t = {args.switch_at:g}" if args.from_go is not None else ""))
+    print(f"G3 {pre.name}: {pre.source}; {args.mode}" + (f" from I = {args.from_go:g} at t = {switch_at:g}" if args.from_go is not None else ""))
     print(f"{'I':>6} {'gait':<7} {'seq':<8} {'freq':>7} {'period':>7}  {'phases LF RF LH RH':<23} {'duty':>5} {'first':<7} {'settle':>6}")
     for r in rows:
         ph = " ".join(f"{p:.2f}" if np.isfinite(p) else "  - " for p in r["phases"])
@@ -422,16 +470,16 @@ def add_study(sub) -> None:
                    "forward (forward progress x time up) (default plain,cyclic)")
     p.add_argument("--controllers", help="controller axis, comma-separated (e.g. ctrnn,simbicon; default: the base run's)")
     p.add_argument("--optimizers", help="optimizer axis, comma-separated: ga, cma (default: the base run's)")
-    p.add_argument("--preset", metavar="NAME", help="base run settings shipped with evobiped (`evobiped presets`)")
+    p.add_argument("--preset", metavar="NAME", help=f"base run settings shipped with evobiped: {names('preset')} (`evobiped presets`)")
     p.add_argument("--config", metavar="FILE.toml", help="base run settings (as for evolve); flags override it")
     p.add_argument("--population", type=positive_int, help="population size (default 50)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--first-seed", type=int, default=0, help="seeds are FIRST .. FIRST+K-1 (default 0)")
     p.add_argument("--recheck-seconds", type=positive_float, default=200.0, help="re-simulate stable best walkers this long (default 200)")
-    p.add_argument("--backend", default="process", help="process (default: one run per core), serial or ray")
-    p.add_argument("--workers", type=positive_int, help="runs at once (default: all cores)")
-    p.add_argument("--address", help="Ray cluster address (with --backend ray)")
+    p.add_argument("--backend", default="process", help=f"backend: {names('backend')} (default process: one run per core)")
+    p.add_argument("--workers", type=positive_int, help="runs at once (default: all cores; not with the serial backend)")
+    p.add_argument("--address", help="Ray cluster address (only with --backend ray)")
     p.add_argument("--replays", action="store_true", help="also write a Rerun recording of each run's best walker")
     p.add_argument("--out", metavar="DIR", default="runs/study", help="study directory (default runs/study); an existing one is resumed")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -452,6 +500,7 @@ def run_study_cmd(args) -> int:
     axis = lambda text: tuple(x.strip() for x in (text or "").split(",") if x.strip())  # noqa: E731
     cfg = StudyConfig(run=base, runs=args.runs, conditions=conditions, controllers=axis(args.controllers), optimizers=axis(args.optimizers),
                       first_seed=args.first_seed, recheck_seconds=args.recheck_seconds)
+    check_workers(args.backend, args.workers, args.address)
     if args.backend == "ray" and args.address:
         from .evolution.evaluate import check_reachable
 
@@ -478,19 +527,22 @@ def run_study_cmd(args) -> int:
 def add_taga(sub) -> None:
     p = sub.add_parser("taga", help="run the Taga biped with its rhythm generator (Taga et al. 1991); gait metrics table")
     p.add_argument("--u0", type=float, nargs="+", default=[5.5], metavar="U", help="tonic input(s) u0, one walker each (default 5.5)")
-    p.add_argument("--preset", default="taga", help="rhythm-generator parameters (default taga: Appendix D)")
-    p.add_argument("--seconds", type=positive_float, default=20.0, help="simulated time in s from Appendix E's initial state (default 20)")
-    p.add_argument("--window", type=positive_float, default=10.0, help="metrics over the last WINDOW s (default 10)")
+    from .taga_experiments import PRESETS
+
+    p.add_argument("--preset", default="taga", help=f"rhythm-generator parameters: {', '.join(PRESETS)} (default taga: Appendix D)")
+    p.add_argument("--seconds", type=positive_float, help="simulated time in s from Appendix E's initial state (default 20; not with --push)")
+    p.add_argument("--window", type=positive_float, help="metrics over the last WINDOW s, at most --seconds (default 10; not with --push)")
     p.add_argument("--slope", type=float, default=0.0, metavar="PCT", help="terrain slope in %% (uphill > 0; default 0)")
     p.add_argument("--slope-start", type=float, default=0.0, metavar="X", help="x (m) where the slope begins (default 0)")
     p.add_argument("--kg", type=positive_float, default=1e4, help="ground stiffness N/m (default 1e4)")
     p.add_argument("--bg", type=float, default=1e3, help="ground damping N s/m (default 1e3)")
     p.add_argument("--timestep", type=positive_float, default=0.0005, help="physics step in s (default 0.0005)")
     p.add_argument("--push", choices=("leg", "hip"), help="Fig. 7: after 10 s push the right shank (200 N) or the hip (288 N) forward for 0.2 s")
-    p.add_argument("--push-force", type=float, help="push force in N (default 200 leg, 288 hip)")
-    p.add_argument("--push-delay", type=float, default=0.05, help="push this many s after the right foot lifts off (default 0.05)")
+    p.add_argument("--push-force", type=float, help="push force in N (default 200 leg, 288 hip; only with --push)")
+    p.add_argument("--push-delay", type=float, help="push this many s after the right foot lifts off (default 0.05; only with --push)")
     p.add_argument("--save-genome", metavar="FILE.json", help="also write the genome file of the (first) walker, for evobiped replay")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_taga_cmd)
 
 
@@ -505,20 +557,34 @@ def run_taga_cmd(args) -> int:
         raise UserError(f"--slope must be within +-50 %, got {args.slope:g}")
     if args.bg < 0:
         raise UserError(f"--bg must be >= 0, got {args.bg:g}")
+    seconds = 20.0 if args.seconds is None else args.seconds
+    window = min(10.0, seconds) if args.window is None else args.window
+    if args.push:
+        if args.seconds is not None or args.window is not None:
+            refuse("--seconds/--window", "--push runs its own schedule (10 s, the push, 8 s more) and reports strides, not a window")
+    else:
+        if args.push_force is not None or args.push_delay is not None:
+            refuse("--push-force/--push-delay", "they shape the push; give --push leg or --push hip")
+        if window > seconds:
+            refuse("--window", f"the metrics window ({window:g} s) cannot be longer than the simulated --seconds ({seconds:g} s)")
     opts = dict(preset=args.preset, timestep=args.timestep, kg=args.kg, bg=args.bg, slope=args.slope / 100, slope_start=args.slope_start)
+    total = 10.0 + 2.0 + 0.2 + 8.0 if args.push else seconds
+    progress = Progress("taga", total, "s simulated", quiet=args.quiet or args.json)
     if args.save_genome:
         from .episode import EpisodeConfig
         from .genome_file import save_genome
 
         body = {k: v for k, v in opts.items() if k != "preset"}
-        cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=args.seconds, body_options=body, controller_options={"u0": args.u0[0]})
+        cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=seconds, body_options=body, controller_options={"u0": args.u0[0]})
         save_genome(args.save_genome, cfg.build().controller.preset_genome(args.preset), cfg, preset=args.preset)
     if args.push:
         if len(args.u0) != 1:
             raise UserError("--push takes one --u0 value")
         force = args.push_force if args.push_force is not None else (200.0 if args.push == "leg" else 288.0)
         target = "right_shank" if args.push == "leg" else "hip"
-        _, (s,) = tx.push(target, force, [args.push_delay], u0=args.u0[0], **opts)
+        delay = 0.05 if args.push_delay is None else args.push_delay
+        _, (s,) = tx.push(target, force, [delay], u0=args.u0[0], progress=progress.update, **opts)
+        progress.finish()
         if args.json:
             print(json.dumps(s))
             return 0
@@ -528,13 +594,15 @@ def run_taga_cmd(args) -> int:
         for i, (L, D) in enumerate(s["strides_after"]):
             print(f"  stride {i + 1:2d} after: {L:.3f} m  {D:.3f} s")
         return 0
-    _, rows = tx.steady(args.u0, seconds=args.seconds, window=min(args.window, args.seconds), **opts)
+    _, rows = tx.steady(args.u0, seconds=seconds, window=window, progress=progress.update, **opts)
+    progress.finish()
     if args.json:
         nan_to_null = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items()} for r in rows]
-        print(json.dumps({"settings": {k: v for k, v in vars(args).items() if k != "func"}, "walkers": nan_to_null}, allow_nan=False))
+        settings = {**{k: v for k, v in vars(args).items() if k != "func"}, "seconds": seconds, "window": window}
+        print(json.dumps({"settings": settings, "walkers": nan_to_null}, allow_nan=False))
         return 0
     print(f"Taga biped, preset {args.preset}, slope {args.slope:g} %, kg {args.kg:g}, bg {args.bg:g}; "
-          f"metrics over the last {min(args.window, args.seconds):g} of {args.seconds:g} s")
+          f"metrics over the last {window:g} of {seconds:g} s")
     print(f"{'u0':>6} {'gait':<6} {'fell at':>7} {'strides':>7} {'stride m':>8} {'cycle s':>7} {'speed':>6} {'double':>6} {'flight':>6} {'hip min-max m':>14}")
     for r in rows:
         fell = f"{r['fell_at']:.2f}" if r["fell"] else "-"
@@ -546,14 +614,15 @@ def run_taga_cmd(args) -> int:
 # ---------------------------------------------------------------- bench
 def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
-    p.add_argument("--body", default="reil", help="body (default reil)")
-    p.add_argument("--controller", default="ctrnn", help="controller (default ctrnn)")
+    p.add_argument("--body", default="reil", help=f"body: {names('body')} (default reil)")
+    p.add_argument("--controller", default="ctrnn", help=f"controller: {names('controller')} (default ctrnn)")
     p.add_argument("--population", type=positive_int, help="walkers (default 50; --quick 16)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50; --quick 4)")
     p.add_argument("--workers", type=positive_int, help="threads for raw stepping, workers for the pools (default: all cores)")
     p.add_argument("--repeats", type=positive_int, help="interleaved repeats of each measurement; the median counts (default 5)")
     p.add_argument("--quick", action="store_true", help="a small run (under 30 s): 16 walkers x 4 s, 5 repeats")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_bench_cmd)
 
 
@@ -564,8 +633,10 @@ def run_bench_cmd(args) -> int:
     size = dict(QUICK) if args.quick else dict(population=50, seconds=50.0, repeats=5)
     size.update({k: getattr(args, k) for k in size if getattr(args, k) is not None})
     cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=size["seconds"])
-    say = (lambda m: None) if args.json else (lambda m: print(m, file=sys.stderr, flush=True))
-    r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"], progress=say)
+    check_workers("process", args.workers, None)
+    progress = Progress("bench", size["repeats"], "repeats", quiet=args.quiet or args.json)
+    r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"], progress=progress)
+    progress.finish()
     print(json.dumps(r, indent=2) if args.json else format_bench(r))
     return 0
 

@@ -83,6 +83,17 @@ class EpisodeConfig:
 
 
 def _construct(cls, kind: str, options: dict):
+    """``cls(**options)``; an option it does not take is one clear line naming the ones it does."""
+    import inspect
+
+    params = inspect.signature(cls.__init__).parameters
+    if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+        known = [n for n, p in params.items() if n != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
+        wired = {"n_outputs", "inputs"} if kind == "controller" else set()  # set by the episode itself
+        for name in options:
+            if name not in known:
+                choices = ", ".join(n for n in known if n not in wired)
+                raise ConfigError(f"bad {kind} option for {cls.name!r}: unknown {kind} option {name!r} (choose from {choices})")
     try:
         return cls(**options)
     except TypeError as exc:

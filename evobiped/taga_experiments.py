@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from typing import Callable
+
 import numpy as np
 
 from .bodies.taga import TagaBiped
@@ -58,8 +60,10 @@ class TagaWalker:
         feedback: bool = True,
         timestep: float = 0.0005,
         record_every: int = 4,
+        progress: Callable[[float], None] | None = None,
         **body_options,
     ):
+        """``progress(t)`` (optional) is called with the simulated time (s) every 1000 physics steps."""
         if preset not in PRESETS:
             raise UserError(f"unknown preset {preset!r} (choose from {', '.join(PRESETS)})")
         u0 = np.atleast_1d(np.asarray(u0, float))
@@ -83,6 +87,7 @@ class TagaWalker:
         self.unstable = np.zeros(self.P, bool)
         self.steps = 0
         self.record_every = int(record_every)
+        self.progress = progress
         self.trace = Trace()
         self._record()
 
@@ -121,6 +126,8 @@ class TagaWalker:
                 self.alive[ids[down]] = False
             if self.steps % self.record_every == 0:
                 self._record()
+            if self.progress is not None and self.steps % 1000 == 0:
+                self.progress(self.time)
 
     def _record(self) -> None:
         k = self.body.links(self.sims)

@@ -8,6 +8,8 @@ compared at float32 precision; scalars are float64 and compared exactly.
 
 from __future__ import annotations
 
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
@@ -166,7 +168,8 @@ def test_frames_match_episode_length_for_a_walker_that_stays_up(tmp_path):
     for body in ("pelvis", "left_thigh", "left_shank", "right_thigh", "right_shank"):
         assert len(column(rrd[f"/world/bodies/{body}"], "Transform3D:translation")[0]) == ep.n_ticks + 1 == 101
     assert len(column(rrd["/neurons/other/n7"], "Scalars:scalars")[0]) == ep.n_ticks
-    assert len(column(rrd["/world/com_trail"], "LineStrips3D:strips")[0]) == ep.n_ticks + 1
+    path = rrd["/world/com_path"]["static"][-1].column("LineStrips3D:strips").to_pylist()[0][0]
+    assert len(path) == 2.0 / 0.1 + 2  # one point per 0.1 s from t = 0, and the last one
     # both feet on the ground at the end: two contact points, at foot height
     _, pts = column(rrd["/world/contacts"], "Points3D:positions")
     assert len(pts[-1]) == 2
@@ -306,3 +309,22 @@ def test_sound_sources_from_the_task_state_are_recorded(tmp_path):
     np.testing.assert_array_equal(pts, [[-3, -10, 0], [3, -10, 0]])
     assert len(column(rrd["/world/source"], "Points3D:positions")[0]) == traj.n_ticks
     assert ground_trajectory(traj, tmp_path / "g.png").stat().st_size > 10_000
+
+
+def test_recording_size_is_linear_in_episode_length(tmp_path):
+    """Every entity holds a fixed number of values per row: twice the episode, twice the values."""
+    cfg = EpisodeConfig(seconds=6.0, body_options={"fall_height": 0.01, "fall_tilt": 3.14159})  # no early end
+
+    def values(x) -> int:
+        return sum(values(v) for v in x) if isinstance(x, (list, tuple)) else 1
+
+    counts = {}
+    for seconds in (3.0, 6.0, 12.0):
+        ep = dataclasses.replace(cfg, seconds=seconds).build()
+        path = tmp_path / f"{seconds}.rrd"
+        result, _ = write_recording(ep, random_genome(ep.controller.layout, 4), path)
+        assert result.end_time[0] == seconds
+        counts[seconds] = sum(values(rb.column(c).to_pylist()) for e in read_rrd(path).values() for rb in e["temporal"]
+                              for c in rb.schema.names if c != "sim_time")
+    growth = (counts[12.0] - counts[6.0]) / (counts[6.0] - counts[3.0])  # 2 when linear, 4 when quadratic
+    assert growth == pytest.approx(2.0, abs=0.05), counts

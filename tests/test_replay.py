@@ -148,6 +148,7 @@ def test_spawn_streams_to_a_new_viewer_and_writes_no_file(tmp_path, monkeypatch,
     import rerun as rr
 
     calls = []
+    monkeypatch.setenv("DISPLAY", ":0")
     monkeypatch.setattr(rr.RecordingStream, "spawn", lambda self, **kw: calls.append(kw) or self.memory_recording())
     cfg = EpisodeConfig(seconds=0.5)
     g = random_genomes(cfg.build().controller.layout, 1, seed=3)[0]

@@ -56,16 +56,20 @@ def replay(
     spawn: bool = False,
     connect: str | None = None,
     figures_dir: str | Path | None = None,
+    listener=None,
 ) -> ReplayReport:
-    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``)."""
+    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``).
+    ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`."""
     import rerun as rr
 
     from .evolution_log import log_history
     from ..episode import Listeners
     from .figures import replay_figures, steering_figures
     from .rerun_recorder import RerunRecorder, blueprint
-    from .viewer import connect_url, flush, require_viewer
+    from .viewer import connect_url, flush, require_display, require_viewer
 
+    if spawn:
+        require_display()
     cfg = source.config
     if seconds is not None:
         cfg = dataclasses.replace(cfg, seconds=float(seconds))
@@ -88,10 +92,11 @@ def replay(
         rec.connect_grpc(connect_url(connect))
     try:
         rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
-        listener = RerunRecorder(rec)
+        recorder = RerunRecorder(rec)
         others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)]  # one walker per sound source
-        result = episode.run(source.genome[None, :], listener=Listeners(listener, *others) if others else listener)
-        traj = listener.trajectory
+        watchers = [recorder, *others] + ([listener] if listener is not None else [])
+        result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
+        traj = recorder.trajectory
         if history is not None:
             log_history(rec, history)
         rec.send_blueprint(blueprint(traj, with_evolution=history is not None))

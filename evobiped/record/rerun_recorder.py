@@ -7,7 +7,7 @@ Entity tree (time series on the ``sim_time`` timeline, in s)::
     world/bodies/<body>/<geom>     static: capsule / sphere / ellipsoid / cylinder / box in the body frame
     world/bodies/<body>/sites      static: visible sites (ears, ...)
     world/com                      Points3D: the centre of mass
-    world/com_trail                LineStrips3D: the centre-of-mass path so far
+    world/com_path                 static LineStrips3D: the centre-of-mass path of the whole episode (one point per 0.1 s)
     world/contacts                 Points3D: touch sensors that touch the ground
     world/source, world/sources    Points3D: sound sources (when the task has them)
     neurons/motor/<i>_<actuator>   Scalars: motor neuron outputs (thick lines)
@@ -18,7 +18,9 @@ Entity tree (time series on the ``sim_time`` timeline, in s)::
     sensors/<name>                 Scalars: every body and task sensor (e.g. the ear signal)
     fitness                        Scalars: fitness so far
 
-Whole trajectories go in with ``send_columns`` (one call per entity).
+Whole trajectories go in with ``send_columns`` (one call per entity); every
+entity holds a fixed amount per row, so a recording grows linearly with the
+episode length.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from .geometry import PLANE_HALF_SIZE, body_names, quat_to_mat, shapes, wxyz_to_
 from .trajectory import Trajectory, TrajectoryRecorder
 
 TIMELINE = "sim_time"
-#: the centre-of-mass trail keeps one point per this many seconds (plus the current one)
+#: the centre-of-mass path keeps one point per this many seconds (plus the last one)
 TRAIL_DT = 0.1
 _MOTOR_COLORS = [(228, 26, 28), (55, 126, 184), (77, 175, 74), (152, 78, 163), (255, 127, 0), (166, 86, 40), (247, 129, 191), (0, 150, 150)]
 
@@ -100,8 +102,8 @@ def log_trajectory(rec, traj: Trajectory) -> None:
         )
     rec.log("world/com", rr.Points3D.from_fields(radii=[0.03], colors=[[20, 20, 20]], labels=["centre of mass"]), static=True)
     rec.send_columns("world/com", indexes=st, columns=rr.Points3D.columns(positions=traj.com))
-    rec.log("world/com_trail", rr.LineStrips3D.from_fields(radii=[0.008], colors=[[30, 30, 30]]), static=True)
-    rec.send_columns("world/com_trail", indexes=st, columns=rr.LineStrips3D.columns(strips=_trail(traj.state_time, traj.com)))
+    rec.log("world/com_path", rr.LineStrips3D([_path(traj.state_time, traj.com)], radii=[0.008], colors=[[30, 30, 30]],
+                                              labels=["centre-of-mass path"]), static=True)
 
     tk = cols(traj.tick_time)
     if traj.touch_names:
@@ -153,10 +155,10 @@ def log_trajectory(rec, traj: Trajectory) -> None:
         rec.send_columns(f"joints/{act}/target", indexes=cm, columns=rr.Scalars.columns(scalars=traj.action[:, a]))
 
 
-def _trail(times: np.ndarray, points: np.ndarray) -> list[np.ndarray]:
-    """For each row k, the path up to row k: one point per ``TRAIL_DT`` s and the current one."""
+def _path(times: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The whole path ``(n, 3)`` -> one point per ``TRAIL_DT`` s and the last one."""
     step = max(1, int(round(TRAIL_DT / max(times[1] - times[0], 1e-9)))) if len(times) > 1 else 1
-    return [np.concatenate([points[: k + 1 : step], points[k : k + 1]]) for k in range(len(points))]
+    return np.concatenate([points[::step], points[-1:]])
 
 
 def blueprint(traj: Trajectory, *, with_evolution: bool = False):

@@ -38,6 +38,16 @@ def require_viewer(url: str, *, timeout: float = 2.0) -> None:
         raise UserError(f"no Rerun viewer at {host}:{port} ({exc.strerror or exc}); start one with `rerun` or use --spawn") from None
 
 
+def require_display() -> None:
+    """UserError (at once) when a spawned viewer could not open a window: Linux without X11 or Wayland."""
+    import os
+    import sys
+
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise UserError("cannot spawn a Rerun viewer: no display here (DISPLAY and WAYLAND_DISPLAY are unset); "
+                        "write a file with --out and open it with `rerun FILE` where there is a screen, or --connect to a viewer")
+
+
 def flush(rec, *, streaming: bool) -> None:
     """Flush ``rec`` (bounded when streaming to a viewer) and close its sinks."""
     try:

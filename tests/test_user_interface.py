@@ -1,0 +1,113 @@
+"""What a user sees: flags that do not apply are refused, -h names the choices, long work shows progress."""
+
+import os
+
+import numpy as np
+import pytest
+
+from evobiped import progress
+from evobiped.cli import build_parser, main
+from evobiped.episode import EpisodeConfig
+from evobiped.genome_file import save_genome
+
+
+@pytest.fixture
+def genome_file(tmp_path):
+    cfg = EpisodeConfig(seconds=0.5)
+    lay = cfg.build().controller.layout
+    g = np.clip(np.random.default_rng(2).normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
+    save_genome(tmp_path / "w.json", g, cfg)
+    return tmp_path / "w.json"
+
+
+REFUSED = [
+    (["episode", "--genome", "GENOME", "--body", "taga"], "--body/--controller"),
+    (["episode", "--genome", "GENOME", "--controller", "g3"], "--body/--controller"),
+    (["evolve", "--address", "127.0.0.1:6379", "--generations", "1"], "--address: only a Ray backend"),
+    (["evolve", "--backend", "serial", "--workers", "2", "--generations", "1"], "--workers: the serial backend"),
+    (["study", "--address", "127.0.0.1:6379"], "--address: only a Ray backend"),
+    (["taga", "--window", "10", "--seconds", "2"], "--window: the metrics window (10 s) cannot be longer"),
+    (["taga", "--push", "leg", "--seconds", "5"], "--seconds/--window"),
+    (["taga", "--push-force", "100"], "--push-force/--push-delay"),
+    (["g3", "fig4", "--switch-at", "5"], "--switch-at"),
+    (["g3", "fig4", "--channels", "LF"], "--channels"),
+    (["replay", "GENOME", "--spawn"], "cannot spawn a Rerun viewer: no display here"),
+]
+
+
+@pytest.mark.parametrize("argv, words", REFUSED, ids=[" ".join(a) for a, _ in REFUSED])
+def test_a_flag_that_does_not_apply_is_refused_with_one_line(argv, words, genome_file, tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.chdir(tmp_path)
+    argv = [str(genome_file) if a == "GENOME" else a for a in argv]
+    before = sorted(os.listdir(tmp_path))
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1 and "Traceback" not in err
+    assert sorted(os.listdir(tmp_path)) == before  # nothing written
+
+
+def test_more_workers_than_cores_is_one_warning_line(tmp_path, capsys):
+    n = (os.cpu_count() or 1) + 3
+    out = tmp_path / "run"
+    assert main(["evolve", "--backend", "thread", "--workers", str(n), "--population", "4", "--generations", "1",
+                 "--episode-seconds", "0.2", "--out", str(out), "--quiet"]) == 0
+    warnings = [l for l in capsys.readouterr().err.splitlines() if "warning" in l]
+    assert len(warnings) == 1 and f"--workers {n} on {os.cpu_count()} cores" in warnings[0]
+
+
+def test_unknown_body_option_names_the_valid_ones(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[episode.body_options]\nkpp = 3\n")
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "unknown body option 'kpp' (choose from timestep, kp," in err and "__init__" not in err and err.count("\n") == 1
+
+
+def _help(command: str) -> str:
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    return "".join(sub.choices[command].format_help().split())  # argparse wraps lines, also at hyphens
+
+
+@pytest.mark.parametrize("command, listed", [
+    ("evolve", ["reil, taga", "ctrnn, g3, matsuoka, simbicon", "walk, steer", "serial, process, thread, ray", "paper, paper-cyclic"]),
+    ("episode", ["reil, taga", "ctrnn, g3, matsuoka, simbicon"]),
+    ("bench", ["reil, taga", "ctrnn, g3, matsuoka, simbicon"]),
+    ("study", ["serial, process, thread, ray", "paper, paper-cyclic"]),
+    ("g3", ["fig4, fig5a"]),
+    ("taga", ["rhythm-generator parameters: taga"]),
+])
+def test_help_lists_the_valid_names(command, listed):
+    text = _help(command)
+    for names in listed:
+        assert "".join(names.split()) in text, (command, names)
+
+
+def test_progress_line_format(capsys):
+    p = progress.Progress("job", 20, "s simulated")
+    p.done = 5
+    p._line(p.t0 + 10.0, "")
+    err = capsys.readouterr().err
+    assert err == "job:  25% (5 of 20 s simulated)  elapsed 0:00:10  left ~0:00:30\n"
+    quiet = progress.Progress("job", 20, quiet=True)
+    quiet._line(quiet.t0 + 1, "")
+    assert capsys.readouterr().err == ""
+
+
+def test_taga_shows_progress_unless_quiet(capsys, monkeypatch):
+    monkeypatch.setattr(progress, "INTERVAL", 0.0)
+    assert main(["taga", "--seconds", "1.5", "--window", "1"]) == 0
+    lines = [l for l in capsys.readouterr().err.splitlines() if l.startswith("taga: ")]
+    assert len(lines) >= 3 and "left ~" in lines[0] and lines[-1].startswith("taga: 100% (1.5 of 1.5 s simulated)")
+    assert main(["taga", "--seconds", "1.5", "--window", "1", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_replay_shows_progress_unless_quiet(genome_file, capsys, monkeypatch):
+    monkeypatch.setattr(progress, "INTERVAL", 0.0)
+    assert main(["replay", str(genome_file)]) == 0
+    lines = [l for l in capsys.readouterr().err.splitlines() if l.startswith("replay: ")]
+    assert lines and "s simulated" in lines[-1]
+    assert main(["replay", str(genome_file), "--quiet"]) == 0
+    assert "replay: " not in capsys.readouterr().err
