@@ -418,8 +418,6 @@ def run_g3_cmd(args) -> int:
     pre = g3.preset(args.preset)
     if args.switch_at is not None and args.from_go is None:
         refuse("--switch-at", "it times the switch from --from-go; give --from-go too")
-    if args.channels is not None and not args.out:
-        refuse("--channels", "it picks the channels of the diagrams; give --out DIR to draw them")
     switch_at = 30.0 if args.switch_at is None else args.switch_at
     channels = [c.strip() for c in (args.channels or "LF,RF,LH,RH").split(",") if c.strip()]
     if not channels:
@@ -432,6 +430,8 @@ def run_g3_cmd(args) -> int:
             idx.append(int(c))
         else:
             raise ConfigError(f"--channels: unknown channel {c!r} (use {', '.join(g3.LIMBS)} or 0-3)")
+    if args.channels is not None and not args.out:
+        refuse("--channels", "it picks the channels of the diagrams; give --out DIR to draw them")
     if args.sweep:
         a, b, step = args.sweep
         if not step > 0 or b < a:
