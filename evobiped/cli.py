@@ -452,11 +452,12 @@ def run_g3_cmd(args) -> int:
         print(json.dumps({"preset": pre.name, "source": pre.source, "mode": args.mode, "levels": rows, "files": files}))
         return 0
     print(f"G3 {pre.name}: {pre.source}; {args.mode}" + (f" from I = {args.from_go:g} at t = {switch_at:g}" if args.from_go is not None else ""))
-    print(f"{'I':>6} {'gait':<7} {'seq':<8} {'freq':>7} {'period':>7}  {'phases LF RF LH RH':<23} {'duty':>5} {'first':<7} {'settle':>6}")
+    print(f"{'I':>6} {'gait':<7} {'seq':<8} {'freq':>7} {'period':>7}  {'phases LF RF LH RH':<23} {'up':>5} {'first':<7} {'settle':>6}")
     for r in rows:
         ph = " ".join(f"{p:.2f}" if np.isfinite(p) else "  - " for p in r["phases"])
         print(f"{r['go']:6.3f} {r['label']:<7} {r['sequence']:<8} {r['frequency']:7.4f} {r['period']:7.3f}  {ph:<23} "
               f"{np.mean(r['duty']):5.3f} {r['transient_label']:<7} {r['settle_time']:6.1f}")
+    print("up: mean fraction of the cycle a channel is above threshold (its limb off the ground; 1 - the duty factor)")
     for f in files:
         print(f"wrote {f}")
     return 0

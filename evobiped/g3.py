@@ -4,7 +4,7 @@
     dy_i/dt = E[(1 - y_i)[x_i]^+ - y_i]                                                 (2, 6)
     f(w) = F1 [w]+^2 / (F2 + [w]+^2),   g(w) = G1 [w]+^2 / (G2 + [w]+^2)                  (4)
 
-Readings of the text (DESIGN.md Sect. 4): inhibition is D_ij g(y_j) (x_i is
+Our readings of the text: inhibition is D_ij g(y_j) (x_i is
 inhibited by y_j); quadruped channels are 0 = left fore, 1 = right fore,
 2 = left hind, 3 = right hind (the paper's 1-4); the GO signal and every later
 change of it reaches channel k ``lags[k]`` time units late ([0, sidelag,

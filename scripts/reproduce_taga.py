@@ -6,7 +6,9 @@ Writes into the results folder: ``taga_results.json`` (every number),
 ``summary.md`` (the tables), and PNG figures: stick figures of walking and
 running (Figs. 5, 9), one steady cycle of each, pushes (Fig. 7), uphill walking
 (Fig. 8), neuron activity walking vs isolated (Fig. 6) and the u0 bifurcation
-diagrams (Fig. 11).  Takes ~8 min on one core (``--quick``: ~3 min).
+diagrams (Fig. 11).  Progress lines go to stderr; docs/taga.md gives the running times.
+``--quick`` runs every part on coarser grids (fewer u0 values, push phases, slopes and
+ground parameters, no physics-step halving) to check the pipeline, not the numbers.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from evobiped import taga_experiments as tx
 from evobiped.fileio import atomic_write
+from evobiped.progress import Progress
 from evobiped.record import taga_figures as fig
 from evobiped.stride import onsets
 
@@ -28,6 +31,11 @@ NEURONS = ["RH f", "RH e", "RK f", "RK e", "RA f", "RA e", "LH f", "LH e", "LK f
 
 def log(msg: str) -> None:
     print(f"[{time.strftime('%H:%M:%S')}] {msg}", flush=True)
+
+
+def progress(what: str, seconds: float):
+    """A ``TagaWalker(progress=...)`` callback: progress lines over ``seconds`` of simulated time."""
+    return Progress(what, seconds, "s simulated").update
 
 
 def fmt(rows: list[dict], keys: list[str]) -> str:
@@ -64,7 +72,7 @@ def main() -> None:
     # ---- claims 1, 2: walking at 5.5, running from Appendix E; u0 scan from the initial state
     log("claims 1-2: walking and running from Appendix E")
     scan = np.round(np.arange(3.0, 10.0 + 1e-9, step), 2)
-    w, rows = tx.steady(scan, seconds=20.0, window=10.0)
+    w, rows = tx.steady(scan, seconds=20.0, window=10.0, progress=progress("claims 1-2", 20.0))
     R["from_initial_state"] = rows
     md += ["## Every u0 from Appendix E's initial condition (20 s, metrics over the last 10 s)\n", fmt(rows, METRIC_KEYS)]
     tr = w.trace.arrays()
@@ -95,8 +103,8 @@ def main() -> None:
     log("claim 3: u0 sweeps up and down")
     up_vals = list(np.round(np.arange(5.5, 9.0 + 1e-9, step), 2))
     down_vals = list(np.round(np.arange(7.75 if not args.quick else 7.5, 3.0 - 1e-9, -step), 2))
-    up = tx.sweep(up_vals)
-    down = tx.sweep(down_vals)
+    up = tx.sweep(up_vals, progress=progress("sweep up", 20.0 + 8.0 * (len(up_vals) - 1)))
+    down = tx.sweep(down_vals, progress=progress("sweep down", 20.0 + 8.0 * (len(down_vals) - 1)))
     R["sweep_up"], R["sweep_down"] = up, down
     md += ["## u0 swept up from walking (each step continues from the previous state; 8 s per step, last 4 s)\n", fmt(up, METRIC_KEYS),
            "## u0 swept down from running\n", fmt(down, METRIC_KEYS)]
@@ -106,7 +114,7 @@ def main() -> None:
     log("claim 4: pushes")
     delays = np.arange(0.0, 1.12, 0.2 if args.quick else 0.1)
     for target, force in (("right_shank", 200.0), ("hip", 288.0)):
-        wp, prow = tx.push(target, force, delays, before=10.0, after=8.0)
+        wp, prow = tx.push(target, force, delays, before=10.0, after=8.0, progress=progress(f"push {target}", 21.3))
         R[f"push_{target}"] = prow
         keys = ["delay", "t_push", "fell", "fell_at", "stride_length_before", "strides_to_recover"]
         for r in prow:
@@ -122,7 +130,7 @@ def main() -> None:
     slopes = [2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10] if not args.quick else [4, 6, 8, -2, -6]
     srows = []
     for s in slopes:
-        ws, (m,) = tx.steady(5.5, seconds=25.0, window=10.0, slope=s / 100, slope_start=5.0)
+        ws, (m,) = tx.steady(5.5, seconds=25.0, window=10.0, slope=s / 100, slope_start=5.0, progress=progress(f"slope {s} %", 25.0))
         m["slope_pct"] = s
         m["distance"] = float(ws.trace.arrays()["hip"][-1, 0, 0])
         srows.append(m)
@@ -138,11 +146,15 @@ def main() -> None:
     # ---- claim 6: ground parameters; the explicit damper needs dt <= 0.5 ms * 2e3 / b_g
     log("claim 6: ground parameters")
     grows = []
-    kgs, bgs = (5e3, 8e3, 1e4, 2e4, 4e4), (4e2, 8e2, 1e3, 2e3, 1e4, 2e4)
-    for dt, sel in ((0.0005, [b for b in bgs if b <= 2e3]), (0.0001, [1e4]), (0.00005, [2e4])):
+    if args.quick:  # the nominal step only (the stiff grounds need 5-10x smaller steps)
+        kgs, ground_steps = (5e3, 1e4, 4e4), ((0.0005, [4e2, 1e3, 2e3]),)
+    else:
+        kgs, ground_steps = (5e3, 8e3, 1e4, 2e4, 4e4), ((0.0005, [4e2, 8e2, 1e3, 2e3]), (0.0001, [1e4]), (0.00005, [2e4]))
+    for dt, sel in ground_steps:
         grid = [(kg, bg) for bg in sel for kg in kgs]
         kg_, bg_ = np.array(grid).T
-        _, rows_ = tx.steady(np.full(len(grid), 5.5), seconds=20.0, window=10.0, kg=kg_, bg=bg_, timestep=dt, record_every=int(round(0.002 / dt)))
+        _, rows_ = tx.steady(np.full(len(grid), 5.5), seconds=20.0, window=10.0, kg=kg_, bg=bg_, timestep=dt, record_every=int(round(0.002 / dt)),
+                             progress=progress(f"ground, step {dt * 1000:g} ms", 20.0))
         for (kg, bg), m in zip(grid, rows_):
             m.update(kg=kg, bg=bg, timestep=dt)
             grows.append(m)
@@ -151,10 +163,11 @@ def main() -> None:
     md += ["## Ground parameters from Appendix E's initial state (u0 = 5.5, 20 s; physics step 0.5 ms, smaller for b_g > 2000)\n",
            fmt(grows, ["kg", "bg", "timestep"] + METRIC_KEYS[1:])]
     swrows = []
-    for dt, sel in ((0.0005, [b for b in bgs if b <= 2e3]), (0.0001, [1e4]), (0.00005, [2e4])):
+    for dt, sel in ground_steps:
         grid = [(kg, bg) for bg in sel for kg in kgs]
         kg_, bg_ = np.array(grid).T
-        rows_ = tx.ground_switch(kg_, bg_, timestep=dt, record_every=int(round(0.002 / dt)))
+        rows_ = tx.ground_switch(kg_, bg_, timestep=dt, record_every=int(round(0.002 / dt)),
+                                 progress=progress(f"switched ground, step {dt * 1000:g} ms", 25.0))
         for m in rows_:
             m["timestep"] = dt
         swrows += rows_
@@ -164,10 +177,11 @@ def main() -> None:
            fmt(swrows, ["kg", "bg", "timestep"] + METRIC_KEYS[1:])]
 
     # ---- convergence of the physics step
-    log("convergence: halving the physics step")
+    log("convergence: halving the physics step" + (" (skipped with --quick)" if args.quick else ""))
     conv = []
-    for dt in (0.0005, 0.00025):
-        _, rows_ = tx.steady([5.5, 7.5], seconds=20.0, window=10.0, timestep=dt, record_every=int(round(0.002 / dt)))
+    for dt in () if args.quick else (0.0005, 0.00025):
+        _, rows_ = tx.steady([5.5, 7.5], seconds=20.0, window=10.0, timestep=dt, record_every=int(round(0.002 / dt)),
+                             progress=progress(f"convergence, step {dt * 1000:g} ms", 20.0))
         for m in rows_:
             m["timestep"] = dt
         conv += rows_

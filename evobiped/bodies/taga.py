@@ -16,7 +16,7 @@ of Appendix A that MJCF cannot express, as generalized forces in
 * knee friction -(b_2 + b_k f(x_5 - x_11)) (dx_5/dt - dx_11/dt) and the knee's
   elastic stop, read as the one-sided linear spring k_k max(0, x_5 - x_11)
   (the literal k_k h(x_5 - x_11) is a constant 1e4 N m step, numerically
-  ill-posed; see DESIGN.md section 4);
+  ill-posed);
 * the joint torques T_r1..T_r6 (actions, N m), the ankle torques only while
   that ankle is in contact (h(F_g2), h(F_g4) with h(0) = 0);
 * optional horizontal pushes on the hip or a shank's centre (Fig. 7).

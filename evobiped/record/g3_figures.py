@@ -9,13 +9,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..gaits import THRESHOLD  # noqa: E402
+from ..gaits import THRESHOLD
+from .figures import pyplot, save_figure
 
 GAIT_COLOURS = {"walk": "tab:blue", "trot": "tab:orange", "pace": "tab:green", "gallop": "tab:red", "pronk": "tab:purple", "none": "0.6"}
 
@@ -34,27 +31,26 @@ def draw_bars(ax, t: np.ndarray, x: np.ndarray, names, threshold: float = THRESH
 def run_figure(path: Path, t: np.ndarray, x: np.ndarray, names, *, title: str, threshold: float = THRESHOLD, go: np.ndarray | None = None) -> Path:
     """Activities x_k(t) above their thresholded Pearson diagram (Fig. 4A/B, 10A/B)."""
     n = 3 if go is not None else 2
-    fig, axes = plt.subplots(n, 1, figsize=(10, 2.2 + 1.6 * n), sharex=True, gridspec_kw={"height_ratios": [2, 1.2, 0.6][:n]})
+    fig, axes = pyplot().subplots(n, 1, figsize=(10, 2.2 + 1.6 * n), sharex=True, gridspec_kw={"height_ratios": [2, 1.2, 0.6][:n]})
     for k, name in enumerate(names):
         axes[0].plot(t, x[:, k], lw=1, label=name)
-    axes[0].axhline(threshold, color="k", ls=":", lw=0.8)
-    axes[0].set_ylabel("x (activity)")
+    axes[0].axhline(threshold, color="k", ls=":", lw=0.8, label=f"threshold {threshold:g}")
+    axes[0].set_ylabel("activity x (model units)")
     axes[0].legend(loc="upper right", ncol=len(names), fontsize=8)
     axes[0].set_title(title, fontsize=10)
     draw_bars(axes[1], t, x, names, threshold)
+    axes[1].set_title("gait diagram: white = above threshold (limb off the ground), black = below", fontsize=8)
     if go is not None:
         axes[2].plot(t, go, color="k")
         axes[2].set_ylabel("GO I")
     axes[-1].set_xlabel("time (model units)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, dpi=110)
 
 
 def sweep_diagrams(path: Path, t: np.ndarray, xs: list[np.ndarray], labels: list[str], names, *, title: str, threshold: float = THRESHOLD) -> Path:
     """One Pearson diagram per GO level (Fig. 8A style); ``xs[l]`` ``(T_l, N)`` over ``t``-aligned windows."""
-    fig, axes = plt.subplots(len(xs), 1, figsize=(10, 0.3 + 1.0 * len(xs)), squeeze=False)
+    fig, axes = pyplot().subplots(len(xs), 1, figsize=(10, 0.3 + 1.0 * len(xs)), squeeze=False)
     for ax, x, lab in zip(axes[:, 0], xs, labels):
         draw_bars(ax, t[: len(x)], x, names, threshold)
         ax.set_ylabel(lab, rotation=0, ha="right", va="center", fontsize=8)
@@ -62,16 +58,14 @@ def sweep_diagrams(path: Path, t: np.ndarray, xs: list[np.ndarray], labels: list
         ax.set_xticks([])
     axes[-1, 0].set_xticks(np.linspace(t[0], t[len(xs[-1]) - 1], 5))
     axes[-1, 0].set_xlabel("time within the window (model units)")
-    axes[0, 0].set_title(title, fontsize=10)
+    axes[0, 0].set_title(f"{title}\nwhite = above threshold (limb off the ground), black = below", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, dpi=110)
 
 
 def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.ndarray, labels: list[str], *, title: str, duty_lines=()) -> Path:
     """Frequency (Figs. 9, 11A) and fraction of cycle above threshold (Fig. 11B) vs GO level."""
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a1, a2) = pyplot().subplots(1, 2, figsize=(11, 4))
     osc = freq > 0  # levels without a steady oscillation are left out
     for lab in dict.fromkeys(labels):
         m = np.array([l_ == lab for l_ in labels]) & osc
@@ -81,15 +75,15 @@ def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.
     a1.set_xlabel("GO level I")
     a1.set_ylabel("frequency (cycles / model time unit)")
     a1.legend(fontsize=8)
-    for y in duty_lines:
-        a2.axhline(y, color="k", ls=":", lw=0.8)
+    for y, ls in zip(duty_lines, (":", "--", "-.")):
+        a2.axhline(y, color="k", ls=ls, lw=0.8, label=f"{y:g}")
+    if len(duty_lines):
+        a2.legend(fontsize=8, title="reference", title_fontsize=8)
     a2.set_xlabel("GO level I")
-    a2.set_ylabel("fraction of cycle above threshold")
+    a2.set_ylabel("fraction of the cycle above threshold (limb off the ground)")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, dpi=110)
 
 
 def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0, max_diagrams: int = 12) -> list[Path]:

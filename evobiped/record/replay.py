@@ -64,7 +64,7 @@ def replay(
 
     from .evolution_log import log_history
     from ..episode import Listeners
-    from .figures import replay_figures, steering_figures
+    from .figures import fitness_label, replay_figures, steering_figures
     from .rerun_recorder import RerunRecorder, blueprint
     from .viewer import connect_url, flush, require_display, require_viewer
 
@@ -108,7 +108,7 @@ def replay(
             tmp.unlink()
     figs = []
     if figures_dir is not None:
-        figs = replay_figures(traj, figures_dir, history=history)
+        figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg))
         if others:
             figs += steering_figures([traj] + [o.trajectory for o in others], figures_dir)
     stored = source.meta.get("fitness")

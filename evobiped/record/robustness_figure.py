@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write
 from ..robustness import Trial, summarise
-from .figures import DPI, _plt
+from .figures import _plt, save_figure
 
 
 def robustness_figure(trials: list[Trial], path: str | Path, *, title: str) -> Path:
@@ -40,8 +38,4 @@ def robustness_figure(trials: list[Trial], path: str | Path, *, title: str) -> P
     b.set_title("Each trial")
     b.legend(fontsize=8, loc="best")
     fig.suptitle(title, fontsize=10)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight")
-    plt.close(fig)
-    atomic_write(path, buf.getvalue())
-    return Path(path)
+    return save_figure(fig, path)

@@ -12,33 +12,44 @@ _COLORS = {"plain": "tab:blue", "cyclic": "tab:orange"}
 
 
 def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, path: str | Path) -> Path:
-    """Fig. 5: best-walker distances, (a) runs whose best fell, (b) runs whose best stayed up; a bar per condition."""
+    """Fig. 5: best-walker distances, (a) runs whose best fell, (b) runs whose best stayed up; one outlined
+    histogram per condition over the same bins (each bar spans exactly its bin)."""
+    from matplotlib.ticker import MaxNLocator
+
     plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
-    width = (edges[1] - edges[0]) / (len(conditions) + 1)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
     for ax, stable, title in ((axes[0], False, "(a) unstable: fell within the episode"), (axes[1], True, "(b) stable: did not fall")):
         for i, c in enumerate(conditions):
             d = [o["distance"] for o in outcomes if o["condition"] == c and o["fell"] != stable]
-            counts, _ = np.histogram(d, bins=edges)
-            ax.bar(edges[:-1] + (i + 0.5) * width, counts, width=width, align="edge", color=_COLORS.get(c), label=f"{c} ({len(d)} runs)")
+            ax.hist(d, bins=edges, histtype="step", lw=2.0 + 1.0 * (len(conditions) - 1 - i), color=_COLORS.get(c, f"C{i}"),
+                    label=f"{c} ({len(d)} runs)")
         ax.set_title(title, fontsize=10)
-        ax.set_xlabel("distance of the best walker (m)")
+        ax.set_xlabel("distance of the best walker from its start (m)")
         ax.set_xlim(edges[0], edges[-1])
-        ax.legend(frameon=False, fontsize=8)
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
         ax.grid(alpha=0.3, axis="y")
     axes[0].set_ylabel("runs")
+    axes[1].legend(frameon=False, fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0), title="condition")
+    fig.suptitle("Distance of each run's best walker (Fig. 5)", fontsize=11)
     return _save(fig, path)
+
+
+#: the y-axis label per study condition: the quantity each one's fitness measures
+FITNESS_LABELS = {"plain": "fitness: distance (m)", "cyclic": "fitness: distance x (1 + cyclic activity) (m)",
+                  "forward": "fitness: (forward m + credit) x time up / T (m)"}
 
 
 def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str | Path) -> Path:
     """Best fitness per generation of every run, one panel per condition (Fig. 6 for all runs at once)."""
     plt = _plt()
-    fig, axes = plt.subplots(1, len(histories), figsize=(5 * len(histories), 3.6), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, len(histories), figsize=(5 * len(histories), 3.8), squeeze=False)
     for ax, (c, runs) in zip(axes[0], histories.items()):
         for h in runs:
-            ax.plot(h["generation"], h["best"], color=_COLORS.get(c), lw=1.0, alpha=0.6)
-        ax.set_title(f"{c}: best fitness of {len(runs)} runs", fontsize=10)
-        ax.set_xlabel("generation")
+            ax.plot(h["generation"], h["best"], color=_COLORS.get(c, "0.3"), lw=1.0, alpha=0.6)
+        ax.set_title(f"{c}: best fitness of each of {len(runs)} runs", fontsize=10)
+        ax.set_xlabel("generation (from 0)")
+        base = c.split("-")[-1] if c.split("-")[-1] in FITNESS_LABELS else c.split("-")[0]
+        ax.set_ylabel(FITNESS_LABELS.get(base, "fitness"), fontsize=9)
         ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("fitness (m)")
+    fig.suptitle("Best fitness per generation, one line per run", fontsize=11)
     return _save(fig, path)

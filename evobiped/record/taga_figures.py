@@ -11,11 +11,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from .figures import pyplot, save_figure
 
 LEG_COLOURS = ("tab:red", "tab:blue")  # right, left
 
@@ -44,7 +42,7 @@ def stick_figure(path: Path, tr: dict, *, p: int = 0, t0: float = 0.0, t1: float
     t = tr["t"]
     idx = _every(t, t0, t1, every)
     span = float(np.ptp(tr["hip"][idx, p, 0])) + 1.5
-    fig, ax = plt.subplots(figsize=(min(40, max(8, 1.2 * span)), 3.2))
+    fig, ax = pyplot().subplots(figsize=(min(40, max(8, 1.2 * span)), 3.2))
     _draw_sticks(ax, tr, p, idx, terrain)
     for m in marks or []:  # dots where a push acted (Fig. 7)
         i = int(np.searchsorted(t, m))
@@ -60,7 +58,7 @@ def cycle_figure(path: Path, tr: dict, start: float, end: float, *, p: int = 0, 
     idx = _every(t, start, end, every)
     c = tr["contact"][idx, p]
     single = c.sum(1) == 1
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+    fig, axes = pyplot().subplots(1, 2, figsize=(10, 3.6), sharey=True)
     for ax, sel, name in ((axes[0], ~single, "double support / flight"), (axes[1], single, "single support")):
         if sel.any():
             _draw_sticks(ax, tr, p, idx[sel])
@@ -71,14 +69,17 @@ def cycle_figure(path: Path, tr: dict, start: float, end: float, *, p: int = 0, 
 
 def activity_figure(path: Path, panels: list[tuple[str, np.ndarray, np.ndarray]], names: list[str]) -> Path:
     """Fig. 6-style: each panel (title, t (T,), u (T, 12)) as 12 stacked traces."""
-    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 7), sharey=True)
+    fig, axes = pyplot().subplots(1, len(panels), figsize=(6 * len(panels), 7), sharey=True)
     axes = np.atleast_1d(axes)
     for ax, (title, t, u) in zip(axes, panels):
         for k in range(u.shape[1]):
             ax.plot(t, u[:, k] / 10 - 1.2 * k, lw=0.8, color="k")
         ax.set_yticks(-1.2 * np.arange(len(names)), names)
-        ax.set_xlabel("t (s)")
-        ax.set_title(title)
+        x0 = t[0] - 0.02 * (t[-1] - t[0])  # amplitude scale bar: 10 units of u
+        ax.plot([x0, x0], [0.4, -0.6], color="tab:red", lw=2.5, clip_on=False)
+        ax.text(x0, -0.1, "10 ", color="tab:red", ha="right", va="center", fontsize=8)
+        ax.set_xlabel("time (s)")
+        ax.set_title(f"{title}\nneuron inner state u (red bar: 10 units)", fontsize=10)
     return _save(fig, path)
 
 
@@ -88,7 +89,7 @@ def bifurcation_figure(path: Path, up: list[dict], down: list[dict], *, title: s
     Squares: walking, diamonds: running (filled: sweep up, open: sweep down); falls
     are omitted."""
     keys = (("stride_length", "stride length (m)"), ("cycle_duration", "stride cycle duration (s)"), ("speed", "speed (m/s)"))
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
+    fig, axes = pyplot().subplots(1, 3, figsize=(14, 4))
     for ax, (k, label) in zip(axes, keys):
         for rows, fill, dname in ((up, True, "up"), (down, False, "down")):
             for gait, marker in (("walk", "s"), ("run", "D")):
@@ -115,6 +116,4 @@ def _save(fig, path: Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)

@@ -53,6 +53,8 @@ class Trajectory:
     sensors: dict[str, np.ndarray] = field(default_factory=dict)  # name -> (T, k)
     source: np.ndarray | None = None  # (T, 2) m, the current sound source, if the task has one
     sources: np.ndarray | None = None  # (S, 2) m, every source of the task, if it has them
+    #: (2,) unit vector: the direction the walker faced at the start (``Body.heading`` after reset)
+    start_facing: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))
     final_fitness: float = float("nan")
     fell: bool = False
     end_time: float = float("nan")
@@ -82,6 +84,7 @@ class TrajectoryRecorder:
         self._sensors: dict[str, list] = {}
         self._source: list = []
         self._sources = None
+        self._facing = np.array(episode.body.heading(sims)[self.index], float)
         self._record_state(0.0, sims)
 
     def tick(self, t, sims, ids, neurons, action, task_state) -> None:
@@ -118,6 +121,7 @@ class TrajectoryRecorder:
             actuator_names=tuple(ep.body.actuator_names),
             n_motor=ep.controller.n_outputs,
             touch_names=self._touch_names,
+            start_facing=self._facing,
             state_time=np.array([r[0] for r in st]),
             body_pos=np.stack([r[1] for r in st]),
             body_quat=np.stack([r[2] for r in st]),
