@@ -32,8 +32,18 @@ def _draw_sticks(ax, tr: dict, p: int, idx: np.ndarray, terrain=None, shift: flo
     x = np.linspace(tr["ankle"][idx, p, :, 0].min() - 0.3 + 0, tr["ankle"][idx, p, :, 0].max() + 0.3 + shift * len(idx), 200)
     ax.plot(x, terrain(x) if terrain is not None else 0 * x, color="0.4", lw=1.2)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
+    ax.set_xlabel("x (m): forward, the walker's initial facing")
     ax.set_ylabel("height (m)")
+
+
+def _stick_key(ax, marks: bool = False) -> None:
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=LEG_COLOURS[1], lw=1.5, label="left leg"), Line2D([], [], color=LEG_COLOURS[0], lw=1.5, label="right leg"),
+               Line2D([], [], marker="o", ls="", color="0.2", ms=4, label="hip"), Line2D([], [], marker=".", ls="", color="k", label="foot on the ground")]
+    if marks:
+        handles.append(Line2D([], [], marker="v", ls="", color="tab:green", label="push"))
+    ax.legend(handles=handles, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
 
 
 def stick_figure(path: Path, tr: dict, *, p: int = 0, t0: float = 0.0, t1: float = 10.0, every: float = 0.1,
@@ -42,12 +52,13 @@ def stick_figure(path: Path, tr: dict, *, p: int = 0, t0: float = 0.0, t1: float
     t = tr["t"]
     idx = _every(t, t0, t1, every)
     span = float(np.ptp(tr["hip"][idx, p, 0])) + 1.5
-    fig, ax = pyplot().subplots(figsize=(min(40, max(8, 1.2 * span)), 3.2))
+    fig, ax = pyplot().subplots(figsize=(min(16, max(8, 1.2 * span)), 3.2))
     _draw_sticks(ax, tr, p, idx, terrain)
     for m in marks or []:  # dots where a push acted (Fig. 7)
         i = int(np.searchsorted(t, m))
         ax.plot(tr["hip"][i, p, 0], tr["hip_z"][i, p] + 0.15, "v", color="tab:green", ms=7)
     ax.set_title(title)
+    _stick_key(ax, marks=bool(marks))
     return _save(fig, path)
 
 
@@ -63,6 +74,7 @@ def cycle_figure(path: Path, tr: dict, start: float, end: float, *, p: int = 0, 
         if sel.any():
             _draw_sticks(ax, tr, p, idx[sel])
         ax.set_title(f"{name} ({sel.sum()} frames)")
+    _stick_key(axes[1])
     fig.suptitle(title)
     return _save(fig, path)
 
