@@ -90,8 +90,11 @@ def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: st
     g = history["generation"]
     ax.plot(g, history["best"], color="black", lw=1.8, label="top")
     ax.plot(g, history["mean"], color="0.6", lw=1.5, label="mean")
+    from matplotlib.ticker import MaxNLocator
+
     ax.set_xlabel("generation (from 0)")
     ax.set_ylabel(ylabel)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlim(g.min(), max(g.max(), g.min() + 1))
     ax.set_title(title)
     ax.legend(frameon=False)

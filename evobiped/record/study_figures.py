@@ -21,7 +21,7 @@ def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, pat
     for ax, stable, title in ((axes[0], False, "(a) unstable: fell within the episode"), (axes[1], True, "(b) stable: did not fall")):
         for i, c in enumerate(conditions):
             d = [o["distance"] for o in outcomes if o["condition"] == c and o["fell"] != stable]
-            ax.hist(d, bins=edges, histtype="step", lw=2.0 + 1.0 * (len(conditions) - 1 - i), color=_COLORS.get(c, f"C{i}"),
+            ax.hist(d, bins=edges, histtype="step", lw=1.5 + 1.2 * (len(conditions) - 1 - i), color=_COLORS.get(c, f"C{i}"),
                     label=f"{c} ({len(d)} runs)")
         ax.set_title(title, fontsize=10)
         ax.set_xlabel("distance of the best walker from its start (m)")
@@ -41,15 +41,26 @@ FITNESS_LABELS = {"plain": "fitness: distance (m)", "cyclic": "fitness: distance
 
 def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str | Path) -> Path:
     """Best fitness per generation of every run, one panel per condition (Fig. 6 for all runs at once)."""
+    from matplotlib.ticker import MaxNLocator
+
     plt = _plt()
-    fig, axes = plt.subplots(1, len(histories), figsize=(5 * len(histories), 3.8), squeeze=False)
-    for ax, (c, runs) in zip(axes[0], histories.items()):
+    n = len(histories)
+    cols = min(3, n)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.4 * rows + 0.5), squeeze=False)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    for i, (ax, (c, runs)) in enumerate(zip(axes.ravel(), histories.items())):
         for h in runs:
             ax.plot(h["generation"], h["best"], color=_COLORS.get(c, "0.3"), lw=1.0, alpha=0.6)
-        ax.set_title(f"{c}: best fitness of each of {len(runs)} runs", fontsize=10)
-        ax.set_xlabel("generation (from 0)")
+        ax.set_title(f"{c}\nbest fitness of each of {len(runs)} runs", fontsize=9)
+        ax.set_xlabel("generation (from 0)", fontsize=9)
         base = c.split("-")[-1] if c.split("-")[-1] in FITNESS_LABELS else c.split("-")[0]
-        ax.set_ylabel(FITNESS_LABELS.get(base, "fitness"), fontsize=9)
+        ax.set_ylabel(FITNESS_LABELS.get(base, "fitness"), fontsize=8)
+        ax.ticklabel_format(useOffset=False)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.tick_params(labelsize=8)
         ax.grid(alpha=0.3)
     fig.suptitle("Best fitness per generation, one line per run", fontsize=11)
+    fig.tight_layout()
     return _save(fig, path)
