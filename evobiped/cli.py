@@ -327,6 +327,7 @@ def run_replay_cmd(args) -> int:
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
                listener=progress.listener())
+    progress.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
@@ -354,6 +355,7 @@ def add_robustness(sub) -> None:
                    help="pushes fall in the first stride after S s (default 10)")
     p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or beside the genome file)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_robustness_cmd)
 
 
@@ -375,7 +377,9 @@ def run_robustness_cmd(args) -> int:
     stem = "robustness" if source.run_dir is None or source.label == "best" else f"robustness_{source.label}"
     if source.run_dir is None:
         stem = f"{source.genome_path.stem}_robustness"
-    trials = battery(source.config.nominal().build(), source.genome, seconds=args.seconds, push_after=args.push_after)
+    progress = Progress("robustness", 1.0, quiet=args.quiet or args.json)
+    trials = battery(source.config.nominal().build(), source.genome, seconds=args.seconds, push_after=args.push_after, progress=progress)
+    progress.finish()
     rows = summarise(trials)
     out.mkdir(parents=True, exist_ok=True)
     report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after,

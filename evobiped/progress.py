@@ -64,20 +64,20 @@ class Progress:
         amount = f"{self.done:g} of {self.total:g}{unit}"
         self.say(f"{100 * frac:3.0f}% ({amount}{'; ' + note if note else ''})  elapsed {hms(elapsed)}  left ~{hms(left)}")
 
-    def listener(self):
-        """An episode listener (:class:`evobiped.episode.Listener`) reporting simulated seconds."""
-        return _EpisodeProgress(self)
+    def listener(self, offset: float = 0.0):
+        """An episode listener (:class:`evobiped.episode.Listener`) reporting ``offset`` + simulated seconds."""
+        return _EpisodeProgress(self, offset)
 
 
 class _EpisodeProgress:
-    def __init__(self, progress: Progress):
-        self.progress = progress
+    def __init__(self, progress: Progress, offset: float):
+        self.progress, self.offset = progress, offset
 
     def start(self, episode, sims):
         pass
 
     def tick(self, t, sims, ids, neurons, action, task_state):
-        self.progress.update(round(t, 3))
+        self.progress.update(round(self.offset + t, 3))
 
-    def end(self, result):
-        self.progress.finish()
+    def end(self, result):  # the caller ends the progress (Progress.finish) when all its episodes are done
+        pass

@@ -29,6 +29,7 @@ import numpy as np
 from .episode import Episode
 from .errors import UserError
 from .perturb import Trials
+from .progress import Progress
 
 PUSH_FORCES = (5.0, 10.0, 15.0)  # N
 PUSH_DURATION = 0.1  # s
@@ -90,8 +91,10 @@ def stride(episode: Episode, genome: np.ndarray, seconds: float, after: float) -
     return float(t[0]), float(np.median(np.diff(t)))
 
 
-def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push_after: float = 10.0) -> list[Trial]:
-    """Run every trial of the battery for one genome ``(G,)``; the episode must be nominal (no perturbations)."""
+def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push_after: float = 10.0,
+            progress: Progress | None = None) -> list[Trial]:
+    """Run every trial of the battery for one genome ``(G,)``; the episode must be nominal (no perturbations).
+    ``progress`` (optional) hears the simulated seconds of its batches."""
     if episode.body.action_kind != "position" or episode.body.floor_geom is None:
         raise UserError(f"the robustness battery needs a body with PD targets and MuJoCo ground contact (reil), not {episode.body.name!r}")
     if not push_after < seconds:
@@ -125,8 +128,11 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     runs += [([("friction", f"mu = {mu:g}")], Trials.nominal(1, n_act, friction=mu)) for mu in FRICTIONS]
     runs += [([("slope", f"{100 * s:+g} %")], Trials.nominal(1, n_act, slope=s)) for s in SLOPES]
     out = []
-    for names, trials in runs:
-        r = episode.run(genome, seconds=seconds, trials=trials).rows
+    if progress is not None:
+        progress.total, progress.unit = float(seconds * len(runs)), "s simulated (batches in turn)"
+    for k, (names, trials) in enumerate(runs):
+        watch = progress.listener(offset=k * seconds) if progress is not None else None
+        r = episode.run(genome, seconds=seconds, trials=trials, listener=watch).rows
         disp = r.end_position - r.start_position
         fwd = disp[:, 0]  # the Reil walker faces +x at the start
         for j, (family, label) in enumerate(names):

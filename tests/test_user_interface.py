@@ -111,3 +111,15 @@ def test_replay_shows_progress_unless_quiet(genome_file, capsys, monkeypatch):
     assert lines and "s simulated" in lines[-1]
     assert main(["replay", str(genome_file), "--quiet"]) == 0
     assert "replay: " not in capsys.readouterr().err
+
+
+def test_robustness_shows_progress_unless_quiet(tmp_path, capsys, monkeypatch):
+    cfg = EpisodeConfig(seconds=2.0, controller="simbicon")
+    lay = cfg.build().controller.layout
+    save_genome(tmp_path / "s.json", (lay.low + lay.high) / 2, cfg)
+    monkeypatch.setattr(progress, "INTERVAL", 0.0)
+    assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5"]) == 0
+    lines = [l for l in capsys.readouterr().err.splitlines() if l.startswith("robustness: ")]
+    assert lines and "s simulated" in lines[-1] and lines[-1].startswith("robustness: 100%")
+    assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5", "--quiet"]) == 0
+    assert "robustness: " not in capsys.readouterr().err
