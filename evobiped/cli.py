@@ -665,6 +665,16 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as exc:
         print(f"evobiped: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # a file or directory that cannot be read or written: one line, not a traceback
+        if exc.filename is None:
+            raise
+        from pathlib import Path
+
+        where = Path(exc.filename)
+        if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
+            where = where.parent
+        print(f"evobiped: error: {exc.strerror or exc}: {where}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("evobiped: interrupted", file=sys.stderr)
         return 130
