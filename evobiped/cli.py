@@ -8,6 +8,7 @@ becomes one line on stderr and exit status 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 
@@ -210,59 +211,74 @@ def default_run_dir(config) -> str:
 
 def run_evolve_cmd(args) -> int:
     from .evolution.evaluate import make_evaluator
-    from .evolution.run import Run, eta_seconds
+    from .evolution.run import Run
 
     if args.rerun is not None:  # before anything is written
         from .record.viewer import connect_url, require_display, require_viewer
 
         require_display() if args.rerun == "spawn" else require_viewer(connect_url(args.rerun))
+    on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
+                                      file=sys.stderr, flush=True)
     if args.resume:
         if any(getattr(args, f) is not None for f in ("preset", "config", "optimizer", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
-        run = Run.resume(args.resume)
-        if run.done:
-            print(f"run {args.resume} is already complete ({run.ga.generation} generations)")
-            return 0
-        backend = args.backend or run.config.backend
-        workers = args.workers or run.config.workers
-        address = args.address or run.config.address
-        check_workers(backend, workers, address)
+        run = Run.resume(args.resume)  # locks the directory and repairs its derived files
+        try:
+            for repair in run.repairs:
+                print(f"evobiped: repaired: {repair}", file=sys.stderr)
+            if run.done:
+                print(f"run {args.resume} is already complete ({run.ga.generation} generations)")
+                return 0
+            backend = args.backend or run.config.backend
+            workers = args.workers or run.config.workers
+            address = args.address or run.config.address
+            check_workers(backend, workers, address)
+            evaluator = make_evaluator(run.config.episode, backend, workers, address, on_retry=on_retry)
+        except BaseException:
+            run.close()
+            raise
     else:
         config = evolve_config(args)
         backend, workers, address = config.backend, config.workers, config.address
         check_workers(backend, workers, address)
         out = args.out or default_run_dir(config)
-        evaluator = make_evaluator(config.episode, backend, workers, address)  # fails before any file is written
+        evaluator = make_evaluator(config.episode, backend, workers, address, on_retry=on_retry)  # fails before any file is written
         try:
             run = Run.create(out, config)
         except BaseException:
             evaluator.close()
             raise
-    if args.resume:
-        evaluator = make_evaluator(run.config.episode, backend, workers, address)
+    with run:
+        return _evolve(run, evaluator, backend, args)
+
+
+def _evolve(run, evaluator, backend: str, args) -> int:
+    """The generations left, with progress lines and an optional live viewer; the summary line."""
+    from .evolution.run import eta_seconds
+
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     c = run.config
     population = len(run.ga.ask()[0])
     say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
         f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+    with evaluator, contextlib.ExitStack() as stack:
+        log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
-    log = _evolution_log(run, args.rerun)
+        def progress(s):
+            if log is not None:
+                log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
+                                   evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
+            eta = eta_seconds(s, run.history)
+            say(f"gen {s.generation:4d}/{s.generations_total - 1}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
+                f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
+                f"elapsed {hms(run.wall)}  left ~{hms(eta)}")
 
-    def progress(s):
-        log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
-                           evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
-        eta = eta_seconds(s, run.history)
-        say(f"gen {s.generation:4d}/{s.generations_total - 1}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
-            f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
-            f"elapsed {hms(run.wall)}  left ~{hms(eta)}")
-
-    try:
-        with evaluator, log:
+        try:
             summary = run.evolve(evaluator, progress)
-    except KeyboardInterrupt:
-        print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in history.csv); checkpoint saved; "
-              f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
-        return 130
+        except KeyboardInterrupt:
+            print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in history.csv); checkpoint saved; "
+                  f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
+            return 130
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
@@ -271,15 +287,15 @@ def run_evolve_cmd(args) -> int:
     return 0
 
 
-def _evolution_log(run, rerun: str | None):
-    """The run's evolution.rrd (resumed runs start it with their history so far), plus a viewer if asked."""
+def _viewer_log(run, rerun: str):
+    """A live viewer of the run's fitness (a new one, or the one at ADDR), started with the history so far
+    (the run's own evolution.rrd is written either way, after every generation)."""
+    from .evolution.run import history_columns
     from .record.evolution_log import EvolutionLog
-    from .record.source import read_history
 
-    kw = {} if rerun is None else {"spawn": True} if rerun == "spawn" else {"connect": rerun}
-    log = EvolutionLog(path=run.dir / "evolution.rrd", **kw)
+    log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))
     if run.history:
-        log.log_history(read_history(run.dir / "history.csv"))
+        log.log_history(history_columns(run.history))
     return log
 
 

@@ -1,14 +1,21 @@
 """Atomic file writes and JSON reading with clear errors.
 
 Every file evobiped writes goes through :func:`atomic_write`: written to a
-temporary file in the same folder, flushed, fsynced and renamed over the
-target, so a killed process leaves the old file or the new one, never half.
+temporary file in the same folder, flushed, fsynced, renamed over the target
+and the folder fsynced, so a killed process (or a lost machine) leaves the old
+file or the new one, never half.  A write that fails (disk full, no
+permission) raises :class:`WriteError`, one line naming the file.
+
+Testing hook: with ``EVOBIPED_FAULT_KILL_AT_REPLACE=N`` in the environment the
+process SIGKILLs itself just before its Nth rename (the fault-injection tests
+kill a run between every pair of writes this way).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import signal
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -23,27 +30,65 @@ def _umask() -> int:
 
 
 _UMASK = _umask()
+_replaces = 0
+
+
+class WriteError(UserError):
+    """A file that cannot be written: ``cannot write PATH: reason`` (exit status 2, nothing half-written)."""
+
+    def __init__(self, path: str | Path, exc: OSError):
+        self.path, self.reason = Path(path), exc.strerror or str(exc)
+        super().__init__(f"cannot write {self.path}: {self.reason}")
+
+
+def _fault_point() -> None:
+    """The testing hook: SIGKILL this process at the Nth rename (see the module docstring)."""
+    global _replaces
+    at = os.environ.get("EVOBIPED_FAULT_KILL_AT_REPLACE")
+    if at:
+        _replaces += 1
+        if _replaces == int(at):
+            os.kill(os.getpid(), signal.SIGKILL)
+
+
+def fsync_directory(directory: str | Path) -> None:
+    """Make a rename or a new file in ``directory`` durable."""
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def atomic_write(path: str | Path, data: str | bytes) -> None:
+    """Replace ``path`` by ``data`` whole or not at all; :class:`WriteError` if it cannot be written."""
     path = Path(path)
     mode = "wb" if isinstance(data, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    tmp = None
     try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
         with os.fdopen(fd, mode) as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, 0o644 & ~_UMASK)  # mkstemp creates 0600; give the usual permissions
+        _fault_point()
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
+        fsync_directory(path.parent)
+    except OSError as exc:
+        raise WriteError(path, exc) from None
+    finally:
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
-        raise
+
+
+def json_text(obj: Any) -> str:
+    """The exact text :func:`write_json` writes."""
+    return json.dumps(obj, indent=2, sort_keys=False) + "\n"
 
 
 def write_json(path: str | Path, obj: Any) -> None:
-    atomic_write(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
+    atomic_write(path, json_text(obj))
 
 
 def read_json(path: str | Path, *, what: str = "file") -> Any:

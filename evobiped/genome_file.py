@@ -18,13 +18,13 @@ import numpy as np
 from . import __version__
 from .episode import EpisodeConfig
 from .errors import ConfigError, UserError
-from .fileio import read_json, write_json
+from .fileio import atomic_write, json_text, read_json
 
 FORMAT = "evobiped-genome/1"
 
 
-def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> None:
-    """Write one genome ``(G,)`` with its episode config and metadata, atomically."""
+def genome_text(genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> str:
+    """The exact content of a genome file for one genome ``(G,)``, its episode config and metadata."""
     obj = {
         "format": FORMAT,
         "genome": [float(x) for x in np.asarray(genome, float).ravel()],
@@ -32,7 +32,12 @@ def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **
         **{k: _plain(v) for k, v in meta.items()},
         "version": __version__,
     }
-    write_json(path, obj)
+    return json_text(obj)
+
+
+def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> None:
+    """Write one genome ``(G,)`` with its episode config and metadata, atomically."""
+    atomic_write(path, genome_text(genome, episode, **meta))
 
 
 def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:

@@ -193,7 +193,7 @@ class CMAES:
             got = state.get("optimizer", "ga") if isinstance(state, dict) else type(state).__name__
             raise UserError(f"the checkpoint was written by the {got!r} optimizer; this run's config uses {self.name!r}")
         told, fitness, generation = state.get("told"), state.get("fitness"), state.get("generation")
-        if not (isinstance(told, list) and isinstance(generation, int) and generation == len(told) and isinstance(fitness, list)):
+        if not (isinstance(told, list) and isinstance(generation, int) and not isinstance(generation, bool) and generation == len(told) and isinstance(fitness, list)):
             raise UserError("checkpoint: the CMA-ES state needs 'told' (one list per generation), 'generation' and 'fitness'")
         self._rewind()
         for g, f in enumerate(told):

@@ -16,7 +16,8 @@ import signal
 import socket
 import sys
 from abc import ABC, abstractmethod
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,6 +93,9 @@ class SerialEvaluator(Evaluator):
 # ---- process pool: one Episode per worker process, built by the initializer
 _worker_episode: Episode | None = None
 
+#: times a generation's lost batches are sent again after worker deaths before the run gives up
+MAX_RETRIES = 3
+
 
 def _init_worker(config: EpisodeConfig) -> None:
     global _worker_episode
@@ -99,7 +103,19 @@ def _init_worker(config: EpisodeConfig) -> None:
     _worker_episode = config.build()
 
 
+def _fault_point() -> None:
+    """Testing hook: with ``EVOBIPED_FAULT_KILL_WORKER=FILE`` the first worker to find FILE deletes it and SIGKILLs itself."""
+    marker = os.environ.get("EVOBIPED_FAULT_KILL_WORKER")
+    if marker:
+        try:
+            os.unlink(marker)
+        except FileNotFoundError:
+            return
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
 def _work(job: tuple[np.ndarray, tuple[int, int] | None]) -> Evaluation:
+    _fault_point()
     return _evaluate(_worker_episode, *job)
 
 
@@ -107,25 +123,56 @@ class ProcessPoolEvaluator(Evaluator):
     """A persistent pool of ``workers`` processes; genomes go out in small batches.
 
     Batches of ``chunk`` genomes (default: about two per worker) balance the load (walkers that fall early cost
-    little, stable walkers the full episode).
+    little, stable walkers the full episode).  A worker that dies (killed, out of memory) breaks the pool: a
+    fresh pool evaluates the batches it lost again, at most :data:`MAX_RETRIES` times per generation, and
+    ``on_retry(n, MAX_RETRIES)`` is told each time.  The results are those of an undisturbed run, since a
+    genome's fate depends on that genome alone.
     """
 
-    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None):
+    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None):
         super().__init__(episode)
         if workers < 1:
             raise ConfigError(f"workers must be >= 1, got {workers}")
-        self.workers, self.chunk = int(workers), chunk
-        ctx = mp.get_context("spawn")
-        self.pool = ctx.Pool(self.workers, initializer=_init_worker, initargs=(episode,))
+        self.workers, self.chunk, self.on_retry = int(workers), chunk, on_retry
+        self.pool = self._new_pool()
+
+    def _new_pool(self) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(self.workers, mp_context=mp.get_context("spawn"), initializer=_init_worker, initargs=(self.config,))
 
     def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
-        parts = self.pool.map(_work, [(genomes[s], key) for s in chunks(len(genomes), self.chunk, self.workers)], chunksize=1)
-        return Evaluation.concat(parts)
+        jobs = [(genomes[s], key) for s in chunks(len(genomes), self.chunk, self.workers)]
+        parts: list[Evaluation | None] = [None] * len(jobs)
+        for attempt in range(MAX_RETRIES + 1):
+            todo = [i for i, p in enumerate(parts) if p is None]
+            futures = {i: self.pool.submit(_work, jobs[i]) for i in todo}
+            try:
+                for i, f in futures.items():
+                    parts[i] = f.result()
+                return Evaluation.concat(parts)
+            except BrokenProcessPool:
+                for i, f in futures.items():  # keep what finished before the death
+                    if parts[i] is None and f.done() and not f.cancelled() and f.exception() is None:
+                        parts[i] = f.result()
+                self._discard_pool()
+                self.pool = self._new_pool()
+                if attempt < MAX_RETRIES and self.on_retry is not None:
+                    self.on_retry(attempt + 1, MAX_RETRIES)
+        raise UserError(f"evaluation workers died {MAX_RETRIES + 1} times in one generation (out of memory? killed?); "
+                        "the last checkpoint is kept: resume the run with evobiped evolve --resume")
+
+    def _discard_pool(self) -> None:
+        """Stop the pool now: cancel queued batches, end running ones."""
+        procs = list((getattr(self.pool, "_processes", None) or {}).values())
+        self.pool.shutdown(wait=False, cancel_futures=True)
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
+        for p in procs:
+            p.join()
 
     def close(self):
-        self.pool.terminate()
-        self.pool.join()
+        self._discard_pool()
 
 
 class ThreadEvaluator(Evaluator):
@@ -232,7 +279,8 @@ class RayEvaluator(Evaluator):
         self.chunk = chunk
         n = workers or int(ray.cluster_resources().get("CPU", 1))
 
-        @ray.remote(num_cpus=1)
+        # a worker that dies is restarted and its batch sent again (same result: fates depend on genomes alone)
+        @ray.remote(num_cpus=1, max_restarts=MAX_RETRIES, max_task_retries=MAX_RETRIES)
         class _Worker:
             def __init__(self, config):
                 self.episode = config.build()
@@ -256,8 +304,10 @@ class RayEvaluator(Evaluator):
             self.ray.shutdown()
 
 
-def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: int | None = None, address: str | None = None) -> Evaluator:
-    """The evaluator for a backend name; ``workers`` defaults to all cores."""
+def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: int | None = None, address: str | None = None,
+                   on_retry=None) -> Evaluator:
+    """The evaluator for a backend name; ``workers`` defaults to all cores; ``on_retry(n, limit)``: a process-pool
+    batch is evaluated again after its worker died."""
     if backend not in BACKENDS:
         raise ConfigError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
     if workers is not None and workers < 1:
@@ -268,4 +318,4 @@ def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: in
         return RayEvaluator(episode, workers, address)
     if backend == "thread":
         return ThreadEvaluator(episode, workers or os.cpu_count() or 1)
-    return ProcessPoolEvaluator(episode, workers or os.cpu_count() or 1)
+    return ProcessPoolEvaluator(episode, workers or os.cpu_count() or 1, on_retry=on_retry)

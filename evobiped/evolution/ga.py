@@ -156,11 +156,26 @@ class GA:
         }
 
     def load_state_dict(self, state: dict) -> None:
-        if isinstance(state, dict) and state.get("optimizer", self.name) != self.name:
+        """Restore a :meth:`state_dict`; UserError (one line, naming the field) unless every field fits this run."""
+        if not isinstance(state, dict):
+            raise UserError(f"checkpoint: ga must be a table, got {type(state).__name__}")
+        if state.get("optimizer", self.name) != self.name:
             raise UserError(f"the checkpoint was written by the {state['optimizer']!r} optimizer; this run's config uses {self.name!r}")
-        pop = np.array(state["population"], float)
+        gen, pop, fit = state.get("generation"), state.get("population"), state.get("fitness")
+        if isinstance(gen, bool) or not isinstance(gen, int) or gen < 0:
+            raise UserError(f"checkpoint: ga.generation must be a whole number >= 0, got {gen!r}")
+        rows_ok = isinstance(pop, list) and all(isinstance(r, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in pop)
+        if not rows_ok or len({len(r) for r in pop}) > 1:
+            raise UserError("checkpoint: ga.population must be a list of genomes (lists of numbers of one length)")
+        pop = np.array(pop, float).reshape(len(pop), -1)
         if pop.shape != self.population.shape:
             raise ConfigError(f"checkpoint population has shape {pop.shape}, the config needs {self.population.shape}")
+        if not np.isfinite(pop).all() or (pop < self.low).any() or (pop > self.high).any():
+            i, j = np.argwhere(~(np.isfinite(pop) & (pop >= self.low) & (pop <= self.high)))[0]
+            raise UserError(f"checkpoint: ga.population[{i}][{j}] = {pop[i, j]!r} is outside the gene's bounds [{self.low[j]:g}, {self.high[j]:g}]")
+        P = len(pop)
+        if not (isinstance(fit, list) and len(fit) == P and all(f is None or (isinstance(f, (int, float)) and not isinstance(f, bool) and not np.isnan(f) and f != np.inf) for f in fit)):
+            raise UserError(f"checkpoint: ga.fitness must be a list of {P} numbers (or -Infinity, or null for unknown)")
         self.population = pop
-        self.fitness = np.array([np.nan if f is None else f for f in state["fitness"]], float)
-        self.generation = int(state["generation"])
+        self.fitness = np.array([np.nan if f is None else f for f in fit], float)
+        self.generation = gen

@@ -1,29 +1,31 @@
 """An evolutionary run: config, run directory, checkpoints, resume.
 
-Run directory (every file written atomically)::
+Run directory (format and names in :mod:`evobiped.evolution.rundir`; every file written atomically)::
 
     config.json            the full resolved RunConfig
-    history.csv            one row per generation (see HISTORY_COLUMNS)
-    generations/gen_NNNN.json   best genome of each generation (genome-file format)
-    best.json              best genome of the run so far
-    checkpoint.json        GA state after the last completed generation
+    checkpoint.json        the commit point: optimizer state, history, best genome after the last generation
+    history.csv            one row per generation (see HISTORY_COLUMNS)       } derived from the checkpoint,
+    best.json              best genome of the run so far                      } rebuilt by a resume when
+    evolution.rrd          fitness per generation, a Rerun recording          } missing, stale or damaged
     summary.json           written when the run ends: the best walker, its distance and walking direction
+    generations/gen_NNNN.json   best genome of each generation (genome-file format), written just before its commit
+    .lock                  held (flock) by the one process that evolves the run
 
-``resume`` continues from checkpoint.json and yields exactly the history an
-uninterrupted run with the same config produces (wall times aside).
+``resume`` continues from checkpoint.json and yields exactly the files an
+uninterrupted run with the same config writes (wall times aside).
 """
 
 from __future__ import annotations
 
 import contextlib
-import csv
 import dataclasses
-import io
 import math
+import os
 import signal
 import threading
 import time
 import tomllib
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -33,16 +35,16 @@ import numpy as np
 from .. import __version__
 from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
-from ..fileio import atomic_write, read_json, write_json
-from ..genome_file import load_genome, save_genome
-from .evaluate import BACKENDS, Evaluator, make_evaluator
+from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
+from ..genome_file import genome_text, load_genome, save_genome
+from . import rundir
 from .cma import CMAES, CMAConfig
+from .evaluate import BACKENDS, Evaluator, make_evaluator  # noqa: F401 (re-exported)
 from .ga import GA, GAConfig
+from .rundir import HISTORY_COLUMNS
 
 #: optimizer name -> class; each has the GA's ask/tell/ranking/next_generation/carried/state_dict interface
 OPTIMIZERS = {"ga": GA, "cma": CMAES}
-
-HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -142,65 +144,164 @@ class GenerationStats:
 
 
 class Run:
-    """A run directory and the GA that lives in it."""
+    """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
-    def __init__(self, directory: Path, config: RunConfig, ga: GA, history: list[list], best: dict | None, wall: float):
+    def __init__(self, directory: Path, config: RunConfig, ga: GA, history: list[list], best: dict | None, wall: float,
+                 best_genome: list[float] | None = None):
         self.dir, self.config, self.ga = directory, config, ga
         self.history, self.best, self.wall = history, best, wall
+        #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
+        self.best_genome = best_genome
         #: fell / unstable / end_time of the current population (for the generation files)
         self._outcome: dict[str, np.ndarray] = {}
+        #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
+        self.repairs: list[str] = []
+        self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
 
     # ---- creating and resuming
     @classmethod
     def create(cls, directory: str | Path, config: RunConfig) -> "Run":
-        """Validate everything first; only then create the (new or empty) directory."""
+        """Validate everything first; only then create the (new or empty) directory and lock it."""
         directory = Path(directory)
         if directory.exists() and not directory.is_dir():
             raise UserError(f"run directory {directory} exists and is a file; give another --out")
-        if directory.exists() and any(directory.iterdir()):
-            raise UserError(f"run directory {directory} exists and is not empty (use --resume {directory} or another --out)")
         ga = make_ga(config)
-        directory.mkdir(parents=True, exist_ok=True)
-        (directory / "generations").mkdir(exist_ok=True)
-        write_json(directory / "config.json", {"evobiped": __version__, **config.to_dict()})
-        run = cls(directory, config, ga, [], None, 0.0)
-        run._write_history()
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise WriteError(directory, exc) from None
+        rundir.lock(directory)
+        try:
+            if any(p.name != rundir.LOCK for p in directory.iterdir()):
+                raise UserError(f"run directory {directory} exists and is not empty (use --resume {directory} or another --out)")
+            try:
+                (directory / rundir.GENERATIONS).mkdir(exist_ok=True)
+            except OSError as exc:
+                raise WriteError(directory / rundir.GENERATIONS, exc) from None
+            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict()})
+            run = cls(directory, config, ga, [], None, 0.0)
+            rundir.write_history(directory / rundir.HISTORY, [])
+        except BaseException:
+            rundir.unlock(directory)
+            raise
         return run
 
     @classmethod
     def resume(cls, directory: str | Path) -> "Run":
+        """Lock the directory, validate its checkpoint, rebuild every derived file from it (see :attr:`repairs`)."""
         directory = Path(directory)
         if not directory.is_dir():
             raise UserError(f"run directory not found: {directory}")
-        cfg = read_json(directory / "config.json", what="run config")
-        cfg.pop("evobiped", None)
-        config = RunConfig.from_dict(cfg, where=str(directory / "config.json"))
-        ga = make_ga(config)
-        ck = read_json(directory / "checkpoint.json", what="checkpoint") if (directory / "checkpoint.json").exists() else None
-        if ck is None:
-            return cls(directory, config, ga, [], None, 0.0)
+        rundir.lock(directory)
         try:
-            ga.load_state_dict(ck["ga"])
-            history, best, wall = ck["history"], ck["best"], float(ck["wall_seconds"])
-        except (KeyError, TypeError, ValueError) as exc:
-            raise UserError(f"checkpoint {directory / 'checkpoint.json'} is malformed ({exc})") from None
-        if len(history) != ga.generation:
-            raise UserError(f"checkpoint {directory / 'checkpoint.json'} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
-        run = cls(directory, config, ga, history, best, wall)
-        run._discard_uncheckpointed()
-        run._outcome = {k: np.array(v, dtype=float if k == "end_time" else bool) for k, v in ck.get("outcome", {}).items()}
+            run = cls._load(directory)
+            run._rebuild()
+        except BaseException:
+            rundir.unlock(directory)
+            raise
         return run
 
-    def _discard_uncheckpointed(self) -> None:
-        """Undo files of a generation that was interrupted before its checkpoint."""
-        for f in (self.dir / "generations").glob("gen_*.json"):
-            if int(f.stem[4:]) >= self.ga.generation:
-                f.unlink()
-        if self.best is not None:
-            src = self.dir / "generations" / f"gen_{self.best['generation']:04d}.json"
-            best = self.dir / "best.json"
-            if src.is_file() and (not best.is_file() or best.read_text() != src.read_text()):
-                atomic_write(best, src.read_text())
+    @classmethod
+    def _load(cls, directory: Path) -> "Run":
+        cfg = read_json(directory / rundir.CONFIG, what="run config")
+        if not isinstance(cfg, dict):
+            raise UserError(f"run config {directory / rundir.CONFIG} is not a table of settings")
+        cfg.pop("evobiped", None)
+        config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
+        ga = make_ga(config)
+        path = directory / rundir.CHECKPOINT
+        if not path.exists():
+            committed = cls._committed_files(directory)
+            if committed:
+                raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
+            return cls(directory, config, ga, [], None, 0.0)  # killed before its first commit: start over
+        ck = read_json(path, what="checkpoint")
+        if ck is None:
+            raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
+        try:
+            rundir.validate_checkpoint(ck, generations=config.generations, low=ga.low, high=ga.high)
+        except UserError as exc:
+            raise UserError(f"checkpoint {path} is malformed: {exc}") from None
+        ga.load_state_dict(ck["ga"])
+        history, best = ck["history"], ck["best"]
+        if len(history) != ga.generation:
+            raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
+        P = len(ga.ask()[0])
+        outcome = ck.get("outcome", {})
+        if any(len(v) != P for v in outcome.values()):
+            raise UserError(f"checkpoint: outcome lists must have one entry per individual ({P})")
+        run = cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
+        run._outcome = {k: np.array(v, dtype=float if k == "end_time" else bool) for k, v in outcome.items()}
+        return run
+
+    @staticmethod
+    def _committed_files(directory: Path) -> list[str]:
+        """Files that exist only after a first commit (gen_0000.json is written just before it)."""
+        found = [n for n in (rundir.BEST, rundir.SUMMARY, rundir.RECORDING) if (directory / n).exists()]
+        hist = directory / rundir.HISTORY
+        if hist.is_file() and hist.read_bytes().count(b"\n") > 1:
+            found.append(rundir.HISTORY)
+        found += [f"{rundir.GENERATIONS}/{p.name}" for p in sorted((directory / rundir.GENERATIONS).glob("gen_*.json")) if p.name != "gen_0000.json"]
+        return found
+
+    def _rebuild(self) -> None:
+        """Make every derived file what the checkpoint says it is; note each repair in :attr:`repairs`."""
+        d, g = self.dir, self.ga.generation
+        for p in rundir.remove_stale_temporaries(d):
+            self.repairs.append(f"{p.relative_to(d)} removed (a write cut short)")
+        (d / rundir.GENERATIONS).mkdir(exist_ok=True)
+        for p in sorted((d / rundir.GENERATIONS).glob("gen_*.json")):
+            if not p.stem[4:].isdigit() or int(p.stem[4:]) >= g:
+                p.unlink()
+                self.repairs.append(f"{p.relative_to(d)} removed (after the last checkpoint)")
+        self._derive(repair=True)
+        if self.done:
+            self._write_summary(repair=True)
+        elif (d / rundir.SUMMARY).exists():
+            (d / rundir.SUMMARY).unlink()
+            self.repairs.append(f"{rundir.SUMMARY} removed (the run is not complete)")
+
+    def _sync(self, name: str, text: str | None, *, repair: bool) -> None:
+        """Give file ``name`` the content ``text`` (None: no such file) unless it has it; a repair says so."""
+        path = self.dir / name
+        try:
+            current = path.read_text() if path.exists() else None
+        except (OSError, UnicodeDecodeError):
+            current = ""
+        if current == text:
+            return
+        if repair:
+            self.repairs.append(f"{name} {'rewritten from the checkpoint' if text is not None else 'removed (no generation is complete)'}")
+        if text is None:
+            path.unlink(missing_ok=True)
+        else:
+            atomic_write(path, text)
+
+    def _derive(self, *, repair: bool = False) -> None:
+        """history.csv, best.json and evolution.rrd from the committed state."""
+        from ..record.evolution_log import recording_matches, write_recording
+
+        self._sync(rundir.HISTORY, rundir.history_text(self.history), repair=repair)
+        self._sync(rundir.BEST, self._best_text(), repair=repair)
+        rec = self.dir / rundir.RECORDING
+        if not self.history:
+            self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None
+            return
+        columns = history_columns(self.history)
+        if repair:
+            if recording_matches(rec, columns):
+                return
+            self.repairs.append(f"{rundir.RECORDING} rebuilt from the checkpoint")
+        write_recording(rec, columns, self.recording_id)
+
+    def _best_text(self) -> str | None:
+        if self.best is None:
+            return None
+        genome = self.best_genome
+        if genome is None:  # a checkpoint written before the best genome was part of it: its generation file
+            src = rundir.generation_file(self.dir, self.best["generation"])
+            return src.read_text() if src.is_file() else None
+        return genome_text(np.array(genome), self.config.episode, **self.best)
 
     @property
     def done(self) -> bool:
@@ -208,7 +309,7 @@ class Run:
 
     # ---- the loop
     def evolve(self, evaluator: Evaluator, on_generation: Callable[[GenerationStats], None] | None = None) -> dict:
-        """Run the remaining generations; checkpoint after each.  Returns the summary."""
+        """Run the remaining generations; commit after each.  Returns the summary."""
         while not self.done:
             t0 = time.perf_counter()
             stats = self.step(evaluator)
@@ -222,7 +323,7 @@ class Run:
         return self.finish()
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate the unknown individuals of this generation and record it."""
+        """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
         ga = self.ga
         pop, unknown = ga.ask()
         ev = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
@@ -250,10 +351,9 @@ class Run:
             generations_total=self.config.generations,
         )
         meta = dict(fitness=float(f[b]), fell=bool(self._outcome["fell"][b]), end_time=float(self._outcome["end_time"][b]), seed=self.config.seed, generation=g)
-        save_genome(self.dir / "generations" / f"gen_{g:04d}.json", pop[b], self.config.episode, **meta)
+        save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
         if self.best is None or meta["fitness"] > self.best["fitness"]:
-            self.best = meta
-            save_genome(self.dir / "best.json", pop[b], self.config.episode, **meta)
+            self.best, self.best_genome = meta, [float(x) for x in pop[b]]
         self.history.append(stats.row())
         # individuals the optimizer carries over keep their outcome; the others' are filled in next generation
         ga.next_generation()
@@ -266,42 +366,68 @@ class Run:
 
     # ---- files
     def checkpoint(self) -> None:
-        """GA state + history, then history.csv; each file atomic, and Ctrl-C waits until both are written."""
+        """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
+        Ctrl-C waits until all are written."""
         outcome = {k: v.tolist() for k, v in self._outcome.items()}
         with _sigint_deferred():
             write_json(
-                self.dir / "checkpoint.json",
-                {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "wall_seconds": self.wall, "outcome": outcome},
+                self.dir / rundir.CHECKPOINT,
+                {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
+                 "wall_seconds": self.wall, "outcome": outcome},
             )
-            self._write_history()
-
-    def _write_history(self) -> None:
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        w.writerow(HISTORY_COLUMNS)
-        w.writerows(self.history)
-        atomic_write(self.dir / "history.csv", buf.getvalue())
+            self._derive()
 
     def _best_walk(self) -> dict | None:
         """Distance and walking direction of the best walker, re-simulated on the nominal episode
         (``EpisodeResult.walk``; the fitness of a perturbed run aggregates other presentations)."""
-        if self.best is None or not (self.dir / "best.json").is_file():
+        if self.best is None or not (self.dir / rundir.BEST).is_file():
             return None
-        genome, cfg, _ = load_genome(self.dir / "best.json")
+        genome, cfg, _ = load_genome(self.dir / rundir.BEST)
         return cfg.nominal().build().run(genome).walk()
 
-    def finish(self) -> dict:
-        summary = {
+    def _summary(self, best_walk: dict | None) -> dict:
+        return {
             "evobiped": __version__,
             "generations": self.ga.generation,
             "best": self.best,
             "wall_seconds": round(self.wall, 3),
             "evaluations": int(sum(r[HISTORY_COLUMNS.index("evaluations")] for r in self.history)),
             "stable": self.best is not None and not self.best["fell"],
-            "best_walk": self._best_walk(),
+            "best_walk": best_walk,
         }
-        write_json(self.dir / "summary.json", summary)
+
+    def _write_summary(self, *, repair: bool = False) -> dict:
+        path = self.dir / rundir.SUMMARY
+        if repair:  # the best walk costs an episode: keep a summary whose other fields agree with the checkpoint
+            try:
+                old = read_json(path, what="summary") if path.exists() else None
+                if isinstance(old, dict) and "best_walk" in old and path.read_text() == json_text(self._summary(old["best_walk"])):
+                    return old
+            except UserError:
+                pass
+            self.repairs.append(f"{rundir.SUMMARY} {'rewritten' if path.exists() else 'written'} from the checkpoint")
+        summary = self._summary(self._best_walk())
+        write_json(path, summary)
         return summary
+
+    def finish(self) -> dict:
+        """Write summary.json (the run is complete); returns it."""
+        return self._write_summary()
+
+    def close(self) -> None:
+        """Release the run directory's lock."""
+        rundir.unlock(self.dir)
+
+    def __enter__(self) -> "Run":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def history_columns(rows: list[list]) -> dict[str, np.ndarray]:
+    """History rows (HISTORY_COLUMNS each) -> ``{column: (n_generations,) array}``, as ``read_history`` gives."""
+    return {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
 
 
 @contextlib.contextmanager
@@ -324,10 +450,25 @@ def _sigint_deferred():
         raise KeyboardInterrupt
 
 
+#: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
+WALKER_BYTES = 256 * 1024
+
+
+def check_memory(population: int, genes: int) -> None:
+    """ConfigError unless a population of ``genes``-gene genomes and their simulations fit in half this machine's memory."""
+    need = population * (genes * 8 * 8 + WALKER_BYTES)
+    have = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    if need > have / 2:
+        fits = int(have / 2 // (genes * 8 * 8 + WALKER_BYTES))
+        raise ConfigError(f"population {population} needs about {need / 2**30:.3g} GiB for its genomes and simulations; "
+                          f"this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
+
+
 def make_ga(config: RunConfig):
     """Build the optimizer (GA or CMA-ES; the episode too, to learn the genome layout): fails before any file is written."""
     episode = config.episode.build()
     layout = episode.controller.layout
+    check_memory(config.cma.lam(layout.size) if config.optimizer == "cma" else config.ga.population, layout.size)
     initial = None
     if config.initial:
         initial = initial_genome(config.initial, config.episode, layout)

@@ -1,15 +1,17 @@
-"""Evolution progress on a ``generation`` timeline in Rerun: watch a run live or afterwards.
+"""Evolution progress on a ``generation`` timeline in Rerun: a run's ``evolution.rrd`` and a live viewer.
 
-The GA loop calls :meth:`EvolutionLog.log_generation` once per generation::
+A run writes its ``evolution.rrd`` whole after every generation, from the
+checkpoint's history (:func:`write_recording`, atomic: a killed run leaves a
+complete recording of its last committed generation, never a cut one).  A live
+viewer gets each generation as it ends through :class:`EvolutionLog`::
 
-    log = EvolutionLog(path=run_dir / "evolution.rrd")   # and/or spawn=True / connect="HOST:PORT"
+    log = EvolutionLog(spawn=True)          # or connect="HOST:PORT", or path=FILE.rrd
     log.log_generation(gen, best=..., mean=..., worst=..., median=..., evaluations=..., falls=...)
     log.close()
 
 Entities: ``evolution/best``, ``evolution/mean``, ``evolution/median``,
 ``evolution/worst`` (fitness) and ``evolution/counts/<name>`` for any extra
-numbers (evaluations, falls, wall seconds).  The file is streamed as the run
-goes (a killed run leaves a readable recording without its footer).
+numbers (evaluations, falls, wall seconds).
 """
 
 from __future__ import annotations
@@ -19,10 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..fileio import atomic_write
 from .viewer import connect_url, flush, require_viewer
 
 TIMELINE = "generation"
 _STYLE = {"best": ((0, 0, 0), 2.5), "mean": ((150, 150, 150), 2.0), "median": ((90, 140, 200), 1.0), "worst": ((220, 120, 120), 1.0)}
+#: the last bytes of a complete .rrd file start with this
+_FOOTER = b"RRF2FOOT"
 
 
 def declare_series(rec) -> None:
@@ -38,7 +43,7 @@ def log_history(rec, history: dict[str, np.ndarray]) -> None:
     import rerun as rr
 
     declare_series(rec)
-    idx = [rr.TimeColumn(TIMELINE, sequence=history["generation"].astype(np.int64))]
+    idx = [rr.TimeColumn(TIMELINE, sequence=np.asarray(history["generation"]).astype(np.int64))]
     for name, vals in history.items():
         if name == "generation":
             continue
@@ -46,61 +51,139 @@ def log_history(rec, history: dict[str, np.ndarray]) -> None:
         rec.send_columns(path, indexes=idx, columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
 
 
+def _blueprint():
+    import rerun.blueprint as rrb
+
+    return rrb.Blueprint(
+        rrb.Vertical(
+            rrb.TimeSeriesView(origin="evolution", contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"], name="fitness per generation"),
+            rrb.TimeSeriesView(origin="evolution/counts", name="evaluations, falls, time"),
+            row_shares=[3, 1],
+        ),
+        collapse_panels=True,
+    )
+
+
+def recording_bytes(history: dict[str, np.ndarray], recording_id: str, application_id: str = "evobiped_evolve") -> bytes:
+    """A complete ``.rrd`` (footer included) of a whole history, made in memory."""
+    import rerun as rr
+
+    rec = rr.RecordingStream(application_id, recording_id=recording_id)
+    stream = rec.binary_stream()
+    rec.send_blueprint(_blueprint())
+    log_history(rec, history)
+    data = stream.read(flush=True) or b""
+    rec.disconnect()
+    return data
+
+
+def write_recording(path: str | Path, history: dict[str, np.ndarray], recording_id: str) -> None:
+    """(Re)write ``path`` from a whole history, atomically (WriteError: which file, which error)."""
+    atomic_write(path, recording_bytes(history, recording_id))
+
+
+def recording_series(path: str | Path, entity: str = "/evolution/best") -> dict[int, float]:
+    """``{generation: value}`` of one series of an evolution recording (exceptions if unreadable)."""
+    import rerun as rr
+
+    out: dict[int, float] = {}
+    for c in rr.chunk.RrdReader(Path(path)).stream():
+        if c.entity_path == entity and not c.is_static:
+            rb = c.to_record_batch()
+            out.update(zip(rb.column(TIMELINE).to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
+    return out
+
+
+def recording_matches(path: str | Path, history: dict[str, np.ndarray]) -> bool:
+    """Whether ``path`` is a complete recording of exactly this history (best and mean per generation)."""
+    path = Path(path)
+    try:
+        if not path.is_file():
+            return False
+        with path.open("rb") as f:
+            f.seek(max(0, path.stat().st_size - 64))
+            if _FOOTER not in f.read():
+                return False
+        for name in ("best", "mean"):
+            want = {int(g): float(v) for g, v in zip(history["generation"], history[name])}
+            if recording_series(path, f"/evolution/{name}") != want:
+                return False
+        return True
+    except Exception:  # any damage: not a match, rebuild it
+        return False
+
+
 class EvolutionLog:
-    """Best/mean/worst fitness per generation to a ``.rrd`` file and/or a live viewer."""
+    """Best/mean/worst fitness per generation to a live viewer and/or a ``.rrd`` file.
+
+    The file (``path``) is made in memory and written whole and atomically by :meth:`close`.
+    """
 
     def __init__(self, *, path: str | Path | None = None, spawn: bool = False, connect: str | None = None, application_id: str = "evobiped_evolve", recording_id: str | None = None):
         import rerun as rr
-        import rerun.blueprint as rrb
 
-        self.rec = rr.RecordingStream(application_id, recording_id=recording_id or uuid.uuid4().hex)
-        bp = rrb.Blueprint(
-            rrb.Vertical(
-                rrb.TimeSeriesView(origin="evolution", contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"], name="fitness per generation"),
-                rrb.TimeSeriesView(origin="evolution/counts", name="evaluations, falls, time"),
-                row_shares=[3, 1],
-            ),
-            collapse_panels=True,
-        )
-        sinks = []
-        if path is not None:
-            sinks.append(rr.FileSink(str(path)))
-        self.streaming = spawn or connect is not None
-        if spawn:
-            self.rec.spawn(connect=False)
-            sinks.append(rr.GrpcSink())
-        elif connect is not None:
-            url = connect_url(connect)
-            require_viewer(url)
-            sinks.append(rr.GrpcSink(url))
-        if not sinks:
+        if not (spawn or connect is not None or path is not None):
             raise ValueError("EvolutionLog needs a path, spawn=True or a connect address")
-        self.rec.set_sinks(*sinks, default_blueprint=bp)
-        declare_series(self.rec)
+        recording_id = recording_id or uuid.uuid4().hex
+        self.path = None if path is None else Path(path)
+        #: (recording, its binary stream or None for a viewer)
+        self._targets = []
+        if spawn or connect is not None:
+            viewer = rr.RecordingStream(application_id, recording_id=recording_id)
+            if spawn:
+                viewer.spawn(connect=False)
+                viewer.set_sinks(rr.GrpcSink(), default_blueprint=_blueprint())
+            else:
+                url = connect_url(connect)
+                require_viewer(url)
+                viewer.set_sinks(rr.GrpcSink(url), default_blueprint=_blueprint())
+            self._targets.append((viewer, None))
+        if self.path is not None:
+            rec = rr.RecordingStream(application_id, recording_id=recording_id)
+            stream = rec.binary_stream()
+            rec.send_blueprint(_blueprint())
+            self._targets.append((rec, stream))
+        for rec, _ in self._targets:
+            declare_series(rec)
 
     def log_generation(self, generation: int, *, best: float, mean: float, worst: float, median: float | None = None, **counts: float) -> None:
         """One generation's fitness summary; ``counts`` (e.g. evaluations=50, falls=12) go to ``evolution/counts``."""
         import rerun as rr
 
-        self.rec.set_time(TIMELINE, sequence=int(generation))
         values = {"best": best, "mean": mean, "worst": worst, "median": median}
-        for name, v in values.items():
-            if v is not None:
-                self.rec.log(f"evolution/{name}", rr.Scalars(float(v)))
-        for name, v in counts.items():
-            if v is not None:
-                self.rec.log(f"evolution/counts/{name}", rr.Scalars(float(v)))
+        for rec, _ in self._targets:
+            rec.set_time(TIMELINE, sequence=int(generation))
+            for name, v in values.items():
+                if v is not None:
+                    rec.log(f"evolution/{name}", rr.Scalars(float(v)))
+            for name, v in counts.items():
+                if v is not None:
+                    rec.log(f"evolution/counts/{name}", rr.Scalars(float(v)))
 
     def log_history(self, history: dict[str, np.ndarray]) -> None:
-        """Every generation so far at once, e.g. from ``history.csv`` when a run resumes."""
-        log_history(self.rec, history)
+        """Every generation so far at once, e.g. the checkpoint's history when a run resumes."""
+        for rec, _ in self._targets:
+            log_history(rec, history)
 
     def close(self) -> None:
-        """Flush everything and finish the file."""
-        flush(self.rec, streaming=self.streaming)
+        """Write the file whole, then flush the viewer stream (bounded)."""
+        targets, self._targets = self._targets, []
+        for rec, stream in targets:
+            if stream is not None:
+                data = stream.read(flush=True) or b""
+                rec.disconnect()
+                atomic_write(self.path, data)
+            else:
+                flush(rec, streaming=True)
 
     def __enter__(self) -> "EvolutionLog":
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+            return
+        try:  # an error is on its way out already: do not mask it with another
+            self.close()
+        except Exception:
+            pass

@@ -18,8 +18,6 @@ from ..episode import EpisodeConfig
 from ..errors import UserError
 from ..genome_file import load_genome
 
-HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst")
-
 
 @dataclass
 class Source:
@@ -76,8 +74,11 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise UserError(f"history file not found: {path}")
-    with path.open(newline="") as f:
-        rows = list(csv.DictReader(f))
+    try:
+        with path.open(newline="") as f:
+            rows = list(csv.DictReader(f))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise UserError(f"{path} is not a run history ({exc})") from None
     if not rows or not {"generation", "best", "mean"} <= set(rows[0]):
         raise UserError(f"{path} is not a run history (needs columns generation, best, mean)")
     try:

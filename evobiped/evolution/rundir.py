@@ -1,0 +1,187 @@
+"""The run-directory format in one place: file names, the lock, checkpoint validation.
+
+``checkpoint.json`` is the run's one commit point per generation and its one
+source of truth: ``history.csv``, ``best.json``, ``summary.json`` and
+``evolution.rrd`` are derived from it and rebuilt from it on ``--resume``
+whenever they are missing, stale or damaged.  ``generations/gen_NNNN.json``
+is written just before the commit of generation NNNN (a resume deletes those
+beyond the last commit).
+"""
+
+from __future__ import annotations
+
+import csv
+import errno
+import fcntl
+import io
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import UserError
+from ..fileio import WriteError, atomic_write
+
+CONFIG = "config.json"
+CHECKPOINT = "checkpoint.json"
+HISTORY = "history.csv"
+BEST = "best.json"
+SUMMARY = "summary.json"
+RECORDING = "evolution.rrd"
+GENERATIONS = "generations"
+LOCK = ".lock"
+
+HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
+#: columns holding counts (whole numbers >= 0) and fitness values (a number or -inf)
+_COUNTS = ("generation", "evaluations", "falls", "unstable")
+_FITNESS = ("best", "mean", "median", "worst")
+
+
+def generation_file(directory: Path, generation: int) -> Path:
+    return Path(directory) / GENERATIONS / f"gen_{generation:04d}.json"
+
+
+def history_text(rows: list[list]) -> str:
+    """history.csv's exact content for ``rows`` (one per generation, HISTORY_COLUMNS)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(HISTORY_COLUMNS)
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def write_history(path: Path, rows: list[list]) -> None:
+    atomic_write(path, history_text(rows))
+
+
+def remove_stale_temporaries(directory: Path) -> list[Path]:
+    """Delete the ``.NAME.*.tmp`` files a killed :func:`~evobiped.fileio.atomic_write` left; returns them."""
+    found = [p for d in (Path(directory), Path(directory) / GENERATIONS) if d.is_dir() for p in d.glob(".*.tmp")]
+    for p in found:
+        p.unlink(missing_ok=True)
+    return found
+
+
+# ---- the lock
+_held: dict[Path, list] = {}  # resolved run directory -> [fd, count] (re-entrant within a process)
+
+
+def lock(directory: str | Path) -> None:
+    """Take the exclusive lock of a run directory (``flock`` on ``DIR/.lock``, which holds the owner's pid).
+
+    The kernel releases it when the process ends, however it ends, so a lock is
+    never stale.  A second process gets a UserError; the same process may lock again.
+    """
+    key = Path(directory).resolve()
+    if key in _held:
+        _held[key][1] += 1
+        return
+    path = key / LOCK
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise WriteError(path, exc) from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as exc:
+        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+        os.close(fd)
+        if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+            raise UserError(f"run directory {directory} is in use by process {owner}") from None
+        raise WriteError(path, exc) from None
+    pid = f"{os.getpid()}\n".encode()
+    if os.pread(fd, 32, 0) != pid:  # the owner's pid, for the message a second writer gets
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, pid, 0)
+    _held[key] = [fd, 1]
+
+
+def unlock(directory: str | Path) -> None:
+    """Release one :func:`lock` of this process (the last one frees the directory)."""
+    key = Path(directory).resolve()
+    if key not in _held:
+        return
+    _held[key][1] -= 1
+    if _held[key][1] == 0:
+        os.close(_held.pop(key)[0])
+
+
+# ---- the checkpoint
+def _bad(field: str, why: str):
+    return UserError(f"{field} {why}")
+
+
+def _number(v: Any, field: str, *, integer: bool = False, low: float | None = None, allow_minus_inf: bool = False) -> float:
+    ok_type = isinstance(v, int) if integer else isinstance(v, (int, float))
+    if isinstance(v, bool) or not ok_type:
+        raise _bad(field, f"must be {'a whole number' if integer else 'a number'}, got {v!r}")
+    if not math.isfinite(v) and not (allow_minus_inf and v == -math.inf):
+        raise _bad(field, f"must be finite, got {v!r}")
+    if low is not None and v < low:
+        raise _bad(field, f"must be >= {low:g}, got {v!r}")
+    return v
+
+
+def validate_checkpoint(ck: Any, *, generations: int, low: np.ndarray, high: np.ndarray) -> None:
+    """Check every field's type and range before use; a UserError names the first bad field (e.g. "best.fitness must be finite").
+
+    ``generations``: the run's total; ``low``/``high`` ``(G,)``: the gene bounds.
+    (The optimizer's own state is checked by its ``load_state_dict``.)
+    """
+    if not isinstance(ck, dict):
+        raise UserError(f"expected a table of fields, got {type(ck).__name__}")
+    for key in ("ga", "history", "best", "wall_seconds"):
+        if key not in ck:
+            raise _bad(key, "is missing")
+    if not isinstance(ck["ga"], dict):
+        raise _bad("ga", "must be a table")
+    history = ck["history"]
+    if not isinstance(history, list):
+        raise _bad("history", f"must be a list of rows, got {type(history).__name__}")
+    if len(history) > generations:
+        raise _bad("history", f"has {len(history)} rows for a run of {generations} generations")
+    for g, row in enumerate(history):
+        where = f"history[{g}]"
+        if not isinstance(row, list) or len(row) != len(HISTORY_COLUMNS):
+            raise _bad(where, f"must be a list of {len(HISTORY_COLUMNS)} values ({', '.join(HISTORY_COLUMNS)})")
+        for name, v in zip(HISTORY_COLUMNS, row):
+            if name in _COUNTS:
+                _number(v, f"{where}.{name}", integer=True, low=0)
+            else:
+                _number(v, f"{where}.{name}", allow_minus_inf=name in _FITNESS, low=0 if name == "wall_seconds" else None)
+        if row[0] != g:
+            raise _bad(f"{where}.generation", f"must be {g}, got {row[0]!r}")
+    _number(ck["wall_seconds"], "wall_seconds", low=0)
+    best = ck["best"]
+    if best is None:
+        if history:
+            raise _bad("best", "is null although generations were completed")
+    else:
+        if not isinstance(best, dict):
+            raise _bad("best", f"must be a table, got {type(best).__name__}")
+        for key in ("fitness", "fell", "end_time", "generation"):
+            if key not in best:
+                raise _bad(f"best.{key}", "is missing")
+        _number(best["fitness"], "best.fitness", allow_minus_inf=True)
+        if not isinstance(best["fell"], bool):
+            raise _bad("best.fell", f"must be true or false, got {best['fell']!r}")
+        _number(best["end_time"], "best.end_time", low=0)
+        _number(best["generation"], "best.generation", integer=True, low=0)
+        if best["generation"] >= len(history):
+            raise _bad("best.generation", f"must be a completed generation (< {len(history)}), got {best['generation']}")
+        genome = ck.get("best_genome")
+        if genome is not None:
+            if not isinstance(genome, list) or len(genome) != len(low):
+                raise _bad("best_genome", f"must be a list of {len(low)} genes")
+            for i, v in enumerate(genome):
+                _number(v, f"best_genome[{i}]")
+                if not low[i] <= v <= high[i]:
+                    raise _bad(f"best_genome[{i}]", f"must be within the gene's bounds [{low[i]:g}, {high[i]:g}], got {v!r}")
+    outcome = ck.get("outcome", {})
+    if not isinstance(outcome, dict) or not set(outcome) <= {"fell", "unstable", "end_time"}:
+        raise _bad("outcome", "must be a table of fell, unstable and end_time lists")
+    for key, vals in outcome.items():
+        if not isinstance(vals, list) or not all(isinstance(v, (bool, int, float)) for v in vals):
+            raise _bad(f"outcome.{key}", "must be a list of numbers or booleans")
