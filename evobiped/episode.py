@@ -22,11 +22,17 @@ from .bodies.base import Body
 from .controllers import CONTROLLERS
 from .controllers.base import Controller
 from .errors import ConfigError, UserError
+from .validate import number
 from .mapping import MAPS, to_action
 from .perturb import PerturbationConfig, Trials
 from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
+
+
+#: the most control ticks, and physics steps, one walker's episode may take
+MAX_TICKS = 10**7
+MAX_STEPS = 10**8
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -49,8 +55,9 @@ class EpisodeConfig:
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
             if name not in reg:
                 raise ConfigError(f"unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
-        if not (isinstance(self.seconds, (int, float)) and self.seconds > 0):
-            raise ConfigError(f"episode seconds must be > 0, got {self.seconds!r}")
+        number(self.seconds, "episode seconds", above=0, unit="s")
+        if not isinstance(self.stop_on_fall, bool):
+            raise ConfigError(f"episode stop_on_fall must be true or false, got {self.stop_on_fall!r}")
         for opt in ("body_options", "controller_options", "task_options"):
             if not isinstance(getattr(self, opt), dict):
                 raise ConfigError(f"{opt} must be a table of options")
@@ -200,6 +207,13 @@ class Episode:
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
         self.control_dt = dt
+        ticks = seconds / dt
+        if not 1 <= round(ticks) <= MAX_TICKS:
+            raise ConfigError(f"episode seconds = {seconds!r} gives {ticks:.3g} control ticks of {dt:g} s; "
+                              f"an episode needs 1 to {MAX_TICKS:.0e}")
+        if round(ticks) * round(ratio) > MAX_STEPS:
+            raise ConfigError(f"an episode of {seconds:g} s at a physics step of {body.timestep:g} s takes "
+                              f"{round(ticks) * round(ratio):.3g} steps per walker, more than {MAX_STEPS:.0e}")
         controller.bind_period(dt)
         self.substeps = int(round(ratio))
         self._sims: dict[tuple, Sims] = {}

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..models import load_model, model_path
 from ..sim import Sims
+from ..validate import number
 
 
 class Body(ABC):
@@ -34,7 +35,7 @@ class Body(ABC):
     floor_geom: ClassVar[str | None] = None
 
     def __init__(self, *, timestep: float, model_file: str | None = None):
-        self.timestep = float(timestep)
+        self.timestep = float(number(timestep, f"{self.name} body: timestep", low=1e-5, high=0.1, unit="s"))
         self.model_file = model_file or str(model_path(self.model_name))
 
     def build_model(self) -> mujoco.MjModel:

@@ -36,6 +36,7 @@ import numpy as np
 from ..errors import UserError
 from ..sim import Sims
 from .base import Body
+from ..validate import number
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
 ACTUATORS = (
@@ -80,6 +81,8 @@ class ReilBiped(Body):
         model_file: str | None = None,
     ):
         super().__init__(timestep=timestep, model_file=model_file)
+        for name, v in (("kp", kp), ("kv", kv), ("fall_height", fall_height), ("fall_tilt", fall_tilt)):
+            number(v, f"reil body: {name}")
         if not (kp > 0 and kv >= 0 and fall_height > 0 and 0 < fall_tilt <= np.pi):
             raise UserError("reil body: kp must be > 0, kv >= 0, fall_height > 0 and 0 < fall_tilt <= pi")
         if inertia not in ("geoms", "karma"):

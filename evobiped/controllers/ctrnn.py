@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
 from .base import Controller
+from ..validate import number
 
 #: Table III (init mean, init sigma, mutation sigma) and the ranges of Sect. II-C1
 WEIGHT = dict(low=-16.0, high=16.0, init_mean=0.0, init_sigma=8.0, mutation_sigma=8.0)
@@ -56,6 +57,8 @@ class CTRNN(Controller):
             raise ConfigError(f"ctrnn: unknown motor map {motor!r} (choose from {', '.join(MOTOR_MAPS)})")
         self.motor = motor
         self.output_kind = MOTOR_MAPS[motor]
+        number(n_neurons, "ctrnn: n_neurons", low=1, high=1000, integer=True)
+        number(dt, "ctrnn: dt", low=1e-4, high=1.0, unit="s")
         if n_neurons < 1 or n_neurons < n_outputs:
             raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
         if not dt > 0:

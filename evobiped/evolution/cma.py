@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
-from .ga import generation_rng
+from .ga import MAX_POPULATION, generation_rng
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -50,8 +50,8 @@ class CMAConfig:
 
     def __post_init__(self):
         p = self.population
-        if not (isinstance(p, int) and not isinstance(p, bool) and (p == 0 or p >= 2)):
-            raise ConfigError(f"cma.population must be an integer >= 2 (or 0 for the default), got {p!r}")
+        if not (isinstance(p, int) and not isinstance(p, bool) and (p == 0 or 2 <= p <= MAX_POPULATION)):
+            raise ConfigError(f"cma.population must be an integer in [2, {MAX_POPULATION:.0e}] (or 0 for the default), got {p!r}")
         s = self.sigma0
         if not (isinstance(s, (int, float)) and not isinstance(s, bool) and math.isfinite(s) and 0 < s <= 1):
             raise ConfigError(f"cma.sigma0 must be in (0, 1] (a fraction of each gene's range), got {s!r}")

@@ -23,6 +23,11 @@ import numpy as np
 
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
+from ..validate import number
+
+
+#: the largest population any optimizer accepts (memory is checked against the machine too: ``run.check_memory``)
+MAX_POPULATION = 10**7
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -36,12 +41,13 @@ class GAConfig:
     reevaluate_survivors: bool = False
 
     def __post_init__(self):
-        if not (isinstance(self.population, int) and self.population >= 2):
-            raise ConfigError(f"ga population must be an integer >= 2, got {self.population!r}")
-        if not (0 < self.fittest_fraction < 1):
+        number(self.population, "ga population", low=2, high=MAX_POPULATION, integer=True)
+        number(self.fittest_fraction, "ga fittest_fraction", above=0)
+        if not self.fittest_fraction < 1:
             raise ConfigError(f"ga fittest_fraction must be in (0, 1), got {self.fittest_fraction!r}")
-        if not (self.mutations_per_genome > 0):
-            raise ConfigError(f"ga mutations_per_genome must be > 0, got {self.mutations_per_genome!r}")
+        number(self.mutations_per_genome, "ga mutations_per_genome", above=0)
+        if not isinstance(self.reevaluate_survivors, bool):
+            raise ConfigError(f"ga reevaluate_survivors must be true or false, got {self.reevaluate_survivors!r}")
         if self.n_survivors < 1:
             raise ConfigError("ga population * fittest_fraction must keep at least one individual")
 

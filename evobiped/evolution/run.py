@@ -67,15 +67,15 @@ class RunConfig:
     frozen_blocks: tuple[str, ...] = ()
 
     def __post_init__(self):
-        if not (isinstance(self.generations, int) and self.generations >= 1):
-            raise ConfigError(f"generations must be an integer >= 1, got {self.generations!r}")
+        if isinstance(self.generations, bool) or not (isinstance(self.generations, int) and 1 <= self.generations <= 10**6):
+            raise ConfigError(f"generations must be an integer in [1, 1e6], got {self.generations!r}")
         if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
             raise ConfigError(f"seed must be an integer >= 0, got {self.seed!r}")
         if self.optimizer not in OPTIMIZERS:
             raise ConfigError(f"unknown optimizer {self.optimizer!r} (choose from {', '.join(OPTIMIZERS)})")
         if self.backend not in BACKENDS:
             raise ConfigError(f"unknown backend {self.backend!r} (choose from {', '.join(BACKENDS)})")
-        if self.workers is not None and not (isinstance(self.workers, int) and self.workers >= 1):
+        if self.workers is not None and (isinstance(self.workers, bool) or not (isinstance(self.workers, int) and self.workers >= 1)):
             raise ConfigError(f"workers must be an integer >= 1, got {self.workers!r}")
 
     def to_dict(self) -> dict:

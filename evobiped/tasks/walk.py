@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from .base import Task
+from ..validate import number
 
 
 def count_cycles(series: np.ndarray, lengths: np.ndarray, band: float) -> np.ndarray:
@@ -97,8 +98,9 @@ class WalkTask(Task):
             raise ConfigError(f"walk task: unknown fitness {fitness!r} (choose from {', '.join(FITNESS)})")
         if not (isinstance(survival_credit, (int, float)) and np.isfinite(survival_credit) and survival_credit >= 0):
             raise ConfigError(f"walk task: survival_credit must be a finite number >= 0 (m), got {survival_credit!r}")
-        if not (np.isfinite(cyclic_weight) and cyclic_weight >= 0) or cyclic_cycles < 1 or not cyclic_band > 0:
-            raise ConfigError("walk task: cyclic_weight >= 0 (finite), cyclic_cycles >= 1 and cyclic_band > 0 required")
+        number(cyclic_weight, "walk task: cyclic_weight", low=0)
+        number(cyclic_cycles, "walk task: cyclic_cycles", low=1, integer=True)
+        number(cyclic_band, "walk task: cyclic_band", above=0)
         if fitness != "distance" and cyclic_weight:
             raise ConfigError("walk task: the cyclic criterion multiplies eq. 4; use it with fitness = 'distance'")
         self.fitness_name = fitness
