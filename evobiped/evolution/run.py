@@ -172,12 +172,13 @@ class Run:
             raise WriteError(directory, exc) from None
         rundir.lock(directory)
         try:
-            if any(p.name != rundir.LOCK for p in directory.iterdir()):
+            if not rundir.is_unused(directory):
                 raise UserError(f"run directory {directory} exists and is not empty (use --resume {directory} or another --out)")
             try:
                 (directory / rundir.GENERATIONS).mkdir(exist_ok=True)
             except OSError as exc:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
+            rundir.remove_stale_temporaries(directory)
             write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict()})
             run = cls(directory, config, ga, [], None, 0.0)
             rundir.write_history(directory / rundir.HISTORY, [])

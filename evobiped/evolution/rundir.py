@@ -64,6 +64,16 @@ def remove_stale_temporaries(directory: Path) -> list[Path]:
     return found
 
 
+def is_unused(directory: Path) -> bool:
+    """True for a directory that holds no run: nothing, or only what a run killed before writing its config leaves
+    (the lock, an empty generations folder, temporaries)."""
+    for p in Path(directory).iterdir():
+        temporary = p.name.startswith(".") and p.name.endswith(".tmp")
+        if not (p.name == LOCK or temporary or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
+            return False
+    return True
+
+
 # ---- the lock
 _held: dict[Path, list] = {}  # resolved run directory -> [fd, count] (re-entrant within a process)
 

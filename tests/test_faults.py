@@ -1,0 +1,316 @@
+"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a dead worker, two writers,
+a full disk, tampered files and hostile configs.
+
+Each fault ends in a completed run equal to an undisturbed one (wall times aside) or in one line on
+stderr with exit status 2 and nothing lost.  Runs are tiny (4 walkers, 0.5 s episodes, 2 generations):
+a whole evolve takes about a second.
+"""
+
+import csv
+import json
+import os
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from evobiped.cli import main
+from evobiped.evolution.rundir import HISTORY_COLUMNS
+
+ROOT = Path(__file__).resolve().parents[1]
+RUN = ["--population", "4", "--generations", "2", "--episode-seconds", "0.5", "--backend", "serial", "--seed", "3", "--quiet"]
+#: atomic renames of an undisturbed RUN: config, history header, 5 per generation, summary
+WRITES = 2 + 5 * 2 + 1
+
+
+def evolve(*args, env=None, **kw) -> subprocess.CompletedProcess:
+    """``python -m evobiped evolve ARGS`` in a child process (a kill there does not touch the tests)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
+    return subprocess.run([sys.executable, "-m", "evobiped", "evolve", *map(str, args)], capture_output=True, text=True, env=env, **kw)
+
+
+def cli(*args) -> int:
+    try:
+        return main(list(map(str, args)))
+    except SystemExit as exc:
+        return exc.code
+
+
+def contents(d: Path) -> dict:
+    """Every file of a run directory, wall-clock times left out (the evolution recording as its series)."""
+    from evobiped.record.evolution_log import recording_series
+
+    out = {}
+    for p in sorted(d.rglob("*")):
+        name = str(p.relative_to(d))
+        if not p.is_file() or name == ".lock":
+            continue
+        if name == "evolution.rrd":
+            for s in ("best", "mean", "median", "worst", "counts/evaluations", "counts/falls", "counts/unstable"):
+                out[f"{name}:{s}"] = recording_series(p, f"/evolution/{s}")
+        elif name == "history.csv":
+            wall = HISTORY_COLUMNS.index("wall_seconds")
+            out[name] = [r[:wall] for r in csv.reader(p.read_text().splitlines())]
+        elif name in ("checkpoint.json", "summary.json"):
+            obj = json.loads(p.read_text())
+            obj.pop("wall_seconds")
+            for row in obj.get("history", []):
+                row.pop()
+            out[name] = obj
+        else:
+            out[name] = p.read_bytes()
+    return out
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("ref") / "run"
+    r = evolve(*RUN, "--out", d)
+    assert r.returncode == 0, r.stderr
+    return d
+
+
+@pytest.fixture
+def done(reference, tmp_path) -> Path:
+    """A completed run to damage."""
+    d = tmp_path / "run"
+    shutil.copytree(reference, d)
+    return d
+
+
+def files(d: Path) -> dict:
+    """Every file's bytes (the lock, which names its last holder, left out)."""
+    return {p: p.read_bytes() for p in d.rglob("*") if p.is_file() and p.name != ".lock"}
+
+
+def one_line_error(err: str, *words: str) -> None:
+    assert err.count("\n") == 1 and err.startswith("evobiped: error: ") and "Traceback" not in err, err
+    for w in words:
+        assert w in err, err
+
+
+# ---- kills between every pair of writes
+@pytest.mark.parametrize("n", range(1, WRITES + 1))
+def test_kill_at_every_write_then_resume_equals_an_undisturbed_run(reference, tmp_path, n):
+    d = tmp_path / "run"
+    killed = evolve(*RUN, "--out", d, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(n)})
+    assert killed.returncode == -signal.SIGKILL
+    if not (d / "config.json").exists():  # killed before the config was written: nothing to resume, start again
+        assert evolve(*RUN, "--out", d).returncode == 0
+    else:
+        r = evolve("--resume", d, "--quiet")
+        assert r.returncode == 0, r.stderr
+        assert "Traceback" not in r.stderr
+    assert contents(d) == contents(reference)
+    assert not list(d.rglob(".*.tmp"))
+
+
+def test_the_hook_kills_exactly_at_the_last_write(tmp_path):
+    """WRITES is the number of renames of RUN: one more kill point finds a finished run."""
+    r = evolve(*RUN, "--out", tmp_path / "r", env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(WRITES + 1)})
+    assert r.returncode == 0
+
+
+# ---- derived files damaged: rebuilt from the checkpoint
+DAMAGE = {
+    "history deleted": ("history.csv", lambda p: p.unlink()),
+    "history emptied": ("history.csv", lambda p: p.write_text("")),
+    "history random bytes": ("history.csv", lambda p: p.write_bytes(os.urandom(300))),
+    "history last row lost": ("history.csv", lambda p: p.write_text("".join(p.read_text().splitlines(True)[:-1]))),
+    "history overwritten": ("history.csv", lambda p: p.write_text("generation,best,mean\n0,99,1\n")),
+    "best deleted": ("best.json", lambda p: p.unlink()),
+    "best tampered": ("best.json", lambda p: p.write_text(p.read_text().replace('"fitness": ', '"fitness": 1'))),
+    "recording deleted": ("evolution.rrd", lambda p: p.unlink()),
+    "recording cut": ("evolution.rrd", lambda p: p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])),
+    "recording garbage": ("evolution.rrd", lambda p: p.write_bytes(os.urandom(1000))),
+    "summary deleted": ("summary.json", lambda p: p.unlink()),
+    "summary tampered": ("summary.json", lambda p: p.write_text("{}")),
+}
+
+
+@pytest.mark.parametrize("name", DAMAGE)
+def test_damaged_derived_file_is_rebuilt_on_resume(reference, done, capsys, name):
+    file, damage = DAMAGE[name]
+    damage(done / file)
+    assert cli("evolve", "--resume", done) == 0
+    captured = capsys.readouterr()
+    assert f"evobiped: repaired: {file} " in captured.err and "already complete" in captured.out
+    assert contents(done) == contents(reference)
+
+
+def test_a_run_cut_after_its_last_checkpoint_gets_its_summary(reference, done, capsys):
+    (done / "summary.json").unlink()
+    (done / "evolution.rrd").unlink()
+    assert cli("evolve", "--resume", done) == 0
+    assert "repaired: summary.json written" in capsys.readouterr().err
+    assert contents(done) == contents(reference)
+    assert cli("evolve", "--resume", done) == 0  # now nothing to repair
+    assert "repaired" not in capsys.readouterr().err
+
+
+# ---- the checkpoint tampered with: one line, exit 2, nothing changed
+def tamper(path: Path, change) -> None:
+    ck = json.loads(path.read_text())
+    path.write_text(json.dumps(change(ck)))
+
+
+TAMPER = {
+    "history is a number": (lambda ck: {**ck, "history": 5}, "history must be a list"),
+    "best is a string": (lambda ck: {**ck, "best": "x"}, "best must be a table"),
+    "best fitness inf": (lambda ck: {**ck, "best": {**ck["best"], "fitness": float("inf")}}, "best.fitness must be finite"),
+    "fitness list too short": (lambda ck: {**ck, "ga": {**ck["ga"], "fitness": ck["ga"]["fitness"][:2]}}, "ga.fitness must be a list of 4"),
+    "gene 1e300": (lambda ck: {**ck, "ga": {**ck["ga"], "population": [[1e300] + r[1:] for r in ck["ga"]["population"]]}}, "outside the gene's bounds"),
+    "best gene 1e300": (lambda ck: {**ck, "best_genome": [1e300] + ck["best_genome"][1:]}, "best_genome[0] must be within"),
+    "history row of text": (lambda ck: {**ck, "history": [["a"] * 9] * 2}, "history[0].generation must be a whole number"),
+    "generation is text": (lambda ck: {**ck, "ga": {**ck["ga"], "generation": "2"}}, "ga.generation must be a whole number"),
+    "null": (lambda ck: None, "is null"),
+    "a list": (lambda ck: [], "expected a table"),
+}
+
+
+@pytest.mark.parametrize("name", TAMPER)
+def test_tampered_checkpoint_is_one_line_and_changes_nothing(done, capsys, name):
+    change, words = TAMPER[name]
+    tamper(done / "checkpoint.json", change)
+    before = files(done)
+    assert cli("evolve", "--resume", done) == 2
+    one_line_error(capsys.readouterr().err, words)
+    assert files(done) == before
+
+
+def test_a_deleted_checkpoint_does_not_restart_the_run(done, capsys):
+    (done / "checkpoint.json").unlink()
+    before = files(done)
+    assert cli("evolve", "--resume", done) == 2
+    one_line_error(capsys.readouterr().err, "checkpoint.json is missing", "cannot be resumed")
+    assert files(done) == before
+
+
+# ---- two writers
+def test_two_runs_into_one_directory_one_wins(tmp_path, reference):
+    d = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    procs = [subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *RUN[:-3], "--seed", str(seed), "--quiet", "--out", str(d)],
+                              stderr=subprocess.PIPE, text=True, env=env) for seed in (3, 4)]
+    results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
+    codes = sorted(rc for rc, _ in results)
+    assert codes == [0, 2], results
+    loser = next(err for rc, err in results if rc == 2)
+    assert ("is in use by process" in loser or "exists and is not empty" in loser) and loser.count("\n") == 1
+    if json.loads((d / "config.json").read_text())["seed"] == 3:
+        assert contents(d) == contents(reference)
+    assert cli("evolve", "--resume", d) == 0  # a consistent run: nothing to repair
+
+
+def test_resume_of_a_running_run_is_refused_and_a_dead_owner_frees_it(tmp_path, reference, capsys):
+    d = tmp_path / "run"
+    slow = [*RUN[:2], "--generations", "2000", *RUN[4:]]
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *slow, "--out", str(d)], env={**os.environ, "PYTHONPATH": str(ROOT)})
+    try:
+        deadline = time.time() + 60
+        while not (d / "checkpoint.json").exists() and time.time() < deadline:
+            time.sleep(0.05)
+        assert cli("evolve", "--resume", d) == 2
+        one_line_error(capsys.readouterr().err, f"is in use by process {proc.pid}")
+        second = evolve(*slow, "--out", d)
+        assert second.returncode == 2 and f"in use by process {proc.pid}" in second.stderr
+    finally:
+        proc.kill()
+        proc.wait()
+    # the owner died holding the lock: the kernel released it
+    r = evolve("--resume", d, "--quiet", env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "1"})
+    assert r.returncode == -signal.SIGKILL  # it got the lock and went on to write
+
+
+# ---- a worker dies
+def test_a_dead_worker_is_replaced_and_its_batch_evaluated_again(tmp_path, reference):
+    marker = tmp_path / "kill-one-worker"
+    marker.touch()
+    d = tmp_path / "run"
+    r = evolve(*RUN[:-3], "--seed", "3", "--quiet", "--backend", "process", "--workers", "2", "--out", d,
+               env={"EVOBIPED_FAULT_KILL_WORKER": str(marker)}, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert not marker.exists()  # a worker took the hook and died
+    assert "a worker died; evaluating its batch again (retry 1 of 3)" in r.stderr
+    got, want = contents(d), contents(reference)
+    got.pop("config.json"), want.pop("config.json")  # backend and workers differ
+    assert got == want
+
+
+# ---- a full disk
+def test_full_disk_is_one_line_and_the_run_completes_later(tmp_path, reference):
+    d = tmp_path / "run"
+    limit = lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))  # noqa: E731
+    r = evolve(*RUN, "--out", d, preexec_fn=limit)
+    assert r.returncode == 2
+    one_line_error(r.stderr, "cannot write", "File too large")
+    assert not (d / "summary.json").exists()
+    r = evolve("--resume", d, "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert contents(d) == contents(reference)
+
+
+# ---- places that cannot be written
+def test_out_under_a_file(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    assert cli("evolve", *RUN, "--out", tmp_path / "file" / "run") == 2
+    one_line_error(capsys.readouterr().err, "cannot write", "Not a directory")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only directories")
+def test_read_only_run_directory(done, capsys):
+    (done / "summary.json").unlink()
+    for p in [done, done / "generations"]:
+        p.chmod(0o555)
+    try:
+        assert cli("evolve", "--resume", done) == 2
+        one_line_error(capsys.readouterr().err, "cannot write", "Permission denied")
+    finally:
+        for p in [done, done / "generations"]:
+            p.chmod(0o755)
+
+
+# ---- hostile configs: one line, exit 2, nothing written
+HOSTILE = {
+    "[episode.body_options]\ntimestep = 0": "timestep must be in",
+    "[episode.body_options]\ntimestep = nan": "timestep must be finite",
+    "[episode.body_options]\ntimestep = 'fast'": "timestep must be a number",
+    "[episode.body_options]\ntimestep = 1e-9": "timestep must be in",
+    "[episode]\nseconds = inf": "episode seconds must be finite",
+    "[episode]\nseconds = 1e-9": "control ticks",
+    "[episode]\nseconds = true": "episode seconds must be a number",
+    "[episode.task_options]\ncyclic_weight = inf": "cyclic_weight must be finite",
+    "[episode.task_options]\ncyclic_weight = nan": "cyclic_weight must be finite",
+    "[ga]\npopulation = 1000000000": "ga population must be in",
+    "[ga]\npopulation = 5000000": "GiB",
+    "generations = true": "generations must be an integer",
+    "[ga]\nmutations_per_genome = inf": "mutations_per_genome must be finite",
+}
+
+
+@pytest.mark.parametrize("text", HOSTILE, ids=[t.replace("\n", " ") for t in HOSTILE])
+def test_hostile_config_is_one_line_and_writes_nothing(tmp_path, capsys, text, monkeypatch):
+    from evobiped.evolution import run
+
+    monkeypatch.setattr(run, "WALKER_BYTES", 2**30)  # any machine: 5e6 walkers of 1 GiB do not fit
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    assert cli("evolve", "--config", cfg, "--out", tmp_path / "run", "--backend", "serial", "--quiet") == 2
+    one_line_error(capsys.readouterr().err, HOSTILE[text])
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("episode, words", [({"seconds": 0}, "episode seconds must be > 0"), ({"seconds": True}, "must be a number"),
+                                             ({"body_options": {"timestep": 0}}, "timestep must be in")])
+def test_replaying_a_genome_with_a_hostile_episode_is_one_line(reference, tmp_path, capsys, episode, words):
+    g = json.loads((reference / "best.json").read_text())
+    g["episode"].update(episode)
+    f = tmp_path / "g.json"
+    f.write_text(json.dumps(g))
+    assert cli("replay", f, "--out", tmp_path / "r.rrd", "--quiet") == 2
+    one_line_error(capsys.readouterr().err, words)
