@@ -242,6 +242,20 @@ def test_a_dead_worker_is_replaced_and_its_batch_evaluated_again(tmp_path, refer
     assert got == want
 
 
+def test_a_dead_ray_worker_is_restarted_and_its_batch_evaluated_again(tmp_path, reference):
+    pytest.importorskip("ray")
+    marker = tmp_path / "kill-one-worker"
+    marker.touch()
+    d = tmp_path / "run"
+    r = evolve(*RUN[:-3], "--seed", "3", "--quiet", "--backend", "ray", "--workers", "2", "--out", d,
+               env={"EVOBIPED_FAULT_KILL_WORKER": str(marker)}, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert not marker.exists()
+    got, want = contents(d), contents(reference)
+    got.pop("config.json"), want.pop("config.json")
+    assert got == want
+
+
 # ---- a full disk
 def test_full_disk_is_one_line_and_the_run_completes_later(tmp_path, reference):
     d = tmp_path / "run"

@@ -286,6 +286,7 @@ class RayEvaluator(Evaluator):
                 self.episode = config.build()
 
             def evaluate(self, genomes, key):
+                _fault_point()
                 return _evaluate(self.episode, genomes, key)
 
         self.actors = [_Worker.remote(episode) for _ in range(max(1, n))]
