@@ -228,6 +228,7 @@ def run_evolve_cmd(args) -> int:
                 print(f"evobiped: repaired: {repair}", file=sys.stderr)
             if run.done:
                 print(f"run {args.resume} is already complete ({run.ga.generation} generations)")
+                run.close()
                 return 0
             backend = args.backend or run.config.backend
             workers = args.workers or run.config.workers

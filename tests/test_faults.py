@@ -101,6 +101,8 @@ def test_kill_at_every_write_then_resume_equals_an_undisturbed_run(reference, tm
     killed = evolve(*RUN, "--out", d, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(n)})
     assert killed.returncode == -signal.SIGKILL
     if not (d / "config.json").exists():  # killed before the config was written: nothing to resume, start again
+        r = evolve("--resume", d)
+        assert r.returncode == 2 and "holds no run yet" in r.stderr and r.stderr.count("\n") == 1
         assert evolve(*RUN, "--out", d).returncode == 0
     else:
         r = evolve("--resume", d, "--quiet")
@@ -163,6 +165,7 @@ TAMPER = {
     "history is a number": (lambda ck: {**ck, "history": 5}, "history must be a list"),
     "best is a string": (lambda ck: {**ck, "best": "x"}, "best must be a table"),
     "best fitness inf": (lambda ck: {**ck, "best": {**ck["best"], "fitness": float("inf")}}, "best.fitness must be finite"),
+    "best fitness not in the history": (lambda ck: {**ck, "best": {**ck["best"], "fitness": 1e9}}, "best.fitness must be the best fitness of"),
     "fitness list too short": (lambda ck: {**ck, "ga": {**ck["ga"], "fitness": ck["ga"]["fitness"][:2]}}, "ga.fitness must be a list of 4"),
     "gene 1e300": (lambda ck: {**ck, "ga": {**ck["ga"], "population": [[1e300] + r[1:] for r in ck["ga"]["population"]]}}, "outside the gene's bounds"),
     "best gene 1e300": (lambda ck: {**ck, "best_genome": [1e300] + ck["best_genome"][1:]}, "best_genome[0] must be within"),

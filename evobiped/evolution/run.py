@@ -204,6 +204,8 @@ class Run:
 
     @classmethod
     def _load(cls, directory: Path) -> "Run":
+        if not (directory / rundir.CONFIG).exists() and rundir.is_unused(directory):
+            raise UserError(f"{directory} holds no run yet (stopped before its config was written): start it again with evobiped evolve --out {directory}")
         cfg = read_json(directory / rundir.CONFIG, what="run config")
         if not isinstance(cfg, dict):
             raise UserError(f"run config {directory / rundir.CONFIG} is not a table of settings")

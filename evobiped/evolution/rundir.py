@@ -181,6 +181,10 @@ def validate_checkpoint(ck: Any, *, generations: int, low: np.ndarray, high: np.
         _number(best["generation"], "best.generation", integer=True, low=0)
         if best["generation"] >= len(history):
             raise _bad("best.generation", f"must be a completed generation (< {len(history)}), got {best['generation']}")
+        if best["fitness"] != history[best["generation"]][1]:
+            raise _bad("best.fitness", f"must be the best fitness of generation {best['generation']} in the history, got {best['fitness']!r}")
+        if "seed" in best:
+            _number(best["seed"], "best.seed", integer=True, low=0)
         genome = ck.get("best_genome")
         if genome is not None:
             if not isinstance(genome, list) or len(genome) != len(low):
