@@ -32,7 +32,7 @@ REFUSED = [
     (["g3", "fig4", "--switch-at", "5"], "--switch-at"),
     (["g3", "fig4", "--channels", "LF"], "--channels"),
     (["replay", "GENOME", "--spawn"], "cannot spawn a Rerun viewer: no display here"),
-    (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"], "No such file or directory: "),
+    (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"], "cannot write no/such/dir/t.json: No such file or directory"),
 ]
 
 
