@@ -17,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from evobiped.cli import main
@@ -243,6 +244,26 @@ def test_a_dead_worker_is_replaced_and_its_batch_evaluated_again(tmp_path, refer
     got, want = contents(d), contents(reference)
     got.pop("config.json"), want.pop("config.json")  # backend and workers differ
     assert got == want
+
+
+def test_workers_that_keep_dying_stop_the_generation_after_the_last_retry(tmp_path, monkeypatch):
+    from evobiped.episode import EpisodeConfig
+    from evobiped.errors import UserError
+    from evobiped.evolution.evaluate import MAX_RETRIES, ProcessPoolEvaluator
+
+    marker = tmp_path / "kill-one-worker"
+    marker.touch()
+    monkeypatch.setenv("EVOBIPED_FAULT_KILL_WORKER", str(marker))
+    retries = []
+
+    def again(n, limit):  # every new pool loses a worker too
+        retries.append((n, limit))
+        marker.touch()
+
+    cfg = EpisodeConfig(seconds=0.1)
+    with ProcessPoolEvaluator(cfg, 1, on_retry=again) as ev, pytest.raises(UserError, match="workers died 4 times"):
+        ev.evaluate(np.zeros((2, cfg.build().controller.layout.size)))
+    assert retries == [(n, MAX_RETRIES) for n in range(1, MAX_RETRIES + 1)]
 
 
 def test_a_dead_ray_worker_is_restarted_and_its_batch_evaluated_again(tmp_path, reference):
