@@ -39,7 +39,7 @@ from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from . import rundir
 from .cma import CMAES, CMAConfig
-from .evaluate import BACKENDS, Evaluator, make_evaluator  # noqa: F401 (re-exported)
+from .evaluate import BACKENDS, Evaluator
 from .ga import GA, GAConfig
 from .rundir import HISTORY_COLUMNS
 
