@@ -8,7 +8,11 @@ Measurements in one process, on the same model, time step and genomes:
 (b) evaluation: the full episode (controller in the loop, every tick through
     Python/numpy, ``mujoco.batch`` stepping in C) in this process, one thread;
 (c) the process-pool evaluator with 1 worker and with ``workers`` workers;
-(d) the thread evaluator with ``workers`` threads (one Episode each).
+(d) the thread evaluator with ``workers`` threads (one Episode each);
+(e) with ``presentations`` R > 1: evaluation in this process of the same genomes on R
+    perturbed presentations side by side in one batch (a push, target and pose noise),
+    counted as R x the simulated seconds, so (e) / (b) is the cost of perturbed
+    evaluation per simulated second relative to one presentation (1 = no extra cost).
 
 Episodes run to the full length (``EpisodeConfig.stop_on_fall=False``) so that every
 measurement integrates exactly the same physics.  Every figure is simulated seconds per
@@ -37,6 +41,9 @@ from .errors import ConfigError
 from .evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
 from .evolution.ga import GA, GAConfig
 from .progress import Progress
+
+#: the disturbances of measurement (e), per presentation (see evobiped.perturb)
+PERTURBED = dict(pushes=1, push_force=5.0, push_after=1.0, target_noise=0.01, pose_noise=0.01)
 
 #: ``bench(..., **QUICK)``: a run of well under 30 s
 QUICK = dict(population=16, seconds=4.0, repeats=5)
@@ -75,15 +82,16 @@ def bench(
     workers: int | None = None,
     repeats: int = 5,
     seed: int = 0,
+    presentations: int = 1,
     progress: Progress | None = None,
 ) -> dict:
-    """Measure (a)-(d) for ``population`` random genomes (Table III initialisation); ``progress``
+    """Measure (a)-(e) for ``population`` random genomes (Table III initialisation); ``progress``
     (optional) hears each finished measurement."""
     say = progress.say if progress is not None else (lambda msg: None)
     episode = episode or EpisodeConfig()
     workers = workers or os.cpu_count() or 1
-    if population < 1 or workers < 1 or repeats < 1:
-        raise ConfigError("bench: population, workers and repeats must be >= 1")
+    if population < 1 or workers < 1 or repeats < 1 or presentations < 1:
+        raise ConfigError("bench: population, workers, repeats and presentations must be >= 1")
     config = replace(episode, stop_on_fall=False)
     ep = config.build()
     if ep.body.has_custom_forces:
@@ -137,6 +145,10 @@ def bench(
         fns[f"threads {workers}"] = lambda: thread_ev.evaluate(genomes)
         if workers > 1:
             fns["pool 1"] = lambda: pools[1].evaluate(genomes)
+        if presentations > 1:
+            perturbed = replace(config, perturbations=dict(PERTURBED, presentations=presentations)).build()
+            trials = perturbed.trials_for((seed, 0))
+            fns[f"eval x{presentations}"] = lambda: perturbed.run(genomes, trials=trials)
         if progress is not None:
             progress.total = float(len(fns) * repeats)
             progress.unit = "measurements"
@@ -147,7 +159,8 @@ def bench(
             pool.close()
         if threads is not None:
             threads.close()
-    median = {k: sim_seconds / float(np.median(v)) for k, v in walls.items()}
+    simulated = {k: sim_seconds * (presentations if k.startswith("eval x") else 1) for k in walls}
+    median = {k: simulated[k] / float(np.median(v)) for k, v in walls.items()}
     raw_n = median[f"raw {workers}"] if workers > 1 else median["raw 1"]
     pool_1 = median["pool 1"] if workers > 1 else median[f"pool {workers}"]
     return {
@@ -158,6 +171,7 @@ def bench(
         "population": population,
         "episode_seconds": config.seconds,
         "simulated_seconds": sim_seconds,
+        "simulated_seconds_each": simulated,
         "repeats": repeats,
         "workers": workers,
         "cpu_count": os.cpu_count(),
@@ -167,6 +181,8 @@ def bench(
         "efficiency_threads": median[f"threads {workers}"] / raw_n,
         "scaling_raw": raw_n / median["raw 1"],
         "scaling_pool": median[f"pool {workers}"] / pool_1,
+        "presentations": presentations,
+        "presentation_cost": median["eval"] / median[f"eval x{presentations}"] if presentations > 1 else None,
         "replay_end_position_gap_m": end_gap,
         "wall_seconds": walls,
     }
@@ -174,10 +190,12 @@ def bench(
 
 def format_bench(r: dict) -> str:
     m, w = r["median_sim_s_per_s"], r["workers"]
-    spread = {k: (r["simulated_seconds"] / max(v), r["simulated_seconds"] / min(v)) for k, v in r["wall_seconds"].items()}
+    sim = r["simulated_seconds_each"]
+    spread = {k: (sim[k] / max(v), sim[k] / min(v)) for k, v in r["wall_seconds"].items()}
     names = {"raw 1": "(a) raw stepping, rollout 1 thread", f"raw {w}": f"(a) raw stepping, rollout {w} threads",
              "eval": "(b) evaluation, 1 process", "pool 1": "(c) process pool, 1 worker", f"pool {w}": f"(c) process pool, {w} workers",
-             f"threads {w}": f"(d) thread evaluator, {w} threads"}
+             f"threads {w}": f"(d) thread evaluator, {w} threads",
+             f"eval x{r['presentations']}": f"(e) evaluation, {r['presentations']} presentations"}
     lines = [
         f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "
         f"physics step {r['timestep_s'] * 1000:g} ms, control step {r['control_dt_s'] * 1000:g} ms, {r['cpu_count']} cores",
@@ -190,6 +208,8 @@ def format_bench(r: dict) -> str:
         f"efficiency: 1 core (b)/(a 1) = {r['efficiency_one_core']:.3f}   {w} cores: pool (c {w})/(a {w}) = {r['efficiency_pool']:.3f}, "
         f"threads (d {w})/(a {w}) = {r['efficiency_threads']:.3f}",
         f"scaling 1 -> {w}: raw {r['scaling_raw']:.2f}x, pool {r['scaling_pool']:.2f}x",
+        *([f"cost per simulated second of {r['presentations']} perturbed presentations vs one: (b)/(e) = {r['presentation_cost']:.3f}"]
+          if r["presentations"] > 1 else []),
         f"open-loop replay of (b)'s controls ends within {r['replay_end_position_gap_m']:.2g} m of (b)",
     ]
     return "\n".join(lines)

@@ -274,7 +274,9 @@ class Episode:
             sims.qpos[:, self._act_qadr] += trials.pose_offset[trial]
             sims.forward()
         noise = trials.noise() if trials is not None else None
+        offset = trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None  # (P, n_act) rad
         pushing = trials is not None and trials.push_start.size > 0
+        pushed = False  # a force is on some trunk now
         state = ctrl.initial_state(params)
         tstate = task.start(body, sims)
         alive = np.ones(P, bool)
@@ -294,13 +296,17 @@ class Episode:
             state, out = ctrl.step(params, state, inputs)
             action = to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)
             if trials is not None:
-                disturbed = action + trials.target_offset[trial]
                 jitter = noise.next()
-                if jitter is not None:
-                    disturbed += jitter[trial]
-                action = np.clip(disturbed, self.low, self.high)
+                if offset is not None or jitter is not None:
+                    disturbed = action + offset if offset is not None else action.copy()
+                    if jitter is not None:
+                        disturbed += jitter[trial]
+                    action = np.clip(disturbed, self.low, self.high)
             if pushing:
-                sims.xfrc_applied[:, self._trunk, :3] = trials.push_at(k * self.control_dt)[trial]
+                force = trials.push_at(k * self.control_dt)  # (R, 3) N
+                if pushed or force.any():  # write only while a push is on or just ended
+                    sims.xfrc_applied[:, self._trunk, :3] = force[trial]
+                    pushed = bool(force.any())
             body.apply(sims, ids, action[ids])
             bad = self._advance(sims, ids)
             t = (k + 1) * self.control_dt

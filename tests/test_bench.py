@@ -49,3 +49,13 @@ def test_cli_bad_arguments(capsys, args, words):
     except SystemExit as exc:
         rc = exc.code
     assert rc == 2 and words in capsys.readouterr().err
+
+
+def test_presentations_measurement_counts_every_presentation(capsys):
+    """(e) simulates R presentations of each walker: R times the simulated seconds of (b)."""
+    assert main(["bench", "--population", "2", "--seconds", "0.5", "--workers", "1", "--repeats", "1", "--presentations", "3", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["simulated_seconds_each"]["eval x3"] == pytest.approx(3 * r["simulated_seconds_each"]["eval"]) == pytest.approx(3.0)
+    m = r["median_sim_s_per_s"]
+    assert r["presentation_cost"] == pytest.approx(m["eval"] / m["eval x3"])
+    assert m["eval x3"] == pytest.approx(3.0 / r["wall_seconds"]["eval x3"][0])

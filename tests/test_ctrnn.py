@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from evobiped.controllers import CTRNN
-from evobiped.errors import GenomeError
+from evobiped.errors import ConfigError, GenomeError
 
 
 def genome(net, W, tau, alpha, V=None):
@@ -96,3 +96,25 @@ def test_malformed_genome(change, words):
     good = net.layout.init_mean.copy()
     with pytest.raises(GenomeError, match=words.replace("[", r"\[").replace("]", r"\]")):
         net.decode(change(good))
+
+
+def test_configurable_time_constants():
+    """A faster range keeps Table III's proportions; a fast neuron follows its input within about tau."""
+    net = CTRNN(n_outputs=1, n_neurons=1, inputs={"s": 1}, time_constants=[0.04, 1.0])
+    lay = net.layout
+    tau = lay.slices()["time_constants"]
+    assert (lay.low[tau][0], lay.high[tau][0], lay.init_mean[tau][0]) == (0.04, 1.0, 0.52)
+    assert lay.init_sigma[tau][0] == pytest.approx(0.32) == lay.mutation_sigma[tau][0]
+    g = lay.init_mean.copy()
+    g[lay.slices()["weights"]], g[tau], g[lay.slices()["biases"]], g[lay.slices()["input_weights"]] = 0.0, 0.04, 0.0, 1.0
+    p = net.decode(g[None])
+    A = net.initial_state(p)
+    for _ in range(5):  # 0.1 s = 2.5 tau of a unit step: 1 - (1 - 0.02/0.04)^5
+        A, _ = net.step(p, A, np.ones((1, 1)))
+    assert A[0, 0] == pytest.approx(1 - 0.5**5)
+
+
+@pytest.mark.parametrize("bad", [[0.01, 5.0], [2.0, 1.0], [0.5], "fast", [0.5, float("nan")]])
+def test_time_constants_that_euler_cannot_integrate_are_refused(bad):
+    with pytest.raises(ConfigError, match="time_constants"):
+        CTRNN(n_outputs=6, time_constants=bad)

@@ -191,7 +191,7 @@ def test_genes_and_layout():
 
 def test_the_evolved_walker_in_docs_walks_50_s_and_10_m():
     """The best of `evobiped evolve --controller simbicon --seed 1` (docs/walkers): no fall in 50 s, >= 10 m
-    (issue 3's target), with steps: the feet take turns on the ground."""
+    with steps: the feet take turns on the ground."""
     from pathlib import Path
 
     from evobiped.genome_file import load_genome

@@ -15,6 +15,11 @@ o = 0.5 is mid-range (a 0.7 rad crouch for the knee).  ``"centred"`` (beyond
 the paper): target = (o - 0.5)(high - low) clipped to the range, so a network
 at rest (o = 0.5) stands straight; the slope is the same.
 
+Time constants (``time_constants``, s): the paper's [0.5, 5] by default.  A
+sensed network (``inputs``) that must balance may need faster neurons: a
+neuron answers its inputs within about tau, and a biped on point feet falls in
+about a second; any [low, high] with low > dt / 2 can be configured.
+
 Genome (Fig. 4): n*n weights, then n time constants, then n biases (120 values
 for n = 10), then, if the controller has external inputs, k*n input weights.
 Weight w_ij (from neuron i to neuron j) is gene i*n + j.
@@ -51,7 +56,8 @@ class CTRNN(Controller):
     name: ClassVar[str] = "ctrnn"
     output_kind: ClassVar[str] = "unit"
 
-    def __init__(self, *, n_outputs: int, n_neurons: int = 10, inputs: dict[str, int] | None = None, dt: float = 0.02, motor: str = "range"):
+    def __init__(self, *, n_outputs: int, n_neurons: int = 10, inputs: dict[str, int] | None = None, dt: float = 0.02, motor: str = "range",
+                 time_constants: tuple[float, float] = (TAU["low"], TAU["high"])):
         inputs = dict(inputs or {})
         if motor not in MOTOR_MAPS:
             raise ConfigError(f"ctrnn: unknown motor map {motor!r} (choose from {', '.join(MOTOR_MAPS)})")
@@ -63,6 +69,7 @@ class CTRNN(Controller):
             raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
         if not dt > 0:
             raise ConfigError(f"ctrnn: dt must be > 0, got {dt}")
+        tau = _tau_block(time_constants, dt)
         self.n = int(n_neurons)
         self.n_outputs = int(n_outputs)
         self.input_names = tuple(inputs)
@@ -71,7 +78,7 @@ class CTRNN(Controller):
         n, k = self.n, self.n_inputs
         blocks = [
             GeneBlock(name="weights", size=n * n, **WEIGHT),
-            GeneBlock(name="time_constants", size=n, **TAU),
+            GeneBlock(name="time_constants", size=n, **tau),
             GeneBlock(name="biases", size=n, **BIAS),
         ]
         if k:
@@ -110,3 +117,19 @@ class CTRNN(Controller):
 
     def describe(self) -> dict:
         return {"name": self.name, "n_neurons": self.n, "dt": self.dt, "motor": self.motor}
+
+
+def _tau_block(time_constants, dt: float) -> dict:
+    """The time-constant gene block for a ``[low, high]`` range (s): Table III's for the paper's
+    [0.5, 5]; otherwise initial mean mid-range, initial and mutation sigma a third of the range
+    (Table III's proportions).  ``low`` must keep forward Euler stable at ``dt`` (low > dt / 2)."""
+    ok = isinstance(time_constants, (list, tuple)) and len(time_constants) == 2
+    ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in time_constants)
+    if not ok or not dt / 2 < time_constants[0] < time_constants[1]:
+        raise ConfigError(f"ctrnn: time_constants must be [low, high] s with {dt / 2:g} < low < high "
+                          f"(forward Euler at dt = {dt:g} s), got {time_constants!r}")
+    low, high = float(time_constants[0]), float(time_constants[1])
+    if (low, high) == (TAU["low"], TAU["high"]):
+        return TAU
+    third = (high - low) / 3
+    return dict(low=low, high=high, init_mean=0.5 * (low + high), init_sigma=third, mutation_sigma=third)
