@@ -236,3 +236,41 @@ def test_com_velocity_equals_mujocos_subtree_velocity_in_motion():
     fwd = body.heading(_sims(body, q0))[0]
     left = np.array([-fwd[1], fwd[0]])
     np.testing.assert_allclose(s["com_velocity"][0], [want @ fwd, want @ left], atol=1e-10)
+
+
+def test_hearing_biases_the_swing_targets_by_the_sound_signal():
+    """With the sound input: two more genes; s shifts the forward swing target by -side sound_forward s
+    and the outward one by side sound_lateral s (side +1 for the left leg); deaf genes change nothing."""
+    heard = {"sound": 1, **SENSORS}
+    ctrl = Simbicon(n_outputs=6, inputs=heard)
+    assert ctrl.layout.size == 15 and ctrl.layout.init_mean[-2:].tolist() == [0.0, 0.0]
+    deaf = Simbicon(n_outputs=6, inputs=SENSORS)
+    base = dict(step_time=0.3, hip_early=0.5, knee_early=-1.0, stance_knee=-0.1, cd=0.4, cv=0.2, roll_offset=0.05)
+    x = np.zeros((1, 1 + sum(SENSORS.values())))
+    x[0, ctrl._at["foot_contact"]] = [1, 1]
+    x[0, ctrl._at["com_from_feet"]] = [0.1, -0.2, 0.0, 0.3]
+    _, quiet = deaf.step(deaf.decode(_genome(deaf, **base)), deaf.initial_state(deaf.decode(_genome(deaf, **base))), x[:, 1:])
+    for sound_forward, sound_lateral in [(0.0, 0.0), (0.3, 0.0), (0.0, 0.2), (-0.1, 0.25)]:
+        params = ctrl.decode(_genome(ctrl, **base, sound_forward=sound_forward, sound_lateral=sound_lateral))
+        x[0, 0] = 0.5  # the source on the left
+        _, out = ctrl.step(params, ctrl.initial_state(params), x)
+        want = quiet[0].copy()
+        want[3] += sound_forward * 0.5  # the right leg swings (left stance): side -1, a longer step
+        want[4] -= sound_lateral * 0.5  # its outward direction is right: the foot moves left
+        np.testing.assert_allclose(out[0], want, atol=1e-12)
+
+
+def test_a_deaf_walker_steers_exactly_as_it_walks():
+    """The balance controller on the steering task with deaf genes: every presentation walks the walk task's path."""
+    import dataclasses
+    from pathlib import Path
+
+    from evobiped.genome_file import load_genome
+
+    genome, cfg, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "simbicon_seed1.json")
+    walk = cfg.build().run(genome, seconds=4.0)
+    steer = dataclasses.replace(cfg, task="steer", task_options={}).build()
+    assert steer.controller.hears and steer.controller.layout.size == 15
+    rows = steer.run(np.concatenate([genome, [0.0, 0.0]]), seconds=4.0).rows
+    assert np.array_equal(rows.end_position, np.repeat(walk.end_position, 2, axis=0))
+    assert np.array_equal(rows.end_time, np.repeat(walk.end_time, 2))

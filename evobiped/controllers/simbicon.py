@@ -21,9 +21,20 @@ same body.  It is a finite-state machine with two states per step:
   target = current angle + ``pelvis_gain`` tilt + ``pelvis_damping`` tilt rate
   (signed so as to turn the pelvis back), in pitch and in roll.
 
+Hearing (beyond SIMBICON, for the steering task).  When the task offers the
+sound signal s (``sound``, + for a source on the left; see
+:mod:`evobiped.tasks.steer`), two more genes bias the swing targets by s:
+``sound_forward`` lengthens the right leg's steps and shortens the left's
+(``- side sound_forward s`` on the forward swing target, side = +1 for the
+left leg), which turns a walker without hip yaw towards the left for s > 0
+when the gene is positive; ``sound_lateral`` moves every swing foot sideways
+(``+ sound_lateral s`` to the left).  Both start at 0 (deaf) and evolve
+like the rest; evolution picks their signs.
+
 Outputs are joint target angles (rad) in the body's actuator order, clipped to
-the body's ranges.  Genome: the 13 numbers above, each its own gene block
-(bounds, initial Gaussian, mutation sigma in :data:`GENES`).
+the body's ranges.  Genome: the 13 numbers above (15 with hearing), each its
+own gene block (bounds, initial Gaussian, mutation sigma in :data:`GENES` and
+:data:`SOUND_GENES`).
 """
 
 from __future__ import annotations
@@ -65,6 +76,16 @@ GENES = tuple(
     GeneBlock(name=k, size=1, low=lo, high=hi, init_mean=0.5 * (lo + hi), init_sigma=(hi - lo) / 4, mutation_sigma=(hi - lo) / 10)
     for k, (lo, hi) in RANGES.items()
 )
+#: hearing (when the task offers the ``sound`` sensor s in [-1, 1], + source on the left):
+#: name: (low, high), initial mean 0 (deaf), sigma = range / 4, mutation sigma = range / 10
+SOUND_RANGES = {
+    "sound_forward": (-0.4, 0.4),  # rad per unit s, added to the right swing hip's forward target, taken from the left's
+    "sound_lateral": (-0.3, 0.3),  # rad per unit s, moves each swing foot to the left (+) or right (-)
+}
+SOUND_GENES = tuple(
+    GeneBlock(name=k, size=1, low=lo, high=hi, init_mean=0.0, init_sigma=(hi - lo) / 4, mutation_sigma=(hi - lo) / 10)
+    for k, (lo, hi) in SOUND_RANGES.items()
+)
 # actuator columns per leg (left = 0, right = 1): hip pitch, hip roll, knee
 PITCH, ROLL, KNEE = np.array([0, 3]), np.array([1, 4]), np.array([2, 5])
 
@@ -90,7 +111,10 @@ class Simbicon(Controller):
         self.input_names = tuple(inputs)
         start = np.cumsum([0, *inputs.values()])
         self._at = {k: slice(start[i], start[i + 1]) for i, k in enumerate(inputs)}
-        self._layout = GenomeLayout(GENES)
+        if "sound" in inputs and inputs["sound"] != 1:
+            raise ConfigError(f"simbicon: the sound input is one signal s, got width {inputs['sound']}")
+        self.hears = "sound" in inputs
+        self._layout = GenomeLayout(GENES + SOUND_GENES if self.hears else GENES)
 
     @property
     def layout(self) -> GenomeLayout:
@@ -131,6 +155,10 @@ class Simbicon(Controller):
 
         fwd = np.where(early, g["hip_early"], g["hip_late"]) + g["cd"] * d[:, 0] + g["cv"] * v[:, 0]
         out = g["roll_offset"] + out_sw * (g["cd_lateral"] * d[:, 1] + g["cv_lateral"] * v[:, 1])
+        if self.hears:  # longer right steps and shorter left ones for a source on the left, feet set towards it
+            sound = x["sound"][:, 0]
+            fwd = fwd - out_sw * g["sound_forward"] * sound
+            out = out + out_sw * g["sound_lateral"] * sound
         target = np.empty((P, 6))
         # a nose-down pelvis swings the legs back, a left-up pelvis swings them left
         target[rows, PITCH[swing]] = fwd + pitch
