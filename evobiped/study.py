@@ -231,7 +231,9 @@ def run_study(
         el = time.perf_counter() - t0
         eta = el / done * (len(todo) - done)
         state = "stayed up" if not o["fell"] else f"fell at {o['end_time']:.1f} s"
-        say(f"run {done}/{len(todo)}: {o['condition']} seed {o['seed']}: best {o['fitness']:.2f} m ({state})  "
+        way = "" if o["heading_deg"] is None else f" at {o['heading_deg']:+.0f} deg"
+        say(f"run {done}/{len(todo)}: {o['condition']} seed {o['seed']}: best fitness {o['fitness']:.2f}, "
+            f"{o['distance']:.1f} m{way} ({state})  "
             f"elapsed {el:.0f} s, left ~{eta:.0f} s")
 
     if todo and backend == "serial":
