@@ -151,7 +151,7 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         return read_json(d / "outcome.json", what="run outcome")
     run_cfg = RunConfig.from_dict(config)
     run = Run.resume(d) if (d / "config.json").is_file() else Run.create(d, run_cfg)
-    with SerialEvaluator(run_cfg.episode) as ev:
+    with run, SerialEvaluator(run_cfg.episode) as ev:  # the run's lock is released when it ends
         summary = run.evolve(ev)  # a finished run only writes its summary again
     best = summary["best"]
     genome, ep_cfg, _ = load_genome(d / "best.json")
