@@ -1,0 +1,36 @@
+"""The walkers shipped in docs/walkers: each still walks as docs/walkers.md says, and still
+reaches its documented robustness-battery figures (docs/walkers/<name>_robustness.json)."""
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+
+from evobiped.genome_file import load_genome
+from evobiped.robustness import battery, summarise
+
+WALKERS = Path(__file__).parents[1] / "docs" / "walkers"
+#: name -> (least distance in the first 50 s (m), largest |heading| (deg) from the initial facing)
+FORWARD_WALKERS = {"simbicon_cma_seed5": (35.0, 10.0), "simbicon_cma_seed3": (25.0, 20.0)}
+
+
+@pytest.mark.parametrize("name", sorted(FORWARD_WALKERS))
+def test_a_forward_walker_walks_forwards_and_stays_up_200_s(name):
+    genome, cfg, meta = load_genome(WALKERS / f"{name}.json")
+    first = cfg.nominal().build().run(genome)
+    walk = first.walk()
+    least, widest = FORWARD_WALKERS[name]
+    assert not first.fell[0] and first.fitness[0] == pytest.approx(meta["fitness"], rel=1e-9)
+    assert walk["distance"] >= least and abs(walk["heading_deg"]) <= widest
+    long = dataclasses.replace(cfg.nominal(), seconds=200.0).build().run(genome)
+    assert not long.fell[0] and long.end_time[0] == 200.0
+
+
+@pytest.mark.parametrize("name", sorted(p.stem.removesuffix("_robustness") for p in WALKERS.glob("*_robustness.json")))
+def test_a_shipped_walker_still_reaches_its_documented_battery_figures(name):
+    documented = json.loads((WALKERS / f"{name}_robustness.json").read_text())
+    genome, cfg, _ = load_genome(WALKERS / f"{name}.json")
+    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"]))
+    got = {r["family"]: r["survived"] for r in rows}
+    assert got == {r["family"]: r["survived"] for r in documented["families"]}
