@@ -283,6 +283,9 @@ class Episode:
         fell = np.zeros(P, bool)
         unstable = np.zeros(P, bool)
         end_time = np.full(P, n_ticks * self.control_dt)
+        # the task sees when each walker's episode ends: the full length until it falls (so a
+        # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
+        tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
         start = body.planar_position(sims).copy()
         facing = body.heading(sims).copy()
         if listener is not None:
@@ -318,7 +321,6 @@ class Episode:
             fell[ids[down]] = True
             alive[ids[down]] = False
             end_time[ids[down]] = t
-        tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
         result = EpisodeResult(
             fitness=task.fitness(tstate),
             fell=fell,

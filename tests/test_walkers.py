@@ -34,3 +34,11 @@ def test_a_shipped_walker_still_reaches_its_documented_battery_figures(name):
     rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"]))
     got = {r["family"]: r["survived"] for r in rows}
     assert got == {r["family"]: r["survived"] for r in documented["families"]}
+
+
+def test_a_forward_fitness_walker_replays_with_its_fitness_so_far(tmp_path, capsys):
+    """The recording reads the forward fitness every tick: a walker still up counts as up to the end."""
+    from evobiped.cli import main
+
+    assert main(["replay", str(WALKERS / "simbicon_cma_seed5.json"), "--seconds", "2", "--out", str(tmp_path / "r.rrd"), "--quiet"]) == 0
+    assert (tmp_path / "r.rrd").stat().st_size > 0
