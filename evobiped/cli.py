@@ -17,6 +17,7 @@ import numpy as np
 from . import __version__
 from .errors import UserError
 from .progress import Progress, hms
+from .tasks.steer import with_sources
 
 
 class _Parser(argparse.ArgumentParser):
@@ -63,6 +64,12 @@ def names(kind: str) -> str:
     return ", ".join(reg)
 
 
+def add_source_flag(p) -> None:
+    p.add_argument("--source", dest="sources", nargs=2, type=float, action="append", metavar=("X", "Y"),
+                   help="a sound source at (X, Y) m for the steer task, one presentation each; repeat it for several "
+                        "(default: the config's, or the paper's (10, 3) and (10, -3))")
+
+
 def refuse(flags: str, why: str) -> None:
     """A flag that does not apply here: one line, exit 2."""
     raise UserError(f"{flags}: {why}")
@@ -91,6 +98,7 @@ def add_episode(sub) -> None:
     p.add_argument("--body", help=f"body: {names('body')} (default reil; not with --genome, whose file names it)")
     p.add_argument("--controller", help=f"controller: {names('controller')} (default ctrnn; not with --genome)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50)")
+    add_source_flag(p)
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_episode_cmd)
 
@@ -108,6 +116,7 @@ def run_episode_cmd(args) -> int:
         genome = None
     if args.seconds:
         cfg = EpisodeConfig(**{**cfg.__dict__, "seconds": args.seconds})
+    cfg = with_sources(cfg, args.sources)
     ep = cfg.build()
     if genome is None:
         lay = ep.controller.layout
@@ -123,11 +132,21 @@ def run_episode_cmd(args) -> int:
         "end_time": float(r.end_time[0]),
         **r.walk(),
     }
+    if cfg.task == "steer":  # the final distance to each source, one presentation each
+        rows = r.rows if r.rows is not None else r
+        out["sources"] = [{"source": list(map(float, q)), "final_distance": float(np.linalg.norm(rows.end_position[j] - q)),
+                           "fell": bool(rows.fell[j]), "end_time": float(rows.end_time[j])}
+                          for j, q in enumerate(ep.task.sources)]
     if args.json:
         print(json.dumps(out))
     else:
         state = f"fell at t = {out['end_time']:.2f} s" if out["fell"] else f"stayed up for {out['end_time']:.1f} s"
         print(f"fitness = {out['fitness']:.3f}; {state}; {walk_line(out)}")
+        for s in out.get("sources", []):
+            how = f"fell at t = {s['end_time']:.2f} s" if s["fell"] else f"up for {s['end_time']:.1f} s"
+            print(f"source ({s['source'][0]:g}, {s['source'][1]:g}) m: final distance {s['final_distance']:.2f} m ({how})")
+        if out.get("sources"):
+            print(f"median final distance over {len(out['sources'])} source(s): {np.median([s['final_distance'] for s in out['sources']]):.2f} m")
     return 0
 
 
@@ -149,6 +168,7 @@ def add_evolve(sub) -> None:
     p.add_argument("--body", help=f"body: {names('body')} (default reil)")
     p.add_argument("--controller", help=f"controller: {names('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {names('task')} (default walk)")
+    add_source_flag(p)
     p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
@@ -186,6 +206,10 @@ def evolve_config(args):
             ep[key] = getattr(args, flag)
     if args.cyclic:
         ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
+    if getattr(args, "sources", None):
+        if ep.get("task", "walk") != "steer":
+            raise UserError(f"--source applies to the steer task (add --task steer); this run's task is {ep.get('task', 'walk')!r}")
+        ep["task_options"] = {**ep.get("task_options", {}), "sources": [list(q) for q in args.sources]}
     if args.population is not None:  # the population of either optimizer
         ga["population"] = args.population
         d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": args.population}
@@ -220,7 +244,7 @@ def run_evolve_cmd(args) -> int:
     on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
                                       file=sys.stderr, flush=True)
     if args.resume:
-        if any(getattr(args, f) is not None for f in ("preset", "config", "optimizer", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze")):
+        if any(getattr(args, f) is not None for f in ("preset", "config", "optimizer", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze", "sources")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
         run = Run.resume(args.resume)  # locks the directory and repairs its derived files
         try:
@@ -325,6 +349,7 @@ def add_replay(sub) -> None:
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    add_source_flag(p)
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_replay_cmd)
 
@@ -343,13 +368,14 @@ def run_replay_cmd(args) -> int:
     seconds = args.seconds or source.config.seconds
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
-               listener=progress.listener())
+               listener=progress.listener(), sources=args.sources)
     progress.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
         why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
-               if source.config.perturbations else "--seconds changed the episode length")
+               if source.config.perturbations else "--source changed the sources" if args.sources and not args.seconds
+               else "--seconds changed the episode length")
         print(f"stored fitness not compared: {why}")
     elif r.stored_fitness is None:
         print("stored fitness: none in the genome file")
@@ -371,6 +397,8 @@ def add_robustness(sub) -> None:
     p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
                    help="pushes fall in the first stride after S s (default 10)")
     p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or beside the genome file)")
+    p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
+                   help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_robustness_cmd)
@@ -395,7 +423,8 @@ def run_robustness_cmd(args) -> int:
     if source.run_dir is None:
         stem = f"{source.genome_path.stem}_robustness"
     progress = Progress("robustness", 1.0, quiet=args.quiet or args.json)
-    trials = battery(source.config.nominal().build(), source.genome, seconds=args.seconds, push_after=args.push_after, progress=progress)
+    config = with_sources(source.config.nominal(), [args.sound_source] if args.sound_source else None)
+    trials = battery(config.build(), source.genome, seconds=args.seconds, push_after=args.push_after, progress=progress)
     progress.finish()
     rows = summarise(trials)
     out.mkdir(parents=True, exist_ok=True)

@@ -97,6 +97,9 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     ``progress`` (optional) hears the simulated seconds of its batches."""
     if episode.body.action_kind != "position" or episode.body.floor_geom is None:
         raise UserError(f"the robustness battery needs a body with PD targets and MuJoCo ground contact (reil), not {episode.body.name!r}")
+    if episode.task.presentations != 1:
+        raise UserError(f"the robustness battery runs one presentation per trial; this {episode.task.name!r} episode has "
+                        f"{episode.task.presentations} (give a steering walker one source)")
     if not push_after < seconds:
         raise UserError(f"the battery pushes after {push_after:g} s: trials must be longer (got {seconds:g} s)")
     hips = _hip_columns(episode)

@@ -141,3 +141,59 @@ def test_replay_records_every_presentation_and_draws_figs_12_13(walker, tmp_path
 
     paths = {c.entity_path for c in rr.chunk.RrdReader(out / "replay_best.rrd").stream()}
     assert {"/sensors/sound", "/world/source", "/world/sources"} <= paths
+
+
+# ---- sources on the command line: one presentation each
+@pytest.fixture(scope="module")
+def hearing_walker(tmp_path_factory):
+    """A short steering run of the balance controller (it hears through two genes) on two given sources."""
+    out = tmp_path_factory.mktemp("steer") / "run"
+    assert main(["evolve", "--controller", "simbicon", "--task", "steer", "--source", "8", "2", "--source", "9", "-4",
+                 "--population", "4", "--generations", "1", "--episode-seconds", "2", "--backend", "serial", "--quiet",
+                 "--out", str(out)]) == 0
+    return out
+
+
+def test_evolve_takes_its_sources_from_the_command_line(hearing_walker):
+    cfg = json.loads((hearing_walker / "config.json").read_text())
+    assert cfg["episode"]["task_options"]["sources"] == [[8.0, 2.0], [9.0, -4.0]]
+
+
+def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys):
+    from evobiped.genome_file import load_genome
+    from evobiped.tasks.steer import with_sources
+
+    sources = [[6.0, 0.0], [12.0, 5.0], [3.0, -6.0]]
+    argv = [a for q in sources for a in ("--source", str(q[0]), str(q[1]))]
+    assert main(["episode", "--genome", str(hearing_walker / "best.json"), *argv, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    genome, cfg, _ = load_genome(hearing_walker / "best.json")
+    for q, row in zip(sources, out["sources"]):  # each presentation alone, on a one-source episode
+        alone = with_sources(cfg, [q]).build().run(genome)
+        assert row["source"] == q and row["final_distance"] == pytest.approx(np.linalg.norm(alone.end_position[0] - q), abs=1e-12)
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--source", "3"], "expected 2 arguments"),
+    (["--source", "0.2", "-0.1"], "at the walker's start"),
+    (["--source", "nan", "1"], "sources must be"),
+])
+def test_bad_sources_are_one_line(hearing_walker, tmp_path, capsys, argv, words):
+    for cmd in (["episode", "--genome", str(hearing_walker / "best.json")], ["evolve", "--task", "steer", "--out", str(tmp_path / "x")]):
+        try:
+            rc = main([*cmd, *argv])
+        except SystemExit as exc:
+            rc = exc.code
+        err = capsys.readouterr().err.strip()
+        assert rc == 2 and words in err and len(err.splitlines()) == 1
+        assert not (tmp_path / "x").exists()
+
+
+def test_a_source_for_a_walking_task_and_a_two_source_battery_are_refused(hearing_walker, tmp_path, capsys):
+    assert main(["episode", "--genome", "docs/walkers/simbicon_cma_seed5.json", "--source", "3", "3"]) == 2
+    assert main(["evolve", "--source", "3", "3", "--out", str(tmp_path / "y")]) == 2 and not (tmp_path / "y").exists()
+    assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet"]) == 2
+    assert "runs one presentation" in capsys.readouterr().err
+    assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet", "--source", "8", "2",
+                 "--out", str(tmp_path / "b")]) == 0
+    assert len(json.loads((tmp_path / "b" / "robustness.json").read_text())["trials"]) == 117

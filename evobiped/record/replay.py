@@ -18,6 +18,7 @@ from pathlib import Path
 
 from .source import Source, read_history
 from .trajectory import Trajectory, TrajectoryRecorder
+from ..tasks.steer import with_sources
 
 
 @dataclass
@@ -26,7 +27,7 @@ class ReplayReport:
 
     fitness: float
     stored_fitness: float | None  # None if the source has none
-    compared: bool  # False when --seconds changed the episode length, or the stored fitness is over perturbed presentations
+    compared: bool  # False when --seconds or --source changed the episode, or the stored fitness is over perturbed presentations
     fell: bool
     end_time: float
     #: distance and walking direction (``EpisodeResult.walk``)
@@ -57,9 +58,11 @@ def replay(
     connect: str | None = None,
     figures_dir: str | Path | None = None,
     listener=None,
+    sources=None,
 ) -> ReplayReport:
     """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``).
-    ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`."""
+    ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`;
+    ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources."""
     import rerun as rr
 
     from .evolution_log import log_history
@@ -73,6 +76,7 @@ def replay(
     cfg = source.config
     if seconds is not None:
         cfg = dataclasses.replace(cfg, seconds=float(seconds))
+    cfg = with_sources(cfg, sources)
     episode = cfg.build()
     history = _history(source)
 
@@ -115,7 +119,7 @@ def replay(
     return ReplayReport(
         fitness=float(result.fitness[0]),
         stored_fitness=float(stored) if isinstance(stored, (int, float)) else None,
-        compared=cfg.seconds == source.config.seconds and not source.config.perturbations,
+        compared=cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options and not source.config.perturbations,
         fell=bool(result.fell[0]),
         end_time=float(result.end_time[0]),
         walk=result.walk(),

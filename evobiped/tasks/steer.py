@@ -36,6 +36,8 @@ from .base import Task
 
 #: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
 DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
+#: m: a source nearer than this to the start (the origin) is refused
+MIN_SOURCE_DISTANCE = 0.5
 
 
 def ear_signal(left: np.ndarray, right: np.ndarray, source: np.ndarray) -> np.ndarray:
@@ -53,7 +55,26 @@ def parse_sources(sources) -> np.ndarray:
         arr = None
     if arr is None or arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0 or not np.isfinite(arr).all():
         raise ConfigError(f"steer task: sources must be a list of [x, y] positions in m, e.g. [[10, 3], [10, -3]]; got {sources!r}")
+    near = np.linalg.norm(arr, axis=1) < MIN_SOURCE_DISTANCE
+    if near.any():
+        x, y = arr[np.argmax(near)]
+        raise ConfigError(f"steer task: the source ({x:g}, {y:g}) is at the walker's start (nearer than {MIN_SOURCE_DISTANCE:g} m "
+                          "to the origin, where it starts): it could not walk towards it")
     return arr
+
+
+def with_sources(config, sources):
+    """``config`` (an EpisodeConfig of the steer task) with these sources ``[[x, y], ...]`` m, one presentation
+    each; ``sources`` None leaves it as it is.  UserError for an episode of another task."""
+    import dataclasses
+
+    from ..errors import UserError
+
+    if sources is None:
+        return config
+    if config.task != "steer":
+        raise UserError(f"--source applies to the steer task; this episode's task is {config.task!r}")
+    return dataclasses.replace(config, task_options={**config.task_options, "sources": [list(map(float, s)) for s in sources]})
 
 
 class SteerTask(Task):
