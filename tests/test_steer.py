@@ -141,6 +141,8 @@ def test_replay_records_every_presentation_and_draws_figs_12_13(walker, tmp_path
 
     paths = {c.entity_path for c in rr.chunk.RrdReader(out / "replay_best.rrd").stream()}
     assert {"/sensors/sound", "/world/source", "/world/sources"} <= paths
+    # every presentation: its path, its source and the ear signal on the way
+    assert {f"/{w}presentations/{j}/{x}" for j in (1, 2) for w, x in (("world/", "path"), ("world/", "source"), ("", "sound"))} <= paths
 
 
 # ---- sources on the command line: one presentation each

@@ -102,6 +102,15 @@ def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: st
     return _save(fig, path)
 
 
+def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:
+    """(outputs are neuron outputs in [0, 1], commands are PD target angles, the y-axis label)."""
+    motor = traj.neurons[:, : traj.n_motor]
+    unit = motor.size == 0 or (np.nanmin(motor) >= 0.0 and np.nanmax(motor) <= 1.0)  # else e.g. angles, torques
+    target = traj.action_kind == "position"  # PD target angles
+    quantity = "output (0-1)" if unit else "target angle (rad)" if target else "torque (N m)" if traj.action_kind == "torque" else "command"
+    return unit, target, quantity
+
+
 def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | None = 10.0) -> Path:
     """One panel per motor output against time (Fig. 7): a neuron's output in [0, 1], or what the
     controller commands (joint target angles in rad, torques in N m).
@@ -112,10 +121,7 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
     n = traj.n_motor
     t = traj.command_time
     keep = t <= seconds if seconds else np.ones(len(t), bool)
-    motor = traj.neurons[:, :n]
-    unit = motor.size == 0 or (np.nanmin(motor) >= 0.0 and np.nanmax(motor) <= 1.0)  # else e.g. angles, torques
-    target = traj.action_kind == "position"  # PD target angles
-    quantity = "output (0-1)" if unit else "target angle (rad)" if target else "torque (N m)" if traj.action_kind == "torque" else "command"
+    unit, target, quantity = _motor_quantity(traj)
     fig, axes = plt.subplots(n, 1, figsize=(7.0, 1.0 + 0.85 * n), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
         ax.plot(t[keep], traj.neurons[keep, i], color="black", lw=1.0)
@@ -302,18 +308,26 @@ def replay_figures(traj: Trajectory, out_dir: str | Path, *, history: dict[str, 
     return paths
 
 
-def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int = 3, labels: list[str] | None = None) -> Path:
-    """One motor neuron's output per presentation (Fig. 13: right hip sagittal = neuron 4, index 3)."""
+def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int = 3, labels: list[str] | None = None,
+                    seconds: float | None = 10.0) -> Path:
+    """One motor output per presentation (Fig. 13: right hip sagittal = neuron 4, index 3): a neuron's
+    output in [0, 1], or the joint target (rad) a controller such as the balance controller commands.
+    ``seconds``: the first this many seconds (default 10, so that the rhythm stays visible; None: all)."""
     plt = _plt()
     fig, axes = plt.subplots(len(trajs), 1, figsize=(7.0, 1.2 + 1.3 * len(trajs)), sharex=True, squeeze=False)
     name = trajs[0].actuator_names[neuron] if neuron < len(trajs[0].actuator_names) else f"neuron {neuron + 1}"
+    unit, target, quantity = _motor_quantity(trajs[0])
     for ax, tr, label in zip(axes[:, 0], trajs, labels or [None] * len(trajs)):
-        ax.plot(tr.command_time, tr.neurons[:, neuron], color="black", lw=1.0)
-        ax.set_ylim(-0.05, 1.05)
-        ax.set_ylabel("output (0-1)")
+        keep = tr.command_time <= seconds if seconds else np.ones(len(tr.command_time), bool)
+        ax.plot(tr.command_time[keep], tr.neurons[keep, neuron], color="black", lw=1.0)
+        if unit:
+            ax.set_ylim(-0.05, 1.05)
+        ax.set_ylabel(quantity, fontsize=8)
         ax.set_title(label or "", fontsize=9)
     axes[-1, 0].set_xlabel("time (s)")
-    fig.suptitle(f"Motor neuron {neuron + 1} ({name}) per sound source", fontsize=10)
+    shown = f", first {seconds:g} s" if seconds and trajs[0].command_time[-1] > seconds else ""
+    what = f"Motor neuron {neuron + 1} ({name})" if unit else f"{name} {'target' if target else 'command'}"
+    fig.suptitle(f"{what} per sound source{shown}", fontsize=10)
     return _save(fig, path)
 
 

@@ -68,7 +68,7 @@ def replay(
     from .evolution_log import log_history
     from ..episode import Listeners
     from .figures import fitness_label, replay_figures, steering_figures
-    from .rerun_recorder import RerunRecorder, blueprint
+    from .rerun_recorder import RerunRecorder, blueprint, log_presentations
     from .viewer import connect_url, flush, require_display, require_viewer
 
     if spawn:
@@ -101,9 +101,11 @@ def replay(
         watchers = [recorder, *others] + ([listener] if listener is not None else [])
         result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
         traj = recorder.trajectory
+        if others:
+            log_presentations(rec, [traj] + [o.trajectory for o in others])
         if history is not None:
             log_history(rec, history)
-        rec.send_blueprint(blueprint(traj, with_evolution=history is not None))
+        rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=bool(others)))
         flush(rec, streaming=target is None)
         if tmp is not None:
             os.replace(tmp, target)

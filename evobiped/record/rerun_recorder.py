@@ -10,6 +10,8 @@ Entity tree (time series on the ``sim_time`` timeline, in s)::
     world/com_path                 static LineStrips3D: the centre-of-mass path of the whole episode (one point per 0.1 s)
     world/contacts                 Points3D: touch sensors that touch the ground
     world/source, world/sources    Points3D: sound sources (when the task has them)
+    world/presentations/<j>/path   static LineStrips3D: the centre-of-mass path towards source j (several sources)
+    presentations/<j>/sound        Scalars: the ear signal s heard on the way to source j
     neurons/motor/<i>_<actuator>   Scalars: motor neuron outputs (thick lines)
     neurons/other/n<i>             Scalars: the other neurons
     joints/<actuator>/angle        Scalars: joint angle (rad)
@@ -155,13 +157,31 @@ def log_trajectory(rec, traj: Trajectory) -> None:
         rec.send_columns(f"joints/{act}/target", indexes=cm, columns=rr.Scalars.columns(scalars=traj.action[:, a]))
 
 
+def log_presentations(rec, trajs: list[Trajectory]) -> None:
+    """Every presentation of a task with several (one per sound source): its path on the ground, its
+    source, and the ear signal heard on the way (``presentations/<j>/sound``), j counted from 1."""
+    import rerun as rr
+
+    for j, traj in enumerate(trajs, 1):
+        color = _MOTOR_COLORS[(j - 1) % len(_MOTOR_COLORS)]
+        rec.log(f"world/presentations/{j}/path", rr.LineStrips3D([_path(traj.state_time, traj.com)], radii=[0.01], colors=[color],
+                                                                  labels=[f"towards source {j}"]), static=True)
+        if traj.source is not None:
+            rec.log(f"world/presentations/{j}/source", rr.Points3D([[*traj.source[0], 0.0]], radii=[0.12], colors=[color],
+                                                                    labels=[f"source {j}"]), static=True)
+        if "sound" in traj.sensors:
+            rec.log(f"presentations/{j}/sound", rr.SeriesLines(names=[f"ear signal s, source {j}"], colors=[color]), static=True)
+            rec.send_columns(f"presentations/{j}/sound", indexes=[rr.TimeColumn(TIMELINE, duration=traj.tick_time)],
+                             columns=rr.Scalars.columns(scalars=traj.sensors["sound"][:, 0]))
+
+
 def _path(times: np.ndarray, points: np.ndarray) -> np.ndarray:
     """The whole path ``(n, 3)`` -> one point per ``TRAIL_DT`` s and the last one."""
     step = max(1, int(round(TRAIL_DT / max(times[1] - times[0], 1e-9)))) if len(times) > 1 else 1
     return np.concatenate([points[::step], points[-1:]])
 
 
-def blueprint(traj: Trajectory, *, with_evolution: bool = False):
+def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentations: bool = False):
     """3D view (tracking the first moving body) beside time-series panels."""
     import rerun.blueprint as rrb
 
@@ -173,6 +193,7 @@ def blueprint(traj: Trajectory, *, with_evolution: bool = False):
         rrb.Tabs(
             rrb.TimeSeriesView(origin="contacts", name="foot contacts"),
             rrb.TimeSeriesView(origin="sensors", name="sensors"),
+            *([rrb.TimeSeriesView(origin="presentations", name="ear signal per source")] if with_presentations else []),
             *([rrb.TimeSeriesView(origin="evolution", name="evolution (per generation)")] if with_evolution else []),
         ),
     ]
