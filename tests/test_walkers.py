@@ -42,3 +42,17 @@ def test_a_forward_fitness_walker_replays_with_its_fitness_so_far(tmp_path, caps
 
     assert main(["replay", str(WALKERS / "simbicon_cma_seed5.json"), "--seconds", "2", "--out", str(tmp_path / "r.rrd"), "--quiet"]) == 0
     assert (tmp_path / "r.rrd").stat().st_size > 0
+
+
+def test_the_shipped_steering_walker_reaches_both_paper_sources_without_falling():
+    """docs/walkers/steer_simbicon_seed0.json: within 1.0 m of (10, 3) and of (10, -3) m after 50 s, up all the way."""
+    import numpy as np
+
+    genome, cfg, meta = load_genome(WALKERS / "steer_simbicon_seed0.json")
+    assert cfg.task == "steer" and cfg.task_options.get("sources") is None  # the paper's two sources, the default
+    r = cfg.build().run(genome)
+    rows = r.rows
+    assert not rows.fell.any() and np.all(rows.end_time == 50.0)
+    distances = np.linalg.norm(rows.end_position - np.array([[10.0, 3.0], [10.0, -3.0]]), axis=1)
+    assert np.all(distances < 1.0)
+    assert r.fitness[0] == pytest.approx(-distances.mean()) == pytest.approx(meta["fitness"], rel=1e-9)
