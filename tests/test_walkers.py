@@ -56,3 +56,18 @@ def test_the_shipped_steering_walker_reaches_both_paper_sources_without_falling(
     distances = np.linalg.norm(rows.end_position - np.array([[10.0, 3.0], [10.0, -3.0]]), axis=1)
     assert np.all(distances < 1.0)
     assert r.fitness[0] == pytest.approx(-distances.mean()) == pytest.approx(meta["fitness"], rel=1e-9)
+
+
+def test_the_six_source_steering_walker_reaches_sources_it_never_heard():
+    """docs/walkers/steer_simbicon_six_sources.json on 15 sources at bearings -60..60 deg and 6, 10, 14 m (none a
+    training source): median final distance at most 1.5 m (documented: 0.48 m; it falls on arrival)."""
+    import numpy as np
+
+    from evobiped.tasks.steer import with_sources
+
+    genome, cfg, _ = load_genome(WALKERS / "steer_simbicon_six_sources.json")
+    sources = [[3, -5.196], [5.196, -3], [6, 0], [5.196, 3], [3, 5.196], [5, -8.66], [8.66, -5], [10, 0], [8.66, 5], [5, 8.66],
+               [7, -12.124], [12.124, -7], [14, 0], [12.124, 7], [7, 12.124]]  # as in docs/steering.md
+    rows = with_sources(cfg, sources).build().run(genome).rows
+    distances = np.linalg.norm(rows.end_position - np.array(sources), axis=1)
+    assert np.median(distances) <= 1.5 and np.median(distances) == pytest.approx(0.48, abs=0.01)
