@@ -11,8 +11,12 @@ Measurements in one process, on the same model, time step and genomes:
 (d) the thread evaluator with ``workers`` threads (one Episode each);
 (e) with ``presentations`` R > 1: evaluation in this process of the same genomes on R
     perturbed presentations side by side in one batch (a push, target and pose noise),
-    counted as R x the simulated seconds, so (e) / (b) is the cost of perturbed
-    evaluation per simulated second relative to one presentation (1 = no extra cost).
+    counted as R x the simulated seconds, so (b) / (e) is the cost of perturbed
+    evaluation per simulated second relative to one presentation (1 = no extra cost);
+    (a e) replays each of its rows open-loop with ``mujoco.rollout`` on 1 thread (its own
+    initial state, controls and push forces), so (e) / (a e) is its efficiency against
+    the physics it integrates (disturbed walkers move differently, and their physics
+    alone may cost more per step than undisturbed ones).
 
 Episodes run to the full length (``EpisodeConfig.stop_on_fall=False``) so that every
 measurement integrates exactly the same physics.  Every figure is simulated seconds per
@@ -50,13 +54,29 @@ QUICK = dict(population=16, seconds=4.0, repeats=5)
 
 
 class _ControlRecorder:
-    """Listener: the actuator controls of every walker at every tick, ``(ticks, P, nu)``."""
+    """Listener: the actuator controls of every walker at every tick, ``(ticks, P, nu)``; with ``forces``
+    also the applied body forces ``(ticks, P, nbody * 6)``, each row's initial full-physics state and the model."""
+
+    def __init__(self, forces: bool = False):
+        self.forces = forces
 
     def start(self, episode, sims):
-        self.ctrl = []
+        self.ctrl, self.xfrc = [], []
+        if self.forces:
+            self.model = sims.model
+            spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+            d = mujoco.MjData(sims.model)
+            self.initial = np.empty((sims.n, mujoco.mj_stateSize(sims.model, spec)))
+            for i in range(sims.n):
+                mujoco.mj_resetData(sims.model, d)
+                d.qpos[:], d.qvel[:] = sims.qpos[i], sims.qvel[i]
+                mujoco.mj_forward(sims.model, d)
+                mujoco.mj_getState(sims.model, d, self.initial[i], spec)
 
     def tick(self, t, sims, ids, neurons, action, task_state):
         self.ctrl.append(sims.ctrl.copy())
+        if self.forces:
+            self.xfrc.append(sims.xfrc_applied.reshape(sims.n, -1).copy())
 
     def end(self, result):
         pass
@@ -130,6 +150,25 @@ def bench(
                 finals[p : p + len(state)] = state[:, -1, 1 : 1 + model.nq]
         return go
 
+    gaps: list[float] = []  # (a e)'s end positions against (e)'s, m
+
+    def raw_perturbed(perturbed, trials):
+        """1 thread, one row at a time: each perturbed row's own start, controls and pushes replayed open-loop
+        (the physics (e) integrates, without the controller), on the model of the generation's friction."""
+        rec = _ControlRecorder(forces=True)
+        rows = perturbed.run(genomes, trials=trials, listener=rec).rows
+        spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
+        controls = np.repeat(np.concatenate([np.stack(rec.ctrl, axis=1), np.stack(rec.xfrc, axis=1)], axis=2), perturbed.substeps, axis=1)
+        d = mujoco.MjData(rec.model)
+
+        def go():
+            for p in range(len(controls)):
+                state, _ = rollout.rollout(rec.model, d, rec.initial[p : p + 1], controls[p : p + 1], control_spec=spec, nstep=controls.shape[1])
+                ends[p] = state[0, -1, 1:3]
+            gaps.append(float(np.max(np.abs(ends - rows.end_position))))
+        ends = np.empty((len(controls), 2))
+        return go
+
     say(f"{population} walkers x {config.seconds:g} s, {repeats} interleaved repeat(s) of: raw stepping (mujoco.rollout) on 1 and "
         f"{workers} thread(s), evaluation in this process, process pools of 1 and {workers}, {workers} thread(s) ...")
     sizes = sorted({1, workers})
@@ -149,6 +188,7 @@ def bench(
             perturbed = replace(config, perturbations=dict(PERTURBED, presentations=presentations)).build()
             trials = perturbed.trials_for((seed, 0))
             fns[f"eval x{presentations}"] = lambda: perturbed.run(genomes, trials=trials)
+            fns[f"raw x{presentations}"] = raw_perturbed(perturbed, trials)
         if progress is not None:
             progress.total = float(len(fns) * repeats)
             progress.unit = "measurements"
@@ -159,7 +199,7 @@ def bench(
             pool.close()
         if threads is not None:
             threads.close()
-    simulated = {k: sim_seconds * (presentations if k.startswith("eval x") else 1) for k in walls}
+    simulated = {k: sim_seconds * (presentations if " x" in k else 1) for k in walls}
     median = {k: simulated[k] / float(np.median(v)) for k, v in walls.items()}
     raw_n = median[f"raw {workers}"] if workers > 1 else median["raw 1"]
     pool_1 = median["pool 1"] if workers > 1 else median[f"pool {workers}"]
@@ -183,7 +223,9 @@ def bench(
         "scaling_pool": median[f"pool {workers}"] / pool_1,
         "presentations": presentations,
         "presentation_cost": median["eval"] / median[f"eval x{presentations}"] if presentations > 1 else None,
+        "efficiency_presentations": median[f"eval x{presentations}"] / median[f"raw x{presentations}"] if presentations > 1 else None,
         "replay_end_position_gap_m": end_gap,
+        "replay_presentations_gap_m": max(gaps) if gaps else None,
         "wall_seconds": walls,
     }
 
@@ -195,6 +237,7 @@ def format_bench(r: dict) -> str:
     names = {"raw 1": "(a) raw stepping, rollout 1 thread", f"raw {w}": f"(a) raw stepping, rollout {w} threads",
              "eval": "(b) evaluation, 1 process", "pool 1": "(c) process pool, 1 worker", f"pool {w}": f"(c) process pool, {w} workers",
              f"threads {w}": f"(d) thread evaluator, {w} threads",
+             f"raw x{r['presentations']}": f"(a e) raw stepping of (e)'s rows, 1 thread",
              f"eval x{r['presentations']}": f"(e) evaluation, {r['presentations']} presentations"}
     lines = [
         f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "
@@ -208,8 +251,11 @@ def format_bench(r: dict) -> str:
         f"efficiency: 1 core (b)/(a 1) = {r['efficiency_one_core']:.3f}   {w} cores: pool (c {w})/(a {w}) = {r['efficiency_pool']:.3f}, "
         f"threads (d {w})/(a {w}) = {r['efficiency_threads']:.3f}",
         f"scaling 1 -> {w}: raw {r['scaling_raw']:.2f}x, pool {r['scaling_pool']:.2f}x",
-        *([f"cost per simulated second of {r['presentations']} perturbed presentations vs one: (b)/(e) = {r['presentation_cost']:.3f}"]
+        *([f"{r['presentations']} perturbed presentations: cost per simulated second vs one (b)/(e) = {r['presentation_cost']:.3f}; "
+           f"efficiency against the raw stepping of their own physics (e)/(a e) = {r['efficiency_presentations']:.3f} "
+           f"(one presentation: (b)/(a 1) = {r['efficiency_one_core']:.3f})"]
           if r["presentations"] > 1 else []),
-        f"open-loop replay of (b)'s controls ends within {r['replay_end_position_gap_m']:.2g} m of (b)",
+        f"open-loop replay of (b)'s controls ends within {r['replay_end_position_gap_m']:.2g} m of (b)"
+        + (f", of (e)'s within {r['replay_presentations_gap_m']:.2g} m of (e)" if r["presentations"] > 1 else ""),
     ]
     return "\n".join(lines)

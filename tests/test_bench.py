@@ -59,3 +59,6 @@ def test_presentations_measurement_counts_every_presentation(capsys):
     m = r["median_sim_s_per_s"]
     assert r["presentation_cost"] == pytest.approx(m["eval"] / m["eval x3"])
     assert m["eval x3"] == pytest.approx(3.0 / r["wall_seconds"]["eval x3"][0])
+    # (a e) replays every perturbed row open-loop (its start, controls and push forces): the same physics to the bit
+    assert r["replay_presentations_gap_m"] == 0.0
+    assert r["efficiency_presentations"] == pytest.approx(m["eval x3"] / m["raw x3"])
