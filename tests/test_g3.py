@@ -1,4 +1,4 @@
-"""The G3 network against Pribe, Grossberg & Cohen 1997 (claims 1, 2, 4 of issue 6)."""
+"""The G3 network against Pribe, Grossberg & Cohen 1997."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,5 @@
 """The Taga biped and its Matsuoka rhythm generator against Taga, Yamaguchi & Shimizu 1991
-(issue 5, claims 1, 2, 4, 7), the stride metrics on synthetic contact sequences, and the CLI."""
+(walking, running, push recovery, the rhythm generator), the stride metrics on synthetic contact sequences, and the CLI."""
 
 import numpy as np
 import pytest
