@@ -310,7 +310,7 @@ def _fmt(x: float, spec: str = ".2f") -> str:
 
 def table_markdown(rows: list[dict], recheck_seconds: float) -> str:
     lines = [
-        f"| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | forward walkers | wall time (s) |",
+        f"| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | forward walkers | wall time, runs summed (s) |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:

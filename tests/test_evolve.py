@@ -284,7 +284,9 @@ def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
     def write_then_interrupt(path, obj):
         write(path, obj)
         if Path(path).name == "checkpoint.json":
-            os.kill(os.getpid(), signal.SIGINT)
+            # to this (the main) thread: a process-directed kill may land in another thread (Rerun's, say)
+            # and reach the interpreter only after the deferral ended, which makes the test flaky
+            signal.raise_signal(signal.SIGINT)
 
     monkeypatch.setattr(runmod, "write_json", write_then_interrupt)
     with make_evaluator(SMALL.episode, "serial") as ev, pytest.raises(KeyboardInterrupt):
