@@ -289,7 +289,12 @@ def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
             signal.raise_signal(signal.SIGINT)
 
     monkeypatch.setattr(runmod, "write_json", write_then_interrupt)
-    with make_evaluator(SMALL.episode, "serial") as ev, pytest.raises(KeyboardInterrupt):
-        run.evolve(ev)
+    # Ctrl-C as a terminal delivers it, whatever an earlier test in this process left installed
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with make_evaluator(SMALL.episode, "serial") as ev, pytest.raises(KeyboardInterrupt):
+            run.evolve(ev)
+    finally:
+        signal.signal(signal.SIGINT, old)
     ck = json.loads((run.dir / "checkpoint.json").read_text())
     assert len(ck["history"]) == len(fitness_history(run.dir)) == 1
