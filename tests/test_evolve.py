@@ -242,7 +242,9 @@ def test_ctrl_c_stops_at_a_generation_boundary_and_resumes(tmp_path):
     assert cli("evolve", *args, "--out", ref, "--quiet") == 0
     cut = tmp_path / "cut"
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, "-m", "evobiped.cli", "evolve", *args, "--out", str(cut)], stderr=subprocess.PIPE, text=True, env=env)
+    # Ctrl-C as a terminal delivers it, even when this test runs in a background job (which ignores SIGINT, and children inherit that)
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped.cli", "evolve", *args, "--out", str(cut)], stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 60
     while time.time() < deadline and not (cut / "checkpoint.json").exists():
         time.sleep(0.05)
@@ -289,7 +291,7 @@ def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
             signal.raise_signal(signal.SIGINT)
 
     monkeypatch.setattr(runmod, "write_json", write_then_interrupt)
-    # Ctrl-C as a terminal delivers it, whatever an earlier test in this process left installed
+    # Ctrl-C as a terminal delivers it, even in a background job (which ignores SIGINT) or after a test that changed it
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         with make_evaluator(SMALL.episode, "serial") as ev, pytest.raises(KeyboardInterrupt):
