@@ -54,24 +54,23 @@ QUICK = dict(population=16, seconds=4.0, repeats=5)
 
 
 class _ControlRecorder:
-    """Listener: the actuator controls of every walker at every tick, ``(ticks, P, nu)``; with ``forces``
-    also the applied body forces ``(ticks, P, nbody * 6)``, each row's initial full-physics state and the model."""
+    """Listener: the model, each walker's initial full-physics state ``(P, nstate)``, and its actuator
+    controls at every tick ``(ticks, P, nu)``; with ``forces`` also the applied body forces ``(ticks, P, nbody * 6)``:
+    everything ``mujoco.rollout`` needs to replay the episode open-loop."""
+
+    SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
     def __init__(self, forces: bool = False):
         self.forces = forces
 
     def start(self, episode, sims):
-        self.ctrl, self.xfrc = [], []
-        if self.forces:
-            self.model = sims.model
-            spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-            d = mujoco.MjData(sims.model)
-            self.initial = np.empty((sims.n, mujoco.mj_stateSize(sims.model, spec)))
-            for i in range(sims.n):
-                mujoco.mj_resetData(sims.model, d)
-                d.qpos[:], d.qvel[:] = sims.qpos[i], sims.qvel[i]
-                mujoco.mj_forward(sims.model, d)
-                mujoco.mj_getState(sims.model, d, self.initial[i], spec)
+        self.ctrl, self.xfrc, self.model = [], [], sims.model
+        d = mujoco.MjData(sims.model)
+        self.initial = np.empty((sims.n, mujoco.mj_stateSize(sims.model, self.SPEC)))
+        for i in range(sims.n):
+            mujoco.mj_resetData(sims.model, d)
+            d.qpos[:], d.qvel[:] = sims.qpos[i], sims.qvel[i]
+            mujoco.mj_getState(sims.model, d, self.initial[i], self.SPEC)
 
     def tick(self, t, sims, ids, neurons, action, task_state):
         self.ctrl.append(sims.ctrl.copy())
@@ -123,15 +122,8 @@ def bench(
     rec = _ControlRecorder()
     result = ep.run(genomes, listener=rec)
     ctrl = np.repeat(np.stack(rec.ctrl, axis=1), ep.substeps, axis=1)  # (P, nstep, nu)
-    model = ep.model
-    sims = ep.sims(1)
-    ep.body.reset(sims)
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    initial = np.empty(mujoco.mj_stateSize(model, spec))
+    model, initial = ep.model, rec.initial[0]  # every walker starts from the same state
     data = [mujoco.MjData(model) for _ in range(workers)]
-    mujoco.mj_resetData(model, data[0])
-    data[0].qpos[:], data[0].qvel[:] = sims.qpos[0], sims.qvel[0]
-    mujoco.mj_getState(model, data[0], initial, spec)
     nstep = ctrl.shape[1]
     finals = np.empty((population, model.nq))
     threads = rollout.Rollout(nthread=workers) if workers > 1 else None
@@ -160,13 +152,13 @@ def bench(
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
         controls = np.repeat(np.concatenate([np.stack(rec.ctrl, axis=1), np.stack(rec.xfrc, axis=1)], axis=2), perturbed.substeps, axis=1)
         d = mujoco.MjData(rec.model)
+        ends = np.empty((len(controls), 2))
 
         def go():
             for p in range(len(controls)):
                 state, _ = rollout.rollout(rec.model, d, rec.initial[p : p + 1], controls[p : p + 1], control_spec=spec, nstep=controls.shape[1])
                 ends[p] = state[0, -1, 1:3]
             gaps.append(float(np.max(np.abs(ends - rows.end_position))))
-        ends = np.empty((len(controls), 2))
         return go
 
     say(f"{population} walkers x {config.seconds:g} s, {repeats} interleaved repeat(s) of: raw stepping (mujoco.rollout) on 1 and "
@@ -237,7 +229,7 @@ def format_bench(r: dict) -> str:
     names = {"raw 1": "(a) raw stepping, rollout 1 thread", f"raw {w}": f"(a) raw stepping, rollout {w} threads",
              "eval": "(b) evaluation, 1 process", "pool 1": "(c) process pool, 1 worker", f"pool {w}": f"(c) process pool, {w} workers",
              f"threads {w}": f"(d) thread evaluator, {w} threads",
-             f"raw x{r['presentations']}": f"(a e) raw stepping of (e)'s rows, 1 thread",
+             f"raw x{r['presentations']}": "(a e) raw stepping of (e)'s rows, 1 thread",
              f"eval x{r['presentations']}": f"(e) evaluation, {r['presentations']} presentations"}
     lines = [
         f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import sys
 
@@ -206,10 +207,6 @@ def evolve_config(args):
             ep[key] = getattr(args, flag)
     if args.cyclic:
         ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
-    if getattr(args, "sources", None):
-        if ep.get("task", "walk") != "steer":
-            raise UserError(f"--source applies to the steer task (add --task steer); this run's task is {ep.get('task', 'walk')!r}")
-        ep["task_options"] = {**ep.get("task_options", {}), "sources": [list(q) for q in args.sources]}
     if args.population is not None:  # the population of either optimizer
         ga["population"] = args.population
         d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": args.population}
@@ -219,7 +216,8 @@ def evolve_config(args):
     if getattr(args, "freeze", None):
         d["frozen_blocks"] = [b.strip() for b in args.freeze.split(",") if b.strip()]
     where = args.config or (f"preset {args.preset}" if getattr(args, "preset", None) else "settings")
-    return RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    config = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    return dataclasses.replace(config, episode=with_sources(config.episode, getattr(args, "sources", None)))
 
 
 def default_run_dir(config) -> str:
@@ -405,7 +403,6 @@ def add_robustness(sub) -> None:
 
 
 def run_robustness_cmd(args) -> int:
-    import dataclasses
     from pathlib import Path
 
     from .fileio import write_json
@@ -538,7 +535,6 @@ def add_study(sub) -> None:
 
 
 def run_study_cmd(args) -> int:
-    import dataclasses
     from pathlib import Path
 
     from .study import StudyConfig, run_study, write_results

@@ -1,6 +1,8 @@
 import numpy as np
 import pytest
 
+from evobiped.cli import main
+
 
 @pytest.fixture
 def rng():
@@ -11,3 +13,11 @@ def random_genomes(layout, n, seed=0):
     """Genomes drawn from the layout's initialisation Gaussians, clipped to bounds."""
     r = np.random.default_rng(seed)
     return np.clip(r.normal(layout.init_mean, layout.init_sigma, (n, layout.size)), layout.low, layout.high)
+
+
+def cli(*args) -> int:
+    """Exit status of ``evobiped ARGS`` run in this process (argument errors exit via SystemExit)."""
+    try:
+        return main([str(a) for a in args])
+    except SystemExit as exc:
+        return exc.code

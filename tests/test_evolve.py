@@ -16,10 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
 from evobiped.evolution.run import HISTORY_COLUMNS
+
+from .conftest import cli
 
 SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAConfig(population=8), generations=3, seed=7, backend="serial")
 
@@ -95,13 +96,6 @@ def test_resume_discards_files_of_an_unfinished_generation(tmp_path):
     assert (run.dir / "best.json").read_text() == kept
     assert resumed.ga.generation == 1
 
-
-def cli(*args) -> int:
-    """Exit status of ``evobiped ARGS`` (argument errors exit via SystemExit)."""
-    try:
-        return main(list(map(str, args)))
-    except SystemExit as exc:
-        return exc.code
 
 
 def snapshot(d: Path) -> dict:

@@ -9,6 +9,8 @@ from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 from evobiped.tasks.steer import ear_signal
 
+from .conftest import cli
+
 E = 0.25  # the Reil pelvis: ears 0.25 m either side of its centre
 
 
@@ -59,12 +61,6 @@ def test_fitness_is_the_mean_over_presentations_of_minus_the_distance():
     assert np.array_equal(ra.fitness, -np.linalg.norm(ra.end_position - [10, 3], axis=1))
     assert r.end_position.shape == (3, 2, 2)
 
-
-def cli(*args) -> int:
-    try:
-        return main([str(a) for a in args])
-    except SystemExit as exc:
-        return exc.code
 
 
 CPG = "weights,time_constants,biases"

@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from evobiped.cli import main
 from evobiped.stats import histogram_edges, mean_std, wilson_interval
 from evobiped.study import summarize
+
+from .conftest import cli
 
 
 @pytest.mark.parametrize(
@@ -57,12 +58,6 @@ def test_summarize_synthetic_outcomes():
     assert plain["wall_seconds"] == 190.0 and plain["walks_indefinitely"] == 1
     assert (cyclic["stable"], cyclic["success_rate"], cyclic["stable_mean_m"], cyclic["walks_indefinitely"]) == (4, 0.8, 20.5, 2)
 
-
-def cli(*args) -> int:
-    try:
-        return main([str(a) for a in args])
-    except SystemExit as exc:
-        return exc.code
 
 
 TINY = ["--population", 4, "--generations", 2, "--episode-seconds", 1, "--recheck-seconds", 3, "--workers", 2, "--quiet"]

@@ -65,10 +65,8 @@ class CTRNN(Controller):
         self.output_kind = MOTOR_MAPS[motor]
         number(n_neurons, "ctrnn: n_neurons", low=1, high=1000, integer=True)
         number(dt, "ctrnn: dt", low=1e-4, high=1.0, unit="s")
-        if n_neurons < 1 or n_neurons < n_outputs:
+        if n_neurons < n_outputs:
             raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
-        if not dt > 0:
-            raise ConfigError(f"ctrnn: dt must be > 0, got {dt}")
         tau = _tau_block(time_constants, dt)
         self.n = int(n_neurons)
         self.n_outputs = int(n_outputs)

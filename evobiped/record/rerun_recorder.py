@@ -87,15 +87,19 @@ def log_geometry(rec, model) -> None:
         )
 
 
+def _cols(times) -> list:
+    """The ``sim_time`` index of a ``send_columns`` call for these times (s)."""
+    import rerun as rr
+
+    return [rr.TimeColumn(TIMELINE, duration=np.asarray(times, float))]
+
+
 def log_trajectory(rec, traj: Trajectory) -> None:
     """Every time series of ``traj`` on the ``sim_time`` timeline (geometry: :func:`log_geometry`)."""
     import rerun as rr
 
-    def cols(times):
-        return [rr.TimeColumn(TIMELINE, duration=np.asarray(times, float))]
-
     names = body_names(traj.model)
-    st = cols(traj.state_time)
+    st = _cols(traj.state_time)
     for b in range(1, traj.model.nbody):
         rec.send_columns(
             f"world/bodies/{names[b]}",
@@ -107,7 +111,7 @@ def log_trajectory(rec, traj: Trajectory) -> None:
     rec.log("world/com_path", rr.LineStrips3D([_path(traj.state_time, traj.com)], radii=[0.008], colors=[[30, 30, 30]],
                                               labels=["centre-of-mass path"]), static=True)
 
-    tk = cols(traj.tick_time)
+    tk = _cols(traj.tick_time)
     if traj.touch_names:
         touching = traj.touch > 0
         counts = touching.sum(axis=1)
@@ -138,7 +142,7 @@ def log_trajectory(rec, traj: Trajectory) -> None:
             static=True,
         )
 
-    cm = cols(traj.command_time)
+    cm = _cols(traj.command_time)
     for i in range(traj.neurons.shape[1]):
         if i < traj.n_motor:
             act = traj.actuator_names[i] if i < len(traj.actuator_names) else f"out{i}"
@@ -171,7 +175,7 @@ def log_presentations(rec, trajs: list[Trajectory]) -> None:
                                                                     labels=[f"source {j}"]), static=True)
         if "sound" in traj.sensors:
             rec.log(f"presentations/{j}/sound", rr.SeriesLines(names=[f"ear signal s, source {j}"], colors=[color]), static=True)
-            rec.send_columns(f"presentations/{j}/sound", indexes=[rr.TimeColumn(TIMELINE, duration=traj.tick_time)],
+            rec.send_columns(f"presentations/{j}/sound", indexes=_cols(traj.tick_time),
                              columns=rr.Scalars.columns(scalars=traj.sensors["sound"][:, 0]))
 
 

@@ -73,7 +73,7 @@ def with_sources(config, sources):
     if sources is None:
         return config
     if config.task != "steer":
-        raise UserError(f"--source applies to the steer task; this episode's task is {config.task!r}")
+        raise UserError(f"--source applies to the steer task (--task steer); this episode's task is {config.task!r}")
     return dataclasses.replace(config, task_options={**config.task_options, "sources": [list(map(float, s)) for s in sources]})
 
 
