@@ -215,7 +215,7 @@ def evolve_config(args):
             d[flag] = getattr(args, flag)
     if getattr(args, "freeze", None):
         d["frozen_blocks"] = [b.strip() for b in args.freeze.split(",") if b.strip()]
-    where = args.config or (f"preset {args.preset}" if getattr(args, "preset", None) else "settings")
+    where = args.config or (f"preset {args.preset}" if getattr(args, "preset", None) else "")
     config = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
     return dataclasses.replace(config, episode=with_sources(config.episode, getattr(args, "sources", None)))
 
