@@ -440,7 +440,7 @@ def run_robustness_cmd(args) -> int:
 # ---------------------------------------------------------------- g3
 def add_g3(sub) -> None:
     p = sub.add_parser("g3", help="run the G3 gait generator (Pribe et al. 1997) at GO levels; gait table and PNGs")
-    from .g3 import PRESETS
+    from .controllers.g3_network import PRESETS
 
     p.add_argument("preset", help=f"parameter set: {', '.join(PRESETS)}")
     lv = p.add_mutually_exclusive_group()
@@ -459,7 +459,8 @@ def add_g3(sub) -> None:
 
 
 def run_g3_cmd(args) -> int:
-    from . import g3
+    from .controllers import g3_network as g3
+    from .experiments.g3.simulation import go_sweep
     from .errors import ConfigError
 
     pre = g3.preset(args.preset)
@@ -488,11 +489,11 @@ def run_g3_cmd(args) -> int:
         levels = np.array(args.go if args.go else pre.go, float)
     if (levels < 0).any() or (args.from_go is not None and args.from_go < 0):
         raise ConfigError(f"GO levels must be >= 0, got {min(levels.min(), args.from_go or 0):g}")
-    s = g3.sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
+    s = go_sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
     files = []
     if args.out:
-        from .record.g3_figures import sweep_figures
+        from .experiments.g3.g3_figures import sweep_figures
 
         files = [str(f) for f in sweep_figures(args.out, f"g3_{pre.name}", s, idx, g3.LIMBS, title=f"G3 {pre.name} ({args.mode})")]
     if args.json:
@@ -537,7 +538,7 @@ def add_study(sub) -> None:
 def run_study_cmd(args) -> int:
     from pathlib import Path
 
-    from .study import StudyConfig, run_study, write_results
+    from .experiments.reil.study import StudyConfig, run_study, write_results
 
     base = evolve_config(argparse.Namespace(
         preset=args.preset, config=args.config, body=None, controller=None, task=None, episode_seconds=args.episode_seconds, cyclic=None,
@@ -563,7 +564,7 @@ def run_study_cmd(args) -> int:
     if args.replays:
         from .record.replay import replay
         from .record.source import resolve
-        from .study import run_dir
+        from .experiments.reil.study import run_dir
 
         for c in cfg.condition_names:
             for k in range(cfg.runs):
@@ -574,7 +575,7 @@ def run_study_cmd(args) -> int:
 def add_taga(sub) -> None:
     p = sub.add_parser("taga", help="run the Taga biped with its rhythm generator (Taga et al. 1991); gait metrics table")
     p.add_argument("--u0", type=float, nargs="+", default=[5.5], metavar="U", help="tonic input(s) u0, one walker each (default 5.5)")
-    from .taga_experiments import PRESETS
+    from .experiments.taga.walking import PRESETS
 
     p.add_argument("--preset", default="taga", help=f"rhythm-generator parameters: {', '.join(PRESETS)} (default taga: Appendix D)")
     p.add_argument("--seconds", type=positive_float, help="simulated time in s from Appendix E's initial state (default 20; not with --push)")
@@ -594,7 +595,7 @@ def add_taga(sub) -> None:
 
 
 def run_taga_cmd(args) -> int:
-    from . import taga_experiments as tx
+    from .experiments.taga import walking as tx
 
     if args.preset not in tx.PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")

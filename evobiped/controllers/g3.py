@@ -1,6 +1,6 @@
 """The G3 GO Gait Generator as a body controller (Pribe, Grossberg & Cohen 1997).
 
-One G3 channel (excitatory x_k, slow inhibitory y_k; :mod:`evobiped.g3`) per
+One G3 channel (excitatory x_k, slow inhibitory y_k; :mod:`evobiped.controllers.g3_network`) per
 driven joint, ``n_outputs`` channels in the body's actuator order, so the same
 class drives any body.  Evolvable (the genome):
 
@@ -32,8 +32,8 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import ConfigError
-from ..g3 import preset as g3_preset
-from ..g3 import rk4_step
+from .g3_network import preset as g3_preset
+from .g3_network import rk4_step
 from ..genome import GeneBlock, GenomeLayout
 from .base import Controller
 
