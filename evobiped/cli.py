@@ -11,6 +11,7 @@ import argparse
 import contextlib
 import dataclasses
 import json
+import os
 import sys
 
 import numpy as np
@@ -711,6 +712,9 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as exc:
         print(f"evobiped: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader went away (`evobiped presets | head -1`): stop quietly, as cat does
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
+        return 141
     except OSError as exc:  # a file or directory that cannot be read or written: one line, not a traceback
         if exc.filename is None:
             raise
