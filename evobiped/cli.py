@@ -11,6 +11,7 @@ import argparse
 import contextlib
 import dataclasses
 import json
+import os
 import sys
 
 import numpy as np
@@ -440,7 +441,7 @@ def run_robustness_cmd(args) -> int:
 # ---------------------------------------------------------------- g3
 def add_g3(sub) -> None:
     p = sub.add_parser("g3", help="run the G3 gait generator (Pribe et al. 1997) at GO levels; gait table and PNGs")
-    from .g3 import PRESETS
+    from .controllers.g3_network import PRESETS
 
     p.add_argument("preset", help=f"parameter set: {', '.join(PRESETS)}")
     lv = p.add_mutually_exclusive_group()
@@ -459,7 +460,8 @@ def add_g3(sub) -> None:
 
 
 def run_g3_cmd(args) -> int:
-    from . import g3
+    from .controllers import g3_network as g3
+    from .experiments.g3.simulation import go_sweep
     from .errors import ConfigError
 
     pre = g3.preset(args.preset)
@@ -488,11 +490,11 @@ def run_g3_cmd(args) -> int:
         levels = np.array(args.go if args.go else pre.go, float)
     if (levels < 0).any() or (args.from_go is not None and args.from_go < 0):
         raise ConfigError(f"GO levels must be >= 0, got {min(levels.min(), args.from_go or 0):g}")
-    s = g3.sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
+    s = go_sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
     files = []
     if args.out:
-        from .record.g3_figures import sweep_figures
+        from .experiments.g3.g3_figures import sweep_figures
 
         files = [str(f) for f in sweep_figures(args.out, f"g3_{pre.name}", s, idx, g3.LIMBS, title=f"G3 {pre.name} ({args.mode})")]
     if args.json:
@@ -537,7 +539,7 @@ def add_study(sub) -> None:
 def run_study_cmd(args) -> int:
     from pathlib import Path
 
-    from .study import StudyConfig, run_study, write_results
+    from .experiments.reil.study import StudyConfig, run_study, write_results
 
     base = evolve_config(argparse.Namespace(
         preset=args.preset, config=args.config, body=None, controller=None, task=None, episode_seconds=args.episode_seconds, cyclic=None,
@@ -563,7 +565,7 @@ def run_study_cmd(args) -> int:
     if args.replays:
         from .record.replay import replay
         from .record.source import resolve
-        from .study import run_dir
+        from .experiments.reil.study import run_dir
 
         for c in cfg.condition_names:
             for k in range(cfg.runs):
@@ -574,7 +576,7 @@ def run_study_cmd(args) -> int:
 def add_taga(sub) -> None:
     p = sub.add_parser("taga", help="run the Taga biped with its rhythm generator (Taga et al. 1991); gait metrics table")
     p.add_argument("--u0", type=float, nargs="+", default=[5.5], metavar="U", help="tonic input(s) u0, one walker each (default 5.5)")
-    from .taga_experiments import PRESETS
+    from .experiments.taga.walking import PRESETS
 
     p.add_argument("--preset", default="taga", help=f"rhythm-generator parameters: {', '.join(PRESETS)} (default taga: Appendix D)")
     p.add_argument("--seconds", type=positive_float, help="simulated time in s from Appendix E's initial state (default 20; not with --push)")
@@ -594,14 +596,17 @@ def add_taga(sub) -> None:
 
 
 def run_taga_cmd(args) -> int:
-    from . import taga_experiments as tx
+    from .bodies import TagaBiped
+    from .experiments.taga import walking as tx
+    from .options import option_bounds
+    from .validate import number
 
     if args.preset not in tx.PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")
     for u in args.u0:
         tx.check_u0(u)
-    if not -50 <= args.slope <= 50:
-        raise UserError(f"--slope must be within +-50 %, got {args.slope:g}")
+    low, high = option_bounds(TagaBiped.Options, "slope")  # the body's one declared limit, in % here
+    number(args.slope, "--slope", low=100 * low, high=100 * high, unit="%")
     if args.bg < 0:
         raise UserError(f"--bg must be >= 0, got {args.bg:g}")
     seconds = 20.0 if args.seconds is None else args.seconds
@@ -710,6 +715,9 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as exc:
         print(f"evobiped: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader went away (`evobiped presets | head -1`): stop quietly, as cat does
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
+        return 141
     except OSError as exc:  # a file or directory that cannot be read or written: one line, not a traceback
         if exc.filename is None:
             raise

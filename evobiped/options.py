@@ -5,17 +5,15 @@ its metadata); :func:`parse` checks a table of settings against the dataclass
 once, when a config is loaded, and names the setting's path in the one-line
 error (``episode.body_options.kp: must be > 0, got -5``).  Checks that relate
 several fields live in the dataclass's ``__post_init__`` (ConfigError).
-:func:`markdown_table` renders the declarations for the README
-(``python -m evobiped.options`` rewrites its tables).
+:func:`markdown_table` renders the declarations (:mod:`evobiped.readme` puts
+them in the README).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from dataclasses import MISSING, field, fields
-from pathlib import Path
 from typing import Any, Callable
 
 from .errors import ConfigError
@@ -101,27 +99,26 @@ def parse(cls: type, values: Any, where: str, *, skip: tuple[str, ...] = ()) -> 
         raise ConfigError(f"{where}: {exc}") from None
 
 
-def values(options: Any) -> dict:
-    """The fields of an options dataclass as keywords (not copied)."""
-    return {f.name: getattr(options, f.name) for f in fields(options)}
+def option_bounds(cls: type, name: str) -> tuple[float | None, float | None]:
+    """The declared ``(low, high)`` of option ``name`` of ``cls`` (e.g. to check it in another unit)."""
+    m = next(f for f in fields(cls) if f.name == name).metadata
+    return m.get("low"), m.get("high")
 
 
-def _span(m: dict) -> str:
+def _span(m: dict, default: Any) -> str:
     if m.get("span"):
         return m["span"]
     if m.get("choices") is not None:
         return ", ".join(f"`{c}`" for c in m["choices"])
-    low, high, above = m.get("low"), m.get("high"), m.get("above")
-    whole = "whole number " if m.get("integer") else ""
-    if above is not None:
-        return f"{whole}> {above:g}" + (f", <= {high:g}" if high is not None else "")
+    if isinstance(default, bool):
+        return "`true`, `false`"
+    low, high, above, below = (m.get(k) for k in ("low", "high", "above", "below"))
     if low is not None and high is not None:
-        return f"{whole}{low:g} to {high:g}"
-    if low is not None:
-        return f"{whole}>= {low:g}"
-    if high is not None:
-        return f"{whole}<= {high:g}"
-    return "whole number" if m.get("integer") else ""
+        parts = [f"{low:g} to {high:g}"]
+    else:
+        parts = [f"> {above:g}"] if above is not None else [f">= {low:g}"] if low is not None else []
+        parts += [f"< {below:g}"] if below is not None else [f"<= {high:g}"] if high is not None else []
+    return ("whole number " if m.get("integer") else "") + ", ".join(parts)
 
 
 def _shown(v: Any) -> str:
@@ -144,45 +141,5 @@ def markdown_table(cls: type) -> str:
     for f in fields(cls):
         m = f.metadata
         default = f.default if f.default is not MISSING else f.default_factory()
-        rows.append(f"| `{f.name}` | `{_shown(default)}` | {m.get('unit', '')} | {_span(m)} | {m.get('doc', '')} |")
+        rows.append(f"| `{f.name}` | `{_shown(default)}` | {m.get('unit', '')} | {_span(m, default)} | {m.get('doc', '')} |")
     return "\n".join(rows) + "\n"
-
-
-def tables() -> dict[str, str]:
-    """Every registered component's option table, by README section id (e.g. ``body reil``)."""
-    from .bodies import BODIES
-    from .controllers import CONTROLLERS
-    from .evolution.cma import CMAConfig
-    from .evolution.ga import GAConfig
-    from .tasks import TASKS
-
-    out = {}
-    for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
-        for name, cls in reg.items():
-            out[f"{kind} {name}"] = markdown_table(cls.Options)
-    out["optimizer ga"] = markdown_table(GAConfig)
-    out["optimizer cma"] = markdown_table(CMAConfig)
-    return out
-
-
-#: the README's generated sections: between ``<!-- options: ID -->`` and ``<!-- end options -->``
-MARKER = re.compile(r"(<!-- options: (?P<id>[a-z0-9_ ]+) -->\n)(?P<body>.*?)(<!-- end options -->)", re.S)
-
-
-def render(text: str) -> str:
-    """``text`` (the README) with every generated option table replaced by the current declarations."""
-    found = tables()
-
-    def sub(m: re.Match) -> str:
-        if m["id"] not in found:
-            raise KeyError(f"README section {m['id']!r} names no registered component")
-        return m.group(1) + found[m["id"]] + m.group(4)
-
-    return MARKER.sub(sub, text)
-
-
-README = Path(__file__).resolve().parent.parent / "README.md"
-
-
-if __name__ == "__main__":  # python -m evobiped.options: rewrite the README's option tables
-    README.write_text(render(README.read_text()))

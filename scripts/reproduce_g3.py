@@ -15,8 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from evobiped import g3, gaits
-from evobiped.record.g3_figures import run_figure, sweep_figures
+from evobiped.controllers import g3_network as g3net
+from evobiped.experiments.g3 import gaits
+from evobiped.experiments.g3 import simulation as g3sim
+from evobiped.experiments.g3.g3_figures import run_figure, sweep_figures
 
 
 def ranges(levels, labels):
@@ -30,7 +32,7 @@ def ranges(levels, labels):
     return out
 
 
-def save_sweep(out: Path, name: str, s: g3.Sweep, title: str) -> dict:
+def save_sweep(out: Path, name: str, s: g3sim.GoSweep, title: str) -> dict:
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
     with open(out / f"{name}.csv", "w", newline="") as fh:
         w = csv.writer(fh)
@@ -39,7 +41,7 @@ def save_sweep(out: Path, name: str, s: g3.Sweep, title: str) -> dict:
         for r in rows:
             w.writerow([r["go"], r["label"], r["sequence"], r["frequency"], r["period"], *r["phases"], np.mean(r["duty"]),
                         *r["steps"], r["transient_label"], r["settle_time"]])
-    sweep_figures(out, name, s, [0, 1, 2, 3], g3.LIMBS, title=title)
+    sweep_figures(out, name, s, [0, 1, 2, 3], g3net.LIMBS, title=title)
     labels = [g.label for g in s.gaits]
     osc = [g for g in s.gaits if g.oscillating]
     return {
@@ -62,16 +64,16 @@ def main() -> None:
     summary: dict = {}
 
     # claim 1: Fig. 4 walk
-    p = g3.preset("fig4")
-    tr = g3.simulate(p.network, g3.go_schedule([0.1]), p.t_run)
-    g = gaits.analyse(tr.t, tr.x[0], t_start=0.6 * p.t_run)
-    run_figure(out / "claim1_fig4_walk.png", tr.t, tr.x[0], g3.LIMBS, title=f"Fig. 4 parameters, I = 0.1: {g.label} ({g.sequence})", go=tr.go[0])
+    p = g3net.preset("fig4")
+    tr = g3sim.simulate(p.network, g3sim.go_schedule([0.1]), p.t_run)
+    g = gaits.analyse_gait(tr.t, tr.x[0], t_start=0.6 * p.t_run)
+    run_figure(out / "claim1_fig4_walk.png", tr.t, tr.x[0], g3net.LIMBS, title=f"Fig. 4 parameters, I = 0.1: {g.label} ({g.sequence})", go=tr.go[0])
     summary["claim1"] = g.as_dict()
     print(f"claim 1: {g.label} {g.sequence}, period {g.period:.3f}, phases {np.round(g.phases, 3)}, duty {np.round(g.duty, 3)}, "
           f"first cycle {g.transient_label}, settled at t = {g.settle_time:.1f}")
 
     # claim 2: Fig. 8A / 9 sweep, reset per I
-    s = g3.sweep(g3.preset("fig8a"), levels, t_run=args.t_run)
+    s = g3sim.go_sweep(g3net.preset("fig8a"), levels, t_run=args.t_run)
     c2 = save_sweep(out, "claim2_fig8a_sweep", s, "Fig. 8A/9: Table 1 modulation, reset per I")
     ok = [g for g in s.gaits if g.oscillating]
     ground = np.array([(1 - np.mean(g.duty)) * g.period for g in ok])
@@ -84,16 +86,16 @@ def main() -> None:
           f"ground fraction by gait: { {k: round(v, 3) for k, v in c2['ground_fraction_by_gait'].items()} }")
 
     # claim 3: Fig. 8B, walk then pace
-    tr = g3.simulate(g3.preset("fig8a").network, g3.go_schedule([[0.1, 0.35]], [0.0, 25.0]), 50.0)
+    tr = g3sim.simulate(g3net.preset("fig8a").network, g3sim.go_schedule([[0.1, 0.35]], [0.0, 25.0]), 50.0)
     starts, ph = gaits.cycle_phases(tr.t, tr.x[0])
     labs = [gaits.classify(q)[0] for q in ph]
     after = [i for i in range(len(starts)) if starts[i] >= 25.0]
     first_pace = next(i for i in after if all(labs[j] == "pace" for j in range(i, len(labs))))
     pace_period = float(np.median(np.diff(starts[first_pace:])))
-    onset_before = {k: [float(v) for v in np.round(gaits.onsets(tr.t, tr.x[0, :, i])[gaits.onsets(tr.t, tr.x[0, :, i]) < 25], 2)] for i, k in enumerate(g3.LIMBS)}
+    onset_before = {k: [float(v) for v in np.round(gaits.onsets(tr.t, tr.x[0, :, i])[gaits.onsets(tr.t, tr.x[0, :, i]) < 25], 2)] for i, k in enumerate(g3net.LIMBS)}
     summary["claim3"] = {"cycles": [[float(a), lab] for a, lab in zip(starts, labs)], "pace_from": float(starts[first_pace]),
                          "pace_period": pace_period, "delay_cycles": (float(starts[first_pace]) - 25.0) / pace_period, "onsets_before_switch": onset_before}
-    run_figure(out / "claim3_fig8b_walk_to_pace.png", tr.t, tr.x[0], g3.LIMBS, title="Fig. 8B: I 0.1 -> 0.35 at t = 25", go=tr.go[0])
+    run_figure(out / "claim3_fig8b_walk_to_pace.png", tr.t, tr.x[0], g3net.LIMBS, title="Fig. 8B: I 0.1 -> 0.35 at t = 25", go=tr.go[0])
     print(f"claim 3: onsets before the switch {onset_before}; steady pace from t = {starts[first_pace]:.2f} "
           f"({summary['claim3']['delay_cycles']:.2f} pace periods of {pace_period:.2f} after the switch)")
 
@@ -102,7 +104,7 @@ def main() -> None:
     c4 = {}
     for name in ("human", "human-lagged"):
         for mode, kw in (("reset", {}), ("from_walk", {"from_go": 0.1, "switch_at": 30.0})):
-            s = g3.sweep(g3.preset(name), hl, **kw)
+            s = g3sim.go_sweep(g3net.preset(name), hl, **kw)
             r = save_sweep(out, f"claim4_{name}_{mode}", s, f"Sect. 6 {name}: " + ("reset per I" if mode == "reset" else "from the walk at I = 0.1, switch at t = 30"))
             walk = [g for g in s.gaits if g.label == "walk" and max(g.duty) < 0.23]
             run = [g for g in s.gaits if g.label == "walk" and min(g.duty) > 0.31]
@@ -114,17 +116,17 @@ def main() -> None:
             print(f"claim 4 {name} {mode}: ranges {[(a, round(b, 3), round(c, 3)) for a, b, c in r['ranges']]}; walk duty max {r['walk_duty_max']}, "
                   f"run duty min {r['run_duty_min']}; walk freq {r['walk_freq']}, run freq {r['run_freq']}")
     for name in ("human", "human-lagged"):  # Fig. 10: walk 0.1 -> 0.15 at t = 30
-        tr = g3.simulate(g3.preset(name).network, g3.go_schedule([[0.1, 0.15]], [0.0, 30.0]), 150.0)
-        g = gaits.analyse(tr.t, tr.x[0], t_start=90.0)
+        tr = g3sim.simulate(g3net.preset(name).network, g3sim.go_schedule([[0.1, 0.15]], [0.0, 30.0]), 150.0)
+        g = gaits.analyse_gait(tr.t, tr.x[0], t_start=90.0)
         c4[f"{name}/fig10"] = g.as_dict()
-        run_figure(out / f"claim4_{name}_fig10.png", tr.t, tr.x[0], g3.LIMBS, title=f"Fig. 10 ({name}): I 0.1 -> 0.15 at t = 30: {g.label}", go=tr.go[0])
+        run_figure(out / f"claim4_{name}_fig10.png", tr.t, tr.x[0], g3net.LIMBS, title=f"Fig. 10 ({name}): I 0.1 -> 0.15 at t = 30: {g.label}", go=tr.go[0])
         print(f"claim 4 {name} Fig. 10 (0.1 -> 0.15 at t = 30): {g.label}, duty {np.round(g.duty, 3)}, period {g.period:.3f}")
     summary["claim4"] = c4
 
     # claim 5: Fig. 5A / 5B, symmetric unmodulated
     for name in ("fig5a", "fig5b", "fig7"):
-        s = g3.sweep(g3.preset(name), levels, t_run=args.t_run)
-        r = save_sweep(out, f"claim5_{name}_sweep", s, f"{g3.preset(name).source}, reset per I")
+        s = g3sim.go_sweep(g3net.preset(name), levels, t_run=args.t_run)
+        r = save_sweep(out, f"claim5_{name}_sweep", s, f"{g3net.preset(name).source}, reset per I")
         summary[f"claim5_{name}" if name != "fig7" else "fig7"] = r
         print(f"{name}: ranges {[(a, round(b, 3), round(c, 3)) for a, b, c in r['ranges']]}")
 
@@ -133,8 +135,8 @@ def main() -> None:
     for name, go in (("fig4", 0.1), ("fig8a", 0.3)):
         per = []
         for dt in (0.01, 0.005, 0.0025):
-            tr = g3.simulate(g3.preset(name).network, g3.go_schedule([go]), 120.0, dt=dt, sample_dt=0.01)
-            per.append(gaits.analyse(tr.t, tr.x[0], t_start=60.0).period)
+            tr = g3sim.simulate(g3net.preset(name).network, g3sim.go_schedule([go]), 120.0, dt=dt, sample_dt=0.01)
+            per.append(gaits.analyse_gait(tr.t, tr.x[0], t_start=60.0).period)
         conv[name] = {"dt": [0.01, 0.005, 0.0025], "period": per, "rel_change_halving_0.005": abs(per[2] / per[1] - 1)}
         print(f"convergence {name} I={go}: periods {per}, halving 0.005 -> 0.0025 changes it by {conv[name]['rel_change_halving_0.005']:.1e}")
     summary["convergence"] = conv

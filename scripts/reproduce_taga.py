@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from evobiped import taga_experiments as tx
+from evobiped.experiments.taga import walking as tx
 from evobiped.fileio import atomic_write
 from evobiped.progress import Progress
-from evobiped.record import taga_figures as fig
-from evobiped.stride import onsets
+from evobiped.experiments.taga import taga_figures as fig
+from evobiped.experiments.taga.stride import onsets
 
 NEURONS = ["RH f", "RH e", "RK f", "RK e", "RA f", "RA e", "LH f", "LH e", "LK f", "LK e", "LA f", "LA e"]
 
@@ -103,8 +103,8 @@ def main() -> None:
     log("claim 3: u0 sweeps up and down")
     up_vals = list(np.round(np.arange(5.5, 9.0 + 1e-9, step), 2))
     down_vals = list(np.round(np.arange(7.75 if not args.quick else 7.5, 3.0 - 1e-9, -step), 2))
-    up = tx.sweep(up_vals, progress=progress("sweep up", 20.0 + 8.0 * (len(up_vals) - 1)))
-    down = tx.sweep(down_vals, progress=progress("sweep down", 20.0 + 8.0 * (len(down_vals) - 1)))
+    up = tx.u0_sweep(up_vals, progress=progress("sweep up", 20.0 + 8.0 * (len(up_vals) - 1)))
+    down = tx.u0_sweep(down_vals, progress=progress("sweep down", 20.0 + 8.0 * (len(down_vals) - 1)))
     R["sweep_up"], R["sweep_down"] = up, down
     md += ["## u0 swept up from walking (each step continues from the previous state; 8 s per step, last 4 s)\n", fmt(up, METRIC_KEYS),
            "## u0 swept down from running\n", fmt(down, METRIC_KEYS)]

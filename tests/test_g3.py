@@ -3,12 +3,14 @@
 import numpy as np
 import pytest
 
-from evobiped import g3, gaits
+from evobiped.controllers import g3_network as g3net
+from evobiped.experiments.g3 import gaits
+from evobiped.experiments.g3 import simulation as g3sim
 from evobiped.errors import ConfigError, UserError
 
 
 def test_inhibition_matrix_layout():
-    D = g3.quadruped_D(0.8, 0.185, 0.01, 0.15, 0.02, 0.03)
+    D = g3net.quadruped_D(0.8, 0.185, 0.01, 0.15, 0.02, 0.03)
     LF, RF, LH, RH = range(4)
     assert np.all(np.diag(D) == 0.8)
     assert D[LF, RF] == D[RF, LF] == D[LH, RH] == D[RH, LH] == 0.185
@@ -19,15 +21,15 @@ def test_inhibition_matrix_layout():
 
 
 def test_table1_boundaries_belong_to_the_lower_gait():
-    assert list(g3.table1_gait([0.1, 0.17, 0.171, 0.25, 0.35, 0.351])) == [0, 0, 1, 1, 2, 3]
-    assert g3.table1_D(np.array([0.35]))[0, 0, 2] == 0.55  # pace: D2 aft->fore raised
+    assert list(g3net.table1_gait([0.1, 0.17, 0.171, 0.25, 0.35, 0.351])) == [0, 0, 1, 1, 2, 3]
+    assert g3net.table1_D(np.array([0.35]))[0, 0, 2] == 0.55  # pace: D2 aft->fore raised
 
 
 def test_go_lags_delay_every_change():
     """With only self-inhibition the channels are independent copies: channel k is
     channel 0 shifted by its lag, for the switch-on and the later switch-off alike."""
-    net = g3.G3Network(D=tuple(map(tuple, g3.quadruped_D(1, 0, 0, 0, 0, 0))), lags=(0.0, 0.5, 1.0, 1.5))
-    tr = g3.simulate(net, g3.go_schedule([[0.2, 0.0]], [0.0, 2.0]), 6.0, dt=0.01, sample_dt=0.01)
+    net = g3net.G3Network(D=tuple(map(tuple, g3net.quadruped_D(1, 0, 0, 0, 0, 0))), lags=(0.0, 0.5, 1.0, 1.5))
+    tr = g3sim.simulate(net, g3sim.go_schedule([[0.2, 0.0]], [0.0, 2.0]), 6.0, dt=0.01, sample_dt=0.01)
     x = tr.x[0]
     assert x[:, 0].max() > 0.3 and x[600 - 1, 0] < 0.5 * x[200, 0]  # it rises, then decays after t = 2
     for k, lag in enumerate((0.5, 1.0, 1.5), start=1):
@@ -38,8 +40,8 @@ def test_go_lags_delay_every_change():
 
 def test_fig4_walk_claim1():
     """Claim 1: Fig. 4 at I = 0.1 walks (lateral sequence LF, RH, RF, LH), equal duty."""
-    tr = g3.simulate(g3.preset("fig4").network, g3.go_schedule([0.1]), 120.0)
-    g = gaits.analyse(tr.t, tr.x[0], t_start=70.0)
+    tr = g3sim.simulate(g3net.preset("fig4").network, g3sim.go_schedule([0.1]), 120.0)
+    g = gaits.analyse_gait(tr.t, tr.x[0], t_start=70.0)
     assert (g.label, g.sequence) == ("walk", "lateral")
     assert np.all(gaits.circ_dist(g.phases, [0, 0.5, 0.75, 0.25]) < 0.01)
     assert g.period == pytest.approx(10.02, abs=0.05)
@@ -48,10 +50,10 @@ def test_fig4_walk_claim1():
 
 def test_integrator_converges():
     """Halving dt changes the Fig. 4 walk period by < 0.1 % (measured: ~1e-5)."""
-    net = g3.preset("fig4").network
+    net = g3net.preset("fig4").network
     periods = [
-        gaits.analyse(tr.t, tr.x[0], t_start=60).period
-        for tr in (g3.simulate(net, g3.go_schedule([0.1]), 100.0, dt=dt, sample_dt=0.02) for dt in (0.01, 0.005))
+        gaits.analyse_gait(tr.t, tr.x[0], t_start=60).period
+        for tr in (g3sim.simulate(net, g3sim.go_schedule([0.1]), 100.0, dt=dt, sample_dt=0.02) for dt in (0.01, 0.005))
     ]
     assert abs(periods[0] / periods[1] - 1) < 1e-3
 
@@ -62,7 +64,7 @@ CLAIM2 = {0.08: "walk", 0.12: "walk", 0.17: "walk", 0.19: "trot", 0.25: "trot", 
 
 @pytest.fixture(scope="module")
 def fig8a_sweep():
-    return g3.sweep(g3.preset("fig8a"), list(CLAIM2), t_run=120.0)
+    return g3sim.go_sweep(g3net.preset("fig8a"), list(CLAIM2), t_run=120.0)
 
 
 def test_fig8a_gait_order_claim2(fig8a_sweep):
@@ -85,7 +87,7 @@ def test_human_walk_and_run_claim4():
     """Claim 4 (tuned lags, see docs/g3.md): same phases, duty < 0.23 walking, > 0.31 running,
     overlapping frequencies.  The run is entered from the walk (Fig. 10's protocol)."""
     levels = [0.06, 0.1, 0.14, 0.16, 0.2, 0.26]
-    s = g3.sweep(g3.preset("human-lagged"), levels, from_go=0.1, switch_at=30.0, t_run=90.0)
+    s = g3sim.go_sweep(g3net.preset("human-lagged"), levels, from_go=0.1, switch_at=30.0, t_run=90.0)
     walk, run = s.gaits[:3], s.gaits[3:]
     for g in s.gaits:
         assert (g.label, g.sequence) == ("walk", "lateral")
@@ -96,20 +98,20 @@ def test_human_walk_and_run_claim4():
 
 def test_human_faithful_lags_pronk_instead_of_run():
     """With Fig. 4's own lags the step from the walk to I = 0.15 ends in a pronk (not the run)."""
-    s = g3.sweep(g3.preset("human"), [0.1, 0.15], from_go=0.1, switch_at=30.0, t_run=90.0)
+    s = g3sim.go_sweep(g3net.preset("human"), [0.1, 0.15], from_go=0.1, switch_at=30.0, t_run=90.0)
     assert [g.label for g in s.gaits] == ["walk", "pronk"]
     assert s.gaits[0].duty[0] < 0.23 and s.gaits[1].duty[0] < 0.31
 
 
 def test_bad_arguments():
     with pytest.raises(ConfigError, match="unknown G3 preset 'cat'"):
-        g3.preset("cat")
+        g3net.preset("cat")
     with pytest.raises(UserError, match=">= 0"):
-        g3.go_schedule([-0.1])
+        g3sim.go_schedule([-0.1])
     with pytest.raises(ConfigError, match="no GO levels"):
-        g3.sweep(g3.preset("fig4"), [])
+        g3sim.go_sweep(g3net.preset("fig4"), [])
     with pytest.raises(ConfigError, match="lags"):
-        g3.G3Network(D=(), lags=(), delta=())
+        g3net.G3Network(D=(), lags=(), delta=())
 
 
 # ------------------------------------------------------------------ the G3 controller
@@ -130,10 +132,10 @@ class _Actions:
 
 
 def _predicted_period_s(ctrl, D, go):
-    """Period (s) of the same network integrated on its own by g3.simulate."""
-    net = g3.G3Network(cells=ctrl.cells, D=tuple(map(tuple, D)), lags=tuple(ctrl.lag_steps * ctrl.h), delta=(0.0,) * ctrl.n)
-    tr = g3.simulate(net, g3.go_schedule([go]), 60.0, dt=0.01, sample_dt=0.01)
-    return gaits.analyse(tr.t, tr.x[0], t_start=30.0).period / ctrl.time_scale
+    """Period (s) of the same network integrated on its own by g3sim.simulate."""
+    net = g3net.G3Network(cells=ctrl.cells, D=tuple(map(tuple, D)), lags=tuple(ctrl.lag_steps * ctrl.h), delta=(0.0,) * ctrl.n)
+    tr = g3sim.simulate(net, g3sim.go_schedule([go]), 60.0, dt=0.01, sample_dt=0.01)
+    return gaits.analyse_gait(tr.t, tr.x[0], t_start=30.0).period / ctrl.time_scale
 
 
 def test_g3_controller_drives_reil_body_at_the_network_frequency():
@@ -210,7 +212,7 @@ def test_cli_g3_bad_arguments(argv, msg, capsys):
 
 def test_fig8b_walk_to_pace_within_about_a_cycle():
     """Claim 3: I 0.1 -> 0.35 at t = 25 gives a steady pace from the second cycle after the switch."""
-    tr = g3.simulate(g3.preset("fig8a").network, g3.go_schedule([[0.1, 0.35]], [0.0, 25.0]), 50.0)
+    tr = g3sim.simulate(g3net.preset("fig8a").network, g3sim.go_schedule([[0.1, 0.35]], [0.0, 25.0]), 50.0)
     starts, ph = gaits.cycle_phases(tr.t, tr.x[0])
     labels = [gaits.classify(q)[0] for q in ph]
     after = starts >= 25.0

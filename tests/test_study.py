@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from evobiped.stats import histogram_edges, mean_std, wilson_interval
-from evobiped.study import summarize
+from evobiped.experiments.reil.stats import histogram_edges, mean_std, wilson_interval
+from evobiped.experiments.reil.study import summarize
 
 from .conftest import cli
 
@@ -96,7 +96,7 @@ def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     """A run stopped after generation 1 of 3 is resumed from its checkpoint and ends as an uninterrupted one."""
     from evobiped.episode import EpisodeConfig
     from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
-    from evobiped.study import StudyConfig, open_study, run_dir, run_study
+    from evobiped.experiments.reil.study import StudyConfig, open_study, run_dir, run_study
 
     cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), ga=GAConfig(population=4), generations=3),
                       runs=1, conditions=("plain",), recheck_seconds=3.0)

@@ -124,3 +124,15 @@ def test_robustness_shows_progress_unless_quiet(tmp_path, capsys, monkeypatch):
     assert lines and "s simulated" in lines[-1] and lines[-1].startswith("robustness: 100%")
     assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5", "--quiet"]) == 0
     assert "robustness: " not in capsys.readouterr().err
+
+
+def test_a_closed_output_pipe_ends_quietly():
+    """`evobiped presets | head -1`: the reader leaves early; no traceback, exit 141 like cat."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "presets"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)))
+    proc.stdout.close()  # before the child has imported anything, so its first write meets a closed pipe
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 141 and err == b""

@@ -1,6 +1,6 @@
 """The G3 GO Gait Generator as a body controller (Pribe, Grossberg & Cohen 1997).
 
-One G3 channel (excitatory x_k, slow inhibitory y_k; :mod:`evobiped.g3`) per
+One G3 channel (excitatory x_k, slow inhibitory y_k; :mod:`evobiped.controllers.g3_network`) per
 driven joint, ``n_outputs`` channels in the body's actuator order, so the same
 class drives any body.  Evolvable (the genome):
 
@@ -34,9 +34,9 @@ import numpy as np
 
 from ..contract import Needs
 from ..errors import ConfigError
-from ..g3 import PRESETS as G3_PRESETS
-from ..g3 import preset as g3_preset
-from ..g3 import rk4_step
+from .g3_network import PRESETS as G3_PRESETS
+from .g3_network import preset as g3_preset
+from .g3_network import rk4_step
 from ..genome import GeneBlock, GenomeLayout
 from ..options import option, parse
 from .base import Controller
@@ -73,9 +73,9 @@ class G3Options:
     dt: float = option(0.02, "control period", unit="s", above=0)
     go: float = option(0.1, "the GO signal: a level, or a schedule [[t, level], ...] (t in s from the episode start)",
                        check=_schedule, span="level >= 0, or [[t_s, level], ...]")
-    lag: float = option(0.05, "GO lag of each channel behind the previous one, in model time units", low=0)
-    time_scale: float = option(10.0, "model time units per second of simulated time", above=0)
-    max_step: float = option(0.05, "largest RK4 step, in model time units", above=0)
+    lag: float = option(0.05, "GO lag of each channel behind the previous one", unit="model time", low=0)
+    time_scale: float = option(10.0, "model time units per second of simulated time", unit="1/s", above=0)
+    max_step: float = option(0.05, "largest RK4 step", unit="model time", above=0)
     preset: str = option("fig4", "cell constants A-G2 of this G3 preset", choices=tuple(G3_PRESETS))
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figures import _plt, _save
+from ...record.figures import _plt, _save
 
 _COLORS = {"plain": "tab:blue", "cyclic": "tab:orange"}
 

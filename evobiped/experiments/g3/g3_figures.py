@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..gaits import THRESHOLD
-from .figures import pyplot, save_figure
+from .gaits import THRESHOLD
+from ...record.figures import pyplot, save_figure
 
 GAIT_COLOURS = {"walk": "tab:blue", "trot": "tab:orange", "pace": "tab:green", "gallop": "tab:red", "pronk": "tab:purple", "none": "0.6"}
 
@@ -87,7 +87,7 @@ def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.
 
 
 def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0, max_diagrams: int = 12) -> list[Path]:
-    """The PNGs of a :class:`evobiped.g3.Sweep`: each level's run (one level) or
+    """The PNGs of a :class:`~evobiped.experiments.g3.simulation.GoSweep`: each level's run (one level) or
     one diagram per level over the last ``span`` time units of its hold (at
     most ``max_diagrams`` evenly spaced levels), plus frequency/duty vs I
     (several levels).  Returns the paths written."""

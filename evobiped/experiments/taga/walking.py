@@ -17,12 +17,12 @@ from typing import Callable
 
 import numpy as np
 
-from .bodies.taga import TagaBiped
-from .controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka
-from .errors import UserError
-from .mapping import to_action
-from .sim import Sims
-from .stride import StrideMetrics, analyse
+from ...bodies.taga import TagaBiped
+from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka
+from ...errors import UserError
+from ...mapping import to_action
+from ...sim import Sims
+from .stride import StrideMetrics, analyse_strides
 
 PRESETS = ("taga",)
 
@@ -140,11 +140,11 @@ class TagaWalker:
         tr.u.append(self.state["u"].copy())
 
     def metrics(self, *, t_start: float | None = None, t_end: float | None = None) -> list[dict]:
-        """Per walker: fell/when and :class:`~evobiped.stride.StrideMetrics` over the window."""
+        """Per walker: fell/when and :class:`~evobiped.experiments.taga.stride.StrideMetrics` over the window."""
         a = self.trace.arrays()
         out = []
         for p in range(self.P):
-            m: StrideMetrics = analyse(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0], a["hip"][:, p, 1], t_start=t_start, t_end=t_end)
+            m: StrideMetrics = analyse_strides(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0], a["hip"][:, p, 1], t_start=t_start, t_end=t_end)
             fell = bool(not self.alive[p])
             d = {"u0": float(self.params["u0"][p, 0]), "fell": fell, "fell_at": float(self.fell_at[p]) if fell else None, "unstable": bool(self.unstable[p])}
             d.update(m.as_dict())
@@ -245,7 +245,7 @@ def ground_switch(kg, bg, *, u0: float = 5.5, before: float = 10.0, after: float
     return rows
 
 
-def sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float = 20.0, **options) -> list[dict]:
+def u0_sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: float = 20.0, **options) -> list[dict]:
     """Fig. 11: step u_0 through ``u0_values``, each step starting from the previous steady state.
 
     The first value runs ``first`` s from Appendix E's initial condition, every

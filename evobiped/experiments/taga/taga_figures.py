@@ -1,7 +1,7 @@
 """Taga et al. 1991 figures as PNG: stick figures (Figs. 5, 8, 9), neuron activity
 (Fig. 6), bifurcation diagrams (Fig. 11).
 
-Inputs are plain arrays from :class:`evobiped.taga_experiments.Trace`
+Inputs are plain arrays from :class:`evobiped.experiments.taga.walking.Trace`
 (``t`` (T,), ``hip`` (T, P, 2) as x and height above terrain, ``hip_z`` (T, P),
 ``knee``/``ankle`` (T, P, 2, 2) with legs (right, left) and (x, y), ``contact``
 (T, P, 2), ``u`` (T, P, 12)).
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figures import pyplot, save_figure
+from ...record.figures import pyplot, save_figure
 
 LEG_COLOURS = ("tab:red", "tab:blue")  # right, left
 

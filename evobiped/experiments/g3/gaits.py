@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .errors import ConfigError
+from ...errors import ConfigError
 
 THRESHOLD = 0.33
 
@@ -130,7 +130,7 @@ def cycle_phases(t: np.ndarray, x: np.ndarray, threshold: float = THRESHOLD) -> 
     return starts, ph
 
 
-def analyse(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, threshold: float = THRESHOLD, tol: float = 0.1) -> Gait:
+def analyse_gait(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, threshold: float = THRESHOLD, tol: float = 0.1) -> Gait:
     """Analyse one run: ``t`` ``(T,)``, ``x`` ``(T, N)``; steady window ``t >= t_start``.
 
     t_start defaults to the second half of the run.
@@ -170,7 +170,3 @@ def analyse(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, thres
         settle = float("nan")
     return Gait(label, seq, True, period, 1.0 / period, phases, duty, steps, int(w.size - 1), first, settle)
 
-
-def analyse_batch(t: np.ndarray, x: np.ndarray, **kw) -> list[Gait]:
-    """:func:`analyse` for every row of ``x`` ``(B, T, N)``."""
-    return [analyse(t, xb, **kw) for xb in x]

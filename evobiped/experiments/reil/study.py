@@ -38,13 +38,13 @@ from typing import Callable
 
 import numpy as np
 
-from . import __version__
-from .errors import ConfigError, UserError
-from .evolution.evaluate import SerialEvaluator, init_ray
-from .controllers import CONTROLLERS
-from .evolution.run import OPTIMIZERS, Run, RunConfig
-from .fileio import atomic_write, read_json, write_json
-from .genome_file import load_genome
+from ... import __version__
+from ...errors import ConfigError, UserError
+from ...evolution.evaluate import SerialEvaluator, init_ray
+from ...controllers import CONTROLLERS
+from ...evolution.run import OPTIMIZERS, Run, RunConfig
+from ...fileio import atomic_write, read_json, write_json
+from ...genome_file import load_genome
 from .stats import histogram_edges, mean_std, wilson_interval
 
 #: walk-task options that define each fitness criterion (added to the base run's)
@@ -324,8 +324,8 @@ def table_markdown(rows: list[dict], recheck_seconds: float) -> str:
 
 def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dict]) -> list[Path]:
     """runs.csv, table.csv/.md/.json and the two figures; returns the paths written."""
-    from .record.source import read_history
-    from .record.study_figures import distance_histograms, fitness_graphs
+    from ...record.source import read_history
+    from .study_figures import distance_histograms, fitness_graphs
 
     d = Path(directory)
     rows = summarize(outcomes, config.condition_names)

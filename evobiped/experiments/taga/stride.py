@@ -61,7 +61,7 @@ def onsets(on: np.ndarray) -> np.ndarray:
     return np.flatnonzero(on[1:] & ~on[:-1]) + 1
 
 
-def analyse(
+def analyse_strides(
     t: np.ndarray,
     contact: np.ndarray,
     foot_x: np.ndarray,

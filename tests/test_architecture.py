@@ -1,0 +1,88 @@
+"""The package's layers (CONTRIBUTING.md): nothing imports upward, components do not know each other."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
+
+#: bottom to top; a unit may import its own modules and units of lower layers only
+LAYERS: list[set[str]] = [
+    {"errors", "__version__"},
+    {"validate", "fileio", "progress", "models", "sim", "genome", "presets", "perturb", "mapping"},
+    {"contract", "options"},
+    {"bodies", "controllers", "tasks"},
+    {"episode", "envs"},
+    {"genome_file"},
+    {"robustness"},
+    {"record"},
+    {"evolution"},
+    {"bench", "readme"},
+    {"experiments.reil", "experiments.taga", "experiments.g3"},
+    {"cli"},
+    {"__main__"},
+]
+#: imports allowed inside one layer (importer -> imported)
+SIDEWAYS = {("tasks", "bodies")}
+
+
+def _unit(module: str) -> str:
+    parts = module.split(".")
+    return ".".join(parts[:2]) if parts[0] == "experiments" and len(parts) > 1 else parts[0]
+
+
+def _imports(path: Path, root: Path = PACKAGE) -> set[str]:
+    """Units of evobiped that ``path`` (a module below ``root``) imports, relatively or absolutely."""
+    rel = path.relative_to(root).with_suffix("")
+    package = list(rel.parts if path.name == "__init__.py" else rel.parts[:-1])
+    if path.name == "__init__.py":
+        package = package[:-1]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            base = package[: len(package) - (node.level - 1)]
+            if node.module:
+                found.add(_unit(".".join([*base, node.module])))
+            elif base:
+                found.add(_unit(".".join(base)))
+            else:  # from . import x, y at the top of the package
+                found.update(_unit(a.name) for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("evobiped."):
+            found.add(_unit(node.module.removeprefix("evobiped.")))
+        elif isinstance(node, ast.Import):
+            found.update(_unit(a.name.removeprefix("evobiped.")) for a in node.names if a.name.startswith("evobiped."))
+    return found
+
+
+def _layer(unit: str) -> int:
+    for i, layer in enumerate(LAYERS):
+        if unit in layer:
+            return i
+    raise AssertionError(f"{unit!r} is in no layer: add it to LAYERS here and to CONTRIBUTING.md")
+
+
+def violations(root: Path = PACKAGE) -> list[str]:
+    """Every import of a higher layer, or of the same layer outside SIDEWAYS, in the package at ``root``."""
+    bad = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).with_suffix("")
+        me = _unit(".".join(p for p in rel.parts if p != "__init__") or "__version__")
+        for other in sorted(_imports(path, root) - {me}):
+            if _layer(other) > _layer(me) or (_layer(other) == _layer(me) and (me, other) not in SIDEWAYS):
+                bad.append(f"{path.relative_to(root.parent)} imports {other}")
+    return bad
+
+
+def test_nothing_imports_upward_or_sideways():
+    bad = violations()
+    assert not bad, "\n".join(bad)
+
+
+def test_the_check_catches_upward_and_sideways_imports(tmp_path):
+    root = tmp_path / "evobiped"
+    (root / "controllers").mkdir(parents=True)
+    (root / "episode.py").write_text("from .cli import main\nfrom .controllers import CONTROLLERS\n")
+    (root / "controllers" / "sine.py").write_text("from ..bodies.reil import ReilBiped\nfrom ..genome import GenomeLayout\n")
+    (root / "tasks.py").write_text("from evobiped.bodies import BODIES\n")
+    assert violations(root) == ["evobiped/controllers/sine.py imports bodies", "evobiped/episode.py imports cli"]
