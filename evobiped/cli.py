@@ -121,9 +121,7 @@ def run_episode_cmd(args) -> int:
     cfg = with_sources(cfg, args.sources)
     ep = cfg.build()
     if genome is None:
-        lay = ep.controller.layout
-        rng = np.random.default_rng(args.seed)
-        genome = np.clip(rng.normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
+        genome = ep.controller.layout.sample(np.random.default_rng(args.seed))
     r = ep.run(genome)
     out = {
         "body": cfg.body,

@@ -71,6 +71,12 @@ class GenomeLayout:
     def mutation_sigma(self) -> np.ndarray:
         return self._per_gene("mutation_sigma")
 
+    def sample(self, rng: np.random.Generator, n: int | None = None) -> np.ndarray:
+        """Random genomes from the initialisation Gaussians, clipped to the bounds: ``(G,)``, or ``(n, G)``
+        for a count ``n`` (one ``rng.normal`` draw of that shape, genes in order)."""
+        size = None if n is None else (int(n), self.size)
+        return np.clip(rng.normal(self.init_mean, self.init_sigma, size), self.low, self.high)
+
     def with_overrides(self, genes: dict[str, dict[str, float]]) -> "GenomeLayout":
         """A copy with some blocks' bounds or distributions replaced.
 

@@ -1,10 +1,15 @@
 """Genome JSON files: a genome with everything needed to re-simulate it.
 
-Format (all keys written, ``genome`` and ``episode`` required on reading)::
+Format (``genome`` and ``episode`` required on reading; the episode config
+names the body, controller and task with their options, which is all a replay
+needs to rebuild the simulation)::
 
     {"format": "evobiped-genome/1", "genome": [...G floats...],
-     "episode": {EpisodeConfig fields}, "controller": {structure},
-     "fitness": 12.3, "fell": false, "seed": 1, "generation": 119, "version": "0.1.0"}
+     "episode": {EpisodeConfig fields}, ...metadata..., "version": "0.1.0"}
+
+The metadata is whatever the writer passes: a run's generation files carry
+``fitness``, ``fell``, ``end_time`` (s), ``seed`` and ``generation``;
+``evobiped taga --save-genome`` carries ``preset``.  A reader returns it as a dict.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ def rng():
 def random_genomes(layout, n, seed=0):
     """Genomes drawn from the layout's initialisation Gaussians, clipped to bounds."""
     r = np.random.default_rng(seed)
-    return np.clip(r.normal(layout.init_mean, layout.init_sigma, (n, layout.size)), layout.low, layout.high)
+    return layout.sample(r, n)
 
 
 def cli(*args) -> int:

@@ -73,7 +73,7 @@ def test_weight_direction_and_inputs():
 def test_batch_rows_are_independent(rng):
     net = CTRNN(n_outputs=6)
     lay = net.layout
-    g = np.clip(rng.normal(lay.init_mean, lay.init_sigma, (9, lay.size)), lay.low, lay.high)
+    g = lay.sample(rng, 9)
     p_all, p_one = net.decode(g), net.decode(g[4:5])
     A_all, A_one = np.zeros((9, 10)), np.zeros((1, 10))
     for _ in range(200):

@@ -161,7 +161,7 @@ def test_cli_episode_prints_fitness(capsys):
     out = json.loads(capsys.readouterr().out)
     ep = EpisodeConfig(seconds=2.0).build()
     lay = ep.controller.layout
-    g = np.clip(np.random.default_rng(1).normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
+    g = lay.sample(np.random.default_rng(1))
     assert out["fitness"] == ep.run(g).fitness[0]
 
 

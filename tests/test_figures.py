@@ -23,7 +23,7 @@ def long_walk():
     """A walker that cannot fall, 40 s: the length that made the stick figure thousands of pixels wide."""
     ep = EpisodeConfig(seconds=40.0, body_options={"fall_height": 0.01, "fall_tilt": 3.14159}).build()
     lay = ep.controller.layout
-    g = np.clip(np.random.default_rng(5).normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
+    g = lay.sample(np.random.default_rng(5))
     return record(ep, g)[1]
 
 

@@ -226,6 +226,6 @@ def test_g3_controller_rows_do_not_depend_on_the_batch():
 
     ep = EpisodeConfig(body="reil", controller="g3", seconds=1.0).build()
     lay = ep.controller.layout
-    g = np.clip(np.random.default_rng(3).normal(lay.init_mean, lay.init_sigma, (3, lay.size)), lay.low, lay.high)
+    g = lay.sample(np.random.default_rng(3), 3)
     alone = ep.run(g[1]).fitness[0]
     assert ep.run(g).fitness[1] == alone

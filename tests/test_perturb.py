@@ -42,7 +42,7 @@ def test_a_genome_scores_the_same_alone_or_in_a_batch():
     trials = ep.trials_for((0, 3))
     rng = np.random.default_rng(0)
     lay = ep.controller.layout
-    others = np.clip(rng.normal(lay.init_mean, lay.init_sigma, (3, lay.size)), lay.low, lay.high)
+    others = lay.sample(rng, 3)
     alone = ep.run(g, seconds=4.0, trials=trials)
     batch = ep.run(np.vstack([others[:2], g, others[2:]]), seconds=4.0, trials=trials)
     assert batch.fitness[2] == alone.fitness[0]

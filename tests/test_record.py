@@ -25,7 +25,7 @@ DT = 0.02
 
 def random_genome(layout, seed):
     r = np.random.default_rng(seed)
-    return np.clip(r.normal(layout.init_mean, layout.init_sigma), layout.low, layout.high)
+    return layout.sample(r)
 
 
 def standing_genome(layout):

@@ -15,14 +15,11 @@ from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 from evobiped.genome_file import save_genome
 
+from .conftest import random_genomes
+
 pytest.importorskip("rerun")
 
 SECONDS = 2.0
-
-
-def random_genomes(layout, n, seed):
-    r = np.random.default_rng(seed)
-    return np.clip(r.normal(layout.init_mean, layout.init_sigma, (n, layout.size)), layout.low, layout.high)
 
 
 @pytest.fixture(scope="module")

@@ -280,7 +280,7 @@ def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
                 continue
             ep = cfg.build()
             lay = ep.controller.layout
-            g = np.clip(lay.init_mean + lay.init_sigma * rng.standard_normal((2, lay.size)), lay.low, lay.high)
+            g = lay.sample(rng, 2)
             r = ep.run(g)
             assert r.fitness.shape == (2,) and np.isfinite(r.fitness).all(), (body, ctrl)
             ran.append((body, ctrl))

@@ -15,7 +15,7 @@ from evobiped.genome_file import save_genome
 def genome_file(tmp_path):
     cfg = EpisodeConfig(seconds=0.5)
     lay = cfg.build().controller.layout
-    g = np.clip(np.random.default_rng(2).normal(lay.init_mean, lay.init_sigma), lay.low, lay.high)
+    g = lay.sample(np.random.default_rng(2))
     save_genome(tmp_path / "w.json", g, cfg)
     return tmp_path / "w.json"
 

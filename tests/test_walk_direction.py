@@ -30,7 +30,7 @@ def test_episode_records_start_facing_and_reports_direction():
     ep = EpisodeConfig(seconds=0.4).build()
     rng = np.random.default_rng(1)
     lay = ep.controller.layout
-    g = np.clip(rng.normal(lay.init_mean, lay.init_sigma, (3, lay.init_mean.size)), lay.low, lay.high)
+    g = lay.sample(rng, 3)
     r = ep.run(g)
     assert r.start_facing.shape == (3, 2)
     np.testing.assert_allclose(np.linalg.norm(r.start_facing, axis=1), 1.0)

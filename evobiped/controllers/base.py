@@ -72,7 +72,3 @@ class Controller(ABC):
     @abstractmethod
     def neuron_outputs(self, params: dict[str, np.ndarray], state: Any) -> np.ndarray:
         """Every neuron's output ``(P, n_neurons)``, motor neurons first (for recording)."""
-
-    def describe(self) -> dict:
-        """Structure settings, saved with genomes so a replay can rebuild the controller."""
-        return {"name": self.name}

@@ -90,7 +90,6 @@ class CTRNN(Controller):
         o = self.options = parse(CTRNNOptions, options, "ctrnn controller_options")
         n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
-        self.motor = motor
         self.output_kind = MOTOR_MAPS[motor]
         if n_neurons < n_outputs:
             raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
@@ -139,9 +138,6 @@ class CTRNN(Controller):
 
     def neuron_outputs(self, params, state):
         return self.outputs_of(params, state)
-
-    def describe(self) -> dict:
-        return {"name": self.name, "n_neurons": self.n, "dt": self.dt, "motor": self.motor}
 
 
 def _tau_block(time_constants, dt: float) -> dict:

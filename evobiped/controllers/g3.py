@@ -102,9 +102,7 @@ class G3Controller(Controller):
         self.n_outputs = self.n = int(n_outputs)
         self.input_names = ()
         self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)
-        self.go = go
         self.go_times, self.go_levels = _schedule(go)
-        self.preset, self.max_step = preset, float(max_step)
         self.cells = g3_preset(preset).network.cells
         span = self.dt * self.time_scale  # model units per control period
         self.substeps = int(np.ceil(span / max_step - 1e-9))
@@ -160,14 +158,3 @@ class G3Controller(Controller):
     def neuron_outputs(self, params, state):
         """x (the motor channels) then y, ``(P, 2N)``."""
         return np.concatenate([state["x"], state["y"]], axis=1)
-
-    def describe(self) -> dict:
-        return {
-            "name": self.name,
-            "dt": self.dt,
-            "go": self.go if isinstance(self.go, (int, float)) else [list(map(float, p)) for p in self.go],
-            "lag": self.lag,
-            "time_scale": self.time_scale,
-            "max_step": self.max_step,
-            "preset": self.preset,
-        }

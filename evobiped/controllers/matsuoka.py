@@ -238,6 +238,3 @@ class Matsuoka(Controller):
 
     def neuron_outputs(self, params, state):
         return np.maximum(state["u"], 0.0)
-
-    def describe(self) -> dict:
-        return {"name": self.name, "u0": self.u0, "feedback": self.feedback, "initial_u": self.initial_u, "dt": self.dt}

@@ -134,9 +134,6 @@ class Simbicon(Controller):
     def layout(self) -> GenomeLayout:
         return self._layout
 
-    def describe(self) -> dict:
-        return {"name": self.name, "dt": self.dt}
-
     def initial_state(self, params):
         P = len(params["step_time"])
         # stance leg (0 left, 1 right), time in the swing (s), last targets (rad)

@@ -83,11 +83,10 @@ class GA:
         P = config.population
         rng = generation_rng(self.seed, 0)
         if initial is None:
-            pop = rng.normal(layout.init_mean, layout.init_sigma, (P, layout.size))
+            self.population = layout.sample(rng, P)
         else:  # clones of one genome (G,), or a population (n, G) repeated to size P
             initial = layout.validate(initial, what="initial genome")
-            pop = initial[np.arange(P) % len(initial)].copy()
-        self.population = np.clip(pop, self.low, self.high)
+            self.population = initial[np.arange(P) % len(initial)].copy()
         self.fitness = np.full(P, np.nan)
 
     @property

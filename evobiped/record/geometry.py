@@ -96,16 +96,13 @@ def shapes(model: mujoco.MjModel) -> list[Shape]:
 
 
 def quat_to_mat(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` of unit quaternions ``(..., 4)`` wxyz."""
-    w, x, y, z = np.moveaxis(np.asarray(q, float), -1, 0)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
+    """Rotation matrices ``(..., 3, 3)`` of unit quaternions ``(..., 4)`` wxyz (MuJoCo's ``mju_quat2Mat`` per quaternion)."""
+    q = np.asarray(q, float)
+    flat = q.reshape(-1, 4)
+    out = np.empty((len(flat), 9))
+    for i, quat in enumerate(flat):
+        mujoco.mju_quat2Mat(out[i], quat)
+    return out.reshape(q.shape[:-1] + (3, 3))
 
 
 def wxyz_to_xyzw(q: np.ndarray) -> np.ndarray:

@@ -61,6 +61,3 @@ class Task:
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         """A genome's fitness from its presentations' ``(P, S)`` -> ``(P,)``."""
         return fitness[:, 0]
-
-    def describe(self) -> dict:
-        return {"name": self.name}

@@ -123,6 +123,3 @@ class SteerTask(Task):
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         return fitness.mean(axis=1)
-
-    def describe(self):
-        return {"name": self.name, "sources": self.sources.tolist()}

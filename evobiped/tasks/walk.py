@@ -159,6 +159,3 @@ class WalkTask(Task):
         if not self.cyclic_weight:
             return W
         return W * (1.0 + self.cyclic_weight * self.cyclicity(state))
-
-    def describe(self):
-        return {"name": self.name, "fitness": self.fitness_name, "cyclic_weight": self.cyclic_weight}
