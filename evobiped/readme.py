@@ -21,7 +21,7 @@ from .tasks import TASKS
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 #: a generated section: its id, the table
-MARKER = re.compile(r"(<!-- options: (?P<id>[a-z0-9_ ]+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.S)
+MARKER = re.compile(r"(<!-- options: (?P<id>[a-z0-9_ -]+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.S)
 
 
 def tables() -> dict[str, str]:

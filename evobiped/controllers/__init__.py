@@ -4,6 +4,7 @@ from .base import Controller
 from .ctrnn import CTRNN
 from .g3 import G3Controller
 from .matsuoka import Matsuoka
+from .open_loop import OpenLoop
 from .simbicon import Simbicon
 
 #: name -> Controller class; constructed as cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)
@@ -12,7 +13,8 @@ CONTROLLERS: dict[str, type[Controller]] = {
     CTRNN.name: CTRNN,
     G3Controller.name: G3Controller,
     Matsuoka.name: Matsuoka,
+    OpenLoop.name: OpenLoop,
     Simbicon.name: Simbicon,
 }
 
-__all__ = ["CONTROLLERS", "CTRNN", "Controller", "G3Controller", "Matsuoka", "Simbicon"]
+__all__ = ["CONTROLLERS", "CTRNN", "Controller", "G3Controller", "Matsuoka", "OpenLoop", "Simbicon"]

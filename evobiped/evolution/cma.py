@@ -178,6 +178,10 @@ class CMAES:
             self._start(self.restart)
         self._sample()
 
+    def stop(self) -> list[str]:
+        """The names of pycma's stopping rules that fired (e.g. ``tolfun``) with no restart left; empty while it goes on."""
+        return sorted(self.es.stop())
+
     # ---- checkpointing
     def state_dict(self) -> dict:
         plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
