@@ -10,10 +10,10 @@ PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
 #: bottom to top; a unit may import its own modules and units of lower layers only
 LAYERS: list[set[str]] = [
     {"errors", "__version__"},
-    {"validate", "fileio", "progress", "models", "sim", "genome", "presets", "perturb", "mapping"},
+    {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "perturb", "mapping"},
     {"bodies", "controllers", "tasks"},
     {"episode", "envs"},
-    {"genome_file"},
+    {"genome_file", "rundir"},
     {"robustness"},
     {"record"},
     {"evolution"},

@@ -13,7 +13,6 @@ import multiprocessing as mp
 import os
 import queue
 import signal
-import socket
 import sys
 from abc import ABC, abstractmethod
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
@@ -24,6 +23,7 @@ import numpy as np
 
 from ..episode import Episode, EpisodeConfig
 from ..errors import ConfigError, UserError
+from ..net import connect_error
 
 BACKENDS = ("serial", "process", "thread", "ray")
 
@@ -235,11 +235,9 @@ def check_reachable(address: str, timeout: float = 5.0) -> None:
     host, _, port = hostport.rpartition(":")
     if not host or not port.isdigit():
         raise UserError(f"bad Ray address {address!r} (expected HOST:PORT, ray://HOST:PORT or auto)")
-    try:
-        with socket.create_connection((host, int(port)), timeout=timeout):
-            pass
-    except OSError as exc:
-        raise UserError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}") from None
+    why = connect_error(host, int(port), timeout)
+    if why is not None:
+        raise UserError(f"cannot reach a Ray cluster at {address}: {why}")
 
 
 def init_ray(address: str | None, workers: int | None):

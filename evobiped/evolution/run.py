@@ -1,18 +1,9 @@
 """An evolutionary run: config, run directory, checkpoints, resume.
 
-Run directory (format and names in :mod:`evobiped.evolution.rundir`; every file written atomically)::
-
-    config.json            the full resolved RunConfig
-    checkpoint.json        the commit point: optimizer state, history, best genome after the last generation
-    history.csv            one row per generation (see HISTORY_COLUMNS)       } derived from the checkpoint,
-    best.json              best genome of the run so far                      } rebuilt by a resume when
-    evolution.rrd          fitness per generation, a Rerun recording          } missing, stale or damaged
-    summary.json           written when the run ends: the best walker, its distance and walking direction
-    generations/gen_NNNN.json   best genome of each generation (genome-file format), written just before its commit
-    .lock                  held (flock) by the one process that evolves the run
-
-``resume`` continues from checkpoint.json and yields exactly the files an
-uninterrupted run with the same config writes (wall times aside).
+The run directory's files, names and columns are :mod:`evobiped.rundir`'s;
+every file is written atomically.  ``resume`` continues from checkpoint.json
+and yields exactly the files an uninterrupted run with the same config writes
+(wall times aside).
 """
 
 from __future__ import annotations
@@ -32,16 +23,15 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import __version__
+from .. import __version__, rundir
 from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
-from . import rundir
 from .cma import CMAES, CMAConfig
 from .evaluate import BACKENDS, Evaluator
 from .ga import GA, GAConfig
-from .rundir import HISTORY_COLUMNS
+from ..rundir import HISTORY_COLUMNS
 
 #: optimizer name -> class; each has the GA's ask/tell/ranking/next_generation/carried/state_dict interface
 OPTIMIZERS = {"ga": GA, "cma": CMAES}
@@ -244,7 +234,7 @@ class Run:
         hist = directory / rundir.HISTORY
         if hist.is_file() and hist.read_bytes().count(b"\n") > 1:
             found.append(rundir.HISTORY)
-        found += [f"{rundir.GENERATIONS}/{p.name}" for p in sorted((directory / rundir.GENERATIONS).glob("gen_*.json")) if p.name != "gen_0000.json"]
+        found += [f"{rundir.GENERATIONS}/{p.name}" for p in rundir.generation_files(directory) if rundir.generation_of(p) != 0]
         return found
 
     def _rebuild(self) -> None:
@@ -253,8 +243,8 @@ class Run:
         for p in rundir.remove_stale_temporaries(d):
             self.repairs.append(f"{p.relative_to(d)} removed (a write cut short)")
         (d / rundir.GENERATIONS).mkdir(exist_ok=True)
-        for p in sorted((d / rundir.GENERATIONS).glob("gen_*.json")):
-            if not p.stem[4:].isdigit() or int(p.stem[4:]) >= g:
+        for p in rundir.generation_files(d):
+            if rundir.generation_of(p) is None or rundir.generation_of(p) >= g:
                 p.unlink()
                 self.repairs.append(f"{p.relative_to(d)} removed (after the last checkpoint)")
         self._derive(repair=True)
@@ -290,7 +280,7 @@ class Run:
         if not self.history:
             self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None
             return
-        columns = history_columns(self.history)
+        columns = rundir.history_columns(self.history)
         if repair:
             if recording_matches(rec, columns):
                 return
@@ -394,7 +384,7 @@ class Run:
             "generations": self.ga.generation,
             "best": self.best,
             "wall_seconds": round(self.wall, 3),
-            "evaluations": int(sum(r[HISTORY_COLUMNS.index("evaluations")] for r in self.history)),
+            "evaluations": int(sum(rundir.column(self.history, "evaluations"))),
             "stable": self.best is not None and not self.best["fell"],
             "best_walk": best_walk,
         }
@@ -426,11 +416,6 @@ class Run:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-def history_columns(rows: list[list]) -> dict[str, np.ndarray]:
-    """History rows (HISTORY_COLUMNS each) -> ``{column: (n_generations,) array}``, as ``read_history`` gives."""
-    return {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
 
 
 @contextlib.contextmanager
@@ -496,7 +481,7 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     the missing trailing genes are filled with zeros (no influence).
     """
     path = Path(source)
-    path = path / "best.json" if path.is_dir() else path
+    path = path / rundir.BEST if path.is_dir() else path
     genome, cfg, _ = load_genome(path)
     if cfg.body != episode.body or cfg.controller != episode.controller:
         raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
@@ -509,5 +494,5 @@ def eta_seconds(stats: GenerationStats, history: list[list]) -> float:
     done = len(history)
     if not done:
         return math.nan
-    walls = [r[HISTORY_COLUMNS.index("wall_seconds")] for r in history]
+    walls = rundir.column(history, "wall_seconds")
     return float(np.mean(walls[-5:])) * (stats.generations_total - done)
