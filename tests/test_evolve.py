@@ -54,6 +54,27 @@ def test_history_identical_on_every_backend(tmp_path):
         assert b["genome"] == best["genome"] and b["fitness"] == best["fitness"]
 
 
+def test_batches_join_into_one_episode_result():
+    """The thread backend, one genome per batch, gives the one-batch EpisodeResult field for field,
+    the per-presentation rows of a two-source steer task included."""
+    import dataclasses
+
+    from evobiped.evolution.evaluate import SerialEvaluator, ThreadEvaluator
+
+    cfg = EpisodeConfig(task="steer", seconds=0.6)
+    rng = np.random.default_rng(3)
+    lay = cfg.build().controller.layout
+    genomes = np.clip(rng.normal(lay.init_mean, lay.init_sigma, (3, lay.size)), lay.low, lay.high)
+    with SerialEvaluator(cfg) as one, ThreadEvaluator(cfg, 2, chunk=1) as many:
+        a, b = one.evaluate(genomes), many.evaluate(genomes)
+    assert a.rows is not None and len(a.rows.fitness) == 6 and len(b.rows.fitness) == 6
+    for r, s in ((a, b), (a.rows, b.rows)):
+        for f in dataclasses.fields(r):
+            if f.name != "rows":
+                assert np.array_equal(getattr(r, f.name), getattr(s, f.name), equal_nan=True), f.name
+    assert b.end_position.shape == (3, 2, 2)
+
+
 class Stop(Exception):
     pass
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
+from .base import Optimizer
 from .ga import MAX_POPULATION, generation_rng
 
 
@@ -74,11 +75,11 @@ class GenerationNormal:
         return self.rng.standard_normal(shape)
 
 
-class CMAES:
-    """Ask/tell CMA-ES over a :class:`GenomeLayout` with the GA's interface.
+class CMAES(Optimizer):
+    """Ask/tell CMA-ES over a :class:`GenomeLayout` with the GA's interface (:class:`~.base.Optimizer`).
 
-    ``ask()`` -> ``(population (P, G), unknown (P,) bool)``; ``tell(fitness (n_unknown,))``;
-    ``ranking()`` best first; ``next_generation()``; ``carried()`` (nothing is carried);
+    ``ask()`` -> ``(population (P, G), unknown (P,) bool)``; ``tell(result)`` of the unknown;
+    ``ranking()`` best first; ``next_generation()`` (a fresh sample: no fitness or outcome is kept);
     ``state_dict()`` / ``load_state_dict()`` for the checkpoint.
     """
 
@@ -89,6 +90,7 @@ class CMAES:
             import cma  # noqa: F401
         except ImportError:  # pragma: no cover - a core dependency
             raise UserError("the cma optimizer needs pycma: pip install cma") from None
+        super().__init__()
         self.layout, self.config, self.seed = layout, config, int(seed)
         self.low, self.high = layout.low, layout.high
         self.span = np.where(self.high > self.low, self.high - self.low, 1.0)
@@ -144,25 +146,7 @@ class CMAES:
         self.population = self._genes(np.array(self._asked))
         self.fitness = np.full(len(self.population), np.nan)
 
-    # ---- the GA's interface
-    def ask(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.population, np.isnan(self.fitness)
-
-    def tell(self, fitness: np.ndarray) -> None:
-        _, unknown = self.ask()
-        fitness = np.asarray(fitness, float)
-        if fitness.shape != (int(unknown.sum()),):
-            raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
-        f = np.where(np.isfinite(fitness), fitness, -np.inf)
-        self.fitness[unknown] = f
-
-    def ranking(self) -> np.ndarray:
-        return np.argsort(-self.fitness, kind="stable")
-
-    def carried(self) -> np.ndarray:
-        """For each row of the new population, the row of the previous one whose outcome it keeps (-1: none)."""
-        return np.full(len(self.population), -1)
-
+    # ---- the next generation
     def next_generation(self) -> None:
         if np.isnan(self.fitness).any():
             raise RuntimeError("next_generation before every individual was evaluated")
@@ -181,6 +165,7 @@ class CMAES:
             self.restart += 1
             self._start(self.restart)
         self._sample()
+        self._carry(np.full(len(self.population), -1))  # nothing is carried over
 
     # ---- checkpointing
     def state_dict(self) -> dict:

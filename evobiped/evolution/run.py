@@ -33,7 +33,7 @@ from .evaluate import BACKENDS, Evaluator
 from .ga import GA, GAConfig
 from ..rundir import HISTORY_COLUMNS
 
-#: optimizer name -> class; each has the GA's ask/tell/ranking/next_generation/carried/state_dict interface
+#: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation/outcome) with state_dict/load_state_dict
 OPTIMIZERS = {"ga": GA, "cma": CMAES}
 
 
@@ -142,8 +142,6 @@ class Run:
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
         self.best_genome = best_genome
-        #: fell / unstable / end_time of the current population (for the generation files)
-        self._outcome: dict[str, np.ndarray] = {}
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
         self.repairs: list[str] = []
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
@@ -219,13 +217,8 @@ class Run:
         history, best = ck["history"], ck["best"]
         if len(history) != ga.generation:
             raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
-        P = len(ga.ask()[0])
-        outcome = ck.get("outcome", {})
-        if any(len(v) != P for v in outcome.values()):
-            raise UserError(f"checkpoint: outcome lists must have one entry per individual ({P})")
-        run = cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
-        run._outcome = {k: np.array(v, dtype=float if k == "end_time" else bool) for k, v in outcome.items()}
-        return run
+        ga.load_outcome(ck.get("outcome", {}))
+        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -319,15 +312,8 @@ class Run:
         """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
         ga = self.ga
         pop, unknown = ga.ask()
-        ev = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
-        ga.tell(ev.fitness)
-        P = len(pop)
-        for key, vals, default in (("fell", ev.fell, False), ("unstable", ev.unstable, False), ("end_time", ev.end_time, np.nan)):
-            prev = self._outcome.get(key)
-            arr = np.full(P, default, dtype=np.asarray(vals).dtype) if prev is None else prev.copy()
-            arr[unknown] = vals
-            self._outcome[key] = arr
-        f = ga.fitness
+        ga.tell(evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation)))
+        f, outcome = ga.fitness, ga.outcome
         b = int(ga.ranking()[0])
         g = ga.generation
         stats = GenerationStats(
@@ -337,36 +323,29 @@ class Run:
             median=float(np.median(f)),
             worst=float(f.min()),
             evaluations=int(unknown.sum()),
-            falls=int(self._outcome["fell"].sum()),
-            unstable=int(self._outcome["unstable"].sum()),
+            falls=int(outcome["fell"].sum()),
+            unstable=int(outcome["unstable"].sum()),
             wall_seconds=0.0,
-            best_fell=bool(self._outcome["fell"][b]),
+            best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
         )
-        meta = dict(fitness=float(f[b]), fell=bool(self._outcome["fell"][b]), end_time=float(self._outcome["end_time"][b]), seed=self.config.seed, generation=g)
+        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed, generation=g)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
         if self.best is None or meta["fitness"] > self.best["fitness"]:
             self.best, self.best_genome = meta, [float(x) for x in pop[b]]
         self.history.append(stats.row())
-        # individuals the optimizer carries over keep their outcome; the others' are filled in next generation
-        ga.next_generation()
-        carried = ga.carried()
-        for key, arr in self._outcome.items():
-            new = np.zeros(len(carried), dtype=arr.dtype)
-            new[carried >= 0] = arr[carried[carried >= 0]]
-            self._outcome[key] = new
+        ga.next_generation()  # the individuals it keeps keep their fitness and outcome
         return stats
 
     # ---- files
     def checkpoint(self) -> None:
         """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
         Ctrl-C waits until all are written."""
-        outcome = {k: v.tolist() for k, v in self._outcome.items()}
         with _sigint_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
-                 "wall_seconds": self.wall, "outcome": outcome},
+                 "wall_seconds": self.wall, "outcome": self.ga.outcome_dict()},
             )
             self._derive()
 

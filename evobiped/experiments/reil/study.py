@@ -28,19 +28,17 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-import multiprocessing as mp
 import os
-import signal
 import time
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
 from ... import __version__, rundir
 from ...errors import ConfigError, UserError
 from ...evolution.evaluate import SerialEvaluator, init_ray
+from ...evolution.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
 from ...evolution.run import OPTIMIZERS, Run, RunConfig
 from ...fileio import atomic_write, read_json, write_json
@@ -140,10 +138,6 @@ def run_dir(study: Path, condition: str, k: int, cfg: StudyConfig) -> Path:
 
 
 # ---------------------------------------------------------------- one run (in a worker)
-def _ignore_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-
-
 def run_one(directory: str, config: dict, condition: str, recheck_seconds: float) -> dict:
     """Create, resume or skip the run in ``directory``; re-check a stable best walker.  Returns the outcome."""
     d = Path(directory)
@@ -241,9 +235,12 @@ def run_study(
             report(run_one(*t))
     elif todo and backend == "process":
         n = min(workers or os.cpu_count() or 1, len(todo))
-        with mp.get_context("spawn").Pool(n, initializer=_ignore_sigint) as pool:
-            for o in pool.imap_unordered(_star_run_one, todo):
-                report(o)
+        pool = spawn_pool(n)
+        try:
+            for f in as_completed([pool.submit(run_one, *t) for t in todo]):
+                report(f.result())
+        finally:
+            stop_pool(pool)
     elif todo:
         ray, owns = init_ray(address, workers)
         try:
@@ -256,10 +253,6 @@ def run_study(
             if owns:
                 ray.shutdown()
     return [read_json(Path(t[0]) / rundir.OUTCOME, what="run outcome") for t in tasks]
-
-
-def _star_run_one(args: tuple) -> dict:
-    return run_one(*args)
 
 
 # ---------------------------------------------------------------- statistics and files
