@@ -226,7 +226,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
             d[key] = value
     if freeze:
         d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
-    where = config or (f"preset {preset}" if preset else "settings")
+    where = config or (f"preset {preset}" if preset else "")
     built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
     return dataclasses.replace(built, episode=with_sources(built.episode, sources))
 
@@ -605,14 +605,17 @@ def add_taga(sub) -> None:
 
 
 def run_taga_cmd(args) -> int:
+    from .bodies import TagaBiped
     from .experiments.taga import walking as tx
+    from .options import option_bounds
+    from .validate import number
 
     if args.preset not in tx.PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")
     for u in args.u0:
         tx.check_u0(u)
-    if not -50 <= args.slope <= 50:
-        raise UserError(f"--slope must be within +-50 %, got {args.slope:g}")
+    low, high = option_bounds(TagaBiped.Options, "slope")  # the body's one declared limit, in % here
+    number(args.slope, "--slope", low=100 * low, high=100 * high, unit="%")
     if args.bg < 0:
         raise UserError(f"--bg must be >= 0, got {args.bg:g}")
     seconds = 20.0 if args.seconds is None else args.seconds

@@ -20,8 +20,11 @@ import numpy as np
 from .bodies import BODIES
 from .bodies.base import Body
 from .controllers import CONTROLLERS
+from .contract import Offer, wire
 from .controllers.base import Controller
 from .errors import ConfigError, UserError
+from .genome import GenomeLayout
+from .options import parse
 from .validate import number
 from .mapping import MAPS, to_action
 from .perturb import PerturbationConfig, Trials
@@ -29,6 +32,10 @@ from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
 
+
+#: controller options every controller takes, handled by the episode: ``inputs`` (sensor names to feed,
+#: replacing the controller's default choice) and ``genes`` (gene-block overrides, see GenomeLayout.with_overrides)
+GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes")
 
 #: the most control ticks, and physics steps, one walker's episode may take
 MAX_TICKS = 10**7
@@ -54,63 +61,46 @@ class EpisodeConfig:
     def __post_init__(self):
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
             if name not in reg:
-                raise ConfigError(f"unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
-        number(self.seconds, "episode seconds", above=0, unit="s")
+                raise ConfigError(f"episode.{kind}: unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
+        number(self.seconds, "episode.seconds:", above=0, unit="s")
         if not isinstance(self.stop_on_fall, bool):
-            raise ConfigError(f"episode stop_on_fall must be true or false, got {self.stop_on_fall!r}")
-        for opt in ("body_options", "controller_options", "task_options"):
-            if not isinstance(getattr(self, opt), dict):
-                raise ConfigError(f"{opt} must be a table of options")
+            raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
+        parse(BODIES[self.body].Options, self.body_options, "episode.body_options")
+        parse(CONTROLLERS[self.controller].Options, self.controller_options, "episode.controller_options", skip=GENERIC_CONTROLLER_OPTIONS)
+        parse(TASKS[self.task].Options, self.task_options, "episode.task_options")
         PerturbationConfig.from_dict(self.perturbations)
 
     def nominal(self) -> "EpisodeConfig":
         """The same episode without perturbations (replays, the robustness battery)."""
         return dataclasses.replace(self, perturbations={})
 
+    def parts(self) -> tuple[Body, Controller, Task]:
+        """The body, controller and task, the controller wired to the sensors it needs: the controller
+        contract checked (one ConfigError line on a mismatch); no model is compiled."""
+        body = BODIES[self.body](**self.body_options)
+        task = TASKS[self.task](**self.task_options)
+        cls = CONTROLLERS[self.controller]
+        opts = {k: v for k, v in self.controller_options.items() if k not in GENERIC_CONTROLLER_OPTIONS}
+        added = task.sensor_widths()
+        offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added))
+        inputs = wire(cls.needs(parse(cls.Options, opts, "episode.controller_options")), offer,
+                      chosen=self.controller_options.get("inputs"),
+                      what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
+        controller = cls(n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators, **opts)
+        if "genes" in self.controller_options:
+            controller.override_genes(self.controller_options["genes"])
+        return body, controller, task
+
+    def layout(self) -> GenomeLayout:
+        """The genome layout of this episode's controller, from the declarations alone (no simulation)."""
+        return self.parts()[1].layout
+
     def build(self) -> "Episode":
-        body = _construct(BODIES[self.body], "body", self.body_options)
-        task = _construct(TASKS[self.task], "task", self.task_options)
-        widths = {**_sensor_widths(body), **task.sensor_widths()}
-        opts = dict(self.controller_options)
-        genes = opts.pop("genes", None)
-        wanted = opts.pop("inputs", None)
-        if wanted is None:
-            wanted = list(task.sensor_widths())
-            wanted += [s for s in CONTROLLERS[self.controller].body_inputs if s in widths and s not in wanted]
-        missing = [w for w in wanted if w not in widths]
-        if missing:
-            raise ConfigError(f"controller inputs {missing} are not sensors of body {self.body!r} / task {self.task!r} (have {sorted(widths)})")
-        inputs = {w: widths[w] for w in wanted}
-        controller = _construct(CONTROLLERS[self.controller], "controller", dict(opts, n_outputs=len(body.actuator_names), inputs=inputs))
-        if genes is not None:
-            controller.override_genes(genes)
+        """The episode, its model compiled once."""
+        body, controller, task = self.parts()
         perturbations = PerturbationConfig.from_dict(self.perturbations)
         return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
                        perturbations=perturbations if perturbations.active else None)
-
-
-def _construct(cls, kind: str, options: dict):
-    """``cls(**options)``; an option it does not take is one clear line naming the ones it does."""
-    import inspect
-
-    params = inspect.signature(cls.__init__).parameters
-    if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
-        known = [n for n, p in params.items() if n != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
-        wired = {"n_outputs", "inputs"} if kind == "controller" else set()  # set by the episode itself
-        for name in options:
-            if name not in known:
-                choices = ", ".join(n for n in known if n not in wired)
-                raise ConfigError(f"bad {kind} option for {cls.name!r}: unknown {kind} option {name!r} (choose from {choices})")
-    try:
-        return cls(**options)
-    except TypeError as exc:
-        raise ConfigError(f"bad {kind} option for {cls.name!r}: {exc}") from None
-
-
-def _sensor_widths(body: Body) -> dict[str, int]:
-    sims = Sims(body.build_model(), 1)
-    body.reset(sims)
-    return {k: v.shape[1] for k, v in body.sensors(sims).items()}
 
 
 @dataclass

@@ -17,6 +17,7 @@ import numpy as np
 
 from . import __version__
 from .episode import EpisodeConfig
+from .options import refuse_unknown
 from .errors import ConfigError, UserError
 from .fileio import atomic_write, json_text, read_json
 
@@ -50,9 +51,9 @@ def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
     if not isinstance(obj["episode"], dict):
         raise UserError(f"{path}: 'episode' must be a table")
     try:
-        cfg = EpisodeConfig(**obj["episode"])
-    except TypeError as exc:
-        raise ConfigError(f"{path}: bad episode config ({exc})") from None
+        cfg = EpisodeConfig(**refuse_unknown(EpisodeConfig, obj["episode"], "episode"))
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
     meta = {k: v for k, v in obj.items() if k not in ("genome", "episode")}
     return np.array(obj["genome"], float), cfg, meta
 

@@ -134,12 +134,12 @@ BAD_FLAGS = [
     (["--body", "quadruped"], "unknown body 'quadruped'"),
     (["--controller", "lstm"], "unknown controller 'lstm'"),
     (["--task", "swim"], "unknown task 'swim'"),
-    (["--backend", "mpi"], "unknown backend 'mpi'"),
+    (["--backend", "mpi"], "backend: must be one of serial, process, thread, ray, got 'mpi'"),
     (["--population", "0"], "--population: must be > 0"),
     (["--generations", "-3"], "--generations: must be > 0"),
     (["--workers", "0"], "--workers: must be > 0"),
     (["--episode-seconds", "nan"], "--episode-seconds: must be > 0"),
-    (["--seed", "-1"], "seed must be an integer >= 0"),
+    (["--seed", "-1"], "seed: must be >= 0"),
     (["--population", "1"], "population"),
     (["--backend", "ray", "--address", "127.0.0.1:1"], "cannot reach a Ray cluster at 127.0.0.1:1"),
     (["--backend", "ray", "--address", "no-port"], "bad Ray address"),
@@ -158,13 +158,15 @@ def test_bad_flags_one_line_exit_2_nothing_written(tmp_path, capsys, flags, word
 
 BAD_TOML = [
     ("generations = [", "is not valid TOML"),
-    ("generatons = 3", "unknown setting 'generatons'"),
+    ("generatons = 3", "generatons: unknown option (choose from episode, optimizer,"),
     ("[episode]\nbody = 'nope'", "unknown body 'nope'"),
     ("[ga]\nfittest_fraction = 1.5", "fittest_fraction"),
     ("[ga]\nmutations_per_genome = -1", "mutations_per_genome"),
-    ("episode = 3", "[episode] must be a table"),
-    ("[episode.body_options]\nkp = -5", "kp must be > 0"),
-    ("[episode.body_options]\nwheels = 4", "bad body option"),
+    ("episode = 3", "episode: must be a table of options, got 3"),
+    ("[episode.body_options]\nkp = -5", "episode.body_options.kp: must be > 0 N m/rad, got -5"),
+    ("[episode.body_options]\nwheels = 4", "episode.body_options.wheels: unknown option (choose from timestep, kp,"),
+    ("[episode.controller_options]\nn_neurons = 2.5", "episode.controller_options.n_neurons: must be a whole number"),
+    ("[episode.task_options]\nfitness = 'far'", "episode.task_options.fitness: must be one of distance, forward"),
 ]
 
 
@@ -201,7 +203,7 @@ def test_existing_run_directory_is_left_untouched(finished_run, capsys):
     [
         (lambda d: (d / "checkpoint.json").write_text('{"ga": {"generation": 1, "popul'), "not valid JSON"),
         (lambda d: (d / "checkpoint.json").write_text('{"ga": {}, "history": []}'), "malformed"),
-        (lambda d: (d / "config.json").write_text('{"generations": "many"}'), "generations must be an integer"),
+        (lambda d: (d / "config.json").write_text('{"generations": "many"}'), "generations: must be a whole number"),
         (lambda d: (d / "config.json").unlink(), "run config not found"),
     ],
     ids=["truncated checkpoint", "checkpoint without state", "bad config", "no config"],

@@ -321,19 +321,19 @@ def test_read_only_run_directory(done, capsys):
 
 # ---- hostile configs: one line, exit 2, nothing written
 HOSTILE = {
-    "[episode.body_options]\ntimestep = 0": "timestep must be in",
-    "[episode.body_options]\ntimestep = nan": "timestep must be finite",
-    "[episode.body_options]\ntimestep = 'fast'": "timestep must be a number",
-    "[episode.body_options]\ntimestep = 1e-9": "timestep must be in",
-    "[episode]\nseconds = inf": "episode seconds must be finite",
+    "[episode.body_options]\ntimestep = 0": "episode.body_options.timestep: must be in",
+    "[episode.body_options]\ntimestep = nan": "episode.body_options.timestep: must be finite",
+    "[episode.body_options]\ntimestep = 'fast'": "episode.body_options.timestep: must be a number",
+    "[episode.body_options]\ntimestep = 1e-9": "episode.body_options.timestep: must be in",
+    "[episode]\nseconds = inf": "episode.seconds: must be finite",
     "[episode]\nseconds = 1e-9": "control ticks",
-    "[episode]\nseconds = true": "episode seconds must be a number",
-    "[episode.task_options]\ncyclic_weight = inf": "cyclic_weight must be finite",
-    "[episode.task_options]\ncyclic_weight = nan": "cyclic_weight must be finite",
-    "[ga]\npopulation = 1000000000": "ga population must be in",
+    "[episode]\nseconds = true": "episode.seconds: must be a number",
+    "[episode.task_options]\ncyclic_weight = inf": "episode.task_options.cyclic_weight: must be finite",
+    "[episode.task_options]\ncyclic_weight = nan": "episode.task_options.cyclic_weight: must be finite",
+    "[ga]\npopulation = 1000000000": "ga.population: must be in",
     "[ga]\npopulation = 5000000": "GiB",
-    "generations = true": "generations must be an integer",
-    "[ga]\nmutations_per_genome = inf": "mutations_per_genome must be finite",
+    "generations = true": "generations: must be a whole number",
+    "[ga]\nmutations_per_genome = inf": "ga.mutations_per_genome: must be finite",
 }
 
 
@@ -349,8 +349,8 @@ def test_hostile_config_is_one_line_and_writes_nothing(tmp_path, capsys, text, m
     assert not (tmp_path / "run").exists()
 
 
-@pytest.mark.parametrize("episode, words", [({"seconds": 0}, "episode seconds must be > 0"), ({"seconds": True}, "must be a number"),
-                                             ({"body_options": {"timestep": 0}}, "timestep must be in")])
+@pytest.mark.parametrize("episode, words", [({"seconds": 0}, "episode.seconds: must be > 0"), ({"seconds": True}, "must be a number"),
+                                             ({"body_options": {"timestep": 0}}, "episode.body_options.timestep: must be in")])
 def test_replaying_a_genome_with_a_hostile_episode_is_one_line(reference, tmp_path, capsys, episode, words):
     g = json.loads((reference / "best.json").read_text())
     g["episode"].update(episode)

@@ -119,7 +119,7 @@ def test_karma_inertia_reading():
 
 
 def test_unknown_inertia_reading_is_refused():
-    from evobiped.errors import UserError
+    from evobiped.errors import ConfigError
 
-    with pytest.raises(UserError, match="inertia must be 'geoms' or 'karma'"):
+    with pytest.raises(ConfigError, match="inertia: must be one of geoms, karma, got 'ode'"):
         ReilBiped(inertia="ode")

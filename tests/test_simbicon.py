@@ -111,7 +111,7 @@ def _inputs(ctrl, **x):
 
 def test_swing_and_stance_targets_by_hand():
     """Left stance, early swing: every target from the module docstring's formulas."""
-    ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
+    ctrl = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
     g = _genome(ctrl, step_time=0.3, hip_early=0.5, knee_early=-1.0, stance_knee=-0.1, cd=0.4, cv=0.2,
                 roll_offset=0.05, cd_lateral=0.5, cv_lateral=0.3, pelvis_gain=0.6, pelvis_damping=0.1)
     params = ctrl.decode(g)
@@ -133,7 +133,7 @@ def test_swing_and_stance_targets_by_hand():
 
 
 def test_the_legs_swap_when_the_swing_foot_lands_after_step_time():
-    ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
+    ctrl = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
     params = ctrl.decode(_genome(ctrl, step_time=0.3))
     st = ctrl.initial_state(params)
     touching = _inputs(ctrl, foot_contact=[1, 1])
@@ -175,16 +175,37 @@ def test_the_stance_hip_turns_a_tilted_pelvis_back():
 
 
 def test_bad_pairings_are_one_clear_error():
-    with pytest.raises(ConfigError, match="needs the body sensors"):
-        EpisodeConfig(body="taga", controller="simbicon").build()
+    with pytest.raises(ConfigError, match="'simbicon' .body 'taga', task 'walk'. needs a left and a right leg with the joints "
+                                          "hip_pitch, hip_roll, knee, the body has right: hip, knee, ankle; left: hip, knee, ankle"):
+        EpisodeConfig(body="taga", controller="simbicon").layout()
     with pytest.raises(ConfigError, match="gives angle outputs, which body 'taga' cannot take as torques"):
-        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=SENSORS), WalkTask(), seconds=1.0)
-    with pytest.raises(ConfigError, match="needs the body sensors"):
-        EpisodeConfig(controller="simbicon", controller_options={"inputs": ["joint_angles"]}).build()
+        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators), WalkTask(), seconds=1.0)
+    with pytest.raises(ConfigError, match="needs the sensors foot_contact, pelvis_tilt, .*; its inputs leave them out"):
+        EpisodeConfig(controller="simbicon", controller_options={"inputs": ["joint_angles"]}).layout()
+    with pytest.raises(ConfigError, match="simbicon: needs the sensors com_velocity .2 wide, offered 1."):
+        Simbicon(n_outputs=6, inputs={**SENSORS, "com_velocity": 1}, actuators=ReilBiped.actuators)
+
+
+def test_simbicon_finds_its_joints_by_role_not_by_column():
+    """The same walker with the body's actuators declared in another order: the same targets, permuted."""
+    from evobiped.contract import index
+
+    mirrored = ReilBiped.actuators[3:] + ReilBiped.actuators[:3]  # right leg first
+    a = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
+    b = Simbicon(n_outputs=6, inputs=SENSORS, actuators=mirrored)
+    g = _genome(a, step_time=0.3, hip_early=0.5, cd=0.4, pelvis_gain=0.6)
+    q = np.array([0.1, 0.02, -0.05, -0.2, 0.03, -0.3])
+    x = dict(foot_contact=[1, 1], pelvis_tilt=[0.05, -0.04], com_from_feet=[0.1, -0.2, 0.0, 0.3], com_velocity=[0.5, -0.1])
+    pa, pb = a.decode(g), b.decode(g)
+    _, out_a = a.step(pa, a.initial_state(pa), _inputs(a, joint_angles=q, **x))
+    _, out_b = b.step(pb, b.initial_state(pb), _inputs(b, joint_angles=np.r_[q[3:], q[:3]], **x))
+    for act in ReilBiped.actuators:
+        assert out_a[0, index(ReilBiped.actuators, act.leg, act.joint)] == out_b[0, index(mirrored, act.leg, act.joint)]
+    assert out_a[0, 3] != out_a[0, 0]  # the legs' targets differ: a permutation is visible
 
 
 def test_genes_and_layout():
-    ctrl = Simbicon(n_outputs=6, inputs=SENSORS)
+    ctrl = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
     assert ctrl.layout.size == len(RANGES) == 13
     assert np.all(ctrl.layout.low < ctrl.layout.init_mean) and np.all(ctrl.layout.init_mean < ctrl.layout.high)
 
@@ -242,9 +263,9 @@ def test_hearing_biases_the_swing_targets_by_the_sound_signal():
     """With the sound input: two more genes; s shifts the forward swing target by -side sound_forward s
     and the outward one by side sound_lateral s (side +1 for the left leg); deaf genes change nothing."""
     heard = {"sound": 1, **SENSORS}
-    ctrl = Simbicon(n_outputs=6, inputs=heard)
+    ctrl = Simbicon(n_outputs=6, inputs=heard, actuators=ReilBiped.actuators)
     assert ctrl.layout.size == 15 and ctrl.layout.init_mean[-2:].tolist() == [0.0, 0.0]
-    deaf = Simbicon(n_outputs=6, inputs=SENSORS)
+    deaf = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
     base = dict(step_time=0.3, hip_early=0.5, knee_early=-1.0, stance_knee=-0.1, cd=0.4, cv=0.2, roll_offset=0.05)
     x = np.zeros((1, 1 + sum(SENSORS.values())))
     x[0, ctrl._at["foot_contact"]] = [1, 1]

@@ -1,6 +1,8 @@
 """The Taga biped and its Matsuoka rhythm generator against Taga, Yamaguchi & Shimizu 1991
 (walking, running, push recovery, the rhythm generator), the stride metrics on synthetic contact sequences, and the CLI."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -112,7 +114,7 @@ def test_knee_stop_is_a_one_sided_spring():
 
 
 def test_taga_weights_from_j_to_i():
-    c = Matsuoka(n_outputs=6)
+    c = Matsuoka(n_outputs=6, actuators=TagaBiped.actuators)
     W = c.decode(c.preset_genome()[None])["W"][0]
     order = c._taga_order  # Taga's neuron k (0-based) -> internal index
     Wt = W[np.ix_(order, order)]  # Taga numbering
@@ -228,8 +230,8 @@ def test_claim4_push_recovery(target, force, delay):
     [
         (["--preset", "nope"], "unknown preset"),
         (["--u0", "-1"], "u0 must be"),
-        (["--slope", "60"], "+-50 %"),
-        (["--slope", "-51"], "+-50 %"),
+        (["--slope", "60"], "--slope must be in [-50, 50] %, got 60"),
+        (["--slope", "-51"], "--slope must be in [-50, 50] %, got -51"),
     ],
 )
 def test_cli_bad_arguments(argv, needle, capsys):
@@ -256,26 +258,45 @@ def test_cli_json_and_genome_file_replays_the_same_walk(capsys, tmp_path):
 
 
 # ---------------------------------------------------------------- pluggability
-def test_every_body_controller_pair_runs():
-    """The papers' three controllers on both bodies; the balance controller on the Reil body only."""
+def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
+    """Every registered body with every registered controller: a pair whose declarations agree runs and gives
+    finite fitness; a pair they refuse is one ConfigError before anything is compiled."""
     from evobiped.bodies import BODIES
+    from evobiped.contract import Offer, problem
     from evobiped.controllers import CONTROLLERS
-    from evobiped.episode import build_episode
-
+    from evobiped.episode import EpisodeConfig
     from evobiped.errors import ConfigError
+    from evobiped.options import parse
 
     rng = np.random.default_rng(0)
-    for body in BODIES:
-        for ctrl in CONTROLLERS:
-            if (body, ctrl) == ("taga", "simbicon"):  # beyond the papers: needs the Reil body's 2-DOF hips and balance sensors
-                with pytest.raises(ConfigError, match="needs the body sensors"):
-                    build_episode(body=body, controller=ctrl, seconds=0.2)
+    ran = []
+    for body, bcls in BODIES.items():
+        for ctrl, ccls in CONTROLLERS.items():
+            cfg = EpisodeConfig(body=body, controller=ctrl, seconds=0.2)
+            why = problem(ccls.needs(parse(ccls.Options, {}, "options")), Offer(bcls.actuators, bcls.sensor_widths))
+            if why is not None:
+                with pytest.raises(ConfigError, match=re.escape(f"controller '{ctrl}' (body '{body}', task 'walk') {why}")):
+                    cfg.layout()
                 continue
-            ep = build_episode(body=body, controller=ctrl, seconds=0.2)
+            ep = cfg.build()
             lay = ep.controller.layout
             g = np.clip(lay.init_mean + lay.init_sigma * rng.standard_normal((2, lay.size)), lay.low, lay.high)
             r = ep.run(g)
             assert r.fitness.shape == (2,) and np.isfinite(r.fitness).all(), (body, ctrl)
+            ran.append((body, ctrl))
+    assert len(ran) >= len(BODIES) * 3  # the papers' three controllers drive both bodies
+
+
+def test_every_body_offers_the_sensors_it_declares():
+    """The declared sensor widths (the controller contract) are the widths of the arrays ``sensors`` returns."""
+    from evobiped.bodies import BODIES
+
+    for name, cls in BODIES.items():
+        body = cls()
+        sims = Sims(body.build_model(), 2)
+        body.reset(sims)
+        got = {k: v.shape for k, v in body.sensors(sims).items()}
+        assert got == {k: (2, w) for k, w in cls.sensor_widths.items()}, name
 
 
 def test_episode_matches_the_experiment_driver():

@@ -63,7 +63,7 @@ def test_unknown_body_option_names_the_valid_ones(tmp_path, capsys):
     cfg.write_text("[episode.body_options]\nkpp = 3\n")
     assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err
-    assert "unknown body option 'kpp' (choose from timestep, kp," in err and "__init__" not in err and err.count("\n") == 1
+    assert "episode.body_options.kpp: unknown option (choose from timestep, kp," in err and "__init__" not in err and err.count("\n") == 1
 
 
 def _help(command: str) -> str:

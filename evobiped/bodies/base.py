@@ -14,9 +14,21 @@ from typing import ClassVar, Literal
 import mujoco
 import numpy as np
 
+from ..contract import Actuator
+from ..errors import ConfigError
 from ..models import load_model, model_path
 from ..sim import Sims
-from ..validate import number
+from ..options import option, parse
+
+
+def model_file_option(stem: str):
+    """The ``model_file`` option every body has."""
+    return option(None, f"MJCF file to load instead of models/{stem}.xml", check=_is_path)
+
+
+def _is_path(v) -> None:
+    if not isinstance(v, str) or not v:
+        raise ConfigError(f"must be a file path, got {v!r}")
 
 
 class Body(ABC):
@@ -33,10 +45,19 @@ class Body(ABC):
     trunk: ClassVar[str]
     #: the MJCF geom of the ground whose friction a trial may change (None: no MuJoCo ground contact)
     floor_geom: ClassVar[str | None] = None
+    #: what the body offers a controller (known without compiling the model): its actuators in
+    #: action order, each with its leg and joint role, and its sensors, name -> width (see :meth:`sensors`)
+    actuators: ClassVar[tuple[Actuator, ...]]
+    sensor_widths: ClassVar[dict[str, int]] = {}
 
-    def __init__(self, *, timestep: float, model_file: str | None = None):
-        self.timestep = float(number(timestep, f"{self.name} body: timestep", low=1e-5, high=0.1, unit="s"))
-        self.model_file = model_file or str(model_path(self.model_name))
+    #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
+    #: ``timestep`` and a ``model_file``); constructed as ``cls(**options)``
+    Options: ClassVar[type]
+
+    def __init__(self, **options):
+        self.options = parse(self.Options, options, f"{self.name} body_options")
+        self.timestep = float(self.options.timestep)
+        self.model_file = self.options.model_file or str(model_path(self.model_name))
 
     def build_model(self) -> mujoco.MjModel:
         """Compile the MJCF once (per worker); the timestep is this body's."""
@@ -49,9 +70,9 @@ class Body(ABC):
         """Look up names and ids in the compiled model (UserError if one is missing)."""
 
     @property
-    @abstractmethod
     def actuator_names(self) -> tuple[str, ...]:
         """The actuated joints, in the order actions are given."""
+        return tuple(a.name for a in self.actuators)
 
     @abstractmethod
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -96,5 +117,5 @@ class Body(ABC):
         """Bool ``(len(ids),)``: the walker has fallen (episode ends)."""
 
     def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
-        """Named sensor arrays ``(P, k)`` a controller may take as inputs."""
+        """Named sensor arrays ``(P, k)`` a controller may take as inputs, k as :attr:`sensor_widths` declares."""
         return {}

@@ -28,15 +28,17 @@ the inertia its mass and length alone imply.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import mujoco
 import numpy as np
 
+from ..contract import Actuator
 from ..errors import UserError
 from ..sim import Sims
-from .base import Body
-from ..validate import number
+from ..options import option
+from .base import Body, model_file_option
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
 ACTUATORS = (
@@ -60,6 +62,21 @@ def _range_of(actuator: str) -> tuple[float, float]:
     return TABLE_II[actuator.split("_", 1)[1]]
 
 
+@dataclass(frozen=True, kw_only=True)
+class ReilOptions:
+    """Options of the reil body."""
+
+    timestep: float = option(0.005, "physics step (control step 0.02 s)", unit="s", low=1e-5, high=0.1)
+    kp: float = option(50.0, "PD stiffness (the module docstring says why not the paper's 5)", unit="N m/rad", above=0)
+    kv: float = option(2.0, "PD damping", unit="N m s/rad", low=0)
+    fall_height: float = option(0.5, "centre-of-mass height below which the walker has fallen", unit="m", above=0)
+    fall_tilt: float = option(float(np.pi / 2), "pelvis tilt beyond which the walker has fallen (on its side, upside down)",
+                              unit="rad", above=0, high=float(np.pi))
+    inertia: str = option("geoms", "link inertias: from the geoms, or MathEngine's default 0.4 kg m^2 per body (`karma`)",
+                          choices=("geoms", "karma"))
+    model_file: str | None = model_file_option("reil_biped")
+
+
 class ReilBiped(Body):
     """Reil & Husbands' walker: PD targets in Table II's ranges, sphere feet."""
 
@@ -68,32 +85,26 @@ class ReilBiped(Body):
     action_kind: ClassVar[str] = "position"
     trunk: ClassVar[str] = "pelvis"
     floor_geom: ClassVar[str | None] = "floor"
+    actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, a.split("_", 1)[0], a.split("_", 1)[1]) for a in ACTUATORS)
+    #: see :meth:`sensors`
+    sensor_widths: ClassVar[dict[str, int]] = {
+        "joint_angles": 6,
+        "joint_velocities": 6,
+        "foot_contact": 2,
+        "pelvis_tilt": 2,
+        "pelvis_tilt_rate": 2,
+        "com_from_feet": 4,
+        "com_velocity": 2,
+    }
 
-    def __init__(
-        self,
-        *,
-        timestep: float = 0.005,
-        kp: float = 50.0,
-        kv: float = 2.0,
-        fall_height: float = 0.5,
-        fall_tilt: float = 1.5707963267948966,
-        inertia: str = "geoms",
-        model_file: str | None = None,
-    ):
-        super().__init__(timestep=timestep, model_file=model_file)
-        for name, v in (("kp", kp), ("kv", kv), ("fall_height", fall_height), ("fall_tilt", fall_tilt)):
-            number(v, f"reil body: {name}")
-        if not (kp > 0 and kv >= 0 and fall_height > 0 and 0 < fall_tilt <= np.pi):
-            raise UserError("reil body: kp must be > 0, kv >= 0, fall_height > 0 and 0 < fall_tilt <= pi")
-        if inertia not in ("geoms", "karma"):
-            raise UserError(f"reil body: inertia must be 'geoms' or 'karma', got {inertia!r}")
-        self.kp, self.kv, self.fall_height = float(kp), float(kv), float(fall_height)
-        self.fall_tilt = float(fall_tilt)
-        self.inertia = inertia
+    Options: ClassVar[type] = ReilOptions
 
-    @property
-    def actuator_names(self) -> tuple[str, ...]:
-        return ACTUATORS
+    def __init__(self, **options):
+        super().__init__(**options)
+        o = self.options
+        self.kp, self.kv, self.fall_height = float(o.kp), float(o.kv), float(o.fall_height)
+        self.fall_tilt = float(o.fall_tilt)
+        self.inertia = o.inertia
 
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = zip(*(_range_of(a) for a in ACTUATORS))

@@ -31,14 +31,17 @@ docs/taga.md).
 from __future__ import annotations
 
 import weakref
+from dataclasses import dataclass
 from typing import ClassVar
 
 import mujoco
 import numpy as np
 
-from ..errors import UserError
+from ..contract import Actuator
+from ..errors import ConfigError, UserError
 from ..sim import Sims
-from .base import Body
+from ..options import option
+from .base import Body, model_file_option
 
 #: actions in this order (N m); T_r1, T_r3, T_r5 (right) and T_r2, T_r4, T_r6 (left)
 ACTUATORS = ("right_hip", "right_knee", "right_ankle", "left_hip", "left_knee", "left_ankle")
@@ -51,6 +54,33 @@ INITIAL_ANGLES = {"right": 0.45 * np.pi, "left": 0.57 * np.pi}
 PUSH_TARGETS = ("none", "hip", "right_shank", "left_shank")
 
 
+def _per_simulation(low: float, strict: bool):
+    """A check: one number, or a list of them (one per simulation), each > low (strict) or >= low."""
+
+    def check(v) -> None:
+        a = np.asarray(v, float) if isinstance(v, (int, float, list, tuple, np.ndarray)) and not isinstance(v, bool) else None
+        if a is None or a.ndim > 1 or a.size == 0 or not np.isfinite(a).all() or not (np.all(a > low) if strict else np.all(a >= low)):
+            raise ConfigError(f"must be a number {'>' if strict else '>='} {low:g} (or a list, one per simulation), got {v!r}")
+
+    return check
+
+
+@dataclass(frozen=True, kw_only=True)
+class TagaOptions:
+    """Options of the taga body."""
+
+    timestep: float = option(0.0005, "physics step (the forces are explicit: keep it small)", unit="s", low=1e-5, high=0.005)
+    kg: float = option(APPENDIX_D["kg"], "ground stiffness k_g (Appendix D)", unit="N/m", check=_per_simulation(0.0, True),
+                       span="> 0, or one per simulation")
+    bg: float = option(APPENDIX_D["bg"], "ground damping b_g (Appendix D)", unit="N s/m", check=_per_simulation(0.0, False),
+                       span=">= 0, or one per simulation")
+    slope: float = option(0.0, "terrain slope beyond `slope_start`, rise over run (0.02 = 2 %, uphill)", low=-0.5, high=0.5)
+    slope_start: float = option(0.0, "where the slope begins, along x", unit="m")
+    max_torque: float = option(2000.0, "joint torque bound (never reached by Taga's generator)", unit="N m", above=0)
+    fall_height: float = option(0.7, "hip height above the terrain below which the walker has fallen", unit="m", above=0)
+    model_file: str | None = model_file_option("taga_biped")
+
+
 class TagaBiped(Body):
     """Taga's 5-link sagittal walker with the Appendix A ground and joint forces."""
 
@@ -59,40 +89,22 @@ class TagaBiped(Body):
     action_kind: ClassVar[str] = "torque"
     trunk: ClassVar[str] = "hip"
     has_custom_forces: ClassVar[bool] = True
+    actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
+    #: see :meth:`sensors`
+    sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}
 
-    def __init__(
-        self,
-        *,
-        timestep: float = 0.0005,
-        kg=APPENDIX_D["kg"],
-        bg=APPENDIX_D["bg"],
-        slope: float = 0.0,
-        slope_start: float = 0.0,
-        max_torque: float = 2000.0,
-        fall_height: float = 0.7,
-        model_file: str | None = None,
-    ):
-        super().__init__(timestep=timestep, model_file=model_file)
-        if not (0 < timestep <= 0.005):
-            raise UserError(f"taga body: timestep must be in (0, 0.005] s, got {timestep}")
-        kg, bg = np.asarray(kg, float), np.asarray(bg, float)
-        if not (np.all(kg > 0) and np.all(bg >= 0)) or kg.ndim > 1 or bg.ndim > 1:
-            raise UserError(f"taga body: ground stiffness kg must be > 0 and damping bg >= 0 (got {kg}, {bg})")
-        if not -0.5 <= slope <= 0.5:
-            raise UserError(f"taga body: slope must be within +-50 % (got {slope * 100:g} %)")
-        if not (max_torque > 0 and fall_height > 0):
-            raise UserError("taga body: max_torque and fall_height must be > 0")
+    Options: ClassVar[type] = TagaOptions
+
+    def __init__(self, **options):
+        super().__init__(**options)
+        o = self.options
         # kg, bg: one value, or one per simulation of the batch (P,)
-        self.p = dict(APPENDIX_D, kg=kg, bg=bg)
-        self.slope, self.slope_start = float(slope), float(slope_start)
-        self.max_torque, self.fall_height = float(max_torque), float(fall_height)
+        self.p = dict(APPENDIX_D, kg=np.asarray(o.kg, float), bg=np.asarray(o.bg, float))
+        self.slope, self.slope_start = float(o.slope), float(o.slope_start)
+        self.max_torque, self.fall_height = float(o.max_torque), float(o.fall_height)
         self._state: weakref.WeakKeyDictionary[Sims, dict] = weakref.WeakKeyDictionary()
 
     # ------------------------------------------------------------ structure
-    @property
-    def actuator_names(self) -> tuple[str, ...]:
-        return ACTUATORS
-
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """``+-max_torque`` N m (2000 by default: never reached by Taga's generator)."""
         h = np.full(len(ACTUATORS), self.max_torque)

@@ -6,7 +6,8 @@ from .g3 import G3Controller
 from .matsuoka import Matsuoka
 from .simbicon import Simbicon
 
-#: name -> Controller class; constructed as cls(n_outputs=..., inputs={name: width}, **options)
+#: name -> Controller class; constructed as cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)
+#: after the episode checks its Needs against the body and task (evobiped.contract)
 CONTROLLERS: dict[str, type[Controller]] = {
     CTRNN.name: CTRNN,
     G3Controller.name: G3Controller,

@@ -13,6 +13,7 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from ..contract import Needs
 from ..genome import GenomeLayout
 
 
@@ -30,8 +31,12 @@ class Controller(ABC):
     #: control period in s, or None to step at every physics step
     dt: float | None
 
-    #: body sensors an episode passes as inputs by default, where the body has them
-    body_inputs: ClassVar[tuple[str, ...]] = ()
+    @classmethod
+    def needs(cls, options: dict) -> Needs:
+        """What this controller, with these options, needs of its body and task (see :mod:`evobiped.contract`);
+        the episode checks it once and constructs the controller with the wiring:
+        ``cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)``."""
+        return Needs()
 
     def bind_period(self, dt: float) -> None:
         """Told the control period (s) once the episode knows it (the physics step when ``dt`` is None)."""

@@ -27,14 +27,16 @@ Weight w_ij (from neuron i to neuron j) is gene i*n + j.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
+from ..contract import Needs
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
+from ..options import option, parse
 from .base import Controller
-from ..validate import number
 
 #: Table III (init mean, init sigma, mutation sigma) and the ranges of Sect. II-C1
 WEIGHT = dict(low=-16.0, high=16.0, init_mean=0.0, init_sigma=8.0, mutation_sigma=8.0)
@@ -50,21 +52,46 @@ def sigmoid(x: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-x))
 
 
+def _pair(v) -> None:
+    if not (isinstance(v, (list, tuple)) and len(v) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in v)):
+        raise ConfigError(f"must be [low, high] in s, got {v!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CTRNNOptions:
+    """Options of the ctrnn controller."""
+
+    n_neurons: int = option(10, "neurons; the first drive the body's actuators", low=1, high=1000, integer=True)
+    dt: float = option(0.02, "control period (forward Euler step)", unit="s", low=1e-4, high=1.0)
+    motor: str = option("range", "motor map: `range` (the paper's: o in [0, 1] spans the joint's range) or `centred` "
+                        "(o = 0.5 stands straight)", choices=tuple(MOTOR_MAPS))
+    time_constants: tuple = option((TAU["low"], TAU["high"]), "range of the time-constant genes, [low, high] with low > dt / 2",
+                                   unit="s", check=_pair, span="0 < dt / 2 < low < high")
+
+    def __post_init__(self):
+        _tau_block(self.time_constants, self.dt)
+
+
 class CTRNN(Controller):
     """Fully connected CTRNN of ``n_neurons``; the first ``n_outputs`` drive the body."""
 
     name: ClassVar[str] = "ctrnn"
     output_kind: ClassVar[str] = "unit"
 
-    def __init__(self, *, n_outputs: int, n_neurons: int = 10, inputs: dict[str, int] | None = None, dt: float = 0.02, motor: str = "range",
-                 time_constants: tuple[float, float] = (TAU["low"], TAU["high"])):
+    Options: ClassVar[type] = CTRNNOptions
+
+    @classmethod
+    def needs(cls, options: CTRNNOptions) -> Needs:
+        """Any body of at most ``n_neurons`` actuators; reads the task's sensors (or the ``inputs`` option's)."""
+        return Needs(task_sensors=True, max_actuators=options.n_neurons)
+
+    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **options):
+        o = self.options = parse(CTRNNOptions, options, "ctrnn controller_options")
+        n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
-        if motor not in MOTOR_MAPS:
-            raise ConfigError(f"ctrnn: unknown motor map {motor!r} (choose from {', '.join(MOTOR_MAPS)})")
         self.motor = motor
         self.output_kind = MOTOR_MAPS[motor]
-        number(n_neurons, "ctrnn: n_neurons", low=1, high=1000, integer=True)
-        number(dt, "ctrnn: dt", low=1e-4, high=1.0, unit="s")
         if n_neurons < n_outputs:
             raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
         tau = _tau_block(time_constants, dt)
@@ -124,7 +151,7 @@ def _tau_block(time_constants, dt: float) -> dict:
     ok = isinstance(time_constants, (list, tuple)) and len(time_constants) == 2
     ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in time_constants)
     if not ok or not dt / 2 < time_constants[0] < time_constants[1]:
-        raise ConfigError(f"ctrnn: time_constants must be [low, high] s with {dt / 2:g} < low < high "
+        raise ConfigError(f"time_constants must be [low, high] s with {dt / 2:g} < low < high "
                           f"(forward Euler at dt = {dt:g} s), got {time_constants!r}")
     low, high = float(time_constants[0]), float(time_constants[1])
     if (low, high) == (TAU["low"], TAU["high"]):

@@ -27,14 +27,18 @@ period 10.0 units at I = 0.1, steps once per 1.0 s).  Each control period
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
+from ..contract import Needs
 from ..errors import ConfigError
+from .g3_network import PRESETS as G3_PRESETS
 from .g3_network import preset as g3_preset
 from .g3_network import rk4_step
 from ..genome import GeneBlock, GenomeLayout
+from ..options import option, parse
 from .base import Controller
 
 SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1)
@@ -51,15 +55,28 @@ def _schedule(go) -> tuple[np.ndarray, np.ndarray]:
         try:
             pairs = [(float(t), float(v)) for t, v in go]
         except (TypeError, ValueError):
-            raise ConfigError(f"g3: go must be a level or a list of [time_s, level] pairs, got {go!r}") from None
+            raise ConfigError(f"go must be a level or a list of [time_s, level] pairs, got {go!r}") from None
     if not pairs:
-        raise ConfigError("g3: the go schedule is empty")
+        raise ConfigError("the go schedule is empty")
     t, v = np.array(pairs).T
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))) or (v < 0).any() or (t < 0).any():
-        raise ConfigError(f"g3: go levels and times must be finite and >= 0, got {go!r}")
+        raise ConfigError(f"go levels and times must be finite and >= 0, got {go!r}")
     if np.any(np.diff(t) <= 0):
-        raise ConfigError("g3: go schedule times must increase")
+        raise ConfigError("go schedule times must increase")
     return t, v
+
+
+@dataclass(frozen=True, kw_only=True)
+class G3Options:
+    """Options of the g3 controller."""
+
+    dt: float = option(0.02, "control period", unit="s", above=0)
+    go: float = option(0.1, "the GO signal: a level, or a schedule [[t, level], ...] (t in s from the episode start)",
+                       check=_schedule, span="level >= 0, or [[t_s, level], ...]")
+    lag: float = option(0.05, "GO lag of each channel behind the previous one", unit="model time", low=0)
+    time_scale: float = option(10.0, "model time units per second of simulated time", unit="1/s", above=0)
+    max_step: float = option(0.05, "largest RK4 step", unit="model time", above=0)
+    preset: str = option("fig4", "cell constants A-G2 of this G3 preset", choices=tuple(G3_PRESETS))
 
 
 class G3Controller(Controller):
@@ -68,24 +85,20 @@ class G3Controller(Controller):
     name: ClassVar[str] = "g3"
     output_kind: ClassVar[str] = "unit"
 
-    def __init__(
-        self,
-        *,
-        n_outputs: int,
-        inputs: dict[str, int] | None = None,
-        dt: float = 0.02,
-        go=0.1,
-        lag: float = 0.05,
-        time_scale: float = 10.0,
-        max_step: float = 0.05,
-        preset: str = "fig4",
-    ):
+    Options: ClassVar[type] = G3Options
+
+    @classmethod
+    def needs(cls, options: G3Options) -> Needs:
+        """Any body; no sensors (the GO signal is an option)."""
+        return Needs(deaf=True)
+
+    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **options):
+        o = self.options = parse(G3Options, options, "g3 controller_options")
+        dt, go, lag, time_scale, max_step, preset = o.dt, o.go, o.lag, o.time_scale, o.max_step, o.preset
         if inputs:
             raise ConfigError(f"g3: takes no sensor inputs (got {sorted(inputs)}); its GO signal is the 'go' option")
         if n_outputs < 1:
             raise ConfigError("g3: needs at least one output channel")
-        if not (dt > 0 and time_scale > 0 and max_step > 0 and lag >= 0):
-            raise ConfigError("g3: dt, time_scale and max_step must be > 0 and lag >= 0")
         self.n_outputs = self.n = int(n_outputs)
         self.input_names = ()
         self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)

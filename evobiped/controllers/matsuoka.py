@@ -31,16 +31,21 @@ structure option (the experiments' control parameter), not a gene.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
+from ..contract import Actuator, Needs, Offer, index, legs, problem
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
+from ..options import option, parse
 from .base import Controller
 
-#: sensors the Appendix C feedback needs (provided by the Taga body)
-FEEDBACK_SENSORS = ("link_angles", "link_velocities", "ground_contact")
+#: sensors the Appendix C feedback needs (provided by the Taga body), with their widths
+FEEDBACK_SENSORS = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2}
+#: the joints of each of Taga's legs, the order of his oscillators within a leg
+TAGA_JOINTS = ("hip", "knee", "ankle")
 #: Appendix D, by joint role within a leg (hip, knee, ankle): tau, tau', p_e, p_f
 TAGA_ROLE = {
     "tau": (0.05, 0.025, 0.025),
@@ -93,37 +98,45 @@ def taga_feedback(a: np.ndarray, angles: np.ndarray, rates: np.ndarray, contact:
     return f
 
 
+@dataclass(frozen=True, kw_only=True)
+class MatsuokaOptions:
+    """Options of the matsuoka controller."""
+
+    u0: float = option(5.5, "tonic input u_0 (the experiments' speed control)", low=0)
+    feedback: str = option("auto", "Appendix C feedback: `taga` (required), `none`, or `auto` (where the body has Taga's "
+                           "legs and sensors)", choices=("auto", "taga", "none"))
+    initial_u: float = option(0.0, "initial u of the first leg's flexors and the second leg's extensors")
+    dt: float | None = option(None, "control period (none: the physics step)", unit="s", above=0)
+
+
 class Matsuoka(Controller):
     """Matsuoka oscillators, one per actuator; Taga's rhythm generator on the Taga body."""
 
     name: ClassVar[str] = "matsuoka"
     output_kind: ClassVar[str] = "signed"
-    #: body sensors an episode passes by default when the body has them
-    body_inputs: ClassVar[tuple[str, ...]] = FEEDBACK_SENSORS
+    Options: ClassVar[type] = MatsuokaOptions
 
-    def __init__(
-        self,
-        *,
-        n_outputs: int,
-        inputs: dict[str, int] | None = None,
-        u0: float = 5.5,
-        feedback: str = "auto",
-        initial_u: float = 0.0,
-        dt: float | None = None,
-    ):
+    @classmethod
+    def needs(cls, options: MatsuokaOptions) -> Needs:
+        """Two legs with the same joints; Taga's feedback where the body has his legs and sensors."""
+        taga = Needs(sensors=FEEDBACK_SENSORS, joints=TAGA_JOINTS)
+        if options.feedback == "taga":
+            return Needs(sensors=FEEDBACK_SENSORS, joints=TAGA_JOINTS, paired_legs=True)
+        return Needs(paired_legs=True, optional=taga if options.feedback == "auto" else None)
+
+    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
+                 **options):
+        o = self.options = parse(MatsuokaOptions, options, "matsuoka controller_options")
         inputs = dict(inputs or {})
         if n_outputs < 2 or n_outputs % 2:
             raise ConfigError(f"matsuoka: needs two legs with the same joints (an even number of actuators), got {n_outputs}")
-        if not (np.isfinite(u0) and u0 >= 0):
-            raise ConfigError(f"matsuoka: the tonic input u0 must be >= 0, got {u0}")
-        if feedback not in ("auto", "taga", "none"):
-            raise ConfigError(f"matsuoka: feedback must be auto, taga or none, got {feedback!r}")
-        if dt is not None and not dt > 0:
-            raise ConfigError(f"matsuoka: dt must be > 0 (or None: the physics step), got {dt}")
-        has = all(s in inputs for s in FEEDBACK_SENSORS)
-        if feedback == "taga" and not (has and n_outputs == 6):
-            raise ConfigError(f"matsuoka: Taga feedback needs 6 actuators and the inputs {FEEDBACK_SENSORS}")
-        self.feedback = "taga" if (feedback == "taga" or (feedback == "auto" and has and n_outputs == 6)) else "none"
+        taga_body = actuators is not None and problem(Needs(joints=TAGA_JOINTS), Offer(actuators, {})) is None
+        has = taga_body and all(s in inputs for s in FEEDBACK_SENSORS)
+        if o.feedback == "taga" and not has:
+            raise ConfigError(f"matsuoka: Taga feedback needs actuators of the joints {', '.join(TAGA_JOINTS)} per leg "
+                              f"and the inputs {', '.join(FEEDBACK_SENSORS)}")
+        self.feedback = "taga" if (o.feedback == "taga" or (o.feedback == "auto" and has)) else "none"
+        u0, initial_u, dt = o.u0, o.initial_u, o.dt
         self.n_outputs = self.n_osc = int(n_outputs)
         self.n = 2 * self.n_osc
         self.u0, self.initial_u = float(u0), float(initial_u)
@@ -137,9 +150,9 @@ class Matsuoka(Controller):
         if self.feedback == "taga":
             blocks.append(GeneBlock(name="feedback", size=8, **BLOCKS["feedback"]))
         self._layout = GenomeLayout(tuple(blocks))
-        # Taga's neuron k (0-based) sits at internal index _taga_order[k]
-        half = n_osc // 2
-        taga_osc = [0, half, 1, half + 1, 2, half + 2] if n_osc == 6 else []
+        # Taga's neuron k (0-based) sits at internal index _taga_order[k]: his oscillators are the
+        # hips, the knees, the ankles, the first leg's before the second's
+        taga_osc = [index(actuators, leg, j) for j in TAGA_JOINTS for leg in legs(actuators)] if taga_body else []
         self._taga_order = np.array([2 * o + s for o in taga_osc for s in (0, 1)], int)
 
     # ------------------------------------------------------------ genome

@@ -39,15 +39,18 @@ own gene block (bounds, initial Gaussian, mutation sigma in :data:`GENES` and
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
+from ..contract import Actuator, Needs, Offer, index, problem
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
+from ..options import option, parse
 from .base import Controller
 
-#: body sensors read (see ReilBiped.sensors), with their widths
+#: body sensors read by name (see ReilBiped.sensors), with their widths
 SENSORS = {
     "joint_angles": 6,
     "foot_contact": 2,
@@ -86,8 +89,15 @@ SOUND_GENES = tuple(
     GeneBlock(name=k, size=1, low=lo, high=hi, init_mean=0.0, init_sigma=(hi - lo) / 4, mutation_sigma=(hi - lo) / 10)
     for k, (lo, hi) in SOUND_RANGES.items()
 )
-# actuator columns per leg (left = 0, right = 1): hip pitch, hip roll, knee
-PITCH, ROLL, KNEE = np.array([0, 3]), np.array([1, 4]), np.array([2, 5])
+#: the joints of each leg, found by role in the body's actuators
+JOINTS = ("hip_pitch", "hip_roll", "knee")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SimbiconOptions:
+    """Options of the simbicon controller."""
+
+    dt: float = option(0.02, "control period", unit="s", above=0)
 
 
 class Simbicon(Controller):
@@ -95,19 +105,23 @@ class Simbicon(Controller):
 
     name: ClassVar[str] = "simbicon"
     output_kind: ClassVar[str] = "angle"
-    body_inputs: ClassVar[tuple[str, ...]] = tuple(SENSORS)
+    Options: ClassVar[type] = SimbiconOptions
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, dt: float = 0.02):
+    @classmethod
+    def needs(cls, options: SimbiconOptions) -> Needs:
+        """Two legs of hip pitch, hip roll and knee; the balance sensors; the task's (``sound``: hearing)."""
+        return Needs(sensors=SENSORS, task_sensors=True, joints=JOINTS)
+
+    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **options):
+        self.options = parse(SimbiconOptions, options, "simbicon controller_options")
         inputs = dict(inputs or {})
-        if n_outputs != 6:
-            raise ConfigError(f"simbicon: drives 6 actuators (hip pitch, hip roll, knee per leg), the body has {n_outputs}")
-        missing = [k for k, w in SENSORS.items() if inputs.get(k) != w]
-        if missing:
-            raise ConfigError(f"simbicon: needs the body sensors {', '.join(missing)} (the reil body has them)")
-        if not dt > 0:
-            raise ConfigError(f"simbicon: dt must be > 0, got {dt}")
-        self.n_outputs = 6
-        self.dt = float(dt)
+        why = problem(self.needs(self.options), Offer(tuple(actuators), inputs))
+        if why:
+            raise ConfigError(f"simbicon: {why}")
+        self.n_outputs = len(actuators)
+        self.dt = float(self.options.dt)
+        # actuator columns per leg (left = 0, right = 1)
+        self._pitch, self._roll, self._knee = (np.array([index(actuators, leg, j) for leg in ("left", "right")]) for j in JOINTS)
         self.input_names = tuple(inputs)
         start = np.cumsum([0, *inputs.values()])
         self._at = {k: slice(start[i], start[i + 1]) for i, k in enumerate(inputs)}
@@ -126,7 +140,7 @@ class Simbicon(Controller):
     def initial_state(self, params):
         P = len(params["step_time"])
         # stance leg (0 left, 1 right), time in the swing (s), last targets (rad)
-        return {"stance": np.zeros(P, int), "t": np.zeros(P), "out": np.zeros((P, 6))}
+        return {"stance": np.zeros(P, int), "t": np.zeros(P), "out": np.zeros((P, self.n_outputs))}
 
     def neuron_outputs(self, params, state):
         """The 6 targets (rad), then the stance leg (0 left, 1 right) and the time in the swing (s)."""
@@ -159,7 +173,8 @@ class Simbicon(Controller):
             sound = x["sound"][:, 0]
             fwd = fwd - out_sw * g["sound_forward"] * sound
             out = out + out_sw * g["sound_lateral"] * sound
-        target = np.empty((P, 6))
+        target = np.empty((P, self.n_outputs))
+        PITCH, ROLL, KNEE = self._pitch, self._roll, self._knee
         # a nose-down pelvis swings the legs back, a left-up pelvis swings them left
         target[rows, PITCH[swing]] = fwd + pitch
         target[rows, ROLL[swing]] = out - out_sw * roll

@@ -37,10 +37,7 @@ class Walkers:
 
     def __init__(self, body: str, n: int, *, seconds: float, control_dt: float, alive_bonus: float,
                  reset_noise_scale: float, body_options: dict[str, Any]):
-        try:
-            self.body = BODIES[body](**body_options)
-        except TypeError as exc:
-            raise ConfigError(f"unknown option for the {body} biped environment: {exc}") from None
+        self.body = BODIES[body](**body_options)  # ConfigError naming the option
         for name, v, ok in (("seconds", seconds, seconds > 0), ("control_dt", control_dt, control_dt > 0),
                             ("reset_noise_scale", reset_noise_scale, reset_noise_scale >= 0)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and ok):

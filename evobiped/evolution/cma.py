@@ -34,31 +34,27 @@ import numpy as np
 
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
+from ..options import check_fields, option
 from .base import Optimizer
 from .ga import MAX_POPULATION, generation_rng
+
+
+def _population(p) -> None:
+    if not (isinstance(p, int) and not isinstance(p, bool) and (p == 0 or 2 <= p <= MAX_POPULATION)):
+        raise ConfigError(f"must be a whole number in [2, {MAX_POPULATION:.0e}] (or 0 for the default), got {p!r}")
 
 
 @dataclass(frozen=True, kw_only=True)
 class CMAConfig:
     """CMA-ES settings."""
 
-    #: lambda, offspring per generation; 0 = pycma's default 4 + floor(3 ln G)
-    population: int = 0
-    #: initial step size as a fraction of every gene's range (0 < sigma0 <= 1)
-    sigma0: float = 0.1
-    #: IPOP restarts allowed (population doubles at each)
-    restarts: int = 0
+    population: int = option(0, "lambda, offspring per generation; 0: pycma's default 4 + floor(3 ln G)", check=_population,
+                             span=f"0, or 2 to {MAX_POPULATION:.0e}")
+    sigma0: float = option(0.1, "initial step size, a fraction of every gene's range", above=0, high=1)
+    restarts: int = option(0, "IPOP restarts allowed (the population doubles at each)", low=0, high=10, integer=True)
 
     def __post_init__(self):
-        p = self.population
-        if not (isinstance(p, int) and not isinstance(p, bool) and (p == 0 or 2 <= p <= MAX_POPULATION)):
-            raise ConfigError(f"cma.population must be an integer in [2, {MAX_POPULATION:.0e}] (or 0 for the default), got {p!r}")
-        s = self.sigma0
-        if not (isinstance(s, (int, float)) and not isinstance(s, bool) and math.isfinite(s) and 0 < s <= 1):
-            raise ConfigError(f"cma.sigma0 must be in (0, 1] (a fraction of each gene's range), got {s!r}")
-        r = self.restarts
-        if not (isinstance(r, int) and not isinstance(r, bool) and 0 <= r <= 10):
-            raise ConfigError(f"cma.restarts must be an integer in [0, 10], got {r!r}")
+        check_fields(self, "cma")
 
     def lam(self, n_genes: int) -> int:
         """Offspring per generation for ``n_genes`` genes."""

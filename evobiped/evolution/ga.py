@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
-from ..validate import number
+from ..options import check_fields, option
 from .base import Optimizer
 
 
@@ -35,22 +35,15 @@ MAX_POPULATION = 10**7
 class GAConfig:
     """GA settings, the paper's values by default."""
 
-    population: int = 50
-    fittest_fraction: float = 0.5
-    mutations_per_genome: float = 1.0
-    #: re-evaluate survivors every generation (useless with deterministic tasks)
-    reevaluate_survivors: bool = False
+    population: int = option(50, "individuals per generation", low=2, high=MAX_POPULATION, integer=True)
+    fittest_fraction: float = option(0.5, "truncation: the fraction that survives unchanged", above=0, below=1)
+    mutations_per_genome: float = option(1.0, "mean mutations per genome (per-locus rate = this / genome length)", above=0)
+    reevaluate_survivors: bool = option(False, "evaluate the survivors again every generation (useless with deterministic tasks)")
 
     def __post_init__(self):
-        number(self.population, "ga population", low=2, high=MAX_POPULATION, integer=True)
-        number(self.fittest_fraction, "ga fittest_fraction", above=0)
-        if not self.fittest_fraction < 1:
-            raise ConfigError(f"ga fittest_fraction must be in (0, 1), got {self.fittest_fraction!r}")
-        number(self.mutations_per_genome, "ga mutations_per_genome", above=0)
-        if not isinstance(self.reevaluate_survivors, bool):
-            raise ConfigError(f"ga reevaluate_survivors must be true or false, got {self.reevaluate_survivors!r}")
+        check_fields(self, "ga")
         if self.n_survivors < 1:
-            raise ConfigError("ga population * fittest_fraction must keep at least one individual")
+            raise ConfigError("ga.population * ga.fittest_fraction must keep at least one individual")
 
     @property
     def n_survivors(self) -> int:

@@ -19,7 +19,7 @@ import tomllib
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
+from ..options import check_fields, option, parse, refuse_unknown
 from .cma import CMAES, CMAConfig
 from .evaluate import BACKENDS, Evaluator
 from .ga import GA, GAConfig
@@ -37,36 +38,35 @@ from ..rundir import HISTORY_COLUMNS
 OPTIMIZERS = {"ga": GA, "cma": CMAES}
 
 
+def _text(v) -> None:
+    if not isinstance(v, str) or not v:
+        raise ConfigError(f"must be a non-empty string, got {v!r}")
+
+
+def _names(v) -> None:
+    if not isinstance(v, (list, tuple)) or not all(isinstance(x, str) for x in v):
+        raise ConfigError(f"must be a list of names, got {v!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
-    #: "ga" (Reil & Husbands' GA, the default) or "cma" (CMA-ES)
-    optimizer: str = "ga"
+    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA) or `cma` (CMA-ES)", choices=tuple(OPTIMIZERS))
     ga: GAConfig = field(default_factory=GAConfig)
     cma: CMAConfig = field(default_factory=CMAConfig)
-    generations: int = 120
-    seed: int = 0
-    backend: str = "process"
-    workers: int | None = None
-    address: str | None = None
-    #: genome file or run directory whose best genome seeds the population (clones)
-    initial: str | None = None
-    #: names of gene blocks kept fixed (e.g. CPG weights when evolving only sensor weights)
-    frozen_blocks: tuple[str, ...] = ()
+    generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
+    seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
+    backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
+    workers: int | None = option(None, "parallel workers (none: one per core)", low=1, integer=True)
+    address: str | None = option(None, "an existing Ray cluster, HOST:PORT (backend ray)", check=_text)
+    initial: str | None = option(None, "genome file or run directory whose best genome seeds the population (clones)", check=_text)
+    frozen_blocks: tuple[str, ...] = option((), "gene blocks kept fixed (e.g. CPG weights when evolving only sensor weights)",
+                                            check=_names)
 
     def __post_init__(self):
-        if isinstance(self.generations, bool) or not (isinstance(self.generations, int) and 1 <= self.generations <= 10**6):
-            raise ConfigError(f"generations must be an integer in [1, 1e6], got {self.generations!r}")
-        if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
-            raise ConfigError(f"seed must be an integer >= 0, got {self.seed!r}")
-        if self.optimizer not in OPTIMIZERS:
-            raise ConfigError(f"unknown optimizer {self.optimizer!r} (choose from {', '.join(OPTIMIZERS)})")
-        if self.backend not in BACKENDS:
-            raise ConfigError(f"unknown backend {self.backend!r} (choose from {', '.join(BACKENDS)})")
-        if self.workers is not None and (isinstance(self.workers, bool) or not (isinstance(self.workers, int) and self.workers >= 1)):
-            raise ConfigError(f"workers must be an integer >= 1, got {self.workers!r}")
+        check_fields(self, "")
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
@@ -75,31 +75,17 @@ class RunConfig:
 
     @classmethod
     def from_dict(cls, d: dict, *, where: str = "config") -> "RunConfig":
-        if not isinstance(d, dict):
-            raise ConfigError(f"{where}: expected a table of settings")
-        d = dict(d)
+        """The config a table of settings (a TOML file, config.json) gives; a bad setting is one ConfigError
+        line, ``where: path.of.setting: what is wrong`` (``where``: the file or preset, if any)."""
         try:
-            episode = EpisodeConfig(**_table(d.pop("episode", {}), f"{where} [episode]"))
-            ga = GAConfig(**_table(d.pop("ga", {}), f"{where} [ga]"))
-            cma = CMAConfig(**_table(d.pop("cma", {}), f"{where} [cma]"))
-            if "frozen_blocks" in d:
+            d = dict(refuse_unknown(cls, d, ""))
+            episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
+            ga, cma = parse(GAConfig, d.pop("ga", {}), "ga"), parse(CMAConfig, d.pop("cma", {}), "cma")
+            if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, ga=ga, cma=cma, **d)
-        except TypeError as exc:
-            raise ConfigError(f"{where}: {_type_error(exc)}") from None
-
-
-def _table(v: Any, where: str) -> dict:
-    if not isinstance(v, dict):
-        raise ConfigError(f"{where} must be a table")
-    return v
-
-
-def _type_error(exc: TypeError) -> str:
-    msg = str(exc)
-    if "unexpected keyword argument" in msg:
-        return "unknown setting " + msg.split("argument", 1)[1].strip()
-    return msg
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}" if where else str(exc)) from None
 
 
 def load_toml(path: str | Path) -> dict:
@@ -432,9 +418,9 @@ def check_memory(population: int, genes: int) -> None:
 
 
 def make_ga(config: RunConfig):
-    """Build the optimizer (GA or CMA-ES; the episode too, to learn the genome layout): fails before any file is written."""
-    episode = config.episode.build()
-    layout = episode.controller.layout
+    """Build the optimizer (GA or CMA-ES) for the episode's genome layout, known from the declarations
+    (nothing compiled); fails before any file is written."""
+    layout = config.episode.layout()
     check_memory(config.cma.lam(layout.size) if config.optimizer == "cma" else config.ga.population, layout.size)
     initial = None
     if config.initial:

@@ -58,9 +58,9 @@ def resolve(source: str | Path, generation: int | None = None) -> Source:
         gpath, run_dir = path, None
     genome, cfg, meta = load_genome(gpath)
     try:
-        episode = cfg.build()
+        layout = cfg.layout()  # from the declarations: the replay compiles the model once, later
     except UserError as exc:
         raise UserError(f"{gpath}: {exc}") from None
-    episode.controller.layout.validate(genome, what=f"genome in {gpath}")
+    layout.validate(genome, what=f"genome in {gpath}")
     return Source(genome=genome, config=cfg, meta=meta, genome_path=gpath, run_dir=run_dir)
 

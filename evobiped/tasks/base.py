@@ -5,20 +5,32 @@ Fitness is higher-is-better everywhere.
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
 from ..bodies.base import Body
+from ..options import parse
 from ..sim import Sims
+
+
+@dataclass(frozen=True, kw_only=True)
+class NoOptions:
+    """A component without options."""
 
 
 class Task:
     """Base class: no sensors, no bookkeeping; subclasses define fitness."""
 
     name = "task"
+    #: the task's options (a dataclass of :func:`evobiped.options.option` fields); constructed as ``cls(**options)``
+    Options: ClassVar[type] = NoOptions
     #: full episodes per genome, each from the initial state (e.g. one per sound source)
     presentations: int = 1
+
+    def __init__(self, **options):
+        self.options = parse(self.Options, options, f"{self.name} task_options")
 
     def presentation_of(self, n_rows: int) -> np.ndarray:
         """Presentation of each simulation row ``(n_rows,)``: genome p's presentation j is row p * S + j."""
@@ -28,7 +40,7 @@ class Task:
         """Look up what the task needs in the compiled model (ConfigError if missing)."""
 
     def sensor_widths(self) -> dict[str, int]:
-        """Widths of the sensor arrays this task provides, by name."""
+        """Widths of the sensor arrays this task adds, by name (its part of the controller contract)."""
         return {}
 
     def start(self, body: Body, sims: Sims) -> dict[str, Any]:

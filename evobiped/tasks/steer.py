@@ -31,7 +31,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from dataclasses import dataclass
+
 from ..errors import ConfigError
+from ..options import option
 from .base import Task
 
 #: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
@@ -54,11 +57,11 @@ def parse_sources(sources) -> np.ndarray:
     except (TypeError, ValueError):
         arr = None
     if arr is None or arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0 or not np.isfinite(arr).all():
-        raise ConfigError(f"steer task: sources must be a list of [x, y] positions in m, e.g. [[10, 3], [10, -3]]; got {sources!r}")
+        raise ConfigError(f"sources must be a list of [x, y] positions in m, e.g. [[10, 3], [10, -3]]; got {sources!r}")
     near = np.linalg.norm(arr, axis=1) < MIN_SOURCE_DISTANCE
     if near.any():
         x, y = arr[np.argmax(near)]
-        raise ConfigError(f"steer task: the source ({x:g}, {y:g}) is at the walker's start (nearer than {MIN_SOURCE_DISTANCE:g} m "
+        raise ConfigError(f"the source ({x:g}, {y:g}) is at the walker's start (nearer than {MIN_SOURCE_DISTANCE:g} m "
                           "to the origin, where it starts): it could not walk towards it")
     return arr
 
@@ -77,11 +80,21 @@ def with_sources(config, sources):
     return dataclasses.replace(config, task_options={**config.task_options, "sources": [list(map(float, s)) for s in sources]})
 
 
+@dataclass(frozen=True, kw_only=True)
+class SteerOptions:
+    """Options of the steer task."""
+
+    sources: tuple = option(DEFAULT_SOURCES, "sound sources on the ground plane, one presentation each", unit="m",
+                            check=parse_sources, span="[[x, y], ...], none at the start")
+
+
 class SteerTask(Task):
     name = "steer"
+    Options = SteerOptions
 
-    def __init__(self, *, sources=DEFAULT_SOURCES):
-        self.sources = parse_sources(sources)
+    def __init__(self, **options):
+        super().__init__(**options)
+        self.sources = parse_sources(self.options.sources)
         self.presentations = len(self.sources)
 
     def bind_model(self, model) -> None:

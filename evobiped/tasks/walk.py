@@ -36,9 +36,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from dataclasses import dataclass
+
 from ..errors import ConfigError
+from ..options import option
 from .base import Task
-from ..validate import number
 
 
 def count_cycles(series: np.ndarray, lengths: np.ndarray, band: float) -> np.ndarray:
@@ -90,24 +92,34 @@ def direction_words(heading_deg: float) -> str:
 FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T"}
 
 
+@dataclass(frozen=True, kw_only=True)
+class WalkOptions:
+    """Options of the walk task."""
+
+    fitness: str = option("distance", "`distance`: eq. 4, the planar distance from the start; `forward`: "
+                          "(displacement forward + survival_credit) * time up / T", choices=tuple(FITNESS))
+    survival_credit: float = option(5.0, "what staying up earns under the forward fitness", unit="m", low=0)
+    cyclic_weight: float = option(0.0, "weight of the cyclic-activity criterion (0: the paper's plain eq. 4)", low=0)
+    cyclic_cycles: int = option(25, "cycles per motor neuron that earn the full criterion", low=1, integer=True)
+    cyclic_band: float = option(0.05, "hysteresis band of a cycle, in unit motor output", above=0)
+
+    def __post_init__(self):
+        if self.fitness != "distance" and self.cyclic_weight:
+            raise ConfigError("the cyclic criterion multiplies eq. 4; use it with fitness = 'distance'")
+
+
 class WalkTask(Task):
     name = "walk"
+    Options = WalkOptions
 
-    def __init__(self, *, fitness: str = "distance", survival_credit: float = 5.0, cyclic_weight: float = 0.0, cyclic_cycles: int = 25, cyclic_band: float = 0.05):
-        if fitness not in FITNESS:
-            raise ConfigError(f"walk task: unknown fitness {fitness!r} (choose from {', '.join(FITNESS)})")
-        if not (isinstance(survival_credit, (int, float)) and np.isfinite(survival_credit) and survival_credit >= 0):
-            raise ConfigError(f"walk task: survival_credit must be a finite number >= 0 (m), got {survival_credit!r}")
-        number(cyclic_weight, "walk task: cyclic_weight", low=0)
-        number(cyclic_cycles, "walk task: cyclic_cycles", low=1, integer=True)
-        number(cyclic_band, "walk task: cyclic_band", above=0)
-        if fitness != "distance" and cyclic_weight:
-            raise ConfigError("walk task: the cyclic criterion multiplies eq. 4; use it with fitness = 'distance'")
-        self.fitness_name = fitness
-        self.survival_credit = float(survival_credit)
-        self.cyclic_weight = float(cyclic_weight)
-        self.cyclic_cycles = int(cyclic_cycles)
-        self.cyclic_band = float(cyclic_band)
+    def __init__(self, **options):
+        super().__init__(**options)
+        o = self.options
+        self.fitness_name = o.fitness
+        self.survival_credit = float(o.survival_credit)
+        self.cyclic_weight = float(o.cyclic_weight)
+        self.cyclic_cycles = int(o.cyclic_cycles)
+        self.cyclic_band = float(o.cyclic_band)
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()

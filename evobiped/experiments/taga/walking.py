@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 
 from ...bodies.taga import TagaBiped
-from ...controllers.matsuoka import Matsuoka
+from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka
 from ...errors import UserError
 from ...mapping import to_action
 from ...sim import Sims
@@ -74,9 +74,8 @@ class TagaWalker:
         self.P = len(u0)
         self.sims = Sims(self.model, self.P)
         self.body.reset(self.sims)
-        widths = {k: v.shape[1] for k, v in self.body.sensors(self.sims).items()}
-        inputs = {k: widths[k] for k in Matsuoka.body_inputs} if feedback else {}
-        self.ctrl = Matsuoka(n_outputs=6, inputs=inputs, u0=float(u0[0]))
+        inputs = dict(FEEDBACK_SENSORS) if feedback else {}
+        self.ctrl = Matsuoka(n_outputs=6, inputs=inputs, actuators=TagaBiped.actuators, u0=float(u0[0]))
         self.ctrl.bind_period(timestep)
         self.params = self.ctrl.decode(np.tile(self.ctrl.preset_genome(preset), (self.P, 1)))
         self.params["u0"] = u0[:, None].copy()

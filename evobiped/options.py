@@ -1,0 +1,145 @@
+"""Typed options: each body, controller, task and optimizer declares its settings as a dataclass.
+
+A field is declared with :func:`option` (default, meaning, unit and bounds in
+its metadata); :func:`parse` checks a table of settings against the dataclass
+once, when a config is loaded, and names the setting's path in the one-line
+error (``episode.body_options.kp: must be > 0, got -5``).  Checks that relate
+several fields live in the dataclass's ``__post_init__`` (ConfigError).
+:func:`markdown_table` renders the declarations (:mod:`evobiped.readme` puts
+them in the README).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import MISSING, field, fields
+from typing import Any, Callable
+
+from .errors import ConfigError
+from .validate import number
+
+
+def option(default: Any, doc: str, *, unit: str = "", low: float | None = None, high: float | None = None,
+           above: float | None = None, below: float | None = None, integer: bool = False, choices: tuple | None = None,
+           check: Callable[[Any], None] | None = None, span: str = "") -> Any:
+    """A dataclass field: ``default``, its meaning ``doc`` and ``unit``, and what values it takes.
+
+    ``low``/``high``/``above``/``below``/``integer``: a number in that range; ``choices``: one of these;
+    a bool default: true or false; ``check(value)``: anything else (ConfigError without the
+    path); ``span``: the range as the README shows it when ``check`` decides it.  A None
+    default also takes None.
+    """
+    meta = dict(doc=doc, unit=unit, low=low, high=high, above=above, below=below, integer=integer, choices=choices, check=check, span=span)
+    if isinstance(default, (list, dict)):
+        return field(default_factory=lambda: type(default)(default), metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+def _check(f: dataclasses.Field, value: Any, path: str) -> None:
+    m = f.metadata
+    default = f.default if f.default is not MISSING else f.default_factory()
+    if value is None and default is None:
+        return
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ConfigError(f"{path}: must be true or false, got {value!r}")
+    elif m.get("choices") is not None:
+        if value not in m["choices"]:
+            raise ConfigError(f"{path}: must be one of {', '.join(map(str, m['choices']))}, got {value!r}")
+    elif any(m.get(k) is not None for k in ("low", "high", "above", "below")) or m.get("integer") or (
+            isinstance(default, (int, float)) and m.get("check") is None):
+        number(value, f"{path}:", low=m["low"], high=m["high"], above=m["above"], below=m["below"], integer=m["integer"], unit=m["unit"])
+    if m.get("check") is not None:
+        try:
+            m["check"](value)
+        except ConfigError as exc:
+            raise ConfigError(f"{path}: {exc}") from None
+
+
+def join(where: str, name: str) -> str:
+    """The path of setting ``name`` inside ``where`` (e.g. ``episode.body_options`` + ``kp``)."""
+    return f"{where}.{name}" if where else name
+
+
+def refuse_unknown(cls: type, values: Any, where: str, *, skip: tuple[str, ...] = ()) -> dict:
+    """``values`` if it is a table of ``cls``'s fields (and ``skip``); ConfigError naming the first unknown one."""
+    if not isinstance(values, dict):
+        raise ConfigError(f"{where or 'settings'}: must be a table of options, got {values!r}")
+    known = [f.name for f in fields(cls)]
+    for name in values:
+        if name not in known and name not in skip:
+            raise ConfigError(f"{join(where, name)}: unknown option (choose from {', '.join([*known, *skip])})")
+    return values
+
+
+def check_fields(obj: Any, where: str) -> None:
+    """Check every declared field of the dataclass ``obj`` (a ``__post_init__`` calls it); ConfigError naming its path."""
+    for f in fields(obj):
+        if f.metadata:
+            _check(f, getattr(obj, f.name), join(where, f.name))
+
+
+def parse(cls: type, values: Any, where: str, *, skip: tuple[str, ...] = ()) -> Any:
+    """``cls(**values)`` after checking every value; ConfigError naming ``where.name`` for a bad one
+    (``where: ...`` for one that the dataclass's ``__post_init__`` refuses).
+
+    ``skip``: keys handled elsewhere (left out of the dataclass, not refused).
+    """
+    if isinstance(values, cls):
+        return values
+    refuse_unknown(cls, values, where, skip=skip)
+    known = {f.name: f for f in fields(cls)}
+    for name, value in values.items():
+        if name not in skip:
+            _check(known[name], value, join(where, name))
+    try:
+        return cls(**{k: v for k, v in values.items() if k not in skip})
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def option_bounds(cls: type, name: str) -> tuple[float | None, float | None]:
+    """The declared ``(low, high)`` of option ``name`` of ``cls`` (e.g. to check it in another unit)."""
+    m = next(f for f in fields(cls) if f.name == name).metadata
+    return m.get("low"), m.get("high")
+
+
+def _span(m: dict, default: Any) -> str:
+    if m.get("span"):
+        return m["span"]
+    if m.get("choices") is not None:
+        return ", ".join(f"`{c}`" for c in m["choices"])
+    if isinstance(default, bool):
+        return "`true`, `false`"
+    low, high, above, below = (m.get(k) for k in ("low", "high", "above", "below"))
+    if low is not None and high is not None:
+        parts = [f"{low:g} to {high:g}"]
+    else:
+        parts = [f"> {above:g}"] if above is not None else [f">= {low:g}"] if low is not None else []
+        parts += [f"< {below:g}"] if below is not None else [f"<= {high:g}"] if high is not None else []
+    return ("whole number " if m.get("integer") else "") + ", ".join(parts)
+
+
+def _shown(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float) and math.isfinite(v):
+        return f"{v:g}"
+    if isinstance(v, tuple):
+        return "[" + ", ".join(_shown(x) for x in v) + "]"
+    if v is None:
+        return "none"
+    if isinstance(v, str):
+        return f'"{v}"'
+    return str(v)
+
+
+def markdown_table(cls: type) -> str:
+    """The options of ``cls`` as a markdown table: name, default, unit, allowed values, meaning."""
+    rows = ["| option | default | unit | values | meaning |", "|---|---|---|---|---|"]
+    for f in fields(cls):
+        m = f.metadata
+        default = f.default if f.default is not MISSING else f.default_factory()
+        rows.append(f"| `{f.name}` | `{_shown(default)}` | {m.get('unit', '')} | {_span(m, default)} | {m.get('doc', '')} |")
+    return "\n".join(rows) + "\n"

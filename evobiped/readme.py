@@ -1,0 +1,50 @@
+"""The README's option tables, generated from the declarations (:mod:`evobiped.options`).
+
+Each table sits between ``<!-- options: ID -->`` and ``<!-- end options -->`` in
+README.md, ID naming the component (``body reil``, ``controller ctrnn``,
+``task walk``, ``optimizer ga``, ...).  ``python -m evobiped.readme`` rewrites
+them; tests/test_options.py checks that they agree with the declarations.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from .bodies import BODIES
+from .controllers import CONTROLLERS
+from .evolution.cma import CMAConfig
+from .evolution.ga import GAConfig
+from .options import markdown_table
+from .tasks import TASKS
+
+README = Path(__file__).resolve().parent.parent / "README.md"
+#: a generated section: its id, the table
+MARKER = re.compile(r"(<!-- options: (?P<id>[a-z0-9_ ]+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.S)
+
+
+def tables() -> dict[str, str]:
+    """Every registered component's option table, by section id."""
+    out = {}
+    for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
+        for name, cls in reg.items():
+            out[f"{kind} {name}"] = markdown_table(cls.Options)
+    out["optimizer ga"] = markdown_table(GAConfig)
+    out["optimizer cma"] = markdown_table(CMAConfig)
+    return out
+
+
+def render(text: str) -> str:
+    """``text`` (the README) with every generated table replaced by the current declarations
+    (KeyError for a section that names no registered component)."""
+    found = tables()
+    return MARKER.sub(lambda m: m.group(1) + found[m["id"]] + m.group(4), text)
+
+
+def sections(text: str) -> list[str]:
+    """The ids of the generated sections in ``text``, in order."""
+    return [m["id"] for m in MARKER.finditer(text)]
+
+
+if __name__ == "__main__":
+    README.write_text(render(README.read_text()))

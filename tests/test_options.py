@@ -1,0 +1,77 @@
+"""Typed options: the declarations, their one-line errors with the setting's path, and the README's tables."""
+
+import dataclasses
+
+import pytest
+
+from evobiped.bodies import BODIES
+from evobiped.controllers import CONTROLLERS
+from evobiped.episode import EpisodeConfig
+from evobiped.errors import ConfigError
+from evobiped.evolution.run import RunConfig
+from evobiped.options import markdown_table, option, parse
+from evobiped.readme import README, render, sections, tables
+from evobiped.tasks import TASKS
+
+
+def test_the_readme_tables_are_the_declarations():
+    """Regenerate with ``python -m evobiped.readme``."""
+    text = README.read_text()
+    assert sections(text) == list(tables())  # every component has its section, in registry order
+    assert render(text) == text
+
+
+def test_a_table_changes_with_its_declaration():
+    @dataclasses.dataclass(frozen=True, kw_only=True)
+    class Knobs:
+        gain: float = option(2.0, "loop gain", unit="N m/rad", above=0)
+        mode: str = option("a", "which mode", choices=("a", "b"))
+
+    table = markdown_table(Knobs)
+    assert "| `gain` | `2` | N m/rad | > 0 | loop gain |" in table and "| `mode` | `\"a\"` |  | `a`, `b` | which mode |" in table
+    text = "x\n<!-- options: body reil -->\nstale\n<!-- end options -->\ny\n"
+    assert render(text) == f"x\n<!-- options: body reil -->\n{tables()['body reil']}<!-- end options -->\ny\n"
+
+
+def test_every_component_declares_defaults_that_pass_its_own_checks():
+    for reg, where in ((BODIES, "b"), (CONTROLLERS, "c"), (TASKS, "t")):
+        for name, cls in reg.items():
+            opts = parse(cls.Options, {}, where)
+            for f in dataclasses.fields(opts):
+                assert f.metadata["doc"], (name, f.name)  # every option says what it is
+
+
+BAD = [
+    (dict(body_options={"kp": -5}), "episode.body_options.kp: must be > 0 N m/rad, got -5"),
+    (dict(body_options={"kp": "stiff"}), "episode.body_options.kp: must be a number, got 'stiff'"),
+    (dict(body="taga", body_options={"slope": 0.6}), "episode.body_options.slope: must be in [-0.5, 0.5], got 0.6"),
+    (dict(body="taga", body_options={"kg": [1.0, -1.0]}), "episode.body_options.kg: must be a number > 0 (or a list"),
+    (dict(controller_options={"n_neurons": 0}), "episode.controller_options.n_neurons: must be in [1, 1000], got 0"),
+    (dict(controller_options={"time_constants": [0.005, 1.0]}), "episode.controller_options: time_constants must be [low, high]"),
+    (dict(controller="matsuoka", controller_options={"feedback": "yes"}),
+     "episode.controller_options.feedback: must be one of auto, taga, none, got 'yes'"),
+    (dict(controller="g3", controller_options={"go": [[1.0, 0.1], [0.5, 0.2]]}), "episode.controller_options.go: go schedule times must increase"),
+    (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option (choose from dt, inputs, genes)"),
+    (dict(task_options={"fitness": "forward", "cyclic_weight": 1.0}), "episode.task_options: the cyclic criterion multiplies eq. 4"),
+    (dict(task="steer", task_options={"sources": [[0.1, 0.0]]}), "episode.task_options.sources: the source (0.1, 0) is at the walker's start"),
+]
+
+
+@pytest.mark.parametrize("episode, words", BAD, ids=[w.split(":")[0] for _, w in BAD])
+def test_a_bad_option_is_refused_when_the_config_is_loaded_naming_its_path(episode, words):
+    with pytest.raises(ConfigError) as exc:
+        RunConfig.from_dict({"episode": episode}, where="c.toml")
+    assert str(exc.value).startswith("c.toml: ") and words in str(exc.value)
+    with pytest.raises(ConfigError, match="^" + words.replace("[", r"\[").replace("(", r"\(").replace(")", r"\)")):
+        EpisodeConfig(**episode)
+
+
+@pytest.mark.parametrize("table, words", [({"ga": {"fittest_fraction": 1.0}}, "ga.fittest_fraction: must be < 1, got 1.0"),
+                                          ({"cma": {"sigma0": 0}}, "cma.sigma0: must be > 0, got 0"),
+                                          ({"cma": {"population": 1}}, "cma.population: must be a whole number in [2, 1e+07]"),
+                                          ({"generations": 0}, "generations: must be in [1, 1e+06], got 0"),
+                                          ({"workers": 0}, "workers: must be >= 1, got 0"),
+                                          ({"optimizer": "de"}, "optimizer: must be one of ga, cma, got 'de'")])
+def test_bad_run_settings_name_their_path(table, words):
+    with pytest.raises(ConfigError, match="^c.toml: " + words.replace("[", r"\[").replace("+", r"\+")):
+        RunConfig.from_dict(table, where="c.toml")
