@@ -22,9 +22,9 @@ from .bodies.base import Body
 from .controllers import CONTROLLERS
 from .contract import Offer, wire
 from .controllers.base import Controller
-from .errors import ConfigError, UserError
+from .errors import ConfigError
 from .genome import GenomeLayout
-from .options import parse
+from .options import parse, refuse_unknown
 from .validate import number
 from .mapping import MAPS, to_action
 from .perturb import PerturbationConfig, Trials
@@ -344,7 +344,4 @@ class Episode:
 
 def build_episode(**config: Any) -> Episode:
     """Convenience: ``build_episode(body="reil", seconds=10)``."""
-    try:
-        return EpisodeConfig(**config).build()
-    except TypeError as exc:
-        raise UserError(f"bad episode setting: {exc}") from None
+    return EpisodeConfig(**refuse_unknown(EpisodeConfig, config, "episode")).build()

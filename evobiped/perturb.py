@@ -29,11 +29,12 @@ episode unless trials are given explicitly.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ConfigError
+from .options import check_fields, option, parse
 
 #: aggregate name -> ``(P, R) -> (P,)``
 AGGREGATES = {
@@ -43,65 +44,38 @@ AGGREGATES = {
 }
 
 
-def _number(name: str, value, *, low: float = 0.0, strict: bool = False, integer: bool = False) -> None:
-    ok = isinstance(value, int if integer else (int, float)) and not isinstance(value, bool)
-    ok = ok and math.isfinite(value) and (value > low if strict else value >= low)
-    if not ok:
-        kind = "an integer" if integer else "a finite number"
-        raise ConfigError(f"episode.perturbations.{name}: must be {kind} {'>' if strict else '>='} {low:g}, got {value!r}")
+def _friction(v) -> None:
+    fr = tuple(v) if isinstance(v, (list, tuple)) else None
+    if fr is None or len(fr) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool) or not math.isfinite(x) or x <= 0
+                                                  for x in fr) or (fr and fr[0] > fr[1]):
+        raise ConfigError(f"must be [] or [low, high] with 0 < low <= high, got {v!r}")
 
 
 @dataclass(frozen=True, kw_only=True)
 class PerturbationConfig:
     """How an evolutionary run draws each generation's perturbed presentations."""
 
-    #: R, presentations per genome (each with its own draws)
-    presentations: int = 1
-    #: pushes per presentation; each at a uniform random time in [push_after, T - push_duration] s
-    pushes: int = 0
-    #: N, magnitude of each push (horizontal, uniform random direction)
-    push_force: float = 10.0
-    #: s, duration of each push
-    push_duration: float = 0.1
-    #: s, no push before this time
-    push_after: float = 2.0
-    #: rad, standard deviation of a constant offset on each PD target, one per presentation
-    target_offset: float = 0.0
-    #: rad, standard deviation of the noise on each PD target at every control tick
-    target_noise: float = 0.0
-    #: rad, standard deviation of the noise on each actuated joint's initial angle
-    pose_noise: float = 0.0
-    #: [low, high] floor friction, one uniform draw per generation; [] keeps the model's
-    friction: tuple[float, ...] = ()
-    #: how presentations combine into a genome's fitness: mean, worst or q25
-    aggregate: str = "mean"
+    presentations: int = option(1, "R, presentations per genome (each with its own draws)", low=1, high=64, integer=True)
+    pushes: int = option(0, "pushes per presentation, each at a uniform random time in [push_after, T - push_duration]",
+                         low=0, integer=True)
+    push_force: float = option(10.0, "magnitude of each push (horizontal, uniform random direction)", unit="N", above=0)
+    push_duration: float = option(0.1, "duration of each push", unit="s", above=0)
+    push_after: float = option(2.0, "no push before this time", unit="s", low=0)
+    target_offset: float = option(0.0, "standard deviation of a constant offset on each PD target, one per presentation",
+                                  unit="rad", low=0)
+    target_noise: float = option(0.0, "standard deviation of the noise on each PD target at every control tick", unit="rad", low=0)
+    pose_noise: float = option(0.0, "standard deviation of the noise on each actuated joint's initial angle", unit="rad", low=0)
+    friction: tuple[float, ...] = option((), "floor friction [low, high], one uniform draw per generation; [] keeps the model's",
+                                         check=_friction, span="[], or 0 < low <= high")
+    aggregate: str = option("mean", "how presentations combine into a genome's fitness", choices=tuple(AGGREGATES))
 
     def __post_init__(self):
-        _number("presentations", self.presentations, low=1, integer=True)
-        if self.presentations > 64:
-            raise ConfigError(f"episode.perturbations.presentations: at most 64, got {self.presentations}")
-        _number("pushes", self.pushes, integer=True)
-        _number("push_force", self.push_force, strict=True)
-        _number("push_duration", self.push_duration, strict=True)
-        _number("push_after", self.push_after)
-        for name in ("target_offset", "target_noise", "pose_noise"):
-            _number(name, getattr(self, name))
-        fr = tuple(self.friction) if isinstance(self.friction, (list, tuple)) else None
-        if fr is None or len(fr) not in (0, 2) or any(not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0 for v in fr) or (fr and fr[0] > fr[1]):
-            raise ConfigError(f"episode.perturbations.friction: must be [] or [low, high] with 0 < low <= high, got {self.friction!r}")
-        object.__setattr__(self, "friction", tuple(float(v) for v in fr))
-        if self.aggregate not in AGGREGATES:
-            raise ConfigError(f"episode.perturbations.aggregate: unknown {self.aggregate!r} (choose from {', '.join(AGGREGATES)})")
+        check_fields(self, "episode.perturbations")
+        object.__setattr__(self, "friction", tuple(float(v) for v in self.friction))
 
     @classmethod
     def from_dict(cls, d: dict) -> "PerturbationConfig":
-        if not isinstance(d, dict):
-            raise ConfigError("episode.perturbations must be a table")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - known)
-        if unknown:
-            raise ConfigError(f"episode.perturbations: unknown setting {unknown[0]!r} (choose from {', '.join(sorted(known))})")
-        return cls(**d)
+        return parse(cls, d, "episode.perturbations")
 
     @property
     def active(self) -> bool:

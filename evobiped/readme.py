@@ -2,7 +2,7 @@
 
 Each table sits between ``<!-- options: ID -->`` and ``<!-- end options -->`` in
 README.md, ID naming the component (``body reil``, ``controller ctrnn``,
-``task walk``, ``optimizer ga``, ...).  ``python -m evobiped.readme`` rewrites
+``task walk``, ``episode perturbations``, ``optimizer ga``, ...).  ``python -m evobiped.readme`` rewrites
 them; tests/test_options.py checks that they agree with the declarations.
 """
 
@@ -16,6 +16,7 @@ from .controllers import CONTROLLERS
 from .evolution.cma import CMAConfig
 from .evolution.ga import GAConfig
 from .options import markdown_table
+from .perturb import PerturbationConfig
 from .tasks import TASKS
 
 README = Path(__file__).resolve().parent.parent / "README.md"
@@ -29,6 +30,7 @@ def tables() -> dict[str, str]:
     for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
         for name, cls in reg.items():
             out[f"{kind} {name}"] = markdown_table(cls.Options)
+    out["episode perturbations"] = markdown_table(PerturbationConfig)
     out["optimizer ga"] = markdown_table(GAConfig)
     out["optimizer cma"] = markdown_table(CMAConfig)
     return out

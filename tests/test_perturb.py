@@ -103,7 +103,7 @@ def test_slope_and_friction_change_the_model_of_their_batch_only():
 @pytest.mark.parametrize("bad", [{"nope": 1}, {"push_force": 0}, {"push_force": -1.0}, {"presentations": 0},
                                  {"friction": [2.0, 1.0]}, {"aggregate": "median"}, {"target_noise": float("nan")}])
 def test_bad_perturbations(bad):
-    with pytest.raises(ConfigError):
+    with pytest.raises(ConfigError, match=f"^episode.perturbations.{next(iter(bad))}: (must|unknown option)"):
         EpisodeConfig(perturbations=bad)
 
 
