@@ -157,5 +157,5 @@ def test_bad_gene_overrides(genes, words):
     from evobiped.episode import EpisodeConfig
     from evobiped.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=words):
-        EpisodeConfig(controller_options={"genes": genes}).build()
+    with pytest.raises(ConfigError, match=f"^episode.controller_options.genes.*{words}"):
+        EpisodeConfig(controller_options={"genes": genes}).layout()
