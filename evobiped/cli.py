@@ -289,6 +289,7 @@ def run_evolve_cmd(args) -> int:
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
     from .evolution.run import eta_seconds
+    from .rundir import HISTORY
 
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     c = run.config
@@ -310,7 +311,7 @@ def _evolve(run, evaluator, backend: str, args) -> int:
         try:
             summary = run.evolve(evaluator, progress)
         except KeyboardInterrupt:
-            print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in history.csv); checkpoint saved; "
+            print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
                   f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
             return 130
     best = summary["best"]

@@ -68,11 +68,22 @@ def test_batches_join_into_one_episode_result():
     with SerialEvaluator(cfg) as one, ThreadEvaluator(cfg, 2, chunk=1) as many:
         a, b = one.evaluate(genomes), many.evaluate(genomes)
     assert a.rows is not None and len(a.rows.fitness) == 6 and len(b.rows.fitness) == 6
-    for r, s in ((a, b), (a.rows, b.rows)):
-        for f in dataclasses.fields(r):
-            if f.name != "rows":
-                assert np.array_equal(getattr(r, f.name), getattr(s, f.name), equal_nan=True), f.name
     assert b.end_position.shape == (3, 2, 2)
+
+    def same(x, y, where):
+        if dataclasses.is_dataclass(x):
+            for f in dataclasses.fields(x):
+                same(getattr(x, f.name), getattr(y, f.name), f"{where}.{f.name}")
+        elif isinstance(x, dict):
+            assert x.keys() == y.keys(), where
+            for k in x:
+                same(x[k], y[k], f"{where}[{k!r}]")
+        elif x is None:
+            assert y is None, where
+        else:
+            assert np.array_equal(x, y, equal_nan=True), where
+
+    same(a, b, "result")
 
 
 class Stop(Exception):
