@@ -1,6 +1,5 @@
 """CMA-ES behind the GA's seam: it optimises, resumes exactly, keeps to the bounds, refuses bad input."""
 
-import dataclasses
 import json
 
 import numpy as np

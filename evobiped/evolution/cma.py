@@ -26,6 +26,7 @@ Fitness is higher-is-better, as everywhere in evobiped (pycma minimises -f).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import warnings
 from dataclasses import dataclass
@@ -82,10 +83,8 @@ class CMAES(Optimizer):
     name = "cma"
 
     def __init__(self, layout: GenomeLayout, config: CMAConfig, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
-        try:
-            import cma  # noqa: F401
-        except ImportError:  # pragma: no cover - a core dependency
-            raise UserError("the cma optimizer needs pycma: pip install cma") from None
+        if importlib.util.find_spec("cma") is None:  # pragma: no cover - a core dependency
+            raise UserError("the cma optimizer needs pycma: pip install cma")
         super().__init__()
         self.layout, self.config, self.seed = layout, config, int(seed)
         self.low, self.high = layout.low, layout.high
