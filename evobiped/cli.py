@@ -190,33 +190,43 @@ def add_evolve(sub) -> None:
     p.set_defaults(func=run_evolve_cmd)
 
 
-def evolve_config(args):
-    """RunConfig from --config and the flags (flags win)."""
+#: evolve's flags that :func:`run_config` takes (the run-settings flags; not --out, --resume, --rerun, --quiet)
+RUN_FLAGS = ("preset", "config", "optimizer", "body", "controller", "task", "sources", "population", "generations",
+             "episode_seconds", "cyclic", "seed", "backend", "workers", "address", "initial", "freeze")
+
+
+def run_config(*, preset: str | None = None, config: str | None = None, optimizer: str | None = None, body: str | None = None,
+               controller: str | None = None, task: str | None = None, sources=None, population: int | None = None,
+               generations: int | None = None, episode_seconds: float | None = None, cyclic: bool | None = None,
+               seed: int | None = None, backend: str | None = None, workers: int | None = None, address: str | None = None,
+               initial: str | None = None, freeze: str | None = None):
+    """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .evolution.run import RunConfig, load_toml
 
     from .presets import merge, path
 
-    d = load_toml(path(args.preset)) if getattr(args, "preset", None) else {}
-    if args.config:
-        d = merge(d, load_toml(args.config))
+    d = load_toml(path(preset)) if preset else {}
+    if config:
+        d = merge(d, load_toml(config))
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
     ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
-    for flag, key in (("body", "body"), ("controller", "controller"), ("task", "task"), ("episode_seconds", "seconds")):
-        if getattr(args, flag) is not None:
-            ep[key] = getattr(args, flag)
-    if args.cyclic:
+    for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
+        if value is not None:
+            ep[key] = value
+    if cyclic:
         ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
-    if args.population is not None:  # the population of either optimizer
-        ga["population"] = args.population
-        d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": args.population}
-    for flag in ("optimizer", "generations", "seed", "backend", "workers", "address", "initial"):
-        if getattr(args, flag, None) is not None:
-            d[flag] = getattr(args, flag)
-    if getattr(args, "freeze", None):
-        d["frozen_blocks"] = [b.strip() for b in args.freeze.split(",") if b.strip()]
-    where = args.config or (f"preset {args.preset}" if getattr(args, "preset", None) else "")
-    config = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
-    return dataclasses.replace(config, episode=with_sources(config.episode, getattr(args, "sources", None)))
+    if population is not None:  # the population of either optimizer
+        ga["population"] = population
+        d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": population}
+    for key, value in (("optimizer", optimizer), ("generations", generations), ("seed", seed), ("backend", backend),
+                       ("workers", workers), ("address", address), ("initial", initial)):
+        if value is not None:
+            d[key] = value
+    if freeze:
+        d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
+    where = config or (f"preset {preset}" if preset else "")
+    built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    return dataclasses.replace(built, episode=with_sources(built.episode, sources))
 
 
 def default_run_dir(config) -> str:
@@ -241,7 +251,7 @@ def run_evolve_cmd(args) -> int:
     on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
                                       file=sys.stderr, flush=True)
     if args.resume:
-        if any(getattr(args, f) is not None for f in ("preset", "config", "optimizer", "body", "controller", "task", "population", "generations", "episode_seconds", "seed", "initial", "out", "cyclic", "freeze", "sources")):
+        if any(getattr(args, f) is not None for f in (*RUN_FLAGS, "out") if f not in ("backend", "workers", "address")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
         run = Run.resume(args.resume)  # locks the directory and repairs its derived files
         try:
@@ -260,7 +270,7 @@ def run_evolve_cmd(args) -> int:
             run.close()
             raise
     else:
-        config = evolve_config(args)
+        config = run_config(**{f: getattr(args, f) for f in RUN_FLAGS})
         backend, workers, address = config.backend, config.workers, config.address
         check_workers(backend, workers, address)
         out = args.out or default_run_dir(config)
@@ -277,6 +287,7 @@ def run_evolve_cmd(args) -> int:
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
     from .evolution.run import eta_seconds
+    from .rundir import HISTORY
 
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     c = run.config
@@ -298,7 +309,7 @@ def _evolve(run, evaluator, backend: str, args) -> int:
         try:
             summary = run.evolve(evaluator, progress)
         except KeyboardInterrupt:
-            print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in history.csv); checkpoint saved; "
+            print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
                   f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
             return 130
     best = summary["best"]
@@ -312,8 +323,8 @@ def _evolve(run, evaluator, backend: str, args) -> int:
 def _viewer_log(run, rerun: str):
     """A live viewer of the run's fitness (a new one, or the one at ADDR), started with the history so far
     (the run's own evolution.rrd is written either way, after every generation)."""
-    from .evolution.run import history_columns
     from .record.evolution_log import EvolutionLog
+    from .rundir import history_columns
 
     log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))
     if run.history:
@@ -356,12 +367,13 @@ def run_replay_cmd(args) -> int:
 
     from .record.replay import default_out, replay
     from .record.source import resolve
+    from .rundir import figures_dir
 
     source = resolve(args.source, args.generation)
     figures = args.figures
     if figures == "":
         base = Path(args.out).parent if args.out else default_out(source).parent
-        figures = base / f"figures_{source.label}"
+        figures = figures_dir(base, source.label)
     seconds = args.seconds or source.config.seconds
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
@@ -408,6 +420,7 @@ def run_robustness_cmd(args) -> int:
     from .record.robustness_figure import robustness_figure
     from .record.source import resolve
     from .robustness import battery, summarise, table
+    from .rundir import robustness_stem
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
@@ -415,9 +428,7 @@ def run_robustness_cmd(args) -> int:
     out = Path(args.out) if args.out else (source.run_dir or source.genome_path.parent)
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
-    stem = "robustness" if source.run_dir is None or source.label == "best" else f"robustness_{source.label}"
-    if source.run_dir is None:
-        stem = f"{source.genome_path.stem}_robustness"
+    stem = robustness_stem(source.label) if source.run_dir is not None else f"{source.genome_path.stem}_robustness"
     progress = Progress("robustness", 1.0, quiet=args.quiet or args.json)
     config = with_sources(source.config.nominal(), [args.sound_source] if args.sound_source else None)
     trials = battery(config.build(), source.genome, seconds=args.seconds, push_after=args.push_after, progress=progress)
@@ -539,9 +550,8 @@ def run_study_cmd(args) -> int:
 
     from .experiments.reil.study import StudyConfig, run_study, write_results
 
-    base = evolve_config(argparse.Namespace(
-        preset=args.preset, config=args.config, body=None, controller=None, task=None, episode_seconds=args.episode_seconds, cyclic=None,
-        population=args.population, generations=args.generations, seed=None, backend=None, workers=None, address=None, initial=None))
+    base = run_config(preset=args.preset, config=args.config, episode_seconds=args.episode_seconds, population=args.population,
+                      generations=args.generations)
     base = dataclasses.replace(base, seed=0)
     conditions = tuple(c.strip() for c in args.conditions.split(",") if c.strip())
     axis = lambda text: tuple(x.strip() for x in (text or "").split(",") if x.strip())  # noqa: E731
@@ -556,7 +566,7 @@ def run_study_cmd(args) -> int:
     try:
         outcomes = run_study(args.out, cfg, backend=args.backend, workers=args.workers, address=args.address, progress=say)
     except KeyboardInterrupt:
-        print(f"evobiped: study interrupted; run the same command again to resume (finished runs are kept, the others resume from their checkpoints)", file=sys.stderr)
+        print("evobiped: study interrupted; run the same command again to resume (finished runs are kept, the others resume from their checkpoints)", file=sys.stderr)
         return 130
     for path in write_results(args.out, cfg, outcomes):
         say(f"wrote {path}")

@@ -88,7 +88,10 @@ class EpisodeConfig:
                       what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
         controller = cls(n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators, **opts)
         if "genes" in self.controller_options:
-            controller.override_genes(self.controller_options["genes"])
+            try:
+                controller.override_genes(self.controller_options["genes"])
+            except ConfigError as exc:
+                raise ConfigError(f"episode.controller_options.{exc}") from None
         return body, controller, task
 
     def layout(self) -> GenomeLayout:

@@ -85,7 +85,7 @@ class GenomeLayout:
         ``{"weights": {"init_sigma": 4.0}}`` (ConfigError on an unknown name).
         """
         if not isinstance(genes, dict):
-            raise ConfigError("genes must be a table of gene blocks")
+            raise ConfigError("genes: must be a table of gene blocks")
         by_name = {b.name: b for b in self.blocks}
         settable = [f.name for f in fields(GeneBlock) if f.name not in ("name", "size")]
         new = dict(by_name)

@@ -36,6 +36,11 @@ def option(default: Any, doc: str, *, unit: str = "", low: float | None = None, 
     return field(default=default, metadata=meta)
 
 
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class NoOptions:
+    """The options of a component that has none."""
+
+
 def _check(f: dataclasses.Field, value: Any, path: str) -> None:
     m = f.metadata
     default = f.default if f.default is not MISSING else f.default_factory()

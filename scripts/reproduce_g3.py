@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from evobiped.controllers import g3_network as g3net
 from evobiped.experiments.g3 import gaits
 from evobiped.experiments.g3 import simulation as g3sim
 from evobiped.experiments.g3.g3_figures import run_figure, sweep_figures
+from evobiped.fileio import atomic_write
 
 
 def ranges(levels, labels):
@@ -34,13 +36,14 @@ def ranges(levels, labels):
 
 def save_sweep(out: Path, name: str, s: g3sim.GoSweep, title: str) -> dict:
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
-    with open(out / f"{name}.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["go", "label", "sequence", "frequency", "period", "ph_LF", "ph_RF", "ph_LH", "ph_RH", "duty_mean",
-                    "steps_LF", "steps_RF", "steps_LH", "steps_RH", "first_cycle", "settle_time"])
-        for r in rows:
-            w.writerow([r["go"], r["label"], r["sequence"], r["frequency"], r["period"], *r["phases"], np.mean(r["duty"]),
-                        *r["steps"], r["transient_label"], r["settle_time"]])
+    fh = io.StringIO()
+    w = csv.writer(fh)
+    w.writerow(["go", "label", "sequence", "frequency", "period", "ph_LF", "ph_RF", "ph_LH", "ph_RH", "duty_mean",
+                "steps_LF", "steps_RF", "steps_LH", "steps_RH", "first_cycle", "settle_time"])
+    for r in rows:
+        w.writerow([r["go"], r["label"], r["sequence"], r["frequency"], r["period"], *r["phases"], np.mean(r["duty"]),
+                    *r["steps"], r["transient_label"], r["settle_time"]])
+    atomic_write(out / f"{name}.csv", fh.getvalue())
     sweep_figures(out, name, s, [0, 1, 2, 3], g3net.LIMBS, title=title)
     labels = [g.label for g in s.gaits]
     osc = [g for g in s.gaits if g.oscillating]
@@ -140,7 +143,7 @@ def main() -> None:
         conv[name] = {"dt": [0.01, 0.005, 0.0025], "period": per, "rel_change_halving_0.005": abs(per[2] / per[1] - 1)}
         print(f"convergence {name} I={go}: periods {per}, halving 0.005 -> 0.0025 changes it by {conv[name]['rel_change_halving_0.005']:.1e}")
     summary["convergence"] = conv
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    atomic_write(out / "summary.json", json.dumps(summary, indent=1))
     print(f"wrote {out}/summary.json and figures")
 
 

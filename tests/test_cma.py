@@ -1,6 +1,5 @@
 """CMA-ES behind the GA's seam: it optimises, resumes exactly, keeps to the bounds, refuses bad input."""
 
-import dataclasses
 import json
 
 import numpy as np
@@ -24,6 +23,18 @@ def optimise(opt, f, generations):
         opt.tell(f(pop[unknown]))
         opt.next_generation()
     return opt
+
+
+def test_outcome_is_told_and_not_carried():
+    """CMA-ES samples a fresh population each generation: the outcome told is there until next_generation, then unknown (zeros)."""
+    from types import SimpleNamespace
+
+    opt = CMAES(LAYOUT, CMAConfig(population=4), seed=2)
+    f = np.array([1.0, 4.0, 2.0, 3.0])
+    opt.tell(SimpleNamespace(fitness=f, fell=f < 2, unstable=f > 3.5, end_time=f / 2))
+    assert opt.outcome["end_time"].tolist() == [0.5, 2.0, 1.0, 1.5] and opt.outcome["fell"].tolist() == [True, False, False, False]
+    opt.next_generation()
+    assert opt.outcome["end_time"].tolist() == [0.0] * 4 and not opt.outcome["unstable"].any()
 
 
 def test_minimises_a_sphere_inside_the_bounds():

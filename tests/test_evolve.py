@@ -54,6 +54,38 @@ def test_history_identical_on_every_backend(tmp_path):
         assert b["genome"] == best["genome"] and b["fitness"] == best["fitness"]
 
 
+def test_batches_join_into_one_episode_result():
+    """The thread backend, one genome per batch, gives the one-batch EpisodeResult field for field,
+    the per-presentation rows of a two-source steer task included."""
+    import dataclasses
+
+    from evobiped.evolution.evaluate import SerialEvaluator, ThreadEvaluator
+
+    cfg = EpisodeConfig(task="steer", seconds=0.6)
+    rng = np.random.default_rng(3)
+    lay = cfg.build().controller.layout
+    genomes = np.clip(rng.normal(lay.init_mean, lay.init_sigma, (3, lay.size)), lay.low, lay.high)
+    with SerialEvaluator(cfg) as one, ThreadEvaluator(cfg, 2, chunk=1) as many:
+        a, b = one.evaluate(genomes), many.evaluate(genomes)
+    assert a.rows is not None and len(a.rows.fitness) == 6 and len(b.rows.fitness) == 6
+    assert b.end_position.shape == (3, 2, 2)
+
+    def same(x, y, where):
+        if dataclasses.is_dataclass(x):
+            for f in dataclasses.fields(x):
+                same(getattr(x, f.name), getattr(y, f.name), f"{where}.{f.name}")
+        elif isinstance(x, dict):
+            assert x.keys() == y.keys(), where
+            for k in x:
+                same(x[k], y[k], f"{where}[{k!r}]")
+        elif x is None:
+            assert y is None, where
+        else:
+            assert np.array_equal(x, y, equal_nan=True), where
+
+    same(a, b, "result")
+
+
 class Stop(Exception):
     pass
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evobiped.evolution.rundir import HISTORY_COLUMNS
+from evobiped.rundir import HISTORY_COLUMNS
 
 from .conftest import cli
 

@@ -68,6 +68,27 @@ def test_truncation_keeps_top_half_unchanged():
     assert unknown.tolist() == [False] * 5 + [True] * 5
 
 
+def test_survivors_keep_their_outcome():
+    """An EpisodeResult told to the GA: each survivor's fell / unstable / end_time move with it (best first),
+    the children's are unknown (zeros) until told; a second tell fills only the children's rows."""
+    from types import SimpleNamespace
+
+    ga = GA(LAYOUT, GAConfig(population=6), seed=5)
+    fit = np.array([3.0, 1.0, 5.0, 0.0, 4.0, 2.0])
+    ga.tell(SimpleNamespace(fitness=fit, fell=fit < 2.5, unstable=fit == 0.0, end_time=10 * fit))
+    assert ga.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
+    ga.next_generation()  # survivors 2, 4, 0 (fitness 5, 4, 3)
+    assert ga.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 0.0, 0.0, 0.0]
+    assert ga.outcome["fell"].tolist() == [False] * 6
+    ga.tell(SimpleNamespace(fitness=np.array([6.0, 1.0, 2.0]), fell=np.array([False, True, True]),
+                            unstable=np.array([False, False, True]), end_time=np.array([60.0, 1.5, 2.5])))
+    assert ga.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
+    assert ga.outcome["unstable"].tolist() == [False] * 5 + [True]
+    assert ga.outcome_dict()["fell"] == [False, False, False, False, True, True]
+    ga.next_generation()  # survivors: rows 3 (6.0), 0 (5.0), 1 (4.0)
+    assert ga.outcome["end_time"].tolist() == [60.0, 50.0, 40.0, 0.0, 0.0, 0.0]
+
+
 def test_frozen_genes_never_change():
     mutable = np.zeros(120, bool)
     mutable[110:] = True
@@ -136,5 +157,5 @@ def test_bad_gene_overrides(genes, words):
     from evobiped.episode import EpisodeConfig
     from evobiped.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=words):
-        EpisodeConfig(controller_options={"genes": genes}).build()
+    with pytest.raises(ConfigError, match=f"^episode.controller_options.genes.*{words}"):
+        EpisodeConfig(controller_options={"genes": genes}).layout()

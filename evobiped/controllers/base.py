@@ -15,6 +15,7 @@ import numpy as np
 
 from ..contract import Needs
 from ..genome import GenomeLayout
+from ..options import NoOptions
 
 
 class Controller(ABC):
@@ -31,8 +32,11 @@ class Controller(ABC):
     #: control period in s, or None to step at every physics step
     dt: float | None
 
+    #: the controller's options (a dataclass of :func:`evobiped.options.option` fields)
+    Options: ClassVar[type] = NoOptions
+
     @classmethod
-    def needs(cls, options: dict) -> Needs:
+    def needs(cls, options) -> Needs:
         """What this controller, with these options, needs of its body and task (see :mod:`evobiped.contract`);
         the episode checks it once and constructs the controller with the wiring:
         ``cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)``."""

@@ -1,7 +1,8 @@
-"""The GA (ask/tell), evaluation backends, and runs with checkpoints."""
+"""Optimizers behind one ask/tell seam (the GA, CMA-ES), evaluation backends, and runs with checkpoints."""
 
-from .evaluate import BACKENDS, Evaluation, make_evaluator
+from .base import Optimizer
+from .evaluate import BACKENDS, make_evaluator
 from .ga import GA, GAConfig
 from .run import Run, RunConfig
 
-__all__ = ["BACKENDS", "GA", "GAConfig", "Evaluation", "Run", "RunConfig", "make_evaluator"]
+__all__ = ["BACKENDS", "GA", "GAConfig", "Optimizer", "Run", "RunConfig", "make_evaluator"]

@@ -26,6 +26,7 @@ Fitness is higher-is-better, as everywhere in evobiped (pycma minimises -f).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import warnings
 from dataclasses import dataclass
@@ -35,6 +36,7 @@ import numpy as np
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 from ..options import check_fields, option
+from .base import Optimizer
 from .ga import MAX_POPULATION, generation_rng
 
 
@@ -70,21 +72,20 @@ class GenerationNormal:
         return self.rng.standard_normal(shape)
 
 
-class CMAES:
-    """Ask/tell CMA-ES over a :class:`GenomeLayout` with the GA's interface.
+class CMAES(Optimizer):
+    """Ask/tell CMA-ES over a :class:`GenomeLayout` with the GA's interface (:class:`~.base.Optimizer`).
 
-    ``ask()`` -> ``(population (P, G), unknown (P,) bool)``; ``tell(fitness (n_unknown,))``;
-    ``ranking()`` best first; ``next_generation()``; ``carried()`` (nothing is carried);
+    ``ask()`` -> ``(population (P, G), unknown (P,) bool)``; ``tell(result)`` of the unknown;
+    ``ranking()`` best first; ``next_generation()`` (a fresh sample: no fitness or outcome is kept);
     ``state_dict()`` / ``load_state_dict()`` for the checkpoint.
     """
 
     name = "cma"
 
     def __init__(self, layout: GenomeLayout, config: CMAConfig, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
-        try:
-            import cma  # noqa: F401
-        except ImportError:  # pragma: no cover - a core dependency
-            raise UserError("the cma optimizer needs pycma: pip install cma") from None
+        if importlib.util.find_spec("cma") is None:  # pragma: no cover - a core dependency
+            raise UserError("the cma optimizer needs pycma: pip install cma")
+        super().__init__()
         self.layout, self.config, self.seed = layout, config, int(seed)
         self.low, self.high = layout.low, layout.high
         self.span = np.where(self.high > self.low, self.high - self.low, 1.0)
@@ -140,25 +141,7 @@ class CMAES:
         self.population = self._genes(np.array(self._asked))
         self.fitness = np.full(len(self.population), np.nan)
 
-    # ---- the GA's interface
-    def ask(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.population, np.isnan(self.fitness)
-
-    def tell(self, fitness: np.ndarray) -> None:
-        _, unknown = self.ask()
-        fitness = np.asarray(fitness, float)
-        if fitness.shape != (int(unknown.sum()),):
-            raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
-        f = np.where(np.isfinite(fitness), fitness, -np.inf)
-        self.fitness[unknown] = f
-
-    def ranking(self) -> np.ndarray:
-        return np.argsort(-self.fitness, kind="stable")
-
-    def carried(self) -> np.ndarray:
-        """For each row of the new population, the row of the previous one whose outcome it keeps (-1: none)."""
-        return np.full(len(self.population), -1)
-
+    # ---- the next generation
     def next_generation(self) -> None:
         if np.isnan(self.fitness).any():
             raise RuntimeError("next_generation before every individual was evaluated")
@@ -177,6 +160,7 @@ class CMAES:
             self.restart += 1
             self._start(self.restart)
         self._sample()
+        self._carry(np.full(len(self.population), -1))  # nothing is carried over
 
     def stop(self) -> list[str]:
         """The names of pycma's stopping rules that fired (e.g. ``tolfun``) with no restart left; empty while it goes on."""

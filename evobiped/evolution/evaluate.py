@@ -9,43 +9,45 @@ does not depend on the backend or on the number of workers.
 from __future__ import annotations
 
 import contextlib
-import multiprocessing as mp
 import os
 import queue
 import signal
-import socket
 import sys
 from abc import ABC, abstractmethod
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
+import dataclasses
 
 import numpy as np
 
-from ..episode import Episode, EpisodeConfig
+from ..episode import Episode, EpisodeConfig, EpisodeResult
 from ..errors import ConfigError, UserError
+from ..net import connect_error
+from .pool import spawn_pool, stop_pool
 
 BACKENDS = ("serial", "process", "thread", "ray")
 
 
-@dataclass
-class Evaluation:
-    """Results for N genomes, each ``(N,)``."""
-
-    fitness: np.ndarray
-    fell: np.ndarray
-    unstable: np.ndarray
-    end_time: np.ndarray
-
-    @staticmethod
-    def concat(parts: list["Evaluation"]) -> "Evaluation":
-        return Evaluation(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("fitness", "fell", "unstable", "end_time")))
-
-
-def _evaluate(episode: Episode, genomes: np.ndarray, key: tuple[int, int] | None = None) -> Evaluation:
+def _evaluate(episode: Episode, genomes: np.ndarray, key: tuple[int, int] | None = None) -> EpisodeResult:
     """Run ``genomes`` under the perturbed presentations of ``key`` = (run seed, generation), or nominally (None)."""
-    r = episode.run(genomes, trials=episode.trials_for(key))
-    return Evaluation(r.fitness, r.fell, r.unstable, r.end_time)
+    return episode.run(genomes, trials=episode.trials_for(key))
+
+
+def concat(parts: list[EpisodeResult]) -> EpisodeResult:
+    """The results of consecutive batches as one, every field joined along its first axis (genomes, or simulation rows)."""
+    def join(values: list):
+        first = values[0]
+        if first is None:
+            return None
+        if isinstance(first, EpisodeResult):
+            return concat(values)
+        if isinstance(first, dict):
+            return {k: join([v[k] for v in values]) for k in first}
+        return np.concatenate(values)
+
+    if len(parts) == 1:
+        return parts[0]
+    return EpisodeResult(**{f.name: join([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(EpisodeResult)})
 
 
 def chunks(n: int, size: int | None, workers: int = 1) -> list[slice]:
@@ -66,8 +68,9 @@ class Evaluator(ABC):
         self.config = episode
 
     @abstractmethod
-    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None) -> Evaluation:
-        """Fitness and outcome of ``genomes``; ``key`` = (run seed, generation) draws the episode's perturbations."""
+    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None) -> EpisodeResult:
+        """The episode results of ``genomes`` (fitness and outcome, ``(N,)`` each); ``key`` = (run seed, generation)
+        draws the episode's perturbations."""
 
     def close(self) -> None:
         pass
@@ -99,7 +102,6 @@ MAX_RETRIES = 3
 
 def _init_worker(config: EpisodeConfig) -> None:
     global _worker_episode
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     _worker_episode = config.build()
 
 
@@ -114,7 +116,7 @@ def _fault_point() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
 
-def _work(job: tuple[np.ndarray, tuple[int, int] | None]) -> Evaluation:
+def _work(job: tuple[np.ndarray, tuple[int, int] | None]) -> EpisodeResult:
     _fault_point()
     return _evaluate(_worker_episode, *job)
 
@@ -136,43 +138,33 @@ class ProcessPoolEvaluator(Evaluator):
         self.workers, self.chunk, self.on_retry = int(workers), chunk, on_retry
         self.pool = self._new_pool()
 
-    def _new_pool(self) -> ProcessPoolExecutor:
-        return ProcessPoolExecutor(self.workers, mp_context=mp.get_context("spawn"), initializer=_init_worker, initargs=(self.config,))
+    def _new_pool(self):
+        return spawn_pool(self.workers, _init_worker, (self.config,))
 
     def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
         jobs = [(genomes[s], key) for s in chunks(len(genomes), self.chunk, self.workers)]
-        parts: list[Evaluation | None] = [None] * len(jobs)
+        parts: list[EpisodeResult | None] = [None] * len(jobs)
         for attempt in range(MAX_RETRIES + 1):
             todo = [i for i, p in enumerate(parts) if p is None]
             futures = {i: self.pool.submit(_work, jobs[i]) for i in todo}
             try:
                 for i, f in futures.items():
                     parts[i] = f.result()
-                return Evaluation.concat(parts)
+                return concat(parts)
             except BrokenProcessPool:
                 for i, f in futures.items():  # keep what finished before the death
                     if parts[i] is None and f.done() and not f.cancelled() and f.exception() is None:
                         parts[i] = f.result()
-                self._discard_pool()
+                stop_pool(self.pool)
                 self.pool = self._new_pool()
                 if attempt < MAX_RETRIES and self.on_retry is not None:
                     self.on_retry(attempt + 1, MAX_RETRIES)
         raise UserError(f"evaluation workers died {MAX_RETRIES + 1} times in one generation (out of memory? killed?); "
                         "the last checkpoint is kept: resume the run with evobiped evolve --resume")
 
-    def _discard_pool(self) -> None:
-        """Stop the pool now: cancel queued batches, end running ones."""
-        procs = list((getattr(self.pool, "_processes", None) or {}).values())
-        self.pool.shutdown(wait=False, cancel_futures=True)
-        for p in procs:
-            if p.is_alive():
-                p.terminate()
-        for p in procs:
-            p.join()
-
     def close(self):
-        self._discard_pool()
+        stop_pool(self.pool)
 
 
 class ThreadEvaluator(Evaluator):
@@ -193,7 +185,7 @@ class ThreadEvaluator(Evaluator):
             self._episodes.put(episode.build())
         self.pool = ThreadPoolExecutor(self.workers, thread_name_prefix="evobiped-eval")
 
-    def _work(self, genomes: np.ndarray, key) -> Evaluation:
+    def _work(self, genomes: np.ndarray, key) -> EpisodeResult:
         episode = self._episodes.get()  # a free one: no two threads share an Episode
         try:
             return _evaluate(episode, genomes, key)
@@ -203,7 +195,7 @@ class ThreadEvaluator(Evaluator):
     def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, self.workers)]
-        return Evaluation.concat(list(self.pool.map(lambda g: self._work(g, key), pieces)))
+        return concat(list(self.pool.map(lambda g: self._work(g, key), pieces)))
 
     def close(self):
         self.pool.shutdown(wait=True)
@@ -235,11 +227,9 @@ def check_reachable(address: str, timeout: float = 5.0) -> None:
     host, _, port = hostport.rpartition(":")
     if not host or not port.isdigit():
         raise UserError(f"bad Ray address {address!r} (expected HOST:PORT, ray://HOST:PORT or auto)")
-    try:
-        with socket.create_connection((host, int(port)), timeout=timeout):
-            pass
-    except OSError as exc:
-        raise UserError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}") from None
+    why = connect_error(host, int(port), timeout)
+    if why is not None:
+        raise UserError(f"cannot reach a Ray cluster at {address}: {why}")
 
 
 def init_ray(address: str | None, workers: int | None):
@@ -295,7 +285,7 @@ class RayEvaluator(Evaluator):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
-        return Evaluation.concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
+        return concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
 
     def close(self):
         for a in self.actors:

@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 from ..options import check_fields, option
+from .base import Optimizer
 
 
 #: the largest population any optimizer accepts (memory is checked against the machine too: ``run.check_memory``)
@@ -54,12 +55,13 @@ def generation_rng(seed: int, generation: int) -> np.random.Generator:
     return np.random.default_rng([int(seed), int(generation), 0x6A])
 
 
-class GA:
-    """Ask/tell truncation GA (the optimizer named ``ga``).
+class GA(Optimizer):
+    """Ask/tell truncation GA (the optimizer named ``ga``; the seam is :class:`~.base.Optimizer`'s).
 
     ``ask()`` returns the current population ``(P, G)`` and a bool mask of the
-    individuals whose fitness is unknown; ``tell(fitness)`` takes the fitness of
-    those ``(n_unknown,)`` and builds the next generation.
+    individuals whose fitness is unknown; ``tell(result)`` takes the results of
+    those ``(n_unknown,)``; ``next_generation()`` builds the next generation, the
+    survivors first (best first), keeping their fitness and outcome.
     """
 
     name = "ga"
@@ -73,6 +75,7 @@ class GA:
         initial: np.ndarray | None = None,
         mutable: np.ndarray | None = None,
     ):
+        super().__init__()
         self.layout, self.config, self.seed = layout, config, int(seed)
         self.low, self.high = layout.low, layout.high
         self.sigma = layout.mutation_sigma
@@ -94,32 +97,6 @@ class GA:
         """Per-locus probability: on average ``mutations_per_genome`` mutable genes change."""
         return min(1.0, self.config.mutations_per_genome / int(self.mutable.sum()))
 
-    def ask(self) -> tuple[np.ndarray, np.ndarray]:
-        unknown = np.isnan(self.fitness)
-        return self.population, unknown
-
-    def tell(self, fitness: np.ndarray) -> None:
-        unknown = np.isnan(self.fitness)
-        fitness = np.asarray(fitness, float)
-        if fitness.shape != (int(unknown.sum()),):
-            raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
-        # an undefined fitness (should not happen: unstable runs score as falls) ranks last
-        self.fitness[unknown] = np.where(np.isfinite(fitness), fitness, -np.inf)
-
-    def ranking(self) -> np.ndarray:
-        """Indices best first; ties keep population order (stable)."""
-        return np.argsort(-self.fitness, kind="stable")
-
-    def carried(self) -> np.ndarray:
-        """After :meth:`next_generation`: for each row, the previous row whose outcome it keeps (-1: none).
-
-        The survivors (rows ``:k``, parents first, best first) keep theirs.
-        """
-        k = self.config.n_survivors
-        out = np.full(self.config.population, -1)
-        out[:k] = self._parents
-        return out
-
     def next_generation(self) -> None:
         """Truncation selection + mutation; call after the population is fully told."""
         if np.isnan(self.fitness).any():
@@ -127,7 +104,6 @@ class GA:
         P, k = self.config.population, self.config.n_survivors
         order = self.ranking()
         parents = order[:k]
-        self._parents = parents
         children_of = parents[np.arange(P - k) % k]
         self.generation += 1
         rng = generation_rng(self.seed, self.generation)
@@ -137,6 +113,7 @@ class GA:
         if not self.config.reevaluate_survivors:
             fit[:k] = self.fitness[parents]
         self.fitness = fit
+        self._carry(np.concatenate([parents, np.full(P - k, -1)]))  # the survivors keep their outcome
 
     def mutate(self, genomes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Gaussian mutation per locus with probability :attr:`mutation_rate`, clipped."""

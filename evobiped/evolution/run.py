@@ -1,18 +1,9 @@
 """An evolutionary run: config, run directory, checkpoints, resume.
 
-Run directory (format and names in :mod:`evobiped.evolution.rundir`; every file written atomically)::
-
-    config.json            the full resolved RunConfig
-    checkpoint.json        the commit point: optimizer state, history, best genome after the last generation
-    history.csv            one row per generation (see HISTORY_COLUMNS)       } derived from the checkpoint,
-    best.json              best genome of the run so far                      } rebuilt by a resume when
-    evolution.rrd          fitness per generation, a Rerun recording          } missing, stale or damaged
-    summary.json           written when the run ends: the best walker, its distance and walking direction
-    generations/gen_NNNN.json   best genome of each generation (genome-file format), written just before its commit
-    .lock                  held (flock) by the one process that evolves the run
-
-``resume`` continues from checkpoint.json and yields exactly the files an
-uninterrupted run with the same config writes (wall times aside).
+The run directory's files, names and columns are :mod:`evobiped.rundir`'s;
+every file is written atomically.  ``resume`` continues from checkpoint.json
+and yields exactly the files an uninterrupted run with the same config writes
+(wall times aside).
 """
 
 from __future__ import annotations
@@ -32,19 +23,18 @@ from typing import Callable
 
 import numpy as np
 
-from .. import __version__
+from .. import __version__, rundir
 from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
-from . import rundir
 from .cma import CMAES, CMAConfig
 from .evaluate import BACKENDS, Evaluator
 from .ga import GA, GAConfig
-from .rundir import HISTORY_COLUMNS
+from ..rundir import HISTORY_COLUMNS
 
-#: optimizer name -> class; each has the GA's ask/tell/ranking/next_generation/carried/state_dict interface
+#: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation/outcome) with state_dict/load_state_dict
 OPTIMIZERS = {"ga": GA, "cma": CMAES}
 
 
@@ -138,8 +128,6 @@ class Run:
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
         self.best_genome = best_genome
-        #: fell / unstable / end_time of the current population (for the generation files)
-        self._outcome: dict[str, np.ndarray] = {}
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
         self.repairs: list[str] = []
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
@@ -215,13 +203,8 @@ class Run:
         history, best = ck["history"], ck["best"]
         if len(history) != ga.generation:
             raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
-        P = len(ga.ask()[0])
-        outcome = ck.get("outcome", {})
-        if any(len(v) != P for v in outcome.values()):
-            raise UserError(f"checkpoint: outcome lists must have one entry per individual ({P})")
-        run = cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
-        run._outcome = {k: np.array(v, dtype=float if k == "end_time" else bool) for k, v in outcome.items()}
-        return run
+        ga.load_outcome(ck.get("outcome", {}))
+        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -230,7 +213,7 @@ class Run:
         hist = directory / rundir.HISTORY
         if hist.is_file() and hist.read_bytes().count(b"\n") > 1:
             found.append(rundir.HISTORY)
-        found += [f"{rundir.GENERATIONS}/{p.name}" for p in sorted((directory / rundir.GENERATIONS).glob("gen_*.json")) if p.name != "gen_0000.json"]
+        found += [f"{rundir.GENERATIONS}/{p.name}" for p in rundir.generation_files(directory) if rundir.generation_of(p) != 0]
         return found
 
     def _rebuild(self) -> None:
@@ -239,8 +222,8 @@ class Run:
         for p in rundir.remove_stale_temporaries(d):
             self.repairs.append(f"{p.relative_to(d)} removed (a write cut short)")
         (d / rundir.GENERATIONS).mkdir(exist_ok=True)
-        for p in sorted((d / rundir.GENERATIONS).glob("gen_*.json")):
-            if not p.stem[4:].isdigit() or int(p.stem[4:]) >= g:
+        for p in rundir.generation_files(d):
+            if rundir.generation_of(p) is None or rundir.generation_of(p) >= g:
                 p.unlink()
                 self.repairs.append(f"{p.relative_to(d)} removed (after the last checkpoint)")
         self._derive(repair=True)
@@ -276,7 +259,7 @@ class Run:
         if not self.history:
             self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None
             return
-        columns = history_columns(self.history)
+        columns = rundir.history_columns(self.history)
         if repair:
             if recording_matches(rec, columns):
                 return
@@ -315,15 +298,8 @@ class Run:
         """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
         ga = self.ga
         pop, unknown = ga.ask()
-        ev = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
-        ga.tell(ev.fitness)
-        P = len(pop)
-        for key, vals, default in (("fell", ev.fell, False), ("unstable", ev.unstable, False), ("end_time", ev.end_time, np.nan)):
-            prev = self._outcome.get(key)
-            arr = np.full(P, default, dtype=np.asarray(vals).dtype) if prev is None else prev.copy()
-            arr[unknown] = vals
-            self._outcome[key] = arr
-        f = ga.fitness
+        ga.tell(evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation)))
+        f, outcome = ga.fitness, ga.outcome
         b = int(ga.ranking()[0])
         g = ga.generation
         stats = GenerationStats(
@@ -333,36 +309,29 @@ class Run:
             median=float(np.median(f)),
             worst=float(f.min()),
             evaluations=int(unknown.sum()),
-            falls=int(self._outcome["fell"].sum()),
-            unstable=int(self._outcome["unstable"].sum()),
+            falls=int(outcome["fell"].sum()),
+            unstable=int(outcome["unstable"].sum()),
             wall_seconds=0.0,
-            best_fell=bool(self._outcome["fell"][b]),
+            best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
         )
-        meta = dict(fitness=float(f[b]), fell=bool(self._outcome["fell"][b]), end_time=float(self._outcome["end_time"][b]), seed=self.config.seed, generation=g)
+        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed, generation=g)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
         if self.best is None or meta["fitness"] > self.best["fitness"]:
             self.best, self.best_genome = meta, [float(x) for x in pop[b]]
         self.history.append(stats.row())
-        # individuals the optimizer carries over keep their outcome; the others' are filled in next generation
-        ga.next_generation()
-        carried = ga.carried()
-        for key, arr in self._outcome.items():
-            new = np.zeros(len(carried), dtype=arr.dtype)
-            new[carried >= 0] = arr[carried[carried >= 0]]
-            self._outcome[key] = new
+        ga.next_generation()  # the individuals it keeps keep their fitness and outcome
         return stats
 
     # ---- files
     def checkpoint(self) -> None:
         """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
         Ctrl-C waits until all are written."""
-        outcome = {k: v.tolist() for k, v in self._outcome.items()}
         with _sigint_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
-                 "wall_seconds": self.wall, "outcome": outcome},
+                 "wall_seconds": self.wall, "outcome": self.ga.outcome_dict()},
             )
             self._derive()
 
@@ -380,7 +349,7 @@ class Run:
             "generations": self.ga.generation,
             "best": self.best,
             "wall_seconds": round(self.wall, 3),
-            "evaluations": int(sum(r[HISTORY_COLUMNS.index("evaluations")] for r in self.history)),
+            "evaluations": int(sum(rundir.column(self.history, "evaluations"))),
             "stable": self.best is not None and not self.best["fell"],
             "best_walk": best_walk,
         }
@@ -412,11 +381,6 @@ class Run:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-def history_columns(rows: list[list]) -> dict[str, np.ndarray]:
-    """History rows (HISTORY_COLUMNS each) -> ``{column: (n_generations,) array}``, as ``read_history`` gives."""
-    return {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
 
 
 @contextlib.contextmanager
@@ -482,7 +446,7 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     the missing trailing genes are filled with zeros (no influence).
     """
     path = Path(source)
-    path = path / "best.json" if path.is_dir() else path
+    path = path / rundir.BEST if path.is_dir() else path
     genome, cfg, _ = load_genome(path)
     if cfg.body != episode.body or cfg.controller != episode.controller:
         raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
@@ -495,5 +459,5 @@ def eta_seconds(stats: GenerationStats, history: list[list]) -> float:
     done = len(history)
     if not done:
         return math.nan
-    walls = [r[HISTORY_COLUMNS.index("wall_seconds")] for r in history]
+    walls = rundir.column(history, "wall_seconds")
     return float(np.mean(walls[-5:])) * (stats.generations_total - done)

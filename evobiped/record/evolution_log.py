@@ -39,7 +39,7 @@ def declare_series(rec) -> None:
 
 
 def log_history(rec, history: dict[str, np.ndarray]) -> None:
-    """A whole ``history.csv`` (see :func:`evobiped.record.source.read_history`) in one go."""
+    """A whole ``history.csv`` (see :func:`evobiped.rundir.read_history`) in one go."""
     import rerun as rr
 
     declare_series(rec)

@@ -41,9 +41,6 @@ def pyplot():
     return plt
 
 
-_plt = pyplot
-
-
 def save_figure(fig, path: str | Path, *, dpi: int = DPI) -> Path:
     """Write ``fig`` as PNG to ``path`` atomically (at most :data:`MAX_SIZE` inches), close it, return the path."""
     w, h = fig.get_size_inches()
@@ -55,9 +52,6 @@ def save_figure(fig, path: str | Path, *, dpi: int = DPI) -> Path:
     pyplot().close(fig)
     atomic_write(path, buf.getvalue())
     return Path(path)
-
-
-_save = save_figure
 
 
 def walk_text(traj: Trajectory) -> str:
@@ -83,9 +77,9 @@ def fitness_label(config) -> str:
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",
                   ylabel: str = "fitness: distance from the start (m)") -> Path:
-    """Top (black) and mean (grey) fitness per generation, as in Fig. 6; ``history`` from ``read_history``;
+    """Top (black) and mean (grey) fitness per generation, as in Fig. 6; ``history`` from :func:`evobiped.rundir.read_history`;
     ``ylabel`` from :func:`fitness_label`."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     g = history["generation"]
     ax.plot(g, history["best"], color="black", lw=1.8, label="top")
@@ -99,7 +93,7 @@ def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: st
     ax.set_title(title)
     ax.legend(frameon=False)
     ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:
@@ -117,7 +111,7 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
 
     ``seconds``: plot only the first this many seconds (default 10, so the rhythm stays visible; None: all).
     """
-    plt = _plt()
+    plt = pyplot()
     n = traj.n_motor
     t = traj.command_time
     keep = t <= seconds if seconds else np.ones(len(t), bool)
@@ -136,7 +130,7 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
     what = "Motor neuron outputs" if unit else "Joint target angles commanded by the controller" if target else "Motor outputs"
     shown = f"first {seconds:g} s of {traj.end_time:g} s" if keep.sum() < len(t) else f"{traj.end_time:g} s"
     axes[0, 0].set_title(f"{what} ({traj.body_name}, {shown}); walked {walk_text(traj)}", fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _side_axis(traj: Trajectory) -> np.ndarray:
@@ -198,7 +192,7 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
     """The walker in side view every ``every`` s from the start (``frames`` frames), left to right, top to
     bottom (Fig. 8).  Each panel's horizontal axis is the position along the initial facing (m), so its
     tick labels show the progress (negative: backwards)."""
-    plt = _plt()
+    plt = pyplot()
     step = max(1, int(round(every / traj.dt)))
     idx = np.arange(0, len(traj.state_time), step)[:frames]
     every = step * traj.dt
@@ -223,14 +217,14 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
     fig.supylabel("height (m)", fontsize=9)
     _side_key(axes[0, -1])
     fig.suptitle(f"Motion sequence, side view, every {every:g} s ({traj.body_name}); walked {walk_text(traj)}", fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, max_figures: int = 40, span: float = 4.0) -> Path:
     """Stick figures every ``every`` s (at most ``max_figures``), drawn where they were along the initial
     facing (Taga Figs. 5, 9), from the start until the walker is ``span`` m from it: the figure's size does
     not grow with the episode."""
-    plt = _plt()
+    plt = pyplot()
     axis, parts = _side_axis(traj), shapes(traj.model)
     h = traj.com[:, :2] @ axis
     far = np.flatnonzero(np.abs(h - h[0]) > span)
@@ -248,14 +242,14 @@ def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, max_
     shown = f"first {traj.state_time[last]:.1f} s of {traj.end_time:g} s" if last < len(h) - 1 else f"{traj.end_time:g} s"
     ax.set_title(f"Stick figure every {every:g} s ({traj.body_name}, {shown}); walked {walk_text(traj)}", fontsize=9)
     _side_key(ax, com=True)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def ground_trajectory(trajs: Trajectory | list[Trajectory], path: str | Path, *, labels: list[str] | None = None) -> Path:
     """The walker's path on the ground plane, start (circle), end (square, x if it fell), sources (star) (Fig. 12)."""
     from matplotlib.lines import Line2D
 
-    plt = _plt()
+    plt = pyplot()
     trajs = [trajs] if isinstance(trajs, Trajectory) else list(trajs)
     fig, ax = plt.subplots(figsize=(6.4, 5.2))
     colors = plt.get_cmap("tab10").colors
@@ -290,7 +284,7 @@ def ground_trajectory(trajs: Trajectory | list[Trajectory], path: str | Path, *,
         ax.set_title(f"Paths on the ground toward each sound source ({trajs[0].body_name})", fontsize=10)
     else:
         ax.set_title(f"Path on the ground ({trajs[0].body_name}, {trajs[0].end_time:g} s)", fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def replay_figures(traj: Trajectory, out_dir: str | Path, *, history: dict[str, np.ndarray] | None = None,
@@ -313,7 +307,7 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int = 
     """One motor output per presentation (Fig. 13: right hip sagittal = neuron 4, index 3): a neuron's
     output in [0, 1], or the joint target (rad) a controller such as the balance controller commands.
     ``seconds``: the first this many seconds (default 10, so that the rhythm stays visible; None: all)."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(len(trajs), 1, figsize=(7.0, 1.2 + 1.3 * len(trajs)), sharex=True, squeeze=False)
     name = trajs[0].actuator_names[neuron] if neuron < len(trajs[0].actuator_names) else f"neuron {neuron + 1}"
     unit, target, quantity = _motor_quantity(trajs[0])
@@ -328,7 +322,7 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int = 
     shown = f", first {seconds:g} s" if seconds and trajs[0].command_time[-1] > seconds else ""
     what = f"Motor neuron {neuron + 1} ({name})" if unit else f"{name} {'target' if target else 'command'}"
     fig.suptitle(f"{what} per sound source{shown}", fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def steering_figures(trajs: list[Trajectory], out_dir: str | Path) -> list[Path]:

@@ -3,20 +3,21 @@
 The replay is the same episode the GA ran (``EpisodeConfig(**stored).build()``
 with the genome alone; batch size does not change results) with a
 :class:`~.rerun_recorder.RerunRecorder` attached, so the replayed fitness
-equals the stored one to the last bit.  The ``.rrd`` is written to a
-temporary file and renamed into place at the end: a failed replay leaves
-nothing half-written.
+equals the stored one to the last bit.  The ``.rrd`` is made in memory and
+written whole by :func:`~evobiped.fileio.atomic_write` at the end: a failed
+replay leaves nothing half-written.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import os
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from .source import Source, read_history
+from .. import rundir
+from ..fileio import atomic_write
+from .source import Source
 from .trajectory import Trajectory, TrajectoryRecorder
 from ..tasks.steer import with_sources
 
@@ -45,7 +46,7 @@ class ReplayReport:
 def default_out(source: Source) -> Path:
     """``RUN/replay_best.rrd``, ``RUN/replay_gen_0007.rrd``, or ``<genome>.rrd`` next to a genome file."""
     if source.run_dir is not None:
-        return source.run_dir / f"replay_{source.label}.rrd"
+        return rundir.replay_file(source.run_dir, source.label)
     return source.genome_path.with_suffix(".rrd")
 
 
@@ -85,33 +86,31 @@ def replay(
     if connect is not None and target is None:
         require_viewer(connect_url(connect))
     rec = rr.RecordingStream("evobiped_replay", recording_id=uuid.uuid4().hex)
-    tmp = None
+    stream = None
     if target is not None:
         target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        rec.save(tmp)
+        stream = rec.binary_stream()
     elif spawn:
         rec.spawn()
     else:
         rec.connect_grpc(connect_url(connect))
-    try:
-        rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
-        recorder = RerunRecorder(rec)
-        others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)]  # one walker per sound source
-        watchers = [recorder, *others] + ([listener] if listener is not None else [])
-        result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
-        traj = recorder.trajectory
-        if others:
-            log_presentations(rec, [traj] + [o.trajectory for o in others])
-        if history is not None:
-            log_history(rec, history)
-        rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=bool(others)))
-        flush(rec, streaming=target is None)
-        if tmp is not None:
-            os.replace(tmp, target)
-    finally:
-        if tmp is not None and tmp.exists():
-            tmp.unlink()
+    rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
+    recorder = RerunRecorder(rec)
+    others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)]  # one walker per sound source
+    watchers = [recorder, *others] + ([listener] if listener is not None else [])
+    result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
+    traj = recorder.trajectory
+    if others:
+        log_presentations(rec, [traj] + [o.trajectory for o in others])
+    if history is not None:
+        log_history(rec, history)
+    rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=bool(others)))
+    if stream is None:
+        flush(rec, streaming=True)
+    else:
+        data = stream.read(flush=True) or b""
+        rec.disconnect()
+        atomic_write(target, data)
     figs = []
     if figures_dir is not None:
         figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg))
@@ -132,6 +131,6 @@ def replay(
 
 
 def _history(source: Source):
-    if source.run_dir is None or not (source.run_dir / "history.csv").is_file():
+    if source.run_dir is None or not (source.run_dir / rundir.HISTORY).is_file():
         return None
-    return read_history(source.run_dir / "history.csv")
+    return rundir.read_history(source.run_dir / rundir.HISTORY)

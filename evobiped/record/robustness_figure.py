@@ -7,13 +7,13 @@ from pathlib import Path
 import numpy as np
 
 from ..robustness import Trial, summarise
-from .figures import _plt, save_figure
+from .figures import pyplot, save_figure
 
 
 def robustness_figure(trials: list[Trial], path: str | Path, *, title: str) -> Path:
     """Left: survival (%) per family of trials.  Right: each trial's forward displacement (m)
     against the time it stayed up (s), coloured by family; a fall is a cross, survival a dot."""
-    plt = _plt()
+    plt = pyplot()
     rows = summarise(trials)
     families = [r["family"] for r in rows]
     colours = {f: plt.get_cmap("tab10")(i % 10) for i, f in enumerate(families)}

@@ -7,10 +7,10 @@ both failures are a :class:`~evobiped.errors.UserError` (one line, exit 2).
 
 from __future__ import annotations
 
-import socket
 from urllib.parse import urlparse
 
 from ..errors import UserError
+from ..net import connect_error
 
 DEFAULT_ADDR = "127.0.0.1:9876"
 #: seconds to wait for a viewer to take the data
@@ -32,10 +32,9 @@ def require_viewer(url: str, *, timeout: float = 2.0) -> None:
         raise UserError(f"bad viewer address {url!r} (expected HOST:PORT)") from None
     if not host:
         raise UserError(f"bad viewer address {url!r} (expected HOST:PORT)")
-    try:
-        socket.create_connection((host, port), timeout=timeout).close()
-    except OSError as exc:
-        raise UserError(f"no Rerun viewer at {host}:{port} ({exc.strerror or exc}); start one with `rerun` or use --spawn") from None
+    why = connect_error(host, port, timeout)
+    if why is not None:
+        raise UserError(f"no Rerun viewer at {host}:{port} ({why}); start one with `rerun` or use --spawn")
 
 
 def require_display() -> None:

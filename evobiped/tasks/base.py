@@ -5,19 +5,13 @@ Fitness is higher-is-better everywhere.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
 from ..bodies.base import Body
-from ..options import parse
+from ..options import NoOptions, parse
 from ..sim import Sims
-
-
-@dataclass(frozen=True, kw_only=True)
-class NoOptions:
-    """A component without options."""
 
 
 class Task:

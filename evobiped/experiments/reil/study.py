@@ -28,19 +28,17 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-import multiprocessing as mp
 import os
-import signal
 import time
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
-from ... import __version__
+from ... import __version__, rundir
 from ...errors import ConfigError, UserError
 from ...evolution.evaluate import SerialEvaluator, init_ray
+from ...evolution.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
 from ...evolution.run import OPTIMIZERS, Run, RunConfig
 from ...fileio import atomic_write, read_json, write_json
@@ -140,21 +138,17 @@ def run_dir(study: Path, condition: str, k: int, cfg: StudyConfig) -> Path:
 
 
 # ---------------------------------------------------------------- one run (in a worker)
-def _ignore_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-
-
 def run_one(directory: str, config: dict, condition: str, recheck_seconds: float) -> dict:
     """Create, resume or skip the run in ``directory``; re-check a stable best walker.  Returns the outcome."""
     d = Path(directory)
-    if (d / "outcome.json").is_file():
-        return read_json(d / "outcome.json", what="run outcome")
+    if (d / rundir.OUTCOME).is_file():
+        return read_json(d / rundir.OUTCOME, what="run outcome")
     run_cfg = RunConfig.from_dict(config)
-    run = Run.resume(d) if (d / "config.json").is_file() else Run.create(d, run_cfg)
+    run = Run.resume(d) if (d / rundir.CONFIG).is_file() else Run.create(d, run_cfg)
     with run, SerialEvaluator(run_cfg.episode) as ev:  # the run's lock is released when it ends
         summary = run.evolve(ev)  # a finished run only writes its summary again
     best = summary["best"]
-    genome, ep_cfg, _ = load_genome(d / "best.json")
+    genome, ep_cfg, _ = load_genome(d / rundir.BEST)
     ep_cfg = ep_cfg.nominal()
     again = ep_cfg.build().run(genome)  # eq. 4's distance (the other criteria's fitness is not that)
     walk = again.walk()
@@ -180,7 +174,7 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         outcome["recheck_end_time"] = float(r.end_time[0])
     outcome["forward_walker"] = bool(outcome["walks_indefinitely"] and not again.fell[0] and outcome["distance"] >= WALKER_DISTANCE
                                      and outcome["heading_deg"] is not None and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
-    write_json(d / "outcome.json", outcome)
+    write_json(d / rundir.OUTCOME, outcome)
     return outcome
 
 
@@ -220,7 +214,7 @@ def run_study(
         for c in config.condition_names
         for k in range(config.runs)
     ]
-    todo = [t for t in tasks if not (Path(t[0]) / "outcome.json").is_file()]
+    todo = [t for t in tasks if not (Path(t[0]) / rundir.OUTCOME).is_file()]
     say(f"study {d}: {len(config.condition_names)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already done, "
         f"{config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
     t0, done = time.perf_counter(), 0
@@ -241,9 +235,12 @@ def run_study(
             report(run_one(*t))
     elif todo and backend == "process":
         n = min(workers or os.cpu_count() or 1, len(todo))
-        with mp.get_context("spawn").Pool(n, initializer=_ignore_sigint) as pool:
-            for o in pool.imap_unordered(_star_run_one, todo):
-                report(o)
+        pool = spawn_pool(n)
+        try:
+            for f in as_completed([pool.submit(run_one, *t) for t in todo]):
+                report(f.result())
+        finally:
+            stop_pool(pool)
     elif todo:
         ray, owns = init_ray(address, workers)
         try:
@@ -255,11 +252,7 @@ def run_study(
         finally:
             if owns:
                 ray.shutdown()
-    return [read_json(Path(t[0]) / "outcome.json", what="run outcome") for t in tasks]
-
-
-def _star_run_one(args: tuple) -> dict:
-    return run_one(*args)
+    return [read_json(Path(t[0]) / rundir.OUTCOME, what="run outcome") for t in tasks]
 
 
 # ---------------------------------------------------------------- statistics and files
@@ -324,7 +317,6 @@ def table_markdown(rows: list[dict], recheck_seconds: float) -> str:
 
 def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dict]) -> list[Path]:
     """runs.csv, table.csv/.md/.json and the two figures; returns the paths written."""
-    from ...record.source import read_history
     from .study_figures import distance_histograms, fitness_graphs
 
     d = Path(directory)
@@ -334,7 +326,7 @@ def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dic
     atomic_write(d / "table.md", table_markdown(rows, config.recheck_seconds))
     write_json(d / "table.json", {"evobiped": __version__, "conditions": rows})
     edges = histogram_edges([o["distance"] for o in outcomes])
-    histories = {c: [read_history(run_dir(d, c, k, config) / "history.csv") for k in range(config.runs)] for c in config.condition_names}
+    histories = {c: [rundir.read_history(run_dir(d, c, k, config) / rundir.HISTORY) for k in range(config.runs)] for c in config.condition_names}
     return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
             distance_histograms(outcomes, config.condition_names, edges, d / "distances.png"),
             fitness_graphs(histories, d / "fitness_graphs.png")]

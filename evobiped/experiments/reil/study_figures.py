@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...record.figures import _plt, _save
+from ...record.figures import pyplot, save_figure
 
 _COLORS = {"plain": "tab:blue", "cyclic": "tab:orange"}
 
@@ -16,7 +16,7 @@ def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, pat
     histogram per condition over the same bins (each bar spans exactly its bin)."""
     from matplotlib.ticker import MaxNLocator
 
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
     for ax, stable, title in ((axes[0], False, "(a) unstable: fell within the episode"), (axes[1], True, "(b) stable: did not fall")):
         for i, c in enumerate(conditions):
@@ -31,7 +31,7 @@ def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, pat
     axes[0].set_ylabel("runs")
     axes[1].legend(frameon=False, fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0), title="condition")
     fig.suptitle("Distance of each run's best walker (Fig. 5)", fontsize=11)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 #: the y-axis label per study condition: the quantity each one's fitness measures
@@ -43,7 +43,7 @@ def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str 
     """Best fitness per generation of every run, one panel per condition (Fig. 6 for all runs at once)."""
     from matplotlib.ticker import MaxNLocator
 
-    plt = _plt()
+    plt = pyplot()
     n = len(histories)
     cols = min(3, n)
     rows = -(-n // cols)
@@ -63,4 +63,4 @@ def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str 
         ax.grid(alpha=0.3)
     fig.suptitle("Best fitness per generation, one line per run", fontsize=11)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)

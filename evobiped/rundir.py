@@ -1,4 +1,19 @@
-"""The run-directory format in one place: file names, the lock, checkpoint validation.
+"""The run-directory format in one place: file names, columns, readers and writers, the lock, checkpoint validation.
+
+A run directory (``evobiped evolve --out DIR``)::
+
+    config.json            the full resolved RunConfig
+    checkpoint.json        the commit point: optimizer state, history, best genome, outcomes after the last generation
+    history.csv            one row per generation (HISTORY_COLUMNS)           } derived from the checkpoint,
+    best.json              best genome of the run so far                      } rebuilt by a resume when
+    evolution.rrd          fitness per generation, a Rerun recording          } missing, stale or damaged
+    summary.json           written when the run ends: the best walker, its distance and walking direction
+    generations/gen_NNNN.json   best genome of each generation (genome-file format), written just before its commit
+    .lock                  held (flock) by the one process that evolves the run
+
+Other commands add to it: ``outcome.json`` (a study's result for the run),
+``replay_<label>.rrd`` and ``figures_<label>/`` (replay), ``robustness[_<label>].json/.png``
+(the robustness battery), where the label is ``best`` or ``gen_NNNN``.
 
 ``checkpoint.json`` is the run's one commit point per generation and its one
 source of truth: ``history.csv``, ``best.json``, ``summary.json`` and
@@ -21,8 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UserError
-from ..fileio import WriteError, atomic_write
+from .errors import UserError
+from .fileio import WriteError, atomic_write
 
 CONFIG = "config.json"
 CHECKPOINT = "checkpoint.json"
@@ -32,6 +47,8 @@ SUMMARY = "summary.json"
 RECORDING = "evolution.rrd"
 GENERATIONS = "generations"
 LOCK = ".lock"
+#: a study's result for the run (evobiped study), with the long re-check
+OUTCOME = "outcome.json"
 
 HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
 #: columns holding counts (whole numbers >= 0) and fitness values (a number or -inf)
@@ -40,7 +57,69 @@ _FITNESS = ("best", "mean", "median", "worst")
 
 
 def generation_file(directory: Path, generation: int) -> Path:
+    """``DIR/generations/gen_NNNN.json``: the best genome of generation ``generation``."""
     return Path(directory) / GENERATIONS / f"gen_{generation:04d}.json"
+
+
+def generation_files(directory: Path) -> list[Path]:
+    """The generation files present, in file-name order."""
+    return sorted((Path(directory) / GENERATIONS).glob("gen_*.json"))
+
+
+def generation_of(path: Path) -> int | None:
+    """The generation a ``gen_NNNN.json`` file holds (None: not such a name)."""
+    digits = Path(path).stem[4:]
+    return int(digits) if Path(path).stem.startswith("gen_") and digits.isdigit() else None
+
+
+def label(genome_path: Path) -> str:
+    """``best`` / ``gen_0007``: how replay and robustness name what they write about a run's genome file."""
+    return Path(genome_path).stem
+
+
+def replay_file(directory: Path, label: str) -> Path:
+    """The default recording of a replay: ``DIR/replay_<label>.rrd``."""
+    return Path(directory) / f"replay_{label}.rrd"
+
+
+def figures_dir(directory: Path, label: str) -> Path:
+    """The default folder of a replay's figures: ``DIR/figures_<label>``."""
+    return Path(directory) / f"figures_{label}"
+
+
+def robustness_stem(label: str) -> str:
+    """File stem of the robustness battery's results in a run directory: ``robustness`` for the best, ``robustness_<label>``."""
+    return "robustness" if label == "best" else f"robustness_{label}"
+
+
+# ---- history.csv
+def history_columns(rows: list[list]) -> dict[str, np.ndarray]:
+    """History rows (HISTORY_COLUMNS each) -> ``{column: (n_generations,) array}``, as :func:`read_history` gives."""
+    return {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
+
+
+def column(rows: list[list], name: str) -> list:
+    """One column of history rows, e.g. ``column(rows, "evaluations")``."""
+    i = HISTORY_COLUMNS.index(name)
+    return [r[i] for r in rows]
+
+
+def read_history(path: str | Path) -> dict[str, np.ndarray]:
+    """``history.csv`` -> ``{column: (n_generations,) float array}``; needs generation/best/mean (UserError otherwise)."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"history file not found: {path}")
+    try:
+        with path.open(newline="") as f:
+            rows = list(csv.DictReader(f))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise UserError(f"{path} is not a run history ({exc})") from None
+    if not rows or not {"generation", "best", "mean"} <= set(rows[0]):
+        raise UserError(f"{path} is not a run history (needs columns generation, best, mean)")
+    try:
+        return {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k is not None}
+    except (TypeError, ValueError) as exc:
+        raise UserError(f"{path}: not a number in the history ({exc})") from None
 
 
 def history_text(rows: list[list]) -> str:
