@@ -203,13 +203,14 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                seed: int | None = None, backend: str | None = None, workers: int | None = None, address: str | None = None,
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
-    from .evolution.run import RunConfig, load_toml
+    from .evolution.run import RunConfig
+    from .fileio import read_toml
 
     from .presets import merge, path
 
-    d = load_toml(path(preset)) if preset else {}
+    d = read_toml(path(preset)) if preset else {}
     if config:
-        d = merge(d, load_toml(config))
+        d = merge(d, read_toml(config))
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
     ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
