@@ -47,8 +47,8 @@ def positive_int(text: str) -> int:
     return v
 
 
-def names(kind: str) -> str:
-    """The valid names of a name-valued option, for its help text: ``names("body")`` -> ``"reil, taga"``."""
+def choices_text(kind: str) -> str:
+    """The valid names of a name-valued option, for its help text: ``choices_text("body")`` -> ``"reil, taga"``."""
     if kind == "body":
         from .bodies import BODIES as reg
     elif kind == "controller":
@@ -97,8 +97,8 @@ def add_episode(sub) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--genome", metavar="FILE", help="genome JSON file (default: a random genome)")
     src.add_argument("--seed", type=int, default=0, help="seed of the random genome (default 0)")
-    p.add_argument("--body", help=f"body: {names('body')} (default reil; not with --genome, whose file names it)")
-    p.add_argument("--controller", help=f"controller: {names('controller')} (default ctrnn; not with --genome)")
+    p.add_argument("--body", help=f"body: {choices_text('body')} (default reil; not with --genome, whose file names it)")
+    p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn; not with --genome)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50)")
     add_source_flag(p)
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
@@ -161,20 +161,20 @@ def walk_line(walk: dict) -> str:
 # ---------------------------------------------------------------- evolve
 def add_evolve(sub) -> None:
     p = sub.add_parser("evolve", help="evolve controllers with the GA of Reil & Husbands (defaults: the paper's)")
-    p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {names('preset')} "
+    p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
     p.add_argument("--optimizer", choices=("ga", "cma"), help="ga (Reil & Husbands' GA, default) or cma (CMA-ES)")
-    p.add_argument("--body", help=f"body: {names('body')} (default reil)")
-    p.add_argument("--controller", help=f"controller: {names('controller')} (default ctrnn)")
-    p.add_argument("--task", help=f"task: {names('task')} (default walk)")
+    p.add_argument("--body", help=f"body: {choices_text('body')} (default reil)")
+    p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
+    p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")
     add_source_flag(p)
     p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A)")
     p.add_argument("--seed", type=int, help="run seed (default 0)")
-    p.add_argument("--backend", help=f"backend: {names('backend')} (default process)")
+    p.add_argument("--backend", help=f"backend: {choices_text('backend')} (default process)")
     p.add_argument("--workers", type=positive_int, help="worker processes / threads / Ray actors (default: all cores; "
                    "more than the cores earns a warning; not with the serial backend)")
     p.add_argument("--address", help="Ray cluster address (only with --backend ray; default: start a local Ray)")
@@ -201,13 +201,14 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                seed: int | None = None, backend: str | None = None, workers: int | None = None, address: str | None = None,
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
-    from .evolution.run import RunConfig, load_toml
+    from .evolution.run import RunConfig
+    from .fileio import read_toml
 
     from .presets import merge, path
 
-    d = load_toml(path(preset)) if preset else {}
+    d = read_toml(path(preset)) if preset else {}
     if config:
-        d = merge(d, load_toml(config))
+        d = merge(d, read_toml(config))
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
     ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
@@ -529,14 +530,14 @@ def add_study(sub) -> None:
                    "forward (forward progress x time up) (default plain,cyclic)")
     p.add_argument("--controllers", help="controller axis, comma-separated (e.g. ctrnn,simbicon; default: the base run's)")
     p.add_argument("--optimizers", help="optimizer axis, comma-separated: ga, cma (default: the base run's)")
-    p.add_argument("--preset", metavar="NAME", help=f"base run settings shipped with evobiped: {names('preset')} (`evobiped presets`)")
+    p.add_argument("--preset", metavar="NAME", help=f"base run settings shipped with evobiped: {choices_text('preset')} (`evobiped presets`)")
     p.add_argument("--config", metavar="FILE.toml", help="base run settings (as for evolve); flags override it")
     p.add_argument("--population", type=positive_int, help="population size (default 50)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--first-seed", type=int, default=0, help="seeds are FIRST .. FIRST+K-1 (default 0)")
     p.add_argument("--recheck-seconds", type=positive_float, default=200.0, help="re-simulate stable best walkers this long (default 200)")
-    p.add_argument("--backend", default="process", help=f"backend: {names('backend')} (default process: one run per core)")
+    p.add_argument("--backend", default="process", help=f"backend: {choices_text('backend')} (default process: one run per core)")
     p.add_argument("--workers", type=positive_int, help="runs at once (default: all cores; not with the serial backend)")
     p.add_argument("--address", help="Ray cluster address (only with --backend ray)")
     p.add_argument("--replays", action="store_true", help="also write a Rerun recording of each run's best walker")
@@ -674,8 +675,8 @@ def run_taga_cmd(args) -> int:
 # ---------------------------------------------------------------- bench
 def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
-    p.add_argument("--body", default="reil", help=f"body: {names('body')} (default reil)")
-    p.add_argument("--controller", default="ctrnn", help=f"controller: {names('controller')} (default ctrnn)")
+    p.add_argument("--body", default="reil", help=f"body: {choices_text('body')} (default reil)")
+    p.add_argument("--controller", default="ctrnn", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--population", type=positive_int, help="walkers (default 50; --quick 16)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50; --quick 4)")
     p.add_argument("--workers", type=positive_int, help="threads for raw stepping, workers for the pools (default: all cores)")

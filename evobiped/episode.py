@@ -179,6 +179,47 @@ class Listeners:
             x.end(result)
 
 
+@dataclass(eq=False, kw_only=True)
+class EpisodeState:
+    """A batch of simulations part-way through an episode (:meth:`Episode.start`, :meth:`Episode.advance`).
+
+    Every per-row array is ``(n,)`` over the simulation rows of :meth:`Episode.run`.
+    """
+
+    sims: Sims
+    #: decoded genomes, one row per simulation (an experiment may change them between advances)
+    params: dict[str, np.ndarray]
+    #: the controller's state (see :meth:`Controller.initial_state`)
+    controller: Any
+    #: the task's state (see :class:`evobiped.tasks.base.Task`)
+    task: dict[str, Any]
+    alive: np.ndarray
+    fell: np.ndarray
+    unstable: np.ndarray
+    #: s: when each row fell, the planned length while it is up
+    end_time: np.ndarray
+    start_position: np.ndarray
+    start_facing: np.ndarray
+    #: s per control tick
+    control_dt: float
+    #: the planned length in control ticks
+    n_ticks: int
+    #: control ticks simulated so far
+    ticks: int = 0
+    trials: Trials | None = None
+    #: each row's trial ``(n,)``, its noise stream, its actuator-target offsets ``(n, n_act)`` rad or None
+    trial: np.ndarray | None = None
+    noise: Any = None
+    offset: np.ndarray | None = None
+    #: a push force is on some trunk now
+    pushed: bool = False
+
+    @property
+    def time(self) -> float:
+        """Simulated time so far, s."""
+        return self.ticks * self.control_dt
+
+
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
@@ -251,7 +292,20 @@ class Episode:
         (p * R + r) * S + j is genome p under trial r and task presentation j.
         The listener sees all rows; the result has one entry per genome, its
         fitness combined over j by the task, then over r by the trials' aggregate.
+        ``run`` is :meth:`start`, :meth:`advance` over the whole length, :meth:`result`.
         """
+        state = self.start(genomes, seconds=seconds, trials=trials)
+        if listener is not None:
+            listener.start(self, state.sims)
+        self.advance(state, ticks=state.n_ticks, listener=listener)
+        result = self.result(state)
+        if listener is not None:
+            listener.end(result)
+        return result
+
+    def start(self, genomes: np.ndarray, *, seconds: float | None = None, trials: Trials | None = None) -> EpisodeState:
+        """Every genome ``(P, G)`` (or one ``(G,)``) at t = 0, rows as in :meth:`run`; ``seconds`` (default the
+        episode's) is the planned length: each row's end time until it falls, and the task's ``seconds``."""
         params = self.controller.decode(genomes)
         S = self.task.presentations
         R = 1 if trials is None else trials.R
@@ -259,76 +313,90 @@ class Episode:
             params = {k: np.repeat(v, S * R, axis=0) for k, v in params.items()}
         P = next(iter(params.values())).shape[0]
         n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
-        body, ctrl, task = self.body, self.controller, self.task
+        body = self.body
         sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope)
         body.reset(sims)
         trial = np.arange(P) // S % R  # each row's trial
         if trials is not None and trials.pose_offset is not None and trials.pose_offset.any():
             sims.qpos[:, self._act_qadr] += trials.pose_offset[trial]
             sims.forward()
-        noise = trials.noise() if trials is not None else None
-        offset = trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None  # (P, n_act) rad
-        pushing = trials is not None and trials.push_start.size > 0
-        pushed = False  # a force is on some trunk now
-        state = ctrl.initial_state(params)
-        tstate = task.start(body, sims)
-        alive = np.ones(P, bool)
-        fell = np.zeros(P, bool)
-        unstable = np.zeros(P, bool)
         end_time = np.full(P, n_ticks * self.control_dt)
+        tstate = self.task.start(body, sims)
         # the task sees when each walker's episode ends: the full length until it falls (so a
         # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
         tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
-        start = body.planar_position(sims).copy()
-        facing = body.heading(sims).copy()
-        if listener is not None:
-            listener.start(self, sims)
-        for k in range(n_ticks):
+        return EpisodeState(
+            sims=sims, params=params, controller=self.controller.initial_state(params), task=tstate,
+            alive=np.ones(P, bool), fell=np.zeros(P, bool), unstable=np.zeros(P, bool), end_time=end_time,
+            start_position=body.planar_position(sims).copy(), start_facing=body.heading(sims).copy(),
+            control_dt=self.control_dt, n_ticks=n_ticks, trials=trials, trial=trial,
+            noise=trials.noise() if trials is not None else None,
+            offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
+        )
+
+    def advance(self, state: EpisodeState, seconds: float | None = None, *, ticks: int | None = None,
+                listener: Listener | None = None) -> EpisodeState:
+        """Continue ``state`` by ``seconds`` (or ``ticks`` control ticks), in place; rows that are down stay
+        where they fell, and an all-down batch stops early (its clock stops with it).  Between calls an
+        experiment may change ``state.params``, the body's ground or forces on ``state.sims``."""
+        n = int(round(seconds / self.control_dt)) if ticks is None else int(ticks)
+        body, ctrl, task, sims, st = self.body, self.controller, self.task, state.sims, state
+        params, tstate, alive, trials, trial = st.params, st.task, st.alive, st.trials, st.trial
+        P = len(alive)
+        for k in range(st.ticks, st.ticks + n):
             ids = np.flatnonzero(alive)
             if ids.size == 0:
                 break
-            neurons = ctrl.neuron_outputs(params, state)
+            neurons = ctrl.neuron_outputs(params, st.controller)
             inputs = self._inputs(sims, tstate, P)
-            state, out = ctrl.step(params, state, inputs)
+            st.controller, out = ctrl.step(params, st.controller, inputs)
             action = to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)
             if trials is not None:
-                jitter = noise.next()
-                if offset is not None or jitter is not None:
-                    disturbed = action + offset if offset is not None else action.copy()
+                jitter = st.noise.next()
+                if st.offset is not None or jitter is not None:
+                    disturbed = action + st.offset if st.offset is not None else action.copy()
                     if jitter is not None:
                         disturbed += jitter[trial]
                     action = np.clip(disturbed, self.low, self.high)
-            if pushing:
-                force = trials.push_at(k * self.control_dt)  # (R, 3) N
-                if pushed or force.any():  # write only while a push is on or just ended
-                    sims.xfrc_applied[:, self._trunk, :3] = force[trial]
-                    pushed = bool(force.any())
+                if trials.push_start.size > 0:
+                    force = trials.push_at(k * self.control_dt)  # (R, 3) N
+                    if st.pushed or force.any():  # write only while a push is on or just ended
+                        sims.xfrc_applied[:, self._trunk, :3] = force[trial]
+                        st.pushed = bool(force.any())
             body.apply(sims, ids, action[ids])
             bad = self._advance(sims, ids)
+            st.ticks = k + 1
             t = (k + 1) * self.control_dt
             task.on_tick(body, sims, tstate, ids, ~bad, neurons)
             if listener is not None:
                 listener.tick(t, sims, ids, neurons, action, tstate)
             down = bad | body.fallen(sims, ids) if self.stop_on_fall else bad
-            unstable[ids[bad]] = True
-            fell[ids[down]] = True
-            alive[ids[down]] = False
-            end_time[ids[down]] = t
+            if down.any():
+                st.unstable[ids[bad]] = True
+                st.fell[ids[down]] = True
+                alive[ids[down]] = False
+                st.end_time[ids[down]] = t
+        return state
+
+    def result(self, state: EpisodeState) -> EpisodeResult:
+        """The outcome of ``state`` so far, one entry per genome (see :meth:`run`)."""
+        task, S = self.task, self.task.presentations
+        tstate = state.task
         result = EpisodeResult(
             fitness=task.fitness(tstate),
-            fell=fell,
-            unstable=unstable,
-            end_time=end_time,
-            start_position=start,
-            end_position=tstate.get("position", body.planar_position(sims)).copy(),
-            start_facing=facing,
+            fell=state.fell.copy(),
+            unstable=state.unstable.copy(),
+            end_time=state.end_time.copy(),
+            start_position=state.start_position,
+            end_position=tstate.get("position", self.body.planar_position(state.sims)).copy(),
+            start_facing=state.start_facing,
         )
+        trials = state.trials
         if trials is not None:
+            R = trials.R
             result = result.per_genome(S * R, lambda f: trials.combine(task.combine(f.reshape(-1, S)).reshape(-1, R)))
         elif S > 1:
             result = result.per_genome(S, task.combine)
-        if listener is not None:
-            listener.end(result)
         return result
 
     def _inputs(self, sims: Sims, tstate: dict[str, Any], P: int) -> np.ndarray:

@@ -17,10 +17,11 @@ import json
 import os
 import signal
 import tempfile
+import tomllib
 from pathlib import Path
 from typing import Any
 
-from .errors import UserError
+from .errors import ConfigError, UserError
 
 
 def _umask() -> int:
@@ -91,11 +92,20 @@ def write_json(path: str | Path, obj: Any) -> None:
     atomic_write(path, json_text(obj))
 
 
-def read_json(path: str | Path, *, what: str = "file") -> Any:
+def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, error: type[UserError] = UserError) -> Any:
+    """``loads(text)`` of the file at ``path``; a missing or malformed file is one line naming ``what``."""
     path = Path(path)
     if not path.is_file():
         raise UserError(f"{what} not found: {path}")
     try:
-        return json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise UserError(f"{what} {path} is not valid JSON ({exc})") from None
+        return loads(path.read_text())
+    except (*errors, UnicodeDecodeError) as exc:
+        raise error(f"{what} {path} is not valid {form} ({exc})") from None
+
+
+def read_json(path: str | Path, *, what: str = "file") -> Any:
+    return _parse_file(path, what, json.loads, (json.JSONDecodeError,), "JSON")
+
+
+def read_toml(path: str | Path, *, what: str = "config file") -> dict:
+    return _parse_file(path, what, tomllib.loads, (tomllib.TOMLDecodeError,), "TOML", ConfigError)

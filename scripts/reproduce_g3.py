@@ -95,7 +95,7 @@ def main() -> None:
     after = [i for i in range(len(starts)) if starts[i] >= 25.0]
     first_pace = next(i for i in after if all(labs[j] == "pace" for j in range(i, len(labs))))
     pace_period = float(np.median(np.diff(starts[first_pace:])))
-    onset_before = {k: [float(v) for v in np.round(gaits.onsets(tr.t, tr.x[0, :, i])[gaits.onsets(tr.t, tr.x[0, :, i]) < 25], 2)] for i, k in enumerate(g3net.LIMBS)}
+    onset_before = {k: [float(v) for v in np.round(gaits.upward_crossings(tr.t, tr.x[0, :, i])[gaits.upward_crossings(tr.t, tr.x[0, :, i]) < 25], 2)] for i, k in enumerate(g3net.LIMBS)}
     summary["claim3"] = {"cycles": [[float(a), lab] for a, lab in zip(starts, labs)], "pace_from": float(starts[first_pace]),
                          "pace_period": pace_period, "delay_cycles": (float(starts[first_pace]) - 25.0) / pace_period, "onsets_before_switch": onset_before}
     run_figure(out / "claim3_fig8b_walk_to_pace.png", tr.t, tr.x[0], g3net.LIMBS, title="Fig. 8B: I 0.1 -> 0.35 at t = 25", go=tr.go[0])

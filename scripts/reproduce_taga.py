@@ -24,7 +24,7 @@ from evobiped.experiments.taga import walking as tx
 from evobiped.fileio import atomic_write
 from evobiped.progress import Progress
 from evobiped.experiments.taga import taga_figures as fig
-from evobiped.experiments.taga.stride import onsets
+from evobiped.experiments.taga.stride import contact_onsets
 
 NEURONS = ["RH f", "RH e", "RK f", "RK e", "RA f", "RA e", "LH f", "LH e", "LK f", "LK e", "LA f", "LA e"]
 
@@ -53,7 +53,7 @@ METRIC_KEYS = ["u0", "gait", "fell_at", "strides", "stride_length", "cycle_durat
 
 
 def one_cycle(tr: dict, p: int, after: float) -> tuple[float, float]:
-    td = onsets(tr["contact"][:, p, 0])
+    td = contact_onsets(tr["contact"][:, p, 0])
     td = td[tr["t"][td] > after]
     return float(tr["t"][td[0]]), float(tr["t"][td[1]])
 
@@ -77,10 +77,10 @@ def main() -> None:
     md += ["## Every u0 from Appendix E's initial condition (20 s, metrics over the last 10 s)\n", fmt(rows, METRIC_KEYS)]
     tr = w.trace.arrays()
     iw, ir = int(np.flatnonzero(scan == 5.5)[0]), int(np.flatnonzero(scan == 7.5)[0])
-    fig.stick_figure(out / "fig5a_walk_u5.5.png", tr, p=iw, t1=10.0, title="walking, u0 = 5.5 (traced every 0.1 s)")
+    fig.taga_stick_figure(out / "fig5a_walk_u5.5.png", tr, p=iw, t1=10.0, title="walking, u0 = 5.5 (traced every 0.1 s)")
     a, b = one_cycle(tr, iw, 15.0)
     fig.cycle_figure(out / "fig5b_walk_cycle.png", tr, a, b, p=iw, title=f"one steady walking cycle, u0 = 5.5 ({b - a:.2f} s, every 0.02 s)")
-    fig.stick_figure(out / "fig9a_run_u7.5.png", tr, p=ir, t1=10.0, title="running, u0 = 7.5 (traced every 0.1 s)")
+    fig.taga_stick_figure(out / "fig9a_run_u7.5.png", tr, p=ir, t1=10.0, title="running, u0 = 7.5 (traced every 0.1 s)")
     a, b = one_cycle(tr, ir, 15.0)
     fig.cycle_figure(out / "fig9b_run_cycle.png", tr, a, b, p=ir, title=f"one steady running cycle, u0 = 7.5 ({b - a:.2f} s, every 0.02 s)")
 
@@ -122,7 +122,7 @@ def main() -> None:
         md += [f"## Push: {target}, {force:g} N forward for 0.2 s, at `delay` s after the right foot's liftoff\n", fmt(prow, keys + ["first_strides_after"])]
         good = next((p for p, r in enumerate(prow) if not r["fell"]), 0)
         tp = wp.trace.arrays()
-        fig.stick_figure(out / f"fig7_push_{target}.png", tp, p=good, t0=prow[good]["t_push"] - 2.0, t1=prow[good]["t_push"] + 5.0,
+        fig.taga_stick_figure(out / f"fig7_push_{target}.png", tp, p=good, t0=prow[good]["t_push"] - 2.0, t1=prow[good]["t_push"] + 5.0,
                          title=f"push {target} {force:g} N for 0.2 s at t = {prow[good]['t_push']:.2f} s (triangle)", marks=[prow[good]["t_push"]])
 
     # ---- claim 5: slopes (start at x = 5 m, after ~4 s of level walking)
@@ -138,7 +138,7 @@ def main() -> None:
             tr_s = ws.trace.arrays()
             t_on = float(tr_s["t"][np.argmax(tr_s["hip"][:, 0, 0] > 5.0)])
             state = f"fell at {m['fell_at']:.1f} s" if m["fell"] else "walks"
-            fig.stick_figure(out / f"fig8_uphill_{s}pct.png", tr_s, t0=t_on, t1=min(t_on + 8.0, float(tr_s["t"][-1])),
+            fig.taga_stick_figure(out / f"fig8_uphill_{s}pct.png", tr_s, t0=t_on, t1=min(t_on + 8.0, float(tr_s["t"][-1])),
                              title=f"{s} % uphill from x = 5 m, u0 = 5.5: {state}", terrain=ws.body.terrain)
     R["slopes"] = srows
     md += ["## Slopes (level to x = 5 m, then the slope; 25 s, metrics over the last 10 s)\n", fmt(srows, ["slope_pct", "distance"] + METRIC_KEYS[1:])]

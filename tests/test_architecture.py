@@ -87,3 +87,17 @@ def test_the_check_catches_upward_and_sideways_imports(tmp_path):
     (root / "controllers" / "sine.py").write_text("from ..bodies.reil import ReilBiped\nfrom ..genome import GenomeLayout\n")
     (root / "tasks.py").write_text("from evobiped.bodies import BODIES\n")
     assert violations(root) == ["evobiped/controllers/sine.py imports bodies", "evobiped/episode.py imports cli"]
+
+
+def test_no_two_modules_classes_or_public_functions_share_a_name():
+    """One name, one thing: module names (a package's base.py aside), classes and public top-level functions."""
+    seen: dict[tuple[str, str], list[str]] = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        where = str(path.relative_to(PACKAGE.parent))
+        if path.stem not in ("__init__", "__main__", "base"):
+            seen.setdefault(("module", path.stem), []).append(where)
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.ClassDef) or (isinstance(node, ast.FunctionDef) and not node.name.startswith("_")):
+                seen.setdefault(("class" if isinstance(node, ast.ClassDef) else "function", node.name), []).append(where)
+    clashes = [f"{kind} {name}: {', '.join(places)}" for (kind, name), places in seen.items() if len(places) > 1]
+    assert not clashes, "\n".join(clashes)

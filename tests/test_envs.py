@@ -10,8 +10,7 @@ import pytest
 
 gymnasium = pytest.importorskip("gymnasium")
 
-import evobiped.envs  # noqa: E402,F401  (registers the environments)
-from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402
+from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402  (importing registers the environments)
 from evobiped.errors import ConfigError  # noqa: E402
 
 IDS = ["evobiped/ReilBiped-v0", "evobiped/TagaBiped-v0"]

@@ -1,5 +1,6 @@
 """One honest episode: standing, collapsing, eq. 4, determinism, bad genomes."""
 
+import dataclasses
 import json
 
 import mujoco
@@ -119,6 +120,30 @@ def test_fitness_is_eq4_from_an_independent_loop():
         W4 = np.hypot(*(d.xpos[pelvis, :2] - start))
         assert res.end_time[k] == pytest.approx(t_end)
         assert res.fitness[k] == pytest.approx(W4, rel=1e-6, abs=1e-9)
+
+
+def test_an_episode_continued_in_pieces_is_the_whole_episode_and_can_change_course():
+    """start + advance(1.3 s) + advance(rest) under perturbed presentations (pushes, noise) gives the
+    whole run bit for bit; an experiment's change between pieces acts from then on only."""
+    from evobiped.genome_file import load_genome
+
+    g, cfg, _ = load_genome("docs/walkers/simbicon_seed1.json")
+    ep = dataclasses.replace(cfg, perturbations=dict(presentations=2, pushes=2, push_force=10.0, target_noise=0.01)).build()
+    trials = ep.trials_for((0, 1))
+    whole = ep.run(g, seconds=3.0, trials=trials)
+    state = ep.start(g, seconds=3.0, trials=trials)
+    ep.advance(state, 1.3)
+    assert state.ticks == 65 and state.time == pytest.approx(1.3)
+    ep.advance(state, ticks=state.n_ticks - state.ticks)
+    pieces = ep.result(state)
+    assert np.array_equal(pieces.rows.fitness, whole.rows.fitness) and np.array_equal(pieces.end_time, whole.end_time)
+    # a push of 2000 N along +y on every trunk between the pieces moves every walker sideways (to +y)
+    state = ep.start(g, seconds=3.0, trials=trials)
+    ep.advance(state, 1.0)
+    mid = ep.body.planar_position(state.sims).copy()
+    state.sims.xfrc_applied[:, ep._trunk, 1] = 2000.0
+    ep.advance(state, 0.1)
+    assert (ep.body.planar_position(state.sims)[:, 1] - mid[:, 1] > 0.05).all()
 
 
 @pytest.mark.parametrize("controller", ["ctrnn", "simbicon"])

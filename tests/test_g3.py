@@ -161,11 +161,11 @@ def test_g3_controller_drives_reil_body_at_the_network_frequency():
     o = (a - lo) / (hi - lo)  # back to the unit outputs o = 0.2 + x
     D = ctrl.decode(g)["D"][0]
     for go, (t0, t1) in ((0.1, (4.0, 10.0)), (0.2, (14.0, 20.0))):
-        on = gaits.onsets(t, o[:, 0], 0.2 + 0.33)
+        on = gaits.upward_crossings(t, o[:, 0], 0.2 + 0.33)
         on = on[(on > t0) & (on < t1)]
         measured = np.median(np.diff(on))
         assert measured == pytest.approx(_predicted_period_s(ctrl, D, go), rel=0.01)
-    periods = [np.median(np.diff(gaits.onsets(t[m], o[m, 0], 0.53))) for m in (t < 10, t > 12)]
+    periods = [np.median(np.diff(gaits.upward_crossings(t[m], o[m, 0], 0.53))) for m in (t < 10, t > 12)]
     assert periods[1] < 0.75 * periods[0]  # measured 0.93 s -> 0.63 s
 
 

@@ -299,18 +299,6 @@ def test_every_body_offers_the_sensors_it_declares():
         assert got == {k: (2, w) for k, w in cls.sensor_widths.items()}, name
 
 
-def test_episode_matches_the_experiment_driver():
-    """The Episode (taga body + matsuoka, Appendix C feedback wired by default) and TagaWalker agree exactly."""
-    from evobiped.episode import build_episode
-
-    ep = build_episode(body="taga", controller="matsuoka", seconds=2.0, controller_options={"u0": 5.5})
-    assert ep.controller.feedback == "taga" and ep.control_dt == 0.0005
-    r = ep.run(ep.controller.preset_genome())
-    w = tx.TagaWalker(5.5)
-    w.advance(2.0)
-    assert np.array_equal(r.end_position[0], w.body.planar_position(w.sims)[0])
-
-
 def test_matsuoka_drives_reil_pd_targets_within_range():
     from evobiped.episode import build_episode
 

@@ -210,7 +210,7 @@ def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentati
     return rrb.Blueprint(rrb.Horizontal(left, rrb.Vertical(*plots), column_shares=[3, 2]), collapse_panels=True)
 
 
-def write_recording(rec, traj: Trajectory) -> None:
+def log_episode(rec, traj: Trajectory) -> None:
     """Geometry and time series of ``traj`` into an open recording stream."""
     log_geometry(rec, traj.model)
     log_trajectory(rec, traj)
@@ -225,4 +225,4 @@ class RerunRecorder(TrajectoryRecorder):
 
     def end(self, result) -> None:
         super().end(result)
-        write_recording(self.rec, self.trajectory)
+        log_episode(self.rec, self.trajectory)

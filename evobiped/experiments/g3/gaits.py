@@ -72,7 +72,7 @@ class Gait:
         return asdict(self)
 
 
-def onsets(t: np.ndarray, x: np.ndarray, threshold: float = THRESHOLD) -> np.ndarray:
+def upward_crossings(t: np.ndarray, x: np.ndarray, threshold: float = THRESHOLD) -> np.ndarray:
     """Upward crossing times of one channel ``x`` ``(T,)`` through ``threshold``."""
     a = x > threshold
     i = np.flatnonzero(~a[:-1] & a[1:])
@@ -112,7 +112,7 @@ def cycle_phases(t: np.ndarray, x: np.ndarray, threshold: float = THRESHOLD) -> 
     phase is (onset - start) / L mod 1 for its onset within
     [start - 0.02 L, start + 0.98 L) (NaN when it has none there).
     """
-    o0 = onsets(t, x[:, 0], threshold)
+    o0 = upward_crossings(t, x[:, 0], threshold)
     if o0.size < 2:
         return o0[:0], np.zeros((0, x.shape[1]))
     starts, lengths = o0[:-1], np.diff(o0)
@@ -120,7 +120,7 @@ def cycle_phases(t: np.ndarray, x: np.ndarray, threshold: float = THRESHOLD) -> 
     ph[:, 0] = 0.0
     eps = 0.02  # an onset up to 2 % of a cycle before channel 0's still counts for this cycle
     for k in range(1, x.shape[1]):
-        ok = onsets(t, x[:, k], threshold)
+        ok = upward_crossings(t, x[:, k], threshold)
         if ok.size == 0:
             continue
         j = np.searchsorted(ok, starts - eps * lengths)
@@ -142,7 +142,7 @@ def analyse_gait(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, 
     if t_start is None:
         t_start = 0.5 * (t[0] + t[-1])
     starts, ph = cycle_phases(t, x, threshold)
-    o0 = onsets(t, x[:, 0], threshold)
+    o0 = upward_crossings(t, x[:, 0], threshold)
     w = o0[o0 >= t_start]
     N = x.shape[1]
     nan = [float("nan")] * N
@@ -160,7 +160,7 @@ def analyse_gait(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, 
     m = (t >= a) & (t < b)
     duty = [float(v) for v in (x[m] > threshold).mean(axis=0)]
     steps = [float(np.sum((o >= a - 0.02 * period) & (o < b - 0.02 * period)) / (w.size - 1))
-             for o in (onsets(t, x[:, k], threshold) for k in range(N))]
+             for o in (upward_crossings(t, x[:, k], threshold) for k in range(N))]
     label, seq = classify(phases, tol) if N == 4 else ("none", "")
     # settling: the first time after which every cycle stays within tol of the steady phases
     if np.all(np.isfinite(phases)):

@@ -55,7 +55,7 @@ def clean(t: np.ndarray, on: np.ndarray, min_phase: float) -> np.ndarray:
     return on
 
 
-def onsets(on: np.ndarray) -> np.ndarray:
+def contact_onsets(on: np.ndarray) -> np.ndarray:
     """Indices where a bool series (T,) switches on."""
     on = np.asarray(on, bool)
     return np.flatnonzero(on[1:] & ~on[:-1]) + 1
@@ -79,7 +79,7 @@ def analyse_strides(
     win = (t >= t0) & (t <= t1)
     both = c[:, 0] & c[:, 1]
     none = ~c[:, 0] & ~c[:, 1]
-    td = onsets(c[:, 0])
+    td = contact_onsets(c[:, 0])
     td = td[win[td]]
     n = len(td) - 1
     hz = np.asarray(hip_z)[win]
@@ -107,5 +107,5 @@ def analyse_strides(
 def per_stride(t: np.ndarray, contact: np.ndarray, foot_x: np.ndarray, *, min_phase: float = 0.01) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every stride of leg 0: (start times (n,), lengths (n,) m, durations (n,) s)."""
     t = np.asarray(t, float)
-    td = onsets(clean(t, contact[:, 0], min_phase))
+    td = contact_onsets(clean(t, contact[:, 0], min_phase))
     return t[td[:-1]], np.abs(np.diff(np.asarray(foot_x)[td, 0])), np.diff(t[td])

@@ -46,7 +46,7 @@ def _stick_key(ax, marks: bool = False) -> None:
     ax.legend(handles=handles, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
 
 
-def stick_figure(path: Path, tr: dict, *, p: int = 0, t0: float = 0.0, t1: float = 10.0, every: float = 0.1,
+def taga_stick_figure(path: Path, tr: dict, *, p: int = 0, t0: float = 0.0, t1: float = 10.0, every: float = 0.1,
                  title: str = "", terrain=None, marks: list[float] | None = None) -> Path:
     """Fig. 5A/9A-style: the walker traced every ``every`` s over [t0, t1]."""
     t = tr["t"]

@@ -4,9 +4,10 @@ A :class:`TagaWalker` is a batch of P walkers (one genome each, u_0 per walker)
 that can be advanced in pieces, so an experiment can change u_0, push the body,
 or continue from a steady state (the u_0 sweeps of Fig. 11).  Every physics
 step: sensors -> rhythm generator (eq. 6) -> torques -> Appendix A forces ->
-MuJoCo step, exactly the order of :class:`evobiped.episode.Episode` with the
-controller stepped at the physics step.  Trajectories are sampled every
-``record_every`` steps; :func:`metrics` reduces them with :mod:`evobiped.stride`.
+MuJoCo step: one :class:`evobiped.episode.Episode` (walk task, the controller
+stepped at the physics step) continued by :meth:`Episode.advance`.
+Trajectories are sampled every ``record_every`` steps; :meth:`TagaWalker.metrics`
+reduces them with :mod:`evobiped.experiments.taga.stride`.
 """
 
 from __future__ import annotations
@@ -20,8 +21,8 @@ import numpy as np
 from ...bodies.taga import TagaBiped
 from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka
 from ...errors import UserError
-from ...mapping import to_action
-from ...sim import Sims
+from ...episode import Episode
+from ...tasks.walk import WalkTask
 from .stride import StrideMetrics, analyse_strides
 
 PRESETS = ("taga",)
@@ -50,7 +51,8 @@ class Trace:
 
 
 class TagaWalker:
-    """P Taga bipeds with their rhythm generators, advanced piece by piece."""
+    """P Taga bipeds with their rhythm generators: one :class:`~evobiped.episode.Episode` (walk task)
+    continued piece by piece, its trajectory sampled every ``record_every`` physics steps."""
 
     def __init__(
         self,
@@ -69,22 +71,14 @@ class TagaWalker:
         u0 = np.atleast_1d(np.asarray(u0, float))
         for v in u0:
             check_u0(v)
-        self.body = TagaBiped(timestep=timestep, **body_options)
-        self.model = self.body.build_model()
-        self.P = len(u0)
-        self.sims = Sims(self.model, self.P)
-        self.body.reset(self.sims)
+        body = TagaBiped(timestep=timestep, **body_options)
         inputs = dict(FEEDBACK_SENSORS) if feedback else {}
-        self.ctrl = Matsuoka(n_outputs=6, inputs=inputs, actuators=TagaBiped.actuators, u0=float(u0[0]))
-        self.ctrl.bind_period(timestep)
-        self.params = self.ctrl.decode(np.tile(self.ctrl.preset_genome(preset), (self.P, 1)))
+        ctrl = Matsuoka(n_outputs=6, inputs=inputs, actuators=TagaBiped.actuators, u0=float(u0[0]))
+        self.episode = Episode(body, ctrl, WalkTask(), seconds=timestep, stop_on_fall=True)
+        self.body, self.ctrl, self.model, self.P = body, ctrl, self.episode.model, len(u0)
+        self.state = self.episode.start(np.tile(ctrl.preset_genome(preset), (self.P, 1)))
+        self.sims, self.params = self.state.sims, self.state.params
         self.params["u0"] = u0[:, None].copy()
-        self.state = self.ctrl.initial_state(self.params)
-        self.low, self.high = self.body.action_bounds()
-        self.alive = np.ones(self.P, bool)
-        self.fell_at = np.full(self.P, np.nan)
-        self.unstable = np.zeros(self.P, bool)
-        self.steps = 0
         self.record_every = int(record_every)
         self.progress = progress
         self.trace = Trace()
@@ -92,7 +86,20 @@ class TagaWalker:
 
     @property
     def time(self) -> float:
-        return self.steps * self.body.timestep
+        return self.state.time
+
+    @property
+    def alive(self) -> np.ndarray:
+        return self.state.alive
+
+    @property
+    def unstable(self) -> np.ndarray:
+        return self.state.unstable
+
+    @property
+    def fell_at(self) -> np.ndarray:
+        """``(P,)`` s when each walker fell, nan while it is up."""
+        return np.where(self.state.fell, self.state.end_time, np.nan)
 
     def set_u0(self, u0) -> None:
         u0 = np.broadcast_to(np.asarray(u0, float), (self.P,))
@@ -102,31 +109,15 @@ class TagaWalker:
 
     def advance(self, seconds: float) -> None:
         """Simulate ``seconds`` more (walkers that fell stay where they fell)."""
-        body, ctrl, sims = self.body, self.ctrl, self.sims
-        names = ctrl.input_names
-        for _ in range(int(round(seconds / body.timestep))):
-            ids = np.flatnonzero(self.alive)
-            if ids.size == 0:
-                break
-            if names:
-                s = body.sensors(sims)
-                inputs = np.concatenate([s[n] for n in names], 1)
-            else:
-                inputs = np.zeros((self.P, 0))
-            self.state, out = ctrl.step(self.params, self.state, inputs)
-            body.apply(sims, ids, to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)[ids])
-            body.substep(sims, ids)
-            bad = sims.step(ids, 1)
-            self.steps += 1
-            down = bad | body.fallen(sims, ids)
-            if down.any():
-                self.unstable[ids[bad]] = True
-                self.fell_at[ids[down]] = self.time
-                self.alive[ids[down]] = False
-            if self.steps % self.record_every == 0:
-                self._record()
-            if self.progress is not None and self.steps % 1000 == 0:
-                self.progress(self.time)
+        self.episode.advance(self.state, seconds, listener=self)
+
+    def tick(self, t, sims, ids, neurons, action, task_state) -> None:
+        """The episode's listener: samples the trace, reports progress."""
+        steps = self.state.ticks
+        if steps % self.record_every == 0:
+            self._record()
+        if self.progress is not None and steps % 1000 == 0:
+            self.progress(self.time)
 
     def _record(self) -> None:
         k = self.body.links(self.sims)
@@ -137,7 +128,7 @@ class TagaWalker:
         tr.contact.append(self.body.sensors(self.sims)["ground_contact"] > 0)
         tr.ankle.append(k["ankle"].copy())
         tr.knee.append(k["knee"].copy())
-        tr.u.append(self.state["u"].copy())
+        tr.u.append(self.state.controller["u"].copy())
 
     def metrics(self, *, t_start: float | None = None, t_end: float | None = None) -> list[dict]:
         """Per walker: fell/when and :class:`~evobiped.experiments.taga.stride.StrideMetrics` over the window."""
