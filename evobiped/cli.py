@@ -219,7 +219,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
         if value is not None:
             ep[key] = value
-    task_name = ep.get("task", EpisodeConfig.task)
+    task_name = ep.get("task", EpisodeConfig.task) if isinstance(ep, dict) else None
     if cyclic and task_name in TASKS:  # the task's cyclic criterion (an unknown task is refused below)
         ep["task_options"] = {**ep.get("task_options", {}), **TASKS[task_name].criterion("cyclic", "--cyclic")}
     if population is not None:  # the population of either optimizer

@@ -87,6 +87,10 @@ class Task:
         """The ground point each presentation walks towards, ``(S, 2)`` m; None: the task has none."""
         return None
 
+    def fitness_label(self) -> str:
+        """What the fitness measures and its unit, for a graph's axis."""
+        return "fitness"
+
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         """A genome's fitness from its presentations' ``(P, S)`` -> ``(P,)``."""
         return fitness[:, 0]

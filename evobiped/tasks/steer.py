@@ -136,6 +136,9 @@ class SteerTask(Task):
     def targets(self):
         return self.sources
 
+    def fitness_label(self):
+        return "fitness: -distance to the source (m)"
+
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         return fitness.mean(axis=1)
 

@@ -168,6 +168,13 @@ class WalkTask(Task):
     def end_position(self, body, sims, state):
         return state["position"]
 
+    def fitness_label(self):
+        if self.fitness_name == "forward":
+            return "fitness: (forward m + credit) x time up / T (m)"
+        if self.cyclic_weight:
+            return "fitness: distance x (1 + cyclic activity) (m)"
+        return "fitness: distance from the start (m)"
+
     def forward(self, state) -> np.ndarray:
         """Displacement along the initial facing, ``(P,)`` m (negative: backwards)."""
         return np.einsum("pi,pi->p", state["position"] - state["start"], state["facing"])
