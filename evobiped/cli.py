@@ -132,11 +132,12 @@ def run_episode_cmd(args) -> int:
         "end_time": float(r.end_time[0]),
         **r.walk(),
     }
-    if cfg.task == "steer":  # the final distance to each source, one presentation each
+    targets = ep.task.targets()
+    if targets is not None:  # the final distance to each presentation's target (a steering walker's sources)
         rows = r.rows if r.rows is not None else r
         out["sources"] = [{"source": list(map(float, q)), "final_distance": float(np.linalg.norm(rows.end_position[j] - q)),
                            "fell": bool(rows.fell[j]), "end_time": float(rows.end_time[j])}
-                          for j, q in enumerate(ep.task.sources)]
+                          for j, q in enumerate(targets)]
     if args.json:
         print(json.dumps(out))
     else:
@@ -172,7 +173,7 @@ def add_evolve(sub) -> None:
     p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
-    p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A)")
+    p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A): the task's cyclic criterion")
     p.add_argument("--seed", type=int, help="run seed (default 0)")
     p.add_argument("--backend", help=f"backend: {choices_text('backend')} (default process)")
     p.add_argument("--workers", type=positive_int, help="worker processes / threads / Ray actors (default: all cores; "
@@ -201,8 +202,10 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                seed: int | None = None, backend: str | None = None, workers: int | None = None, address: str | None = None,
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
+    from .episode import EpisodeConfig
     from .evolution.run import RunConfig
     from .fileio import read_toml
+    from .tasks import TASKS
 
     from .presets import merge, path
 
@@ -214,8 +217,9 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
         if value is not None:
             ep[key] = value
-    if cyclic:
-        ep["task_options"] = {**ep.get("task_options", {}), "cyclic_weight": 1.0}
+    task_name = ep.get("task", EpisodeConfig.task) if isinstance(ep, dict) else None
+    if cyclic and task_name in TASKS:  # the task's cyclic criterion (an unknown task is refused below)
+        ep["task_options"] = {**ep.get("task_options", {}), **TASKS[task_name].criterion("cyclic", "--cyclic")}
     if population is not None:  # the population of either optimizer
         ga["population"] = population
         d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": population}

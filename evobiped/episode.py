@@ -120,6 +120,9 @@ class EpisodeResult:
     start_facing: np.ndarray
     #: per simulation row (one per genome and presentation) when the task has several presentations
     rows: "EpisodeResult | None" = None
+    #: the task's fitness terms by name (``Task.term_names``): ``(P,)`` per simulation row, ``(P, S)`` per genome
+    #: of S rows (presentations x trials, as the positions)
+    terms: dict[str, np.ndarray] = field(default_factory=dict)
 
 
     def walk(self, i: int = 0) -> dict:
@@ -149,6 +152,7 @@ class EpisodeResult:
             end_position=by(self.end_position),
             start_facing=by(self.start_facing),
             rows=self,
+            terms={k: by(v) for k, v in self.terms.items()},
         )
 
 
@@ -388,8 +392,9 @@ class Episode:
             unstable=state.unstable.copy(),
             end_time=state.end_time.copy(),
             start_position=state.start_position,
-            end_position=tstate.get("position", self.body.planar_position(state.sims)).copy(),
+            end_position=task.end_position(self.body, state.sims, tstate).copy(),
             start_facing=state.start_facing,
+            terms=task.terms(tstate),
         )
         trials = state.trials
         if trials is not None:

@@ -146,6 +146,25 @@ def test_an_episode_continued_in_pieces_is_the_whole_episode_and_can_change_cour
     assert (ep.body.planar_position(state.sims)[:, 1] - mid[:, 1] > 0.05).all()
 
 
+@pytest.mark.parametrize("cyclic_weight", [0.0, 1.0])
+def test_walk_terms_beside_the_fitness(cyclic_weight):
+    """distance is eq. 4 from the positions, forward the displacement along the initial facing (+x for the
+    Reil body), cyclicity c in [0, 1] with the cyclic criterion (fitness = distance (1 + c)), NaN without."""
+    ep = build_episode(seconds=2.0, task_options={"cyclic_weight": cyclic_weight})
+    r = ep.run(random_genomes(ep.controller.layout, 6, seed=4))
+    d = r.end_position - r.start_position
+    assert ep.task.term_names == tuple(r.terms) == ("distance", "forward", "cyclicity")
+    np.testing.assert_array_equal(r.terms["distance"], np.linalg.norm(d, axis=1))
+    np.testing.assert_allclose(r.terms["forward"], d[:, 0], rtol=1e-12, atol=1e-12)
+    c = r.terms["cyclicity"]
+    if cyclic_weight:
+        assert ((0 <= c) & (c <= 1)).all() and c.max() > 0
+        np.testing.assert_array_equal(r.fitness, r.terms["distance"] * (1.0 + c))
+    else:
+        assert np.isnan(c).all()
+        np.testing.assert_array_equal(r.fitness, r.terms["distance"])
+
+
 @pytest.mark.parametrize("controller", ["ctrnn", "simbicon"])
 def test_same_genome_same_fitness_any_batch(controller):
     """Bit for bit, whatever else is in the batch (so a run never depends on how genomes are split over workers)."""

@@ -289,18 +289,14 @@ def test_importing_the_package_does_not_import_rerun_or_matplotlib():
     assert out.strip() == "[]"
 
 
-def test_sound_sources_from_the_task_state_are_recorded(tmp_path):
-    """Steering tasks put ``sources`` (all) and ``source`` (current, per individual) in their state."""
+def test_the_targets_a_task_names_are_recorded(tmp_path):
+    """A task naming its presentations' targets (``Task.targets``, a steering walker's sources): all of
+    them, and this walker's own (presentation 0 here) at every tick."""
     from evobiped.record.figures import ground_trajectory
 
     ep = EpisodeConfig(seconds=0.5).build()
-    start = ep.task.start
     sources = np.array([[-3.0, -10.0], [3.0, -10.0]])
-
-    def with_sources(body, sims):
-        return {**start(body, sims), "sources": sources, "source": np.tile(sources[0], (sims.n, 1))}
-
-    ep.task.start = with_sources
+    ep.task.targets = lambda: sources
     result, traj = write_recording(ep, random_genome(ep.controller.layout, 4), tmp_path / "s.rrd")
     np.testing.assert_array_equal(traj.sources, sources)
     assert traj.source.shape == (traj.n_ticks, 2) and (traj.source == sources[0]).all()

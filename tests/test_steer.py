@@ -195,3 +195,26 @@ def test_a_source_for_a_walking_task_and_a_two_source_battery_are_refused(hearin
     assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet", "--source", "8", "2",
                  "--out", str(tmp_path / "b")]) == 0
     assert len(json.loads((tmp_path / "b" / "robustness.json").read_text())["trials"]) == 117
+
+
+def test_terms_per_presentation_are_the_distances_to_each_source():
+    """terms: distance_to_source per row is minus the row's fitness, distance is from the start;
+    per genome they come as (P, S), S = 2 sources; the task names the sources as its targets."""
+    ep = EpisodeConfig(task="steer", seconds=1.0, task_options={"sources": [[10, 3], [10, -3]]}).build()
+    lay = ep.controller.layout
+    g = np.clip(np.random.default_rng(2).normal(lay.init_mean, lay.init_sigma, (3, lay.size)), lay.low, lay.high)
+    r = ep.run(g)
+    np.testing.assert_array_equal(ep.task.targets(), [[10, 3], [10, -3]])
+    assert set(r.terms) == set(ep.task.term_names) == {"distance", "distance_to_source"}
+    rows = r.rows
+    np.testing.assert_array_equal(rows.terms["distance_to_source"], -rows.fitness)
+    np.testing.assert_allclose(rows.terms["distance"], np.linalg.norm(rows.end_position - rows.start_position, axis=1), rtol=1e-15)
+    assert r.terms["distance_to_source"].shape == (3, 2)
+    np.testing.assert_array_equal(r.terms["distance_to_source"].mean(axis=1), -r.fitness)
+
+
+def test_cyclic_flag_is_refused_for_a_task_without_that_criterion(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert cli("evolve", "--task", "steer", "--cyclic", "--generations", "1", "--out", out) == 2
+    err = capsys.readouterr().err
+    assert "--cyclic: the steer task has no cyclic criterion" in err and err.count("\n") == 1 and not out.exists()

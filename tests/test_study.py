@@ -140,6 +140,16 @@ def test_bad_input(tmp_path, capsys, args, words):
     assert not out.exists()
 
 
+def test_a_study_needs_a_task_with_criteria_and_the_distance_term(tmp_path, capsys):
+    cfg = tmp_path / "steer.toml"
+    cfg.write_text('[episode]\ntask = "steer"\n')
+    out = tmp_path / "s"
+    assert cli("study", "--config", cfg, *TINY, "--out", out) == 2
+    err = capsys.readouterr().err
+    assert "a study compares fitness criteria by the terms distance; the run's task 'steer' declares criteria []" in err
+    assert err.count("\n") == 1 and not out.exists()
+
+
 def test_a_different_study_in_the_directory_is_refused(tmp_path, capsys):
     out = tmp_path / "s"
     assert cli("study", "--runs", 1, "--conditions", "plain", *TINY, "--out", out) == 0

@@ -64,15 +64,10 @@ def walk_text(traj: Trajectory) -> str:
 
 
 def fitness_label(config) -> str:
-    """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit."""
-    opts = config.task_options or {}
-    if config.task == "steer":
-        return "fitness: -distance to the source (m)"
-    if opts.get("fitness") == "forward":
-        return "fitness: (forward m + credit) x time up / T (m)"
-    if opts.get("cyclic_weight"):
-        return "fitness: distance x (1 + cyclic activity) (m)"
-    return "fitness: distance from the start (m)"
+    """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit (``Task.fitness_label``)."""
+    from ..tasks import TASKS
+
+    return TASKS[config.task](**(config.task_options or {})).fitness_label()
 
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",

@@ -96,7 +96,8 @@ def replay(
         rec.connect_grpc(connect_url(connect))
     rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
     recorder = RerunRecorder(rec)
-    others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)]  # one walker per sound source
+    # one walker per presentation when the task names each one's target (a steering walker's sound sources)
+    others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)] if episode.task.targets() is not None else []
     watchers = [recorder, *others] + ([listener] if listener is not None else [])
     result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
     traj = recorder.trajectory

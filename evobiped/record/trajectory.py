@@ -51,8 +51,8 @@ class Trajectory:
     touch: np.ndarray  # (T, K) touch sensor readings (N), K = len(touch_names)
     touch_pos: np.ndarray  # (T, K, 3) m, where each touch sensor's site is
     sensors: dict[str, np.ndarray] = field(default_factory=dict)  # name -> (T, k)
-    source: np.ndarray | None = None  # (T, 2) m, the current sound source, if the task has one
-    sources: np.ndarray | None = None  # (S, 2) m, every source of the task, if it has them
+    source: np.ndarray | None = None  # (T, 2) m, this walker's target (a sound source), if the task has targets
+    sources: np.ndarray | None = None  # (S, 2) m, every presentation's target (Task.targets), if it has them
     #: (2,) unit vector: the direction the walker faced at the start (``Body.heading`` after reset)
     start_facing: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))
     final_fitness: float = float("nan")
@@ -83,7 +83,11 @@ class TrajectoryRecorder:
         self._rows: dict[str, list] = {k: [] for k in ("state", "command", "tick")}
         self._sensors: dict[str, list] = {}
         self._source: list = []
-        self._sources = None
+        task = episode.task
+        self._sources = task.targets()  # (S, 2) m or None
+        if self._sources is not None:
+            self._sources = np.asarray(self._sources, float)
+            self._target = self._sources[task.presentation_of(sims.n)[self.index]]
         self._facing = np.array(episode.body.heading(sims)[self.index], float)
         self._record_state(0.0, sims)
 
@@ -100,12 +104,8 @@ class TrajectoryRecorder:
         readings = {**ep.body.sensors(sims), **ep.task.sensors(ep.body, sims, task_state)}
         for name, arr in readings.items():
             self._sensors.setdefault(name, []).append(np.array(arr[p], float))
-        if "source" in task_state:
-            src = np.asarray(task_state["source"], float)
-            self._source.append(src[p] if src.ndim == 2 else src)
-        if "sources" in task_state and self._sources is None:
-            srcs = np.asarray(task_state["sources"], float)
-            self._sources = srcs[p] if srcs.ndim == 3 else srcs
+        if self._sources is not None:
+            self._source.append(self._target)
 
     def end(self, result) -> None:
         ep, p = self._episode, self.index

@@ -1,6 +1,14 @@
-"""What a task adds to an episode: sensor inputs, bookkeeping per tick, fitness.
+"""What a task adds to an episode: sensor inputs, bookkeeping per tick, fitness and its terms.
 
-Fitness is higher-is-better everywhere.
+Fitness is higher-is-better everywhere.  Beside it a task returns named
+fitness terms (:attr:`Task.term_names`, :meth:`Task.terms`), one value per
+simulation row, which the episode hands back in ``EpisodeResult.terms``.
+
+The task state is the dict :meth:`Task.start` returns, private to the task
+except for two keys the episode writes into it: ``end_time`` ``(n,)`` s (when
+each row's episode ends: the planned length until it falls) and ``seconds``
+(the planned length, s).  Everything else about the task is read through its
+methods (``end_position``, ``targets``, ``terms``), never through state keys.
 """
 
 from __future__ import annotations
@@ -10,6 +18,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..bodies.base import Body
+from ..errors import ConfigError
 from ..options import NoOptions, parse
 from ..sim import Sims
 
@@ -22,9 +31,23 @@ class Task:
     Options: ClassVar[type] = NoOptions
     #: full episodes per genome, each from the initial state (e.g. one per sound source)
     presentations: int = 1
+    #: names of the fitness terms :meth:`terms` returns, each ``(n,)`` per simulation row
+    term_names: ClassVar[tuple[str, ...]] = ()
+    #: named fitness criteria: name -> the task options that select it (the study's conditions, ``evolve --cyclic``)
+    criteria: ClassVar[dict[str, dict]] = {}
 
     def __init__(self, **options):
         self.options = parse(self.Options, options, f"{self.name} task_options")
+
+    @classmethod
+    def criterion(cls, name: str, flag: str) -> dict:
+        """The task options that select criterion ``name`` where they differ from the defaults (what a flag
+        such as ``evolve --cyclic`` adds); ConfigError naming ``flag`` for a task without that criterion."""
+        if name not in cls.criteria:
+            raise ConfigError(f"{flag}: the {cls.name} task has no {name} criterion "
+                              f"(its criteria: {', '.join(cls.criteria) or 'none'})")
+        defaults = cls.Options()
+        return {k: v for k, v in cls.criteria[name].items() if getattr(defaults, k) != v}
 
     def presentation_of(self, n_rows: int) -> np.ndarray:
         """Presentation of each simulation row ``(n_rows,)``: genome p's presentation j is row p * S + j."""
@@ -51,6 +74,22 @@ class Task:
     def fitness(self, state: dict[str, Any]) -> np.ndarray:
         """``(P,)`` fitness at the end of the episode."""
         raise NotImplementedError
+
+    def terms(self, state: dict[str, Any]) -> dict[str, np.ndarray]:
+        """The fitness terms named in :attr:`term_names`, ``(n,)`` each, at the end of the episode."""
+        return {}
+
+    def end_position(self, body: Body, sims: Sims, state: dict[str, Any]) -> np.ndarray:
+        """Where each row's walker ended on the ground plane, ``(n, 2)`` m (default: its position now)."""
+        return body.planar_position(sims)
+
+    def targets(self) -> np.ndarray | None:
+        """The ground point each presentation walks towards, ``(S, 2)`` m; None: the task has none."""
+        return None
+
+    def fitness_label(self) -> str:
+        """What the fitness measures and its unit, for a graph's axis."""
+        return "fitness"
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         """A genome's fitness from its presentations' ``(P, S)`` -> ``(P,)``."""

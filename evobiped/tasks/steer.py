@@ -89,8 +89,13 @@ class SteerOptions:
 
 
 class SteerTask(Task):
+    """State: ``start``, ``position`` ``(n, 2)`` m (the last finite planar position), ``source`` ``(n, 2)`` m
+    (each row's source)."""
+
     name = "steer"
     Options = SteerOptions
+    #: ``distance`` from the start (m), ``distance_to_source`` from the row's source at the end (m)
+    term_names = ("distance", "distance_to_source")
 
     def __init__(self, **options):
         super().__init__(**options)
@@ -108,7 +113,7 @@ class SteerTask(Task):
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)], "sources": self.sources}
+        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)]}
 
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
@@ -120,6 +125,19 @@ class SteerTask(Task):
 
     def fitness(self, state):
         return -np.linalg.norm(state["position"] - state["source"], axis=1)
+
+    def terms(self, state):
+        return {"distance": np.linalg.norm(state["position"] - state["start"], axis=1),
+                "distance_to_source": np.linalg.norm(state["position"] - state["source"], axis=1)}
+
+    def end_position(self, body, sims, state):
+        return state["position"]
+
+    def targets(self):
+        return self.sources
+
+    def fitness_label(self):
+        return "fitness: -distance to the source (m)"
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         return fitness.mean(axis=1)

@@ -109,8 +109,19 @@ class WalkOptions:
 
 
 class WalkTask(Task):
+    """State: ``start``, ``position`` ``(n, 2)`` m (the last finite planar position), ``facing`` ``(n, 2)``,
+    ``n_motor``; with the cyclic criterion ``motor`` (per tick ``(n, n_motor)`` outputs) and ``ticks`` ``(n,)``."""
+
     name = "walk"
     Options = WalkOptions
+    #: ``distance`` eq. 4 (m), ``forward`` displacement along the initial facing (m), ``cyclicity`` c in [0, 1]
+    #: (NaN without the cyclic criterion)
+    term_names = ("distance", "forward", "cyclicity")
+    criteria = {
+        "plain": {"fitness": "distance", "cyclic_weight": 0.0},
+        "cyclic": {"fitness": "distance", "cyclic_weight": 1.0},
+        "forward": {"fitness": "forward", "cyclic_weight": 0.0},
+    }
 
     def __init__(self, **options):
         super().__init__(**options)
@@ -141,11 +152,28 @@ class WalkTask(Task):
         return np.linalg.norm(state["position"] - state["start"], axis=1)
 
     def cyclicity(self, state) -> np.ndarray:
-        """c in [0, 1] per individual ``(P,)`` (see the module docstring)."""
+        """c in [0, 1] per individual ``(P,)`` (see the module docstring); counted once per tick count."""
         if not state.get("motor"):
             return np.zeros(len(state["start"]))
-        n = count_cycles(np.stack(state["motor"]), state["ticks"], self.cyclic_band)
-        return (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1)
+        done = state.get("cyclicity")
+        if done is None or done[0] != len(state["motor"]):
+            n = count_cycles(np.stack(state["motor"]), state["ticks"], self.cyclic_band)
+            done = state["cyclicity"] = (len(state["motor"]), (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1))
+        return done[1]
+
+    def terms(self, state):
+        c = self.cyclicity(state) if self.cyclic_weight else np.full(len(state["start"]), np.nan)
+        return {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
+
+    def end_position(self, body, sims, state):
+        return state["position"]
+
+    def fitness_label(self):
+        if self.fitness_name == "forward":
+            return "fitness: (forward m + credit) x time up / T (m)"
+        if self.cyclic_weight:
+            return "fitness: distance x (1 + cyclic activity) (m)"
+        return "fitness: distance from the start (m)"
 
     def forward(self, state) -> np.ndarray:
         """Displacement along the initial facing, ``(P,)`` m (negative: backwards)."""

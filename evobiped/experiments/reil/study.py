@@ -1,8 +1,10 @@
 """Many independent evolutionary runs per condition, and their statistics (Reil & Husbands Sect. III).
 
-A study runs K seeds for each condition ("plain" = eq. 4, "cyclic" = eq. 4
-with the cyclic-activity criterion), one whole run per task, spread over
-local processes or a Ray cluster.  Study directory::
+A study runs K seeds for each condition, a fitness criterion the run's task
+declares (``Task.criteria``; the walk task's "plain" = eq. 4, "cyclic" = eq. 4
+with the cyclic-activity criterion, "forward"), one whole run per task, spread
+over local processes or a Ray cluster; the task must return the terms in
+:data:`TERMS`.  Study directory::
 
     study.json                 the StudyConfig
     <condition>/seed_NNN/      an ordinary run directory (evobiped evolve's)
@@ -13,7 +15,8 @@ local processes or a Ray cluster.  Study directory::
     distances.png              Fig. 5: distance histograms, stable and unstable apart
     fitness_graphs.png         best fitness per generation of every run
 
-Distances are eq. 4's (for the cyclic condition the fitness is larger).
+Distances are eq. 4's (for the cyclic condition the fitness is larger), read
+from each run's summary (its best walker on the nominal episode).
 "Stable" is the paper's: the run's best walker did not fall within the
 episode (50 s).  Each stable walker is re-simulated for ``recheck_seconds``
 (200 s by default); "walks indefinitely" counts those still up at the end.
@@ -40,17 +43,14 @@ from ...errors import ConfigError, UserError
 from ...evolution.evaluate import SerialEvaluator, init_ray
 from ...evolution.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
+from ...tasks import TASKS
 from ...evolution.run import OPTIMIZERS, Run, RunConfig
 from ...fileio import atomic_write, read_json, write_json
 from ...genome_file import load_genome
 from .stats import histogram_edges, mean_std, wilson_interval
 
-#: walk-task options that define each fitness criterion (added to the base run's)
-CONDITIONS = {
-    "plain": {"fitness": "distance", "cyclic_weight": 0.0},
-    "cyclic": {"fitness": "distance", "cyclic_weight": 1.0},
-    "forward": {"fitness": "forward", "cyclic_weight": 0.0},
-}
+#: the fitness terms a study needs of the run's task (besides the criteria its conditions name, ``Task.criteria``)
+TERMS = ("distance",)
 #: a walker in the sense of the walker targets: up for the whole re-check, at least this far (m) in
 #: the episode, within this angle (degrees) of the direction it faced at the start
 WALKER_DISTANCE, WALKER_ANGLE = 20.0, 30.0
@@ -72,14 +72,16 @@ class StudyConfig:
     def __post_init__(self):
         if not (isinstance(self.runs, int) and self.runs >= 1):
             raise ConfigError(f"study runs must be an integer >= 1, got {self.runs!r}")
-        unknown = [c for c in self.conditions if c not in CONDITIONS]
+        task = TASKS[self.run.episode.task]
+        if not task.criteria or any(t not in task.term_names for t in TERMS):
+            raise ConfigError(f"a study compares fitness criteria by the terms {', '.join(TERMS)}; the run's task "
+                              f"{task.name!r} declares criteria {list(task.criteria)} and terms {list(task.term_names)}")
+        unknown = [c for c in self.conditions if c not in task.criteria]
         if unknown or not self.conditions or len(set(self.conditions)) != len(self.conditions):
-            raise ConfigError(f"study conditions must be distinct names from {', '.join(CONDITIONS)}, got {list(self.conditions)}")
+            raise ConfigError(f"study conditions must be distinct names from {', '.join(task.criteria)}, got {list(self.conditions)}")
         for axis, names, registry in (("controllers", self.controllers, CONTROLLERS), ("optimizers", self.optimizers, OPTIMIZERS)):
             if any(n not in registry for n in names) or len(set(names)) != len(names):
                 raise ConfigError(f"study {axis} must be distinct names from {', '.join(registry)}, got {list(names)}")
-        if self.run.episode.task != "walk":
-            raise ConfigError(f"a study compares walk-task conditions; the run's task is {self.run.episode.task!r}")
         if not (isinstance(self.first_seed, int) and self.first_seed >= 0):
             raise ConfigError(f"first seed must be an integer >= 0, got {self.first_seed!r}")
         if not self.recheck_seconds > 0:
@@ -106,7 +108,7 @@ class StudyConfig:
         ep = self.run.episode
         options = ep.controller_options if controller == ep.controller else {}
         episode = dataclasses.replace(ep, controller=controller, controller_options=options,
-                                      task_options={**ep.task_options, **CONDITIONS[criterion]})
+                                      task_options={**ep.task_options, **TASKS[ep.task].criteria[criterion]})
         return dataclasses.replace(self.run, episode=episode, optimizer=optimizer, seed=self.first_seed + k,
                                    backend="serial", workers=None, address=None)
 
@@ -148,10 +150,7 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
     with run, SerialEvaluator(run_cfg.episode) as ev:  # the run's lock is released when it ends
         summary = run.evolve(ev)  # a finished run only writes its summary again
     best = summary["best"]
-    genome, ep_cfg, _ = load_genome(d / rundir.BEST)
-    ep_cfg = ep_cfg.nominal()
-    again = ep_cfg.build().run(genome)  # eq. 4's distance (the other criteria's fitness is not that)
-    walk = again.walk()
+    walk = summary["best_walk"]  # eq. 4's distance and the direction, of the nominal episode (the run's summary)
     outcome = {
         "condition": condition,
         "seed": run_cfg.seed,
@@ -166,13 +165,12 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         "walks_indefinitely": None,
         "recheck_end_time": None,
     }
-    if again.fitness[0] != best["fitness"] and not run_cfg.episode.perturbations:
-        raise RuntimeError(f"{d}: the best walker's fitness does not reproduce ({again.fitness[0]!r} != {best['fitness']!r})")
-    if not best["fell"]:
-        r = dataclasses.replace(ep_cfg, seconds=float(recheck_seconds)).build().run(genome)
+    if not best["fell"]:  # the long re-check (up for it: up for the nominal episode too, its first part)
+        genome, ep_cfg, _ = load_genome(d / rundir.BEST)
+        r = dataclasses.replace(ep_cfg.nominal(), seconds=float(recheck_seconds)).build().run(genome)
         outcome["walks_indefinitely"] = not bool(r.fell[0])
         outcome["recheck_end_time"] = float(r.end_time[0])
-    outcome["forward_walker"] = bool(outcome["walks_indefinitely"] and not again.fell[0] and outcome["distance"] >= WALKER_DISTANCE
+    outcome["forward_walker"] = bool(outcome["walks_indefinitely"] and outcome["distance"] >= WALKER_DISTANCE
                                      and outcome["heading_deg"] is not None and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
     write_json(d / rundir.OUTCOME, outcome)
     return outcome

@@ -74,6 +74,7 @@ class TagaWalker:
         body = TagaBiped(timestep=timestep, **body_options)
         inputs = dict(FEEDBACK_SENSORS) if feedback else {}
         ctrl = Matsuoka(n_outputs=6, inputs=inputs, actuators=TagaBiped.actuators, u0=float(u0[0]))
+        # open-ended: the episode's planned length (one step) only fills end_time for walkers still up
         self.episode = Episode(body, ctrl, WalkTask(), seconds=timestep, stop_on_fall=True)
         self.body, self.ctrl, self.model, self.P = body, ctrl, self.episode.model, len(u0)
         self.state = self.episode.start(np.tile(ctrl.preset_genome(preset), (self.P, 1)))
