@@ -22,8 +22,9 @@ class Controller(ABC):
     """Base class; subclasses are registered in :data:`evobiped.controllers.CONTROLLERS`."""
 
     name: ClassVar[str]
-    #: "unit": outputs in [0, 1]; "signed": real-valued outputs centred on 0; "angle": joint targets in rad
-    output_kind: ClassVar[Literal["unit", "signed", "angle"]]
+    #: how :func:`evobiped.mapping.to_action` reads the outputs: "unit": in [0, 1] spanning the joint's range;
+    #: "centred": in [0, 1] with 0.5 at 0 rad; "signed": real-valued, centred on 0; "angle": joint targets in rad
+    output_kind: ClassVar[Literal["unit", "centred", "signed", "angle"]]
 
     #: number of motor outputs (= the body's actuators)
     n_outputs: int
