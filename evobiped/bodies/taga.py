@@ -81,6 +81,13 @@ class TagaOptions:
     model_file: str | None = model_file_option("taga_biped")
 
 
+def _last_axis(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.stack([a, b], -1)`` without its generic overhead (this runs several times per control tick)."""
+    out = np.empty(a.shape + (2,))
+    out[..., 0], out[..., 1] = a, b
+    return out
+
+
 class TagaBiped(Body):
     """Taga's 5-link sagittal walker with the Appendix A ground and joint forces."""
 
@@ -182,12 +189,13 @@ class TagaBiped(Body):
         shank = thigh + q[:, [3, 5]]
         dthigh = v[:, [2, 4]]
         dshank = dthigh + v[:, [3, 5]]
-        ut = np.stack([np.cos(thigh), -np.sin(thigh)], -1)  # (P, 2, 2) unit vectors hip->knee
-        us = np.stack([np.cos(shank), -np.sin(shank)], -1)
+        cos_t, sin_t, cos_s, sin_s = np.cos(thigh), np.sin(thigh), np.cos(shank), np.sin(shank)
+        ut = _last_axis(cos_t, -sin_t)  # (P, 2, 2) unit vectors hip->knee
+        us = _last_axis(cos_s, -sin_s)
         knee = hip[:, None, :] + l1 * ut
         ankle = knee + l2 * us
-        dt_ = np.stack([-np.sin(thigh), -np.cos(thigh)], -1) * dthigh[..., None]
-        ds_ = np.stack([-np.sin(shank), -np.cos(shank)], -1) * dshank[..., None]
+        dt_ = _last_axis(-sin_t, -cos_t) * dthigh[..., None]
+        ds_ = _last_axis(-sin_s, -cos_s) * dshank[..., None]
         dankle = dhip[:, None, :] + l1 * dt_ + l2 * ds_
         return dict(hip=hip, dhip=dhip, thigh=thigh, shank=shank, dthigh=dthigh, dshank=dshank, knee=knee, ankle=ankle, dankle=dankle)
 
