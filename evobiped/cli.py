@@ -608,6 +608,11 @@ def add_taga(sub) -> None:
     p.set_defaults(func=run_taga_cmd)
 
 
+def _nan_to_null(row: dict) -> dict:
+    """A metrics row for strict JSON: non-finite floats become null."""
+    return {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in row.items()}
+
+
 def run_taga_cmd(args) -> int:
     from .bodies import TagaBiped
     from .experiments.taga import walking as tx
@@ -651,7 +656,10 @@ def run_taga_cmd(args) -> int:
         _, (s,) = tx.push(target, force, [delay], u0=args.u0[0], progress=progress.update, **opts)
         progress.finish()
         if args.json:
-            print(json.dumps(s))
+            print(json.dumps(_nan_to_null(s), allow_nan=False))
+            return 0
+        if s["t_push"] is None:
+            print(f"push {target} {force:g} N (u0 = {args.u0[0]:g}): not given, the walker fell at {s['fell_at']:.2f} s, before the push")
             return 0
         print(f"push {target} {force:g} N for 0.2 s at t = {s['t_push']:.2f} s (u0 = {args.u0[0]:g}): "
               + (f"fell at {s['fell_at']:.2f} s" if s["fell"] else f"recovered after {s['strides_to_recover']} strides"))
@@ -662,9 +670,8 @@ def run_taga_cmd(args) -> int:
     _, rows = tx.steady(args.u0, seconds=seconds, window=window, progress=progress.update, **opts)
     progress.finish()
     if args.json:
-        nan_to_null = [{k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items()} for r in rows]
         settings = {**{k: v for k, v in vars(args).items() if k != "func"}, "seconds": seconds, "window": window}
-        print(json.dumps({"settings": settings, "walkers": nan_to_null}, allow_nan=False))
+        print(json.dumps({"settings": settings, "walkers": [_nan_to_null(r) for r in rows]}, allow_nan=False))
         return 0
     print(f"Taga biped, preset {args.preset}, slope {args.slope:g} %, kg {args.kg:g}, bg {args.bg:g}; "
           f"metrics over the last {window:g} of {seconds:g} s")

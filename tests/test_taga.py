@@ -224,7 +224,24 @@ def test_claim4_push_recovery(target, force, delay):
     assert r["strides_to_recover"] is not None and r["strides_to_recover"] <= 3
 
 
+def test_a_push_that_fells_every_walker_ends_and_reports_the_fall():
+    # an all-down batch stops its clock: the push loop must not wait for a time that never comes
+    _, (r,) = tx.push("hip", 5000.0, [0.0], before=2.0, after=0.5)
+    assert r["fell"] and r["t_push"] < r["fell_at"] < r["t_push"] + 0.7 and r["strides_to_recover"] is None
+
+
 # ---------------------------------------------------------------- CLI
+def test_cli_push_on_a_walker_that_falls_first_says_so(capsys):
+    import json
+
+    assert main(["taga", "--push", "hip", "--u0", "1.5", "--quiet"]) == 0  # u0 = 1.5 falls within a second
+    out, err = capsys.readouterr()
+    assert "not given, the walker fell at 0.9" in out and "before the push" in out and err == ""
+    assert main(["taga", "--push", "hip", "--u0", "1.5", "--quiet", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)  # strict JSON: no NaN
+    assert r["fell"] and r["t_push"] is None and r["stride_length_before"] is None
+
+
 @pytest.mark.parametrize(
     "argv,needle",
     [

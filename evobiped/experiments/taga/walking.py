@@ -174,7 +174,9 @@ def push(
     swinging shank).  Per walker: push time, fell/when, the median stride
     length and cycle duration of the strides before the push, every stride
     after it, and the strides until all later ones are within ``tolerance``
-    (relative) of the pre-push values (None if never).
+    (relative) of the pre-push values (None if never).  A walker that fell
+    before its push has ``t_push`` None; without strides before the push the
+    pre-push values are nan.
     """
     from .stride import per_stride
 
@@ -190,7 +192,7 @@ def push(
     starts = w.time + delays
     t_end = starts.max() + duration + after
     on = np.zeros(len(delays), bool)
-    while w.time < t_end - step / 2:
+    while w.alive.any() and w.time < t_end - step / 2:  # an all-down batch stops its clock
         t = w.time
         want = (t >= starts - step / 2) & (t < starts + duration - step / 2)
         for i in np.flatnonzero(want != on):
@@ -202,16 +204,17 @@ def push(
     for p in range(w.P):
         s, L, D = per_stride(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0])
         pre, post = (s < starts[p] - 1.5) & (s > before - 5.0), s > starts[p]
-        refL, refD = float(np.median(L[pre])), float(np.median(D[pre]))
+        refL, refD = (float(np.median(L[pre])), float(np.median(D[pre]))) if pre.any() else (np.nan, np.nan)
         ok = (np.abs(L[post] / refL - 1) < tolerance) & (np.abs(D[post] / refD - 1) < tolerance)
         fell = bool(not w.alive[p])
+        pushed = not (fell and w.fell_at[p] < starts[p])
         recovered = None if fell else next((i for i in range(len(ok)) if ok[i:].all() and len(ok) - i >= 3), None)
         rows.append(
             dict(
                 target=target,
                 force=float(force),
                 delay=float(delays[p]),
-                t_push=float(starts[p]),
+                t_push=float(starts[p]) if pushed else None,
                 fell=fell,
                 fell_at=float(w.fell_at[p]) if fell else None,
                 stride_length_before=refL,
