@@ -192,12 +192,14 @@ def push(
     starts = w.time + delays
     t_end = starts.max() + duration + after
     on = np.zeros(len(delays), bool)
+    given = np.zeros(len(delays), bool)  # the push acted on the walker for at least one step
     while w.alive.any() and w.time < t_end - step / 2:  # an all-down batch stops its clock
         t = w.time
         want = (t >= starts - step / 2) & (t < starts + duration - step / 2)
         for i in np.flatnonzero(want != on):
             w.body.set_push(w.sims, np.array([i]), target if want[i] else "none", force if want[i] else 0.0)
         on = want
+        given |= want & w.alive
         w.advance(step)
     a = w.trace.arrays()
     rows = []
@@ -207,14 +209,13 @@ def push(
         refL, refD = (float(np.median(L[pre])), float(np.median(D[pre]))) if pre.any() else (np.nan, np.nan)
         ok = (np.abs(L[post] / refL - 1) < tolerance) & (np.abs(D[post] / refD - 1) < tolerance)
         fell = bool(not w.alive[p])
-        pushed = not (fell and w.fell_at[p] < starts[p])
         recovered = None if fell else next((i for i in range(len(ok)) if ok[i:].all() and len(ok) - i >= 3), None)
         rows.append(
             dict(
                 target=target,
                 force=float(force),
                 delay=float(delays[p]),
-                t_push=float(starts[p]) if pushed else None,
+                t_push=float(starts[p]) if given[p] else None,
                 fell=fell,
                 fell_at=float(w.fell_at[p]) if fell else None,
                 stride_length_before=refL,
