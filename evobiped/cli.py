@@ -358,7 +358,7 @@ def add_replay(sub) -> None:
     p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd or next to the genome file)")
+    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, or runs/<stem>/replay_<stem>.rrd for a genome file)")
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
@@ -393,13 +393,28 @@ def run_replay_cmd(args) -> int:
         print(f"stored fitness not compared: {why}")
     elif r.stored_fitness is None:
         print("stored fitness: none in the genome file")
-    else:
+    elif not r.environment_differences:
         verdict = "equals it bit for bit" if r.matches else f"DIFFERS by {r.fitness - r.stored_fitness:.3g}"
-        print(f"stored fitness   = {r.stored_fitness!r}: the replay {verdict}")
+        print(f"stored fitness   = {r.stored_fitness!r}: the replay {verdict} (same numerical environment)")
+    else:
+        print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
+        print(f"stored fitness   = {r.stored_fitness!r}: "
+              + ("the replay equals it bit for bit all the same" if r.matches else f"drift {drift_text(r.fitness, r.stored_fitness)}"))
+        if r.drift:
+            print("outcome drift: " + "; ".join(r.drift))
+        print("outcome holds within the declared tolerance" if not r.outcome_failures
+              else "outcome DIFFERS: " + "; ".join(r.outcome_failures))
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")
-    return 0 if (r.matches or not r.compared or r.stored_fitness is None) else 1
+    return 0 if r.reproduced else 1
+
+
+def drift_text(value: float, stored: float) -> str:
+    """``+3.4e-06 (8.2e-05 relative)``: how far a replayed fitness drifted from the stored one."""
+    d = value - stored
+    rel = f" ({abs(d) / abs(stored):.2g} relative)" if stored else ""
+    return f"{d:+.3g}{rel}"
 
 
 # ---------------------------------------------------------------- robustness
@@ -410,7 +425,7 @@ def add_robustness(sub) -> None:
     p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
     p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
                    help="pushes fall in the first stride after S s (default 10)")
-    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or beside the genome file)")
+    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or runs/<stem>/ for a genome file)")
     p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
                    help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -425,12 +440,12 @@ def run_robustness_cmd(args) -> int:
     from .record.robustness_figure import robustness_figure
     from .record.source import resolve
     from .robustness import battery, summarise, table
-    from .rundir import robustness_stem
+    from .rundir import genome_outputs, robustness_stem
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
     source = resolve(args.source, args.generation)
-    out = Path(args.out) if args.out else (source.run_dir or source.genome_path.parent)
+    out = Path(args.out) if args.out else (source.run_dir or genome_outputs(source.genome_path))
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
     stem = robustness_stem(source.label) if source.run_dir is not None else f"{source.genome_path.stem}_robustness"

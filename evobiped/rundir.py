@@ -87,6 +87,16 @@ def figures_dir(directory: Path, label: str) -> Path:
     return Path(directory) / f"figures_{label}"
 
 
+#: where replay and robustness write about a lone genome file when no --out is given, relative to the current
+#: directory (never beside the file, which may sit in a repository)
+GENOME_OUTPUTS = Path("runs")
+
+
+def genome_outputs(genome_path: Path) -> Path:
+    """The default folder for what replay and robustness write about a lone genome file: ``runs/<stem>``."""
+    return GENOME_OUTPUTS / Path(genome_path).stem
+
+
 def robustness_stem(label: str) -> str:
     """File stem of the robustness battery's results in a run directory: ``robustness`` for the best, ``robustness_<label>``."""
     return "robustness" if label == "best" else f"robustness_{label}"

@@ -15,6 +15,8 @@ from evobiped.errors import GenomeError
 from evobiped.genome import GeneBlock, GenomeLayout
 from evobiped.tasks import WalkTask
 
+from .conftest import WALKERS
+
 from .conftest import random_genomes
 
 
@@ -127,7 +129,7 @@ def test_an_episode_continued_in_pieces_is_the_whole_episode_and_can_change_cour
     whole run bit for bit; an experiment's change between pieces acts from then on only."""
     from evobiped.genome_file import load_genome
 
-    g, cfg, _ = load_genome("docs/walkers/simbicon_seed1.json")
+    g, cfg, _ = load_genome(WALKERS / "simbicon_seed1.json")
     ep = dataclasses.replace(cfg, perturbations=dict(presentations=2, pushes=2, push_force=10.0, target_noise=0.01)).build()
     trials = ep.trials_for((0, 1))
     whole = ep.run(g, seconds=3.0, trials=trials)

@@ -12,7 +12,9 @@ from evobiped.genome_file import load_genome
 from evobiped.models import model_path
 from evobiped.perturb import PerturbationConfig, Trials
 
-WALKER = "docs/walkers/simbicon_seed1.json"
+from .conftest import WALKERS
+
+WALKER = str(WALKERS / "simbicon_seed1.json")
 PERTURBED = dict(presentations=3, pushes=2, push_force=10.0, target_noise=0.01, target_offset=0.02, pose_noise=0.02, friction=[0.8, 1.2])
 
 

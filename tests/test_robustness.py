@@ -1,6 +1,7 @@
 """The robustness battery: its trial set, its numbers against direct episodes, and bad input."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +11,9 @@ from evobiped.genome_file import load_genome, save_genome
 from evobiped.perturb import Trials
 from evobiped.robustness import battery, summarise
 
-WALKER = "docs/walkers/simbicon_seed1.json"
+from .conftest import WALKERS
+
+WALKER = str(WALKERS / "simbicon_seed1.json")
 
 
 @pytest.fixture(scope="module")
@@ -48,9 +51,10 @@ def test_cli_writes_table_json_and_png(tmp_path, capsys):
     assert main(["robustness", str(tmp_path / "w.json"), "--seconds", "8", "--push-after", "4"]) == 0
     out = capsys.readouterr().out
     assert "push 10 N" in out and "offset 0.05 rad" in out
-    report = json.loads((tmp_path / "w_robustness.json").read_text())
+    report = json.loads((Path.cwd() / "runs" / "w" / "w_robustness.json").read_text())  # never beside the genome file
     assert len(report["trials"]) == 117 and report["seconds"] == 8.0
-    assert (tmp_path / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
+    assert (Path.cwd() / "runs" / "w" / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]
 
 
 @pytest.mark.parametrize("args, msg", [

@@ -22,7 +22,7 @@ from typing import Callable
 
 import numpy as np
 
-from .. import __version__, rundir
+from .. import __version__, provenance, rundir
 from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
@@ -142,7 +142,7 @@ class Run:
             except OSError as exc:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
             rundir.remove_stale_temporaries(directory)
-            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict()})
+            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": provenance.current()})
             run = cls(directory, config, ga, [], None, 0.0)
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
@@ -173,6 +173,7 @@ class Run:
         if not isinstance(cfg, dict):
             raise UserError(f"run config {directory / rundir.CONFIG} is not a table of settings")
         cfg.pop("evobiped", None)
+        cfg.pop("environment", None)
         config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
         ga = make_ga(config)
         path = directory / rundir.CHECKPOINT
