@@ -262,6 +262,9 @@ def run_evolve_cmd(args) -> int:
         try:
             for repair in run.repairs:
                 print(f"evobiped: repaired: {repair}", file=sys.stderr)
+            if run.environment_differences:
+                print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
+                      " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
             if run.done:
                 print(f"run {args.resume} is already complete ({run.ga.generation} generations)")
                 run.close()

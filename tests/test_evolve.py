@@ -328,3 +328,20 @@ def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
         signal.signal(signal.SIGINT, old)
     ck = json.loads((run.dir / "checkpoint.json").read_text())
     assert len(ck["history"]) == len(fitness_history(run.dir)) == 1
+
+
+def test_a_resume_in_another_numerical_environment_says_so(tmp_path, capsys):
+    """config.json records where the run started; a resume elsewhere notes that bit-identity ends there."""
+    from evobiped.cli import main
+
+    run = tmp_path / "run"
+    assert main(["evolve", "--population", "4", "--generations", "1", "--episode-seconds", "0.2", "--backend", "serial",
+                 "--out", str(run), "--quiet"]) == 0
+    assert main(["evolve", "--resume", str(run)]) == 0
+    assert "numerical environment" not in capsys.readouterr().err
+    cfg = json.loads((run / "config.json").read_text())
+    cfg["environment"]["numpy_simd"] = ["ELSEWHERE"]
+    (run / "config.json").write_text(json.dumps(cfg))
+    assert main(["evolve", "--resume", str(run)]) == 0
+    err = capsys.readouterr().err
+    assert "note: this run started in another numerical environment (numpy SIMD ELSEWHERE -> " in err

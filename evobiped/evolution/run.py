@@ -119,6 +119,9 @@ class Run:
         self.best_genome = best_genome
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
         self.repairs: list[str] = []
+        #: how this process's numerical environment differs from the one the run started in (a resume's; empty:
+        #: the resumed run is bit-identical to an uninterrupted one)
+        self.environment_differences: list[str] = []
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
 
     # ---- creating and resuming
@@ -167,13 +170,20 @@ class Run:
 
     @classmethod
     def _load(cls, directory: Path) -> "Run":
+        run, started_in = cls._read(directory)
+        run.environment_differences = provenance.differences(started_in)
+        return run
+
+    @classmethod
+    def _read(cls, directory: Path) -> tuple["Run", dict | None]:
+        """The run in ``directory`` and the numerical environment its config.json records (None: none)."""
         if not (directory / rundir.CONFIG).exists() and rundir.is_unused(directory):
             raise UserError(f"{directory} holds no run yet (stopped before its config was written): start it again with evobiped evolve --out {directory}")
         cfg = read_json(directory / rundir.CONFIG, what="run config")
         if not isinstance(cfg, dict):
             raise UserError(f"run config {directory / rundir.CONFIG} is not a table of settings")
         cfg.pop("evobiped", None)
-        cfg.pop("environment", None)
+        started_in = cfg.pop("environment", None)
         config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
         ga = make_ga(config)
         path = directory / rundir.CHECKPOINT
@@ -181,7 +191,7 @@ class Run:
             committed = cls._committed_files(directory)
             if committed:
                 raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
-            return cls(directory, config, ga, [], None, 0.0)  # killed before its first commit: start over
+            return cls(directory, config, ga, [], None, 0.0), started_in  # killed before its first commit: start over
         ck = read_json(path, what="checkpoint")
         if ck is None:
             raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
@@ -194,7 +204,7 @@ class Run:
         if len(history) != ga.generation:
             raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
         ga.load_outcome(ck.get("outcome", {}))
-        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
+        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome")), started_in
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
