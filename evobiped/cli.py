@@ -403,8 +403,10 @@ def run_replay_cmd(args) -> int:
         print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
         print(f"stored fitness   = {r.stored_fitness!r}: "
               + ("the replay equals it bit for bit all the same" if r.matches else f"drift {drift_text(r.fitness, r.stored_fitness)}"))
-        if r.drift:
-            print("outcome drift: " + "; ".join(r.drift))
+    if r.outcome_checked:
+        if r.environment_differences and not r.compared:
+            print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
+        print("outcome drift: " + "; ".join(r.drift))
         print("outcome holds within the declared tolerance" if not r.outcome_failures
               else "outcome DIFFERS: " + "; ".join(r.outcome_failures))
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")

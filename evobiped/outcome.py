@@ -80,12 +80,12 @@ def compare(stored: dict, replayed: dict, tolerance: Tolerance = TOLERANCE) -> t
         if old.get("distance") is not None:
             d = new["distance"] - old["distance"]
             allowed = max(tolerance.distance_m, tolerance.distance_rel * old["distance"])
-            drift.append(at + f"distance {new['distance']:.2f} m (stored {old['distance']:.2f} m, {d:+.3g} m)")
+            drift.append(at + f"distance {new['distance']:.2f} m (stored {old['distance']:.2f} m, {d:+.4f} m)")
             if abs(d) > allowed:
                 failures.append(at + f"distance {new['distance']:.2f} m, stored {old['distance']:.2f} m (allowed +-{allowed:.2f} m)")
         if old.get("heading_deg") is not None and new["heading_deg"] is not None:
             d = (new["heading_deg"] - old["heading_deg"] + 180.0) % 360.0 - 180.0
-            drift.append(at + f"heading {new['heading_deg']:+.1f} deg (stored {old['heading_deg']:+.1f} deg, {d:+.3g})")
+            drift.append(at + f"heading {new['heading_deg']:+.1f} deg (stored {old['heading_deg']:+.1f} deg, {d:+.2f})")
             if abs(d) > tolerance.heading_deg:
                 failures.append(at + f"heading {new['heading_deg']:+.1f} deg, stored {old['heading_deg']:+.1f} deg "
                                      f"(allowed +-{tolerance.heading_deg:g} deg)")

@@ -15,7 +15,7 @@ def replayed(*rows):
 def test_an_outcome_within_tolerance_holds_and_its_drift_is_reported():
     drift, failures = compare(replayed(row()), replayed(row(distance=20.9, heading_deg=7.5)))
     assert failures == []  # 0.9 m <= max(0.5, 5 % of 20) = 1.0 m; 4.5 deg <= 5 deg
-    assert "distance 20.90 m (stored 20.00 m, +0.9 m)" in drift and "up 50 s (as stored)" in drift
+    assert "distance 20.90 m (stored 20.00 m, +0.9000 m)" in drift and "up 50 s (as stored)" in drift
 
 
 def test_each_quantity_outside_its_tolerance_is_a_failure():

@@ -39,10 +39,13 @@ class Source:
 
     def stored_outcome(self) -> dict | None:
         """What the walker did when it was stored, as :func:`evobiped.outcome.compare` reads it: the file's
-        ``outcome``, else its ``fell`` and ``end_time`` with, for a run's best, the distance and direction in
-        the run's summary.json; None when the file says nothing of it."""
+        ``outcome`` (always of the nominal episode), else, for a run without perturbations, its ``fell`` and
+        ``end_time`` with, for a run's best, the distance and direction in the run's summary.json; None when the
+        file says nothing of it."""
         if isinstance(self.meta.get("outcome"), dict):
             return self.meta["outcome"]
+        if self.config.perturbations:
+            return None  # its fell and end time are of the perturbed presentations, not of the nominal replay
         stored = {k: self.meta[k] for k in ("fell", "end_time") if isinstance(self.meta.get(k), (bool, int, float))}
         summary = self.run_dir / rundir.SUMMARY if self.run_dir is not None and self.label == "best" else None
         if summary is not None and summary.is_file():
