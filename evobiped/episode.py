@@ -187,7 +187,10 @@ class Listeners:
 class EpisodeState:
     """A batch of simulations part-way through an episode (:meth:`Episode.start`, :meth:`Episode.advance`).
 
-    Every per-row array is ``(n,)`` over the simulation rows of :meth:`Episode.run`.
+    Every per-row array is ``(n,)`` over the simulation rows of :meth:`Episode.run`.  A state is a
+    value: it owns its simulations (and the body's state kept in them), so two states never share
+    anything, and :meth:`copy` forks it: both copies continue independently, each exactly as a
+    fresh run would.
     """
 
     sims: Sims
@@ -223,6 +226,10 @@ class EpisodeState:
         """Simulated time so far, s."""
         return self.ticks * self.control_dt
 
+    def copy(self) -> "EpisodeState":
+        """An independent state equal to this one (simulations, controller, task, noise streams)."""
+        return copy.deepcopy(self)
+
 
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
@@ -252,9 +259,10 @@ class Episode:
         if round(ticks) * round(ratio) > MAX_STEPS:
             raise ConfigError(f"an episode of {seconds:g} s at a physics step of {body.timestep:g} s takes "
                               f"{round(ticks) * round(ratio):.3g} steps per walker, more than {MAX_STEPS:.0e}")
-        controller.bind_period(dt)
+        # the controller told its period: a bound copy, the caller's controller unchanged
+        self.controller = controller.bound(dt)
         self.substeps = int(round(ratio))
-        self._sims: dict[tuple, Sims] = {}
+        self._models: dict[tuple, Any] = {}
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)
         self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
@@ -264,9 +272,9 @@ class Episode:
         return int(round(self.seconds / self.control_dt))
 
     def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0) -> Sims:
-        """A batch of ``n`` simulations, created once per size (and ground) and reused."""
-        key = (n, friction, slope)
-        if key not in self._sims:
+        """A new batch of ``n`` simulations (each :meth:`start` owns one), on the model with this ground."""
+        key = (friction, slope)
+        if key not in self._models:
             model = self.model
             if friction is not None or slope:
                 model = copy.deepcopy(self.model)
@@ -278,8 +286,8 @@ class Episode:
                     g = float(np.linalg.norm(self.model.opt.gravity))
                     a = np.arctan(slope)
                     model.opt.gravity[:] = (-g * np.sin(a), 0.0, -g * np.cos(a))
-            self._sims[key] = Sims(model, n)
-        return self._sims[key]
+            self._models[key] = model
+        return Sims(self._models[key], n)
 
     def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
         """The perturbed presentations of generation key = (run seed, generation); None: nominal."""

@@ -31,6 +31,8 @@ structure option (the experiments' control parameter), not a gene.
 
 from __future__ import annotations
 
+import copy
+
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -174,9 +176,11 @@ class Matsuoka(Controller):
         parts["feedback"] = np.array(TAGA_FEEDBACK)
         return np.concatenate([parts[b.name] for b in self.layout.blocks])
 
-    def bind_period(self, dt: float) -> None:
-        """The control period in s (the physics step when ``dt`` is None)."""
-        self.period = float(dt)
+    def bound(self, dt: float) -> "Matsuoka":
+        """A copy integrating with Euler steps of ``dt`` s (the physics step when ``dt`` is None)."""
+        other = copy.copy(self)
+        other.period = float(dt)
+        return other
 
     def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
         g = super().decode(genomes)
@@ -226,7 +230,7 @@ class Matsuoka(Controller):
 
     def step(self, params, state, inputs):
         if self.period is None:
-            raise ConfigError("matsuoka: the control period is unknown (call bind_period or give dt)")
+            raise ConfigError("matsuoka: the control period is unknown (step the controller bound(dt) returns, or give dt)")
         u, v = state["u"], state["v"]
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)
