@@ -125,19 +125,20 @@ class EpisodeResult:
     terms: dict[str, np.ndarray] = field(default_factory=dict)
 
 
-    def walk(self, i: int = 0) -> dict:
-        """Where walker ``i`` went (its first presentation when there are several): distance (m) and
-        direction (``heading_deg``, see :func:`evobiped.tasks.walk.displacement_heading`; None: it did not move)
-        and displacement (x, y) in m."""
+    def displacements(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where each walker went in its first presentation: displacement ``(P, 2)`` m and direction ``(P,)``
+        degrees (see :func:`evobiped.tasks.walk.displacement_heading`; NaN: it did not move)."""
         from .tasks.walk import displacement_heading
 
         rows = self.rows if self.rows is not None else self
         S = len(rows.fitness) // len(self.fitness)
-        j = i * S
-        a, b, f = rows.start_position[j : j + 1], rows.end_position[j : j + 1], rows.start_facing[j : j + 1]
-        heading = float(displacement_heading(a, b, f)[0])
-        return {"distance": float(np.linalg.norm(b - a, axis=1)[0]), "heading_deg": None if not np.isfinite(heading) else round(heading, 2),
-                "displacement": [round(float(v), 4) for v in (b - a)[0]]}
+        a, b, f = rows.start_position[::S], rows.end_position[::S], rows.start_facing[::S]
+        return b - a, displacement_heading(a, b, f)
+
+    def walk(self, i: int = 0) -> dict:
+        """Where walker ``i`` went (its first presentation when there are several), see :func:`walk_summary`."""
+        d, h = self.displacements()
+        return walk_summary(d[i], h[i])
 
     def per_genome(self, S: int, combine) -> "EpisodeResult":
         """Rows p * S + j -> one entry per genome: fitness combined by ``combine`` ``(P, S) -> (P,)``,
@@ -154,6 +155,14 @@ class EpisodeResult:
             rows=self,
             terms={k: by(v) for k, v in self.terms.items()},
         )
+
+
+def walk_summary(displacement: np.ndarray, heading_deg: float) -> dict:
+    """A walk as runs and replays report it: distance (m), direction (``heading_deg``, None: it did not move)
+    and displacement (x, y) in m, from the displacement ``(2,)`` m and direction in degrees."""
+    d, h = np.asarray(displacement, float)[None], float(heading_deg)
+    return {"distance": float(np.linalg.norm(d, axis=1)[0]), "heading_deg": None if not np.isfinite(h) else round(h, 2),
+            "displacement": [round(float(v), 4) for v in d[0]]}
 
 
 class Listener(Protocol):

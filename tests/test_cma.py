@@ -10,6 +10,7 @@ from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError, UserError
 from evobiped.evolution import Run, RunConfig, make_evaluator
 from evobiped.evolution.cma import CMAES, CMAConfig
+from evobiped.evolution.individuals import Individuals
 from evobiped.genome import GeneBlock, GenomeLayout
 
 from .test_evolve import fitness_history
@@ -25,16 +26,16 @@ def optimise(opt, f, generations):
     return opt
 
 
-def test_outcome_is_told_and_not_carried():
-    """CMA-ES samples a fresh population each generation: the outcome told is there until next_generation, then unknown (zeros)."""
-    from types import SimpleNamespace
-
+def test_nothing_is_carried():
+    """CMA-ES samples a fresh population each generation: every new row is a new individual, so a run's outcomes
+    are unknown (zeros) after it."""
     opt = CMAES(LAYOUT, CMAConfig(population=4), seed=2)
-    f = np.array([1.0, 4.0, 2.0, 3.0])
-    opt.tell(SimpleNamespace(fitness=f, fell=f < 2, unstable=f > 3.5, end_time=f / 2))
-    assert opt.outcome["end_time"].tolist() == [0.5, 2.0, 1.0, 1.5] and opt.outcome["fell"].tolist() == [True, False, False, False]
-    opt.next_generation()
-    assert opt.outcome["end_time"].tolist() == [0.0] * 4 and not opt.outcome["unstable"].any()
+    opt.tell(np.array([1.0, 4.0, 2.0, 3.0]))
+    ind = Individuals(outcome={"end_time": np.array([0.5, 2.0, 1.0, 1.5])})
+    rows = opt.next_generation()
+    assert rows.tolist() == [-1] * 4
+    ind.carry(rows)
+    assert ind.outcome["end_time"].tolist() == [0.0] * 4
 
 
 def test_minimises_a_sphere_inside_the_bounds():

@@ -26,10 +26,11 @@ SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAConfig(population=8),
 
 
 def fitness_history(run_dir) -> list[list[str]]:
-    """history.csv without the wall-clock column."""
+    """history.csv without the wall-clock column (the best's terms after the fixed columns)."""
     with open(Path(run_dir) / "history.csv") as f:
         rows = list(csv.reader(f))
-    assert rows[0] == list(HISTORY_COLUMNS)
+    assert rows[0][: len(HISTORY_COLUMNS)] == list(HISTORY_COLUMNS)
+    assert all(c.startswith("best_") for c in rows[0][len(HISTORY_COLUMNS) :])
     wall = HISTORY_COLUMNS.index("wall_seconds")
     return [r[:wall] + r[wall + 1 :] for r in rows[1:]]
 

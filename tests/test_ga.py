@@ -1,11 +1,15 @@
 """The GA of Reil & Husbands (Table III, Sect. II-C1): operator statistics and search."""
 
+import json
+
 import numpy as np
 import pytest
 
 from evobiped.controllers import CTRNN
 from evobiped.errors import ConfigError
+from evobiped.episode import EpisodeResult
 from evobiped.evolution.ga import GA, GAConfig
+from evobiped.evolution.individuals import Individuals
 from evobiped.genome import GeneBlock, GenomeLayout
 
 LAYOUT = CTRNN(n_outputs=6).layout
@@ -68,25 +72,40 @@ def test_truncation_keeps_top_half_unchanged():
     assert unknown.tolist() == [False] * 5 + [True] * 5
 
 
-def test_survivors_keep_their_outcome():
-    """An EpisodeResult told to the GA: each survivor's fell / unstable / end_time move with it (best first),
-    the children's are unknown (zeros) until told; a second tell fills only the children's rows."""
-    from types import SimpleNamespace
+def _result(fitness, fell, unstable, end_time):
+    """An EpisodeResult of walkers that went ``fitness`` m along +x, with the term ``distance`` beside it."""
+    n = len(fitness)
+    end = np.stack([fitness, np.zeros(n)], 1)
+    return EpisodeResult(fitness=fitness, fell=fell, unstable=unstable, end_time=end_time, start_position=np.zeros((n, 2)),
+                         end_position=end, start_facing=np.tile([1.0, 0.0], (n, 1)), terms={"distance": fitness.copy()})
 
+
+def test_survivors_keep_their_outcome():
+    """The rows the GA keeps (next_generation's answer) carry each survivor's fell / unstable / end_time, terms and
+    walk along (best first); the children's are unknown (zeros) until told; a second tell fills only their rows."""
     ga = GA(LAYOUT, GAConfig(population=6), seed=5)
+    ind = Individuals()
     fit = np.array([3.0, 1.0, 5.0, 0.0, 4.0, 2.0])
-    ga.tell(SimpleNamespace(fitness=fit, fell=fit < 2.5, unstable=fit == 0.0, end_time=10 * fit))
-    assert ga.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
-    ga.next_generation()  # survivors 2, 4, 0 (fitness 5, 4, 3)
-    assert ga.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 0.0, 0.0, 0.0]
-    assert ga.outcome["fell"].tolist() == [False] * 6
-    ga.tell(SimpleNamespace(fitness=np.array([6.0, 1.0, 2.0]), fell=np.array([False, True, True]),
-                            unstable=np.array([False, False, True]), end_time=np.array([60.0, 1.5, 2.5])))
-    assert ga.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
-    assert ga.outcome["unstable"].tolist() == [False] * 5 + [True]
-    assert ga.outcome_dict()["fell"] == [False, False, False, False, True, True]
-    ga.next_generation()  # survivors: rows 3 (6.0), 0 (5.0), 1 (4.0)
-    assert ga.outcome["end_time"].tolist() == [60.0, 50.0, 40.0, 0.0, 0.0, 0.0]
+    _, unknown = ga.ask()
+    r = _result(fit, fit < 2.5, fit == 0.0, 10 * fit)
+    ga.tell(r)
+    ind.told(unknown, r)
+    assert ind.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
+    ind.carry(ga.next_generation())  # survivors 2, 4, 0 (fitness 5, 4, 3)
+    assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 0.0, 0.0, 0.0]
+    assert ind.outcome["fell"].tolist() == [False] * 6
+    assert ind.terms_of(1) == {"distance": 4.0} and ind.walk_of(0) == {"distance": 5.0, "heading_deg": 0.0, "displacement": [5.0, 0.0]}
+    _, unknown = ga.ask()
+    r = _result(np.array([6.0, 1.0, 2.0]), np.array([False, True, True]), np.array([False, False, True]), np.array([60.0, 1.5, 2.5]))
+    ga.tell(r)
+    ind.told(unknown, r)
+    assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
+    assert ind.outcome["unstable"].tolist() == [False] * 5 + [True]
+    back = Individuals.from_dict(json.loads(json.dumps(ind.to_dict())), 6)
+    assert back.to_dict() == ind.to_dict() and back.to_dict()["fell"] == [False, False, False, False, True, True]
+    ind.carry(ga.next_generation())  # survivors: rows 3 (6.0), 0 (5.0), 1 (4.0)
+    assert ind.outcome["end_time"].tolist() == [60.0, 50.0, 40.0, 0.0, 0.0, 0.0]
+    assert ind.terms["distance"].tolist() == [6.0, 5.0, 4.0, 0.0, 0.0, 0.0]
 
 
 def test_frozen_genes_never_change():
