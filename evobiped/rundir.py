@@ -116,7 +116,7 @@ def history_columns(rows: list[list], terms: list[dict] | None = None) -> dict[s
     out = {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
     padded = [*(terms or ()), *[{}] * (len(rows) - len(terms or ()))]
     for name in _term_names(terms):
-        out[TERM_PREFIX + name] = np.array([float(t.get(name, np.nan)) for t in padded])
+        out[TERM_PREFIX + name] = np.array([np.nan if t.get(name) is None else float(t[name]) for t in padded])
     return out
 
 
@@ -317,5 +317,5 @@ def validate_checkpoint(ck: Any, *, generations: int, low: np.ndarray, high: np.
         raise _bad("best_walk", "must be a table with the best walker's distance, or null")
     terms = ck.get("history_terms", [])
     if not isinstance(terms, list) or len(terms) > len(history) or not all(
-            isinstance(t, dict) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in t.values()) for t in terms):
-        raise _bad("history_terms", "must be a list of tables of numbers, at most one per generation")
+            isinstance(t, dict) and all(map(entry, t.values())) for t in terms):
+        raise _bad("history_terms", "must be a list of tables of numbers (or nulls), at most one per generation")

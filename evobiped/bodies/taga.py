@@ -95,6 +95,8 @@ class TagaBiped(Body):
     action_kind: ClassVar[str] = "torque"
     trunk: ClassVar[str] = "hip"
     has_custom_forces: ClassVar[bool] = True
+    contact_sensor: ClassVar[tuple[str, tuple[str, ...]]] = ("ground_contact", ("right", "left"))
+    sagittal: ClassVar[bool] = True
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}

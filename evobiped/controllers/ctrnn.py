@@ -91,8 +91,6 @@ class CTRNN(Controller):
         n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
         self.output_kind = MOTOR_MAPS[motor]
-        if n_neurons < n_outputs:
-            raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
         tau = _tau_block(time_constants, dt)
         self.n = int(n_neurons)
         self.n_outputs = int(n_outputs)

@@ -57,9 +57,11 @@ class Individuals:
                 new[rows >= 0] = arr[rows[rows >= 0]]
                 table[key] = new
 
-    def terms_of(self, i: int) -> dict[str, float | list[float]]:
-        """Row ``i``'s terms: a number each, or a list over its presentations."""
-        return {k: float(v[i]) if v.ndim == 1 else [float(x) for x in v[i]] for k, v in self.terms.items()}
+    def terms_of(self, i: int) -> dict[str, float | list[float] | None]:
+        """Row ``i``'s terms: a number each, or a list over its presentations (None: undefined, e.g. the
+        cyclicity of a task that does not measure it)."""
+        num = lambda x: float(x) if np.isfinite(x) else None  # noqa: E731
+        return {k: num(v[i]) if v.ndim == 1 else [num(x) for x in v[i]] for k, v in self.terms.items()}
 
     def walk_of(self, i: int) -> dict | None:
         """Where row ``i`` walked, as ``EpisodeResult.walk`` gives it (None: not known, e.g. an older checkpoint)."""

@@ -333,7 +333,8 @@ class Run:
         if self.best is None or meta["fitness"] > self.best["fitness"]:
             self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
         self.history.append(stats.row())
-        self.history_terms.append({k: float(np.mean(v)) for k, v in terms.items()})
+        means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
+        self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
         self.individuals.carry(ga.next_generation())  # the individuals it keeps keep their outcome
         return stats
 
