@@ -49,6 +49,9 @@ class Body(ABC):
     #: action order, each with its leg and joint role, and its sensors, name -> width (see :meth:`sensors`)
     actuators: ClassVar[tuple[Actuator, ...]]
     sensor_widths: ClassVar[dict[str, int]] = {}
+    #: how a controller that normalises its inputs reads each sensor: name -> (standing values, scales), one per
+    #: component, in the sensor's units; the controller sees (reading - standing value) / scale
+    sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}
 
     #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
     #: ``timestep`` and a ``model_file``); constructed as ``cls(**options)``
