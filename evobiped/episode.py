@@ -20,7 +20,7 @@ import numpy as np
 from .bodies import BODIES
 from .bodies.base import Body
 from .controllers import CONTROLLERS
-from .contract import Offer, wire
+from .contract import Offer, normaliser, wire
 from .controllers.base import Controller
 from .errors import ConfigError
 from .genome import GenomeLayout
@@ -34,8 +34,11 @@ from .tasks.base import Task
 
 
 #: controller options every controller takes, handled by the episode: ``inputs`` (sensor names to feed,
-#: replacing the controller's default choice) and ``genes`` (gene-block overrides, see GenomeLayout.with_overrides)
-GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes")
+#: replacing the controller's default choice), ``genes`` (gene-block overrides, see GenomeLayout.with_overrides)
+#: and ``latency`` (control ticks by which its actions reach the body late: see :class:`Episode`)
+GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes", "latency")
+#: the longest control latency, in control ticks
+MAX_LATENCY = 100
 
 #: the most control ticks, and physics steps, one walker's episode may take
 MAX_TICKS = 10**7
@@ -67,6 +70,8 @@ class EpisodeConfig:
             raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
         parse(BODIES[self.body].Options, self.body_options, "episode.body_options")
         parse(CONTROLLERS[self.controller].Options, self.controller_options, "episode.controller_options", skip=GENERIC_CONTROLLER_OPTIONS)
+        number(self.controller_options.get("latency", 0), "episode.controller_options.latency:", low=0, high=MAX_LATENCY,
+               integer=True, unit="control ticks")
         parse(TASKS[self.task].Options, self.task_options, "episode.task_options")
         PerturbationConfig.from_dict(self.perturbations)
 
@@ -82,11 +87,13 @@ class EpisodeConfig:
         cls = CONTROLLERS[self.controller]
         opts = {k: v for k, v in self.controller_options.items() if k not in GENERIC_CONTROLLER_OPTIONS}
         added = task.sensor_widths()
-        offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added))
+        offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()})
         inputs = wire(cls.needs(parse(cls.Options, opts, "episode.controller_options")), offer,
                       chosen=self.controller_options.get("inputs"),
                       what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
         controller = cls(n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators, **opts)
+        if controller.normalises_inputs:
+            controller.input_norm = normaliser(inputs, offer.norms)
         if "genes" in self.controller_options:
             try:
                 controller.override_genes(self.controller_options["genes"])
@@ -103,7 +110,8 @@ class EpisodeConfig:
         body, controller, task = self.parts()
         perturbations = PerturbationConfig.from_dict(self.perturbations)
         return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
-                       perturbations=perturbations if perturbations.active else None)
+                       perturbations=perturbations if perturbations.active else None,
+                       latency=int(self.controller_options.get("latency", 0)))
 
 
 @dataclass
@@ -229,6 +237,8 @@ class EpisodeState:
     offset: np.ndarray | None = None
     #: a push force is on some trunk now
     pushed: bool = False
+    #: the actions computed but not yet applied, oldest first (``Episode.latency`` > 0)
+    pending: list = field(default_factory=list)
 
     @property
     def time(self) -> float:
@@ -244,8 +254,11 @@ class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
     def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True,
-                 perturbations: PerturbationConfig | None = None):
+                 perturbations: PerturbationConfig | None = None, latency: int = 0):
         self.body, self.controller, self.task = body, controller, task
+        #: control ticks by which each action reaches the body late (a real controller's computation and
+        #: transmission delay; the first action is held until the pipeline is full)
+        self.latency = int(latency)
         self.seconds = float(seconds)
         self.stop_on_fall = stop_on_fall
         self.perturbations = perturbations
@@ -384,6 +397,9 @@ class Episode:
                     if st.pushed or force.any():  # write only while a push is on or just ended
                         sims.xfrc_applied[:, self._trunk, :3] = force[trial]
                         st.pushed = bool(force.any())
+            if self.latency:
+                st.pending.append(action)
+                action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
             body.apply(sims, ids, action[ids])
             bad = self._advance(sims, ids)
             st.ticks = k + 1
@@ -428,7 +444,9 @@ class Episode:
         available = self.task.sensors(self.body, sims, tstate)
         if any(n not in available for n in names):  # body sensors only when the controller reads one
             available = {**self.body.sensors(sims), **available}
-        return np.concatenate([available[n] for n in names], axis=1)
+        x = np.concatenate([available[n] for n in names], axis=1)
+        norm = self.controller.input_norm
+        return x if norm is None else (x - norm[0]) / norm[1]
 
     def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         """One control period of physics for ``ids``; bool mask of blow-ups."""

@@ -16,7 +16,7 @@ LAYERS: list[set[str]] = [
     {"bodies", "controllers", "tasks"},
     {"episode", "envs"},
     {"genome_file", "rundir", "outcome"},
-    {"robustness"},
+    {"robustness", "distill"},
     {"record"},
     {"evolution"},
     {"bench", "readme"},

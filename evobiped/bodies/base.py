@@ -53,6 +53,9 @@ class Body(ABC):
     contact_sensor: ClassVar[tuple[str, tuple[str, ...]] | None] = None
     #: True for a walker confined to its sagittal plane (nothing moves it sideways)
     sagittal: ClassVar[bool] = False
+    #: how a controller that normalises its inputs reads each sensor: name -> (standing values, scales), one per
+    #: component, in the sensor's units; the controller sees (reading - standing value) / scale
+    sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}
 
     #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
     #: ``timestep`` and a ``model_file``); constructed as ``cls(**options)``

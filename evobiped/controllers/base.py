@@ -24,7 +24,7 @@ class Controller(ABC):
     name: ClassVar[str]
     #: how :func:`evobiped.mapping.to_action` reads the outputs: "unit": in [0, 1] spanning the joint's range;
     #: "centred": in [0, 1] with 0.5 at 0 rad; "signed": real-valued, centred on 0; "angle": joint targets in rad
-    output_kind: ClassVar[Literal["unit", "centred", "signed", "angle"]]
+    output_kind: ClassVar[Literal["unit", "centred", "centred_full", "signed", "angle"]]
 
     #: number of motor outputs (= the body's actuators)
     n_outputs: int
@@ -32,6 +32,10 @@ class Controller(ABC):
     input_names: tuple[str, ...] = ()
     #: control period in s, or None to step at every physics step
     dt: float | None
+    #: whether the episode hands it its inputs normalised (``Needs.normalised``), and with what:
+    #: ``(centre (k,), scale (k,))`` set by the episode; None: raw readings
+    normalises_inputs: bool = False
+    input_norm: tuple | None = None
 
     #: the controller's options (a dataclass of :func:`evobiped.options.option` fields)
     Options: ClassVar[type] = NoOptions
