@@ -27,7 +27,7 @@ from .genome import GenomeLayout
 from .options import parse, refuse_unknown
 from .validate import number
 from .mapping import MAPS, to_action
-from .perturb import PerturbationConfig, Trials
+from .perturb import PerturbationOptions, Trials
 from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
@@ -73,7 +73,7 @@ class EpisodeConfig:
         number(self.controller_options.get("latency", 0), "episode.controller_options.latency:", low=0, high=MAX_LATENCY,
                integer=True, unit="control ticks")
         parse(TASKS[self.task].Options, self.task_options, "episode.task_options")
-        PerturbationConfig.from_dict(self.perturbations)
+        PerturbationOptions.from_dict(self.perturbations)
 
     def nominal(self) -> "EpisodeConfig":
         """The same episode without perturbations (replays, the robustness battery)."""
@@ -108,7 +108,7 @@ class EpisodeConfig:
     def build(self) -> "Episode":
         """The episode, its model compiled once."""
         body, controller, task = self.parts()
-        perturbations = PerturbationConfig.from_dict(self.perturbations)
+        perturbations = PerturbationOptions.from_dict(self.perturbations)
         return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
                        perturbations=perturbations if perturbations.active else None,
                        latency=int(self.controller_options.get("latency", 0)))
@@ -254,7 +254,7 @@ class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
     def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True,
-                 perturbations: PerturbationConfig | None = None, latency: int = 0):
+                 perturbations: PerturbationOptions | None = None, latency: int = 0):
         self.body, self.controller, self.task = body, controller, task
         #: control ticks by which each action reaches the body late (a real controller's computation and
         #: transmission delay; the first action is held until the pipeline is full)

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
+from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
 from evobiped.evolution.run import HISTORY_COLUMNS
 
 from .conftest import cli
 
-SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAConfig(population=8), generations=3, seed=7, backend="serial")
+SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAOptions(population=8), generations=3, seed=7, backend="serial")
 
 
 def fitness_history(run_dir) -> list[list[str]]:
@@ -249,7 +249,7 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
     """PD gains far beyond what the 20 ms step can integrate blow every walker up: the run goes on."""
     cfg = RunConfig(
         episode=EpisodeConfig(seconds=1.0, body_options={"timestep": 0.02, "kp": 1e6, "kv": 0.0}),
-        ga=GAConfig(population=6),
+        ga=GAOptions(population=6),
         generations=2,
         backend="serial",
     )

@@ -46,7 +46,7 @@ def _population(p) -> None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class CMAConfig:
+class CMAOptions:
     """CMA-ES settings."""
 
     population: int = option(0, "lambda, offspring per generation; 0: pycma's default 4 + floor(3 ln G)", check=_population,
@@ -82,7 +82,7 @@ class CMAES(Optimizer):
 
     name = "cma"
 
-    def __init__(self, layout: GenomeLayout, config: CMAConfig, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
+    def __init__(self, layout: GenomeLayout, config: CMAOptions, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
         if importlib.util.find_spec("cma") is None:  # pragma: no cover - a core dependency
             raise UserError("the cma optimizer needs pycma: pip install cma")
         self.layout, self.config, self.seed = layout, config, int(seed)

@@ -32,7 +32,7 @@ MAX_POPULATION = 10**7
 
 
 @dataclass(frozen=True, kw_only=True)
-class GAConfig:
+class GAOptions:
     """GA settings, the paper's values by default."""
 
     population: int = option(50, "individuals per generation", low=2, high=MAX_POPULATION, integer=True)
@@ -69,7 +69,7 @@ class GA(Optimizer):
     def __init__(
         self,
         layout: GenomeLayout,
-        config: GAConfig,
+        config: GAOptions,
         *,
         seed: int,
         initial: np.ndarray | None = None,

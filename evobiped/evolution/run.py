@@ -28,9 +28,9 @@ from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
-from .cma import CMAES, CMAConfig
+from .cma import CMAES, CMAOptions
 from .evaluate import BACKENDS, Evaluator
-from .ga import GA, GAConfig
+from .ga import GA, GAOptions
 from .individuals import Individuals
 from ..rundir import HISTORY_COLUMNS
 
@@ -54,8 +54,8 @@ class RunConfig:
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
     optimizer: str = option("ga", "`ga` (Reil & Husbands' GA) or `cma` (CMA-ES)", choices=tuple(OPTIMIZERS))
-    ga: GAConfig = field(default_factory=GAConfig)
-    cma: CMAConfig = field(default_factory=CMAConfig)
+    ga: GAOptions = field(default_factory=GAOptions)
+    cma: CMAOptions = field(default_factory=CMAOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
     seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
     backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
@@ -80,7 +80,7 @@ class RunConfig:
         try:
             d = dict(refuse_unknown(cls, d, ""))
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
-            ga, cma = parse(GAConfig, d.pop("ga", {}), "ga"), parse(CMAConfig, d.pop("cma", {}), "cma")
+            ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, ga=ga, cma=cma, **d)

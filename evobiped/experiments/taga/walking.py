@@ -19,9 +19,10 @@ from typing import Callable
 import numpy as np
 
 from ...bodies.taga import TagaBiped
-from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka
+from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka, MatsuokaOptions
 from ...errors import UserError
 from ...episode import Episode
+from ...options import check_value
 from ...tasks.walk import WalkTask
 from .stride import StrideMetrics, analyse_strides
 
@@ -29,9 +30,8 @@ PRESETS = ("taga",)
 
 
 def check_u0(u0: float) -> float:
-    if not (np.isfinite(u0) and u0 >= 0):
-        raise UserError(f"u0 must be a number >= 0, got {u0}")
-    return float(u0)
+    """``u0`` as the matsuoka controller's option declares it (ConfigError otherwise)."""
+    return float(check_value(MatsuokaOptions, "u0", float(u0), "u0"))
 
 
 @dataclass
