@@ -81,7 +81,20 @@ class EpisodeConfig:
 
     def parts(self) -> tuple[Body, Controller, Task]:
         """The body, controller and task, the controller wired to the sensors it needs: the controller
-        contract checked (one ConfigError line on a mismatch); no model is compiled."""
+        contract checked (one ConfigError line on a mismatch); no model is compiled.  Built once per config
+        and shared by :meth:`layout` and every :meth:`build` (parts keep no episode state: that is the
+        :class:`EpisodeState`'s, and an episode binds its own copy of the controller)."""
+        cached = self.__dict__.get("_parts")
+        if cached is None:
+            cached = self._make_parts()
+            object.__setattr__(self, "_parts", cached)
+        return cached
+
+    def __getstate__(self) -> dict:
+        """Pickled and copied without the built parts (a worker builds its own)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_parts"}
+
+    def _make_parts(self) -> tuple[Body, Controller, Task]:
         body = BODIES[self.body](**self.body_options)
         task = TASKS[self.task](**self.task_options)
         cls = CONTROLLERS[self.controller]

@@ -139,7 +139,8 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
     if not rows or not {"generation", "best", "mean"} <= set(rows[0]):
         raise UserError(f"{path} is not a run history (needs columns generation, best, mean)")
     try:
-        return {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k is not None}
+        # an empty cell: a term undefined for that generation's best (or not kept then)
+        return {k: np.array([float(r[k]) if r[k] != "" else np.nan for r in rows]) for k in rows[0] if k is not None}
     except (TypeError, ValueError) as exc:
         raise UserError(f"{path}: not a number in the history ({exc})") from None
 
