@@ -52,7 +52,7 @@ OUTCOME = "outcome.json"
 
 HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
 #: history.csv's further columns: the best individual's task terms (``best_distance``, ...; the mean over its
-#: presentations), one per term, empty for generations of a checkpoint written before terms were kept
+#: presentations), one per term; nan where undefined, or for generations of a checkpoint written before terms were kept
 TERM_PREFIX = "best_"
 #: columns holding counts (whole numbers >= 0) and fitness values (a number or -inf)
 _COUNTS = ("generation", "evaluations", "falls", "unstable")
@@ -139,8 +139,7 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
     if not rows or not {"generation", "best", "mean"} <= set(rows[0]):
         raise UserError(f"{path} is not a run history (needs columns generation, best, mean)")
     try:
-        # an empty cell: a term undefined for that generation's best (or not kept then)
-        return {k: np.array([float(r[k]) if r[k] != "" else np.nan for r in rows]) for k in rows[0] if k is not None}
+        return {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k is not None}
     except (TypeError, ValueError) as exc:
         raise UserError(f"{path}: not a number in the history ({exc})") from None
 
@@ -153,7 +152,7 @@ def history_text(rows: list[list], terms: list[dict] | None = None) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([*HISTORY_COLUMNS, *(TERM_PREFIX + n for n in names)])
-    w.writerows([*r, *(t.get(n, "") for n in names)] for r, t in zip(rows, padded))
+    w.writerows([*r, *("nan" if t.get(n) is None else t[n] for n in names)] for r, t in zip(rows, padded))
     return buf.getvalue()
 
 
