@@ -2,7 +2,7 @@
 
 Each table sits between ``<!-- options: ID -->`` and ``<!-- end options -->`` in
 README.md, ID naming the component (``body reil``, ``controller ctrnn``,
-``task walk``, ``episode perturbations``, ``optimizer ga``, ...).  ``python -m evobiped.readme`` rewrites
+``task walk``, ``episode perturbations``, ``optimizer ga``, ``environment``, ...).  ``python -m evobiped.readme`` rewrites
 them; tests/test_options.py checks that they agree with the declarations.
 """
 
@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .bodies import BODIES
 from .controllers import CONTROLLERS
+from .envs.walkers import EnvOptions
 from .evolution.cma import CMAOptions
 from .evolution.ga import GAOptions
 from .options import markdown_table
@@ -33,6 +34,7 @@ def tables() -> dict[str, str]:
     out["episode perturbations"] = markdown_table(PerturbationOptions)
     out["optimizer ga"] = markdown_table(GAOptions)
     out["optimizer cma"] = markdown_table(CMAOptions)
+    out["environment"] = markdown_table(EnvOptions)
     return out
 
 

@@ -68,6 +68,20 @@ class Task:
         """Task state at t = 0 (after the body's reset)."""
         return {}
 
+    def restart(self, body: Body, sims: Sims, state: dict[str, Any], ids: np.ndarray) -> None:
+        """Rows ``ids`` of ``state`` begin anew (after the body's reset of those rows), in place: by default
+        they take the rows of a fresh :meth:`start`; a task whose state is not kept per row overrides this."""
+        fresh = self.start(body, sims)
+        for key, value in fresh.items():
+            if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
+                state[key][ids] = value[ids]
+            elif not isinstance(value, (int, float, str)):
+                raise ConfigError(f"{self.name} task: its state {key!r} is not kept per row, so rows cannot begin anew")
+
+    #: the task reads the controller's neuron outputs (:meth:`on_tick`'s ``neurons``): it needs a controller
+    def reads_neurons(self) -> bool:
+        return False
+
     def sensors(self, body: Body, sims: Sims, state: dict[str, Any]) -> dict[str, np.ndarray]:
         """Named sensor arrays ``(P, k)`` for the controller."""
         return {}

@@ -140,6 +140,9 @@ class WalkTask(Task):
             state["ticks"] = np.zeros(sims.n, int)
         return state
 
+    def reads_neurons(self):
+        return bool(self.cyclic_weight)  # the cyclic criterion counts the motor neurons' cycles
+
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         state["position"][ok] = body.planar_position(sims)[ok]
