@@ -391,7 +391,7 @@ def run_replay_cmd(args) -> int:
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
         why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
-               if source.config.perturbations else "--source changed the sources" if args.sources and not args.seconds
+               if source.config.perturbed else "--source changed the sources" if args.sources and not args.seconds
                else "--seconds changed the episode length")
         print(f"stored fitness not compared: {why}")
     elif r.stored_fitness is None:
@@ -785,7 +785,7 @@ def run_distill_cmd(args) -> int:
     check = teacher_cfg.build().run(source.genome)
     if check.fell[0]:
         raise UserError(f"the teacher {source.genome_path} falls at {check.end_time[0]:.1f} s of its own episode "
-                        f"(latency {teacher_cfg.controller_options.get('latency', 0)} ticks): it cannot teach walking")
+                        f"(latency {teacher_cfg.latency} ticks): it cannot teach walking")
     walk = check.walk()
     progress = Progress("distill", 1.0, quiet=args.quiet)
     progress.say(f"teacher {source.genome_path}: up {check.end_time[0]:g} s, {walk_line(walk)}")
@@ -800,7 +800,7 @@ def run_distill_cmd(args) -> int:
     write_json(out.with_name(out.stem + "_distill.json"), {"teacher": str(source.genome_path), "options": dataclasses.asdict(options),
                                                           "iterations": report.iterations})
     state = f"fell at t = {done.end_time[0]:.2f} s" if done.fell[0] else f"stayed up for {done.end_time[0]:.1f} s"
-    print(f"student ({student.controller_options['n_neurons']} neurons): {state}; {walk_line(done.walk())}")
+    print(f"student ({student.controller_options.n_neurons} neurons): {state}; {walk_line(done.walk())}")
     print(f"genome file: {out}")
     return 0
 

@@ -24,7 +24,7 @@ from .contract import Offer, normaliser, wire
 from .controllers.base import Controller
 from .errors import ConfigError
 from .genome import GenomeLayout
-from .options import parse, refuse_unknown
+from .options import given, parse, refuse_unknown
 from .validate import number
 from .mapping import MAPS, to_action
 from .perturb import PerturbationOptions, Trials
@@ -33,13 +33,6 @@ from .tasks import TASKS
 from .tasks.base import Task
 
 
-#: controller options every controller takes, handled by the episode: ``inputs`` (sensor names to feed,
-#: replacing the controller's default choice), ``genes`` (gene-block overrides, see GenomeLayout.with_overrides)
-#: and ``latency`` (control ticks by which its actions reach the body late: see :class:`Episode`)
-GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes", "latency")
-#: the longest control latency, in control ticks
-MAX_LATENCY = 100
-
 #: the most control ticks, and physics steps, one walker's episode may take
 MAX_TICKS = 10**7
 MAX_STEPS = 10**8
@@ -47,7 +40,14 @@ MAX_STEPS = 10**8
 
 @dataclass(frozen=True, kw_only=True)
 class EpisodeConfig:
-    """What to simulate: registry names, their options, and the episode length (s)."""
+    """What to simulate: registry names, their options, and the episode length (s).
+
+    The options are given as tables (a config file's, keyword settings) or as parsed objects; each table
+    is parsed once, here, into its component's frozen ``Options`` (``body_options``: the body's,
+    ``controller_options``: the controller's, with the options every controller takes, ``task_options``:
+    the task's, ``perturbations``: :class:`PerturbationOptions`), which the parts are built from.
+    :meth:`to_dict` writes back the settings the tables gave.
+    """
 
     body: str = "reil"
     controller: str = "ctrnn"
@@ -55,11 +55,11 @@ class EpisodeConfig:
     seconds: float = 50.0
     #: end a walker's episode when it falls (False: run to the end; only blow-ups stop, e.g. for benchmarks)
     stop_on_fall: bool = True
-    body_options: dict = field(default_factory=dict)
-    controller_options: dict = field(default_factory=dict)
-    task_options: dict = field(default_factory=dict)
+    body_options: Any = field(default_factory=dict)
+    controller_options: Any = field(default_factory=dict)
+    task_options: Any = field(default_factory=dict)
     #: how an evolutionary run perturbs each generation (see evobiped.perturb); {} = none
-    perturbations: dict = field(default_factory=dict)
+    perturbations: Any = field(default_factory=dict)
 
     def __post_init__(self):
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
@@ -68,12 +68,26 @@ class EpisodeConfig:
         number(self.seconds, "episode.seconds:", above=0, unit="s")
         if not isinstance(self.stop_on_fall, bool):
             raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
-        parse(BODIES[self.body].Options, self.body_options, "episode.body_options")
-        parse(CONTROLLERS[self.controller].Options, self.controller_options, "episode.controller_options", skip=GENERIC_CONTROLLER_OPTIONS)
-        number(self.controller_options.get("latency", 0), "episode.controller_options.latency:", low=0, high=MAX_LATENCY,
-               integer=True, unit="control ticks")
-        parse(TASKS[self.task].Options, self.task_options, "episode.task_options")
-        PerturbationOptions.from_dict(self.perturbations)
+        for name, cls in (("body_options", BODIES[self.body].Options), ("controller_options", CONTROLLERS[self.controller].Options),
+                          ("task_options", TASKS[self.task].Options), ("perturbations", PerturbationOptions)):
+            object.__setattr__(self, name, parse(cls, getattr(self, name), f"episode.{name}"))
+
+    def to_dict(self) -> dict:
+        """The config as a table (config.json, genome files): every option table as its settings were given."""
+        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        for name in ("body_options", "controller_options", "task_options", "perturbations"):
+            d[name] = copy.deepcopy(given(d[name]))
+        return d
+
+    @property
+    def perturbed(self) -> bool:
+        """The config perturbs its episodes (it has a perturbations table)."""
+        return bool(given(self.perturbations)) or self.perturbations.active
+
+    @property
+    def latency(self) -> int:
+        """Control ticks by which the controller's actions reach the body late."""
+        return int(self.controller_options.latency)
 
     def nominal(self) -> "EpisodeConfig":
         """The same episode without perturbations (replays, the robustness battery)."""
@@ -95,21 +109,19 @@ class EpisodeConfig:
         return {k: v for k, v in self.__dict__.items() if k != "_parts"}
 
     def _make_parts(self) -> tuple[Body, Controller, Task]:
-        body = BODIES[self.body](**self.body_options)
-        task = TASKS[self.task](**self.task_options)
-        cls = CONTROLLERS[self.controller]
-        opts = {k: v for k, v in self.controller_options.items() if k not in GENERIC_CONTROLLER_OPTIONS}
+        body = BODIES[self.body](self.body_options)
+        task = TASKS[self.task](self.task_options)
+        cls, opts = CONTROLLERS[self.controller], self.controller_options
         added = task.sensor_widths()
         offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()})
-        inputs = wire(cls.needs(parse(cls.Options, opts, "episode.controller_options")), offer,
-                      chosen=self.controller_options.get("inputs"),
+        inputs = wire(cls.needs(opts), offer, chosen=opts.inputs,
                       what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
-        controller = cls(n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators, **opts)
+        controller = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
         if controller.normalises_inputs:
             controller.input_norm = normaliser(inputs, offer.norms)
-        if "genes" in self.controller_options:
+        if "genes" in given(opts):
             try:
-                controller.override_genes(self.controller_options["genes"])
+                controller.override_genes(opts.genes)
             except ConfigError as exc:
                 raise ConfigError(f"episode.controller_options.{exc}") from None
         return body, controller, task
@@ -121,10 +133,8 @@ class EpisodeConfig:
     def build(self) -> "Episode":
         """The episode, its model compiled once."""
         body, controller, task = self.parts()
-        perturbations = PerturbationOptions.from_dict(self.perturbations)
         return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
-                       perturbations=perturbations if perturbations.active else None,
-                       latency=int(self.controller_options.get("latency", 0)))
+                       perturbations=self.perturbations if self.perturbations.active else None, latency=self.latency)
 
 
 @dataclass

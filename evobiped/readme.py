@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .bodies import BODIES
 from .controllers import CONTROLLERS
+from .controllers.base import GENERIC_CONTROLLER_OPTIONS
 from .envs.walkers import EnvOptions
 from .evolution.cma import CMAOptions
 from .evolution.ga import GAOptions
@@ -30,7 +31,8 @@ def tables() -> dict[str, str]:
     out = {}
     for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
         for name, cls in reg.items():
-            out[f"{kind} {name}"] = markdown_table(cls.Options)
+            # every controller's generic options (inputs, genes, latency) are described once, beside the tables
+            out[f"{kind} {name}"] = markdown_table(cls.Options, skip=GENERIC_CONTROLLER_OPTIONS if kind == "controller" else ())
     out["episode perturbations"] = markdown_table(PerturbationOptions)
     out["optimizer ga"] = markdown_table(GAOptions)
     out["optimizer cma"] = markdown_table(CMAOptions)

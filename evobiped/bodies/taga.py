@@ -103,8 +103,8 @@ class TagaBiped(Body):
 
     Options: ClassVar[type] = TagaOptions
 
-    def __init__(self, **options):
-        super().__init__(**options)
+    def __init__(self, options=None, **given):
+        super().__init__(options, **given)
         o = self.options
         # kg, bg: one value, or one per simulation of the batch (P,)
         self.p = dict(APPENDIX_D, kg=np.asarray(o.kg, float), bg=np.asarray(o.bg, float))

@@ -41,8 +41,8 @@ import numpy as np
 from ..contract import Actuator, Needs, Offer, index, legs, problem
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
-from ..options import option, parse
-from .base import Controller
+from ..options import option
+from .base import Controller, ControllerOptions
 
 #: sensors the Appendix C feedback needs (provided by the Taga body), with their widths
 FEEDBACK_SENSORS = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2}
@@ -101,7 +101,7 @@ def taga_feedback(a: np.ndarray, angles: np.ndarray, rates: np.ndarray, contact:
 
 
 @dataclass(frozen=True, kw_only=True)
-class MatsuokaOptions:
+class MatsuokaOptions(ControllerOptions):
     """Options of the matsuoka controller."""
 
     u0: float = option(5.5, "tonic input u_0 (the experiments' speed control)", low=0)
@@ -126,9 +126,9 @@ class Matsuoka(Controller):
             return Needs(sensors=FEEDBACK_SENSORS, joints=TAGA_JOINTS, paired_legs=True)
         return Needs(paired_legs=True, optional=taga if options.feedback == "auto" else None)
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
-                 **options):
-        o = self.options = parse(MatsuokaOptions, options, "matsuoka controller_options")
+    def __init__(self, options: MatsuokaOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
+                 **given):
+        o = self.options = self.own_options(options, given)
         inputs = dict(inputs or {})
         # the episode checked needs(): two legs, and Taga's legs and sensors where the feedback is "taga"; "auto"
         # takes the feedback where the wiring gave its sensors

@@ -71,6 +71,7 @@ class RunConfig:
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
+        d["episode"] = self.episode.to_dict()
         d["frozen_blocks"] = list(self.frozen_blocks)
         return d
 
@@ -364,7 +365,7 @@ class Run:
         written before walks were kept."""
         if self.best is None or not (self.dir / rundir.BEST).is_file():
             return None
-        if self.best_walk is not None and not self.config.episode.perturbations:
+        if self.best_walk is not None and not self.config.episode.perturbed:
             return self.best_walk
         genome, cfg, _ = load_genome(self.dir / rundir.BEST)
         return cfg.nominal().build().run(genome).walk()
@@ -476,7 +477,8 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     genome, cfg, _ = load_genome(path)
     if cfg.body != episode.body or cfg.controller != episode.controller:
         raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
-    if len(genome) < layout.size and cfg.controller_options == {k: v for k, v in episode.controller_options.items() if k != "inputs"}:
+    same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
+    if len(genome) < layout.size and same:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
     return layout.validate(genome, what=f"genome in {path}")
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..bodies.base import Body
 from ..errors import ConfigError
-from ..options import NoOptions, parse
+from ..options import NoOptions, taken
 from ..sim import Sims
 
 
@@ -27,7 +27,7 @@ class Task:
     """Base class: no sensors, no bookkeeping; subclasses define fitness."""
 
     name = "task"
-    #: the task's options (a dataclass of :func:`evobiped.options.option` fields); constructed as ``cls(**options)``
+    #: the task's options (a dataclass of :func:`evobiped.options.option` fields); constructed as ``cls(options)``
     Options: ClassVar[type] = NoOptions
     #: full episodes per genome, each from the initial state (e.g. one per sound source)
     presentations: int = 1
@@ -36,8 +36,8 @@ class Task:
     #: named fitness criteria: name -> the task options that select it (the study's conditions, ``evolve --cyclic``)
     criteria: ClassVar[dict[str, dict]] = {}
 
-    def __init__(self, **options):
-        self.options = parse(self.Options, options, f"{self.name} task_options")
+    def __init__(self, options: Any = None, **given):
+        self.options = taken(self.Options, options, given, f"{self.name} task_options")
 
     @classmethod
     def criterion(cls, name: str, flag: str) -> dict:
