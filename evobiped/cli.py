@@ -475,7 +475,7 @@ def run_robustness_cmd(args) -> int:
 # ---------------------------------------------------------------- g3
 def add_g3(sub) -> None:
     p = sub.add_parser("g3", help="run the G3 gait generator (Pribe et al. 1997) at GO levels; gait table and PNGs")
-    from .controllers.g3_network import PRESETS
+    from .experiments.g3.network import PRESETS
 
     p.add_argument("preset", help=f"parameter set: {', '.join(PRESETS)}")
     lv = p.add_mutually_exclusive_group()
@@ -494,7 +494,7 @@ def add_g3(sub) -> None:
 
 
 def run_g3_cmd(args) -> int:
-    from .controllers import g3_network as g3
+    from .experiments.g3 import network as g3
     from .experiments.g3.simulation import go_sweep
     from .errors import ConfigError
 
@@ -667,7 +667,7 @@ def run_taga_cmd(args) -> int:
 
         body = {k: v for k, v in opts.items() if k != "preset"}
         cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=seconds, body_options=body, controller_options={"u0": args.u0[0]})
-        save_genome(args.save_genome, cfg.build().controller.preset_genome(args.preset), cfg, preset=args.preset)
+        save_genome(args.save_genome, tx.preset_genome(cfg.build().controller, args.preset), cfg, preset=args.preset)
     if args.push:
         if len(args.u0) != 1:
             raise UserError("--push takes one --u0 value")

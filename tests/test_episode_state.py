@@ -9,6 +9,8 @@ import pytest
 
 from evobiped.bodies import BODIES
 from evobiped.episode import Episode, EpisodeConfig
+from evobiped.experiments.taga.parameters import preset_genome
+from evobiped.experiments.taga.walking import set_push
 from evobiped.genome_file import load_genome
 from evobiped.tasks import TASKS
 
@@ -34,7 +36,7 @@ def _taga_changes(ep, state, which: str) -> None:
     """Two ways to go on: a faster rhythm and a push on the hip, or a slower one and none."""
     if which == "fast":
         state.params["u0"][:] = 6.5
-        ep.body.set_push(state.sims, np.arange(2), "hip", 60.0)
+        set_push(state.sims, np.arange(2), "hip", 60.0)
     else:
         state.params["u0"][:] = 4.5
 
@@ -43,7 +45,7 @@ def test_a_taga_walk_forked_mid_walk_continues_each_way_as_a_fresh_run():
     """Fork at 0.6 s; one copy speeds up and is pushed, the other slows down.  Each equals a fresh run
     that made the same change at 0.6 s, bit for bit (ground contacts and pushes included)."""
     ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=1.2).build()
-    g = np.tile(ep.controller.preset_genome(), (2, 1))
+    g = np.tile(preset_genome(ep.controller), (2, 1))
     state = ep.advance(ep.start(g), 0.6)
     fork = state.copy()
     assert fork.sims is not state.sims and fork.sims.extra["taga"]["rest"] is not state.sims.extra["taga"]["rest"]
@@ -143,7 +145,7 @@ def test_a_controller_s_advance_is_its_actions_through_step():
     """``advance`` is the controller's actions through ``step``: feeding a controller-less episode the
     actions a Taga walker's ``advance`` applied (as its listener saw them) gives the same walk, bit for bit."""
     ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=1.0).build()
-    g = np.tile(ep.controller.preset_genome(), (2, 1))
+    g = np.tile(preset_genome(ep.controller), (2, 1))
 
     class Actions:
         def __init__(self):

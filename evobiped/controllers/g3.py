@@ -34,9 +34,7 @@ import numpy as np
 
 from ..contract import Needs
 from ..errors import ConfigError
-from .g3_network import PRESETS as G3_PRESETS
-from .g3_network import preset as g3_preset
-from .g3_network import rk4_step
+from .g3_network import CELLS, rk4_step
 from ..genome import GeneBlock, GenomeLayout
 from ..options import option
 from .base import Controller, ControllerOptions
@@ -76,7 +74,7 @@ class G3Options(ControllerOptions):
     lag: float = option(0.05, "GO lag of each channel behind the previous one", unit="model time", low=0)
     time_scale: float = option(10.0, "model time units per second of simulated time", unit="1/s", above=0)
     max_step: float = option(0.05, "largest RK4 step", unit="model time", above=0)
-    preset: str = option("fig4", "cell constants A-G2 of this G3 preset", choices=tuple(G3_PRESETS))
+    preset: str = option("fig4", "cell constants A-G2 of this published parameter set", choices=tuple(CELLS))
 
 
 class G3Controller(Controller):
@@ -103,7 +101,7 @@ class G3Controller(Controller):
         self.input_names = ()
         self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)
         self.go_times, self.go_levels = _schedule(go)
-        self.cells = g3_preset(preset).network.cells
+        self.cells = CELLS[preset]
         span = self.dt * self.time_scale  # model units per control period
         self.substeps = int(np.ceil(span / max_step - 1e-9))
         self.h = span / self.substeps
