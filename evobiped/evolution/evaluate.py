@@ -8,11 +8,9 @@ does not depend on the backend or on the number of workers.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import queue
 import signal
-import sys
 from abc import ABC, abstractmethod
 from concurrent.futures import ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -23,7 +21,7 @@ import numpy as np
 from ..episode import Episode, EpisodeConfig, EpisodeResult
 from ..errors import ConfigError, UserError
 from ..net import connect_error
-from .pool import spawn_pool, stop_pool
+from .pool import silenced_stderr, spawn_pool, stop_pool
 
 BACKENDS = ("serial", "process", "thread", "ray")
 
@@ -201,20 +199,6 @@ class ThreadEvaluator(Evaluator):
         self.pool.shutdown(wait=True)
 
 
-@contextlib.contextmanager
-def _silenced_stderr():
-    """Send file descriptor 2 (C/C++ libraries' logs too) to /dev/null for a while."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-        yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-
-
 def check_reachable(address: str, timeout: float = 5.0) -> None:
     """UserError unless ``host:port`` (or ``ray://host:port``) accepts a TCP connection.
 
@@ -248,7 +232,7 @@ def init_ray(address: str | None, workers: int | None):
         check_reachable(address)
     try:
         kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
-        with _silenced_stderr():  # Ray's C++ client logs a warning per connection retry
+        with silenced_stderr():  # Ray's C++ client logs a warning per connection retry
             ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
     except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...
         where = f" at {address}" if address else ""
@@ -260,7 +244,11 @@ def init_ray(address: str | None, workers: int | None):
 
 
 class RayEvaluator(Evaluator):
-    """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
+    """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode.
+
+    An actor that dies is restarted and its batch sent again, at most :data:`MAX_RETRIES` times; one lost for
+    good (its node died) stops the generation with a UserError, the run's last checkpoint intact.
+    """
 
     def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None):
         super().__init__(episode)
@@ -285,7 +273,14 @@ class RayEvaluator(Evaluator):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
-        return concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
+        try:
+            return concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
+        except self.ray.exceptions.RayError as exc:
+            if isinstance(exc, self.ray.exceptions.RayTaskError):
+                raise  # an error in evobiped's own code, not a lost worker
+            # a worker beyond its restarts, or one on a node that died: the generation is lost, not the run
+            raise UserError(f"Ray lost a worker ({type(exc).__name__}: a node died, or a worker died {MAX_RETRIES + 1} times); "
+                            "the last checkpoint is kept: resume the run with evobiped evolve --resume") from None
 
     def close(self):
         for a in self.actors:
@@ -303,6 +298,7 @@ def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: in
         raise ConfigError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
     if workers is not None and workers < 1:
         raise ConfigError(f"workers must be >= 1, got {workers}")
+    episode.check()  # here, once, whatever the backend: a worker never meets a bad value
     if backend == "serial":
         return SerialEvaluator(episode)
     if backend == "ray":
