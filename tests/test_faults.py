@@ -597,7 +597,26 @@ def test_a_run_directory_that_cannot_be_listed(tmp_path, capsys):
 
 
 # ---- a Ray worker lost for good (its node died)
-def test_a_lost_ray_worker_is_one_line(monkeypatch):
+class FakeActorPool:
+    """Ray's ActorPool whose results are ``outcome()`` (an exception to raise)."""
+
+    outcome = None
+
+    def __init__(self, actors):
+        self.pending = 0
+
+    def submit(self, fn, value):
+        self.pending += 1
+
+    def has_next(self):
+        return self.pending > 0
+
+    def get_next(self, timeout=None):
+        raise self.outcome()
+
+
+@pytest.mark.parametrize("how", ["node died error", "node dead while waiting"])
+def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
     ray = pytest.importorskip("ray")
     from types import SimpleNamespace
 
@@ -605,17 +624,17 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch):
     from evobiped.errors import UserError
     from evobiped.evolution.evaluate import RayEvaluator
 
-    class Pool:
-        def __init__(self, actors):
-            pass
-
-        def map(self, fn, items):
-            raise ray.exceptions.NodeDiedError("the node running this actor died")
-
-    ev = RayEvaluator.__new__(RayEvaluator)  # no cluster: the actor pool of one whose node died
-    ev.config, ev.chunk, ev.actors = EpisodeConfig(seconds=0.1), None, [None]
-    ev.ray = SimpleNamespace(util=SimpleNamespace(ActorPool=Pool), exceptions=ray.exceptions)
-    with pytest.raises(UserError, match=r"^Ray lost a worker \(NodeDiedError: .*resume the run with evobiped evolve --resume$"):
+    if how == "node died error":  # the result of a task on the lost node
+        monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))
+        words = r"^Ray lost a worker \(NodeDiedError: .*resume the run with evobiped evolve --resume$"
+    else:  # Ray waits for room to restart the actor: no result, ever
+        monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: TimeoutError("Timed out waiting for result")))
+        words = r"^a Ray node running this run's workers died \(1 of 2 nodes lost\); .*evobiped evolve --resume$"
+    ev = RayEvaluator.__new__(RayEvaluator)  # no cluster: actors on nodes a and b, b dead
+    ev.config, ev.chunk, ev.actors, ev.nodes = EpisodeConfig(seconds=0.1), None, [None, None], {"a", "b"}
+    nodes = lambda: [{"NodeID": "a", "Alive": True}, {"NodeID": "b", "Alive": False}]  # noqa: E731
+    ev.ray = SimpleNamespace(util=SimpleNamespace(ActorPool=FakeActorPool), exceptions=ray.exceptions, nodes=nodes)
+    with pytest.raises(UserError, match=words):
         ev.evaluate(np.zeros((2, 3)))
 
 

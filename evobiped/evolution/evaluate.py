@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import queue
 import signal
+import threading
 from abc import ABC, abstractmethod
 from concurrent.futures import ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -19,7 +20,7 @@ import dataclasses
 import numpy as np
 
 from ..episode import Episode, EpisodeConfig, EpisodeResult
-from ..errors import ConfigError, UserError
+from ..errors import STOP_SIGNALS, ConfigError, UserError
 from ..net import connect_error
 from .pool import silenced_stderr, spawn_pool, stop_pool
 
@@ -96,6 +97,8 @@ _worker_episode: Episode | None = None
 
 #: times a generation's lost batches are sent again after worker deaths before the run gives up
 MAX_RETRIES = 3
+#: seconds between checks, while a generation waits for Ray actors, that their nodes are alive
+NODE_CHECK_PERIOD = 5.0
 
 
 def _init_worker(config: EpisodeConfig) -> None:
@@ -230,6 +233,7 @@ def init_ray(address: str | None, workers: int | None):
         return ray, False
     if address:
         check_reachable(address)
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, *STOP_SIGNALS)}
     try:
         kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
         with silenced_stderr():  # Ray's C++ client logs a warning per connection retry
@@ -240,14 +244,19 @@ def init_ray(address: str | None, workers: int | None):
         if address and os.environ.get("RAY_AUTH_MODE") != "token":
             hint = " (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and its token: see `ray get-auth-token`)"
         raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
+    if threading.current_thread() is threading.main_thread():
+        for s, h in handlers.items():  # ray.init puts its own in place (SIGTERM: exit status 15, no checkpoint line)
+            if h is not None:
+                signal.signal(s, h)
     return ray, True
 
 
 class RayEvaluator(Evaluator):
     """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode.
 
-    An actor that dies is restarted and its batch sent again, at most :data:`MAX_RETRIES` times; one lost for
-    good (its node died) stops the generation with a UserError, the run's last checkpoint intact.
+    An actor that dies is restarted and its batch sent again, at most :data:`MAX_RETRIES` times.  One lost for
+    good, or one whose node died (checked every :data:`NODE_CHECK_PERIOD` s while a generation waits: Ray would
+    wait forever for room to restart it), stops the generation with a UserError, the run's last checkpoint intact.
     """
 
     def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None):
@@ -267,14 +276,33 @@ class RayEvaluator(Evaluator):
                 _fault_point()
                 return _evaluate(self.episode, genomes, key)
 
+            def node(self):
+                return ray.get_runtime_context().get_node_id()
+
         self.actors = [_Worker.remote(episode) for _ in range(max(1, n))]
+        self.nodes = set(ray.get([a.node.remote() for a in self.actors]))  # where they run
+
+    def _check_nodes(self) -> None:
+        """UserError if a node that runs one of the actors has died."""
+        alive = {n["NodeID"] for n in self.ray.nodes() if n["Alive"]}
+        if not self.nodes <= alive:
+            raise UserError(f"a Ray node running this run's workers died ({len(self.nodes - alive)} of {len(self.nodes)} nodes lost); "
+                            "the last checkpoint is kept: resume the run with evobiped evolve --resume")
 
     def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
+        for g in pieces:
+            pool.submit(lambda a, g: a.evaluate.remote(g, key), g)
+        parts = []
         try:
-            return concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
+            while pool.has_next():
+                try:
+                    parts.append(pool.get_next(timeout=NODE_CHECK_PERIOD))
+                except TimeoutError:
+                    self._check_nodes()
+            return concat(parts)
         except self.ray.exceptions.RayError as exc:
             if isinstance(exc, self.ray.exceptions.RayTaskError):
                 raise  # an error in evobiped's own code, not a lost worker
