@@ -1,5 +1,5 @@
-"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a dead worker, two writers,
-a full disk, tampered files and hostile configs.
+"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a killed run's processes, a dead worker, a lost Ray node, two writers,
+a full disk, tampered files (huge numbers, foreign formats) and hostile configs.
 
 Each fault ends in a completed run equal to an undisturbed one (wall times aside) or in one line on
 stderr with exit status 2 and nothing lost.  Runs are tiny (4 walkers, 0.5 s episodes, 2 generations):
