@@ -10,13 +10,13 @@ PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
 #: bottom to top; a unit may import its own modules and units of lower layers only
 LAYERS: list[set[str]] = [
     {"errors", "__version__"},
-    {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping"},
+    {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping", "provenance"},
     {"contract", "options"},
     {"perturb"},
     {"bodies", "controllers", "tasks"},
     {"episode", "envs"},
-    {"genome_file", "rundir"},
-    {"robustness"},
+    {"genome_file", "rundir", "outcome"},
+    {"robustness", "distill"},
     {"record"},
     {"evolution"},
     {"bench", "readme"},
