@@ -17,7 +17,7 @@ import sys
 import numpy as np
 
 from . import __version__
-from .errors import UserError
+from .errors import UserError, exit_status, stop_on_signals
 from .progress import Progress, hms
 from .tasks.steer import with_sources
 
@@ -316,10 +316,10 @@ def _evolve(run, evaluator, backend: str, args) -> int:
 
         try:
             summary = run.evolve(evaluator, progress)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
             print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
                   f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
-            return 130
+            return exit_status(exc)
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
@@ -590,9 +590,9 @@ def run_study_cmd(args) -> int:
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     try:
         outcomes = run_study(args.out, cfg, backend=args.backend, workers=args.workers, address=args.address, progress=say)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("evobiped: study interrupted; run the same command again to resume (finished runs are kept, the others resume from their checkpoints)", file=sys.stderr)
-        return 130
+        return exit_status(exc)
     for path in write_results(args.out, cfg, outcomes):
         say(f"wrote {path}")
     if args.replays:
@@ -819,6 +819,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
     try:
         return int(args.func(args) or 0)
     except UserError as exc:
@@ -835,11 +836,13 @@ def main(argv: list[str] | None = None) -> int:
         where = Path(exc.filename)
         if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
             where = where.parent
-        print(f"evobiped: error: {exc.strerror or exc}: {where}", file=sys.stderr)
+        print(f"evobiped: error: cannot access {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("evobiped: interrupted", file=sys.stderr)
-        return 130
+        return exit_status(exc)
+    finally:
+        restore()
 
 
 if __name__ == "__main__":

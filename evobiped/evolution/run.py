@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import __version__, provenance, rundir
 from ..episode import EpisodeConfig
-from ..errors import ConfigError, UserError
+from ..errors import STOP_SIGNALS, ConfigError, Interrupted, UserError, raise_interrupted
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
@@ -341,8 +341,8 @@ class Run:
     # ---- files
     def checkpoint(self) -> None:
         """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
-        Ctrl-C waits until all are written."""
-        with _sigint_deferred():
+        Ctrl-C (SIGTERM, SIGHUP) waits until all are written."""
+        with _signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
@@ -404,23 +404,27 @@ class Run:
 
 
 @contextlib.contextmanager
-def _sigint_deferred():
-    """Hold Ctrl-C back for the duration and raise it right after (main thread only).
+def _signals_deferred():
+    """Hold Ctrl-C (and SIGTERM/SIGHUP where they stop the command, see :func:`~evobiped.errors.stop_on_signals`)
+    back for the duration and raise it right after (main thread only).
 
     A Python-level handler, not a signal mask: the signal may be delivered to
     any thread (Rerun's, for one), but Python handlers always run in the main thread.
+    Signals this process ignores or handles otherwise (pool workers) are left alone.
     """
-    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        yield  # another thread, or a process that ignores or handles Ctrl-C itself (pool workers)
+    if threading.current_thread() is not threading.main_thread():
+        yield
         return
+    raising = {signal.SIGINT: signal.default_int_handler, **{s: raise_interrupted for s in STOP_SIGNALS}}
     caught = []
-    old = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    old = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s, h in raising.items() if signal.getsignal(s) is h}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        for s, h in old.items():
+            signal.signal(s, h)
     if caught:
-        raise KeyboardInterrupt
+        raise Interrupted(caught[0])
 
 
 #: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
