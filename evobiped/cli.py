@@ -362,6 +362,13 @@ def add_replay(sub) -> None:
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    p.add_argument("--video", metavar="FILE", help="also render a video, MP4 or GIF by the suffix, without a display "
+                   "(MuJoCo's offscreen renderer; MUJOCO_GL unset: a display's GLFW, else EGL, else OSMesa); "
+                   "the frames go into the recording too")
+    p.add_argument("--video-size", nargs=2, type=positive_int, metavar=("W", "H"), default=[480, 360],
+                   help="size of each panel in pixels, even numbers (default 480 360; a steering walker gets one panel per source)")
+    p.add_argument("--video-fps", type=positive_float, default=25.0, metavar="FPS", help="frames per simulated second (default 25: real time)")
+    p.add_argument("--video-window", nargs=2, type=float, metavar=("T0", "T1"), help="only simulated times T0..T1 s (default: all)")
     add_source_flag(p)
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_replay_cmd)
@@ -374,6 +381,13 @@ def run_replay_cmd(args) -> int:
     from .record.source import resolve
     from .rundir import figures_dir
 
+    video_flags = args.video_window is not None or args.video_size != [480, 360] or args.video_fps != 25.0
+    if args.video is None and video_flags:
+        refuse("--video-size/--video-fps/--video-window", "they shape the video: give --video FILE too")
+    if any(v % 2 for v in args.video_size):
+        refuse("--video-size", f"width and height must be even (H.264), got {args.video_size[0]} {args.video_size[1]}")
+    if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
+        refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
     source = resolve(args.source, args.generation)
     figures = args.figures
     if figures == "":
@@ -381,9 +395,13 @@ def run_replay_cmd(args) -> int:
         figures = figures_dir(base, source.label)
     seconds = args.seconds or source.config.seconds
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
+    frames = Progress("replay video", 1.0, "frames rendered", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
-               listener=progress.listener(), sources=args.sources)
+               listener=progress.listener(), sources=args.sources, video=args.video,
+               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window, progress=frames))
     progress.finish()
+    if args.video:
+        frames.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
@@ -399,6 +417,8 @@ def run_replay_cmd(args) -> int:
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")
+    if r.video is not None:
+        print(f"video: {r.video}")
     return 0 if (r.matches or not r.compared or r.stored_fitness is None) else 1
 
 
