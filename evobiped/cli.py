@@ -161,7 +161,8 @@ def walk_line(walk: dict) -> str:
 
 # ---------------------------------------------------------------- evolve
 def add_evolve(sub) -> None:
-    p = sub.add_parser("evolve", help="evolve controllers with the GA of Reil & Husbands (defaults: the paper's)")
+    what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings) or CMA-ES (--optimizer cma)"
+    p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
@@ -291,7 +292,7 @@ def run_evolve_cmd(args) -> int:
 
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
-    from .evolution.run import eta_seconds
+    from .progress import time_left
     from .rundir import HISTORY
 
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
@@ -302,14 +303,20 @@ def _evolve(run, evaluator, backend: str, args) -> int:
     with evaluator, contextlib.ExitStack() as stack:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
+        line = Progress("evolve", c.generations, "generations", quiet=args.quiet)
+        walls, simulated = [], []  # per generation of this session: wall s, simulated s
+
         def progress(s):
             if log is not None:
                 log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
-            eta = eta_seconds(s, run.history)
-            say(f"gen {s.generation:4d}/{s.generations_total - 1}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
-                f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
-                f"elapsed {hms(run.wall)}  left ~{hms(eta)}")
+            walls.append(s.wall_seconds)
+            simulated.append(s.simulated_seconds)
+            left = time_left(walls, simulated, s.generations_total - s.generation - 1)
+            best = run.best or {"fitness": s.best, "fell": s.best_fell}
+            line.report(s.generation + 1, f"best {best['fitness']:.3f} {'(fell)' if best['fell'] else '(up)'}, this generation's "
+                        f"{s.best:.3f} {'(fell)' if s.best_fell else '(up)'}, mean {s.mean:.3f}, worst {s.worst:.3f}; "
+                        f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated", left=left)
 
         try:
             summary = run.evolve(evaluator, progress)

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import math
 import os
 import signal
 import threading
@@ -103,6 +102,8 @@ class GenerationStats:
     best_fell: bool = False
     evals_per_second: float = 0.0
     generations_total: int = 0
+    #: simulated seconds of this generation's evaluations, every presentation's row until it ended (a fall or T)
+    simulated_seconds: float = 0.0
 
     def row(self) -> list:
         return [getattr(self, c) for c in HISTORY_COLUMNS]
@@ -287,7 +288,8 @@ class Run:
         """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
         ga = self.ga
         pop, unknown = ga.ask()
-        ga.tell(evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation)))
+        result = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
+        ga.tell(result)
         f, outcome = ga.fitness, ga.outcome
         b = int(ga.ranking()[0])
         g = ga.generation
@@ -303,6 +305,7 @@ class Run:
             wall_seconds=0.0,
             best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
+            simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
         )
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed, generation=g)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
@@ -442,11 +445,3 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     if len(genome) < layout.size and cfg.controller_options == {k: v for k, v in episode.controller_options.items() if k != "inputs"}:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
     return layout.validate(genome, what=f"genome in {path}")
-
-
-def eta_seconds(stats: GenerationStats, history: list[list]) -> float:
-    done = len(history)
-    if not done:
-        return math.nan
-    walls = rundir.column(history, "wall_seconds")
-    return float(np.mean(walls[-5:])) * (stats.generations_total - done)
