@@ -304,19 +304,24 @@ def _evolve(run, evaluator, backend: str, args) -> int:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
         line = Progress("evolve", c.generations, "generations", quiet=args.quiet)
-        walls, simulated = [], []  # per generation of this session: wall s, simulated s
+        walls, clocks = [], []  # per generation of this session: wall s, longest episode s
 
         def progress(s):
             if log is not None:
                 log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
             walls.append(s.wall_seconds)
-            simulated.append(s.simulated_seconds)
-            left = time_left(walls, simulated, s.generations_total - s.generation - 1)
+            clocks.append(s.longest_seconds)
+            # episodes lengthen as walkers learn to stay up: the time left if every generation's longest episode runs
+            # its T (the run's aim), and if they stay as short as now
+            steps = s.generations_total - s.generation - 1
+            full, short = time_left(walls, clocks, steps, ahead=c.episode.seconds), time_left(walls, clocks, steps)
+            shorter = f"; {hms(short)} if episodes stay as short as now" if short < 0.75 * full else ""
             best = run.best or {"fitness": s.best, "fell": s.best_fell}
             line.report(s.generation + 1, f"best {best['fitness']:.3f} {'(fell)' if best['fell'] else '(up)'}, this generation's "
                         f"{s.best:.3f} {'(fell)' if s.best_fell else '(up)'}, mean {s.mean:.3f}, worst {s.worst:.3f}; "
-                        f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated", left=left)
+                        f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated, longest episode "
+                        f"{s.longest_seconds:.1f} s{shorter}", left=full)
 
         try:
             summary = run.evolve(evaluator, progress)
@@ -470,7 +475,10 @@ def run_robustness_cmd(args) -> int:
     report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after,
               "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
     write_json(out / f"{stem}.json", report)
-    png = robustness_figure(trials, out / f"{stem}.png", title=f"Robustness battery: {source.genome_path}")
+    seed = source.meta.get("seed")
+    who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
+    png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
+                            title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s)\n{who}")
     if args.json:
         print(json.dumps(rows))
     else:

@@ -10,7 +10,7 @@ a line on stderr at most every :data:`INTERVAL` seconds (and one at the end),
 nothing with ``quiet``.  By default the time left assumes the rest goes at the
 rate so far (elapsed / fraction done); work whose pieces grow, such as
 generations whose episodes lengthen as walkers learn to stay up, gives its own
-estimate (:func:`time_left`).
+estimate from the simulated seconds still to go (:func:`time_left`).
 """
 
 from __future__ import annotations
@@ -32,19 +32,22 @@ def hms(seconds: float) -> str:
     return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
 
-def time_left(wall: Sequence[float], simulated: Sequence[float], steps_left: int, *, window: int = 3) -> float:
-    """Wall seconds for ``steps_left`` more steps (generations), from simulated seconds still to go at the current rate.
+def time_left(wall: Sequence[float], clock: Sequence[float], steps_left: int, *, ahead: float | None = None,
+              window: int = 3) -> float:
+    """Wall seconds for ``steps_left`` more steps (generations), from the simulated seconds still to go at the
+    current rate.
 
-    ``wall[i]`` and ``simulated[i]`` are the wall-clock and simulated seconds of step i so far.  The rate
-    (wall s per simulated s) is that of the last ``window`` steps; each remaining step is assumed to simulate
-    at least as much as the latest and as the mean of the window (episodes lengthen as walkers stay up,
-    rarely shorten).  NaN before the first step."""
-    if not len(wall) or not len(simulated):
+    ``wall[i]`` is step i's wall-clock time (s) and ``clock[i]`` its simulated clock (s): the longest episode
+    of a generation, which its batches wait for.  The rate (wall s per simulated s) is that of the last
+    ``window`` steps.  Each remaining step is assumed to simulate ``ahead`` s (an evolution of walkers: the
+    episode length T, since episodes lengthen as walkers learn to stay up), by default at least as much as
+    the latest step and the window's mean (episodes as short as now).  NaN before the first step."""
+    if not len(wall) or not len(clock):
         return math.nan
-    w, s = float(sum(wall[-window:])), float(sum(simulated[-window:]))
+    w, s = float(sum(wall[-window:])), float(sum(clock[-window:]))
     if s <= 0:  # nothing simulated: each step costs what the last ones did
         return w / len(wall[-window:]) * steps_left
-    per_step = max(float(simulated[-1]), s / len(simulated[-window:]))
+    per_step = max(float(clock[-1]), s / len(clock[-window:])) if ahead is None else float(ahead)
     return w / s * per_step * steps_left
 
 

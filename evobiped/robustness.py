@@ -129,7 +129,7 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
                           push_duration=PUSH_DURATION, target_offset=np.array(offsets))
     runs = [(labels, main)]
     runs += [([("friction", f"mu = {mu:g}")], Trials.nominal(1, n_act, friction=mu)) for mu in FRICTIONS]
-    runs += [([("slope", f"{100 * s:+g} %")], Trials.nominal(1, n_act, slope=s)) for s in SLOPES]
+    runs += [([("slope", f"{100 * s:+g} % ({'uphill' if s > 0 else 'downhill'})")], Trials.nominal(1, n_act, slope=s)) for s in SLOPES]
     out = []
     n_trials = sum(len(names) for names, _ in runs)
     if progress is not None:  # trial-seconds: each trial's own simulated time, a fallen trial's rest counted at its batch's end

@@ -98,13 +98,16 @@ def test_progress_line_format(capsys):
 
 
 def test_time_left_counts_the_simulated_seconds_still_to_go():
-    """Generations whose episodes lengthen: the time left follows the simulated seconds, not the generation count."""
-    wall = [1.0, 1.0, 2.0, 4.0]  # s: the rate is 0.1 wall s per simulated s throughout
-    simulated = [10.0, 10.0, 20.0, 40.0]
-    # the latest generation simulated 40 s: 6 more cost at least 6 * 40 s * (7 s / 70 s)
-    assert progress.time_left(wall, simulated, 6) == pytest.approx(6 * 40 * 7 / 70)
-    # a shorter latest generation: the window's mean (30 s) is the floor
-    assert progress.time_left([3.0, 3.0, 0.6], [30.0, 30.0, 6.0], 2) == pytest.approx(2 * 22 * 6.6 / 66)
+    """Generations whose episodes lengthen: the time left follows the simulated seconds, not the generation count.
+    The numbers are the quick start's first five generations (walker-simbicon, seed 5): wall s, longest episode s."""
+    wall, clock = [1.34, 0.39, 0.36, 0.90, 0.44], [3.12, 2.18, 2.16, 14.3, 6.48]
+    rate = (0.36 + 0.90 + 0.44) / (2.16 + 14.3 + 6.48)  # wall s per simulated s, the last 3 generations
+    # 145 generations to go, each waiting for one 50 s episode: 537 s (the run took 642 s more)
+    assert progress.time_left(wall, clock, 145, ahead=50.0) == pytest.approx(rate * 50 * 145)
+    assert 0.7 * 642 < progress.time_left(wall, clock, 145, ahead=50.0) < 1.3 * 642
+    # episodes as short as now: at least the latest generation's and the window's mean (7.65 s)
+    assert progress.time_left(wall, clock, 145) == pytest.approx(rate * (2.16 + 14.3 + 6.48) / 3 * 145)
+    assert progress.time_left([1.0, 1.0, 4.0], [10.0, 10.0, 40.0], 2) == pytest.approx(2 * 40 * 6 / 60)
     assert progress.time_left([2.0, 4.0], [0.0, 0.0], 3) == pytest.approx(9.0)  # nothing simulated: wall per step
     assert np.isnan(progress.time_left([], [], 5))
 

@@ -104,6 +104,8 @@ class GenerationStats:
     generations_total: int = 0
     #: simulated seconds of this generation's evaluations, every presentation's row until it ended (a fall or T)
     simulated_seconds: float = 0.0
+    #: the longest of those episodes (s): the batches wait for their longest row
+    longest_seconds: float = 0.0
 
     def row(self) -> list:
         return [getattr(self, c) for c in HISTORY_COLUMNS]
@@ -306,6 +308,7 @@ class Run:
             best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
             simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
+            longest_seconds=float(np.max(result.end_time, initial=0.0)),
         )
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed, generation=g)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)

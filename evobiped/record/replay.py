@@ -152,9 +152,11 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         write_video(video, frames, opts.get("fps", FPS))
     figs = []
     if figures_dir is not None:
-        figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg))
+        seed = source.meta.get("seed")
+        who = f"{source.name}: {cfg.body}/{cfg.controller}" + (f", run seed {seed}" if seed is not None else "")
+        figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg), who=who)
         if others:
-            figs += steering_figures([traj] + [o.trajectory for o in others], figures_dir)
+            figs += steering_figures(trajs, figures_dir, who=who)
     stored = source.meta.get("fitness")
     return ReplayReport(
         fitness=float(result.fitness[0]),

@@ -324,5 +324,5 @@ def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dic
     histories = {c: [rundir.read_history(run_dir(d, c, k, config) / rundir.HISTORY) for k in range(config.runs)] for c in config.condition_names}
     return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
             distance_histograms(outcomes, config.condition_names, edges, d / "distances.png"),
-            fitness_graphs(histories, d / "fitness_graphs.png")]
+            fitness_graphs(histories, d / "fitness_graphs.png", seeds=[config.first_seed + k for k in range(config.runs)])]
 
