@@ -14,24 +14,29 @@ def robustness_figure(trials: list[Trial], path: str | Path, *, title: str, seco
     """Left: survival (%) per family of trials.  Right: each trial's forward displacement (m) against the time
     it stayed up (s), coloured by family, a legend decoding colours and markers (o: up at the end, x: fell);
     the trials that stayed up all ``seconds`` s are spread sideways in a band at the end (their time is
-    exactly ``seconds``), and the friction and slope trials are labelled with their values."""
+    exactly ``seconds``); families of a few trials (friction, slope) name each trial's value and outcome."""
     from matplotlib.lines import Line2D
 
     plt = pyplot()
     rows = summarise(trials)
     families = [r["family"] for r in rows]
     colours = {f: plt.get_cmap("tab10")(i % 10) for i, f in enumerate(families)}
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"width_ratios": [1, 1.5]})
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12.5, 5.6), gridspec_kw={"width_ratios": [1, 1.4]})
     y = np.arange(len(rows))[::-1]
     a.barh(y, [100 * r["survival"] for r in rows], color=[colours[f] for f in families])
+    few = {f: [t for t in trials if t.family == f] for f in families if sum(t.family == f for t in trials) <= 4}
     for yi, r in zip(y, rows):
-        a.text(min(100 * r["survival"] + 2, 86), yi, f"{r['survived']}/{r['trials']}", va="center", fontsize=9)
-    a.set_yticks(y, families)
+        text = f"{r['survived']}/{r['trials']}"
+        if r["family"] in few:  # name the values: which stayed up, which fell
+            text += "".join(f"\n{t.label}: {'up' if t.survived else f'fell at {t.end_time:.1f} s'}" for t in few[r["family"]])
+        a.text(min(100 * r["survival"] + 2, 60), yi, text, va="center", fontsize=9 if r["family"] not in few else 7,
+               bbox=dict(facecolor="white", edgecolor="none", alpha=0.85, pad=1.0))  # readable over a long bar
+    a.set_yticks(y, [f"{f}\n({', '.join(t.label for t in few[f])})" if f in few else f for f in families], fontsize=8)
     a.set_xlim(0, 100)
     a.set_xlabel("trials survived (%)")
     a.set_title("Survival per family", fontsize=10)
     end = seconds if seconds is not None else max(t.end_time for t in trials)
-    band = 0.06 * end  # survivors are spread over [end, end + band] by their order, not piled on one point
+    band = 0.1 * end  # survivors are spread over [end, end + band] by their order, not piled on one point
     k_up = 0
     n_up = max(1, sum(t.survived for t in trials))
     for f in families:
@@ -42,10 +47,6 @@ def robustness_figure(trials: list[Trial], path: str | Path, *, title: str, seco
         k_up += len(up)
         b.scatter(xs, [t.forward for t in up], color=colours[f], marker="o", s=18, zorder=3)
         b.scatter([t.end_time for t in down], [t.forward for t in down], color=colours[f], marker="x", s=24, zorder=3)
-        if f in ("friction", "slope"):  # few trials: name each one's value
-            for t, x in [*zip(up, xs), *((t, t.end_time) for t in down)]:
-                b.annotate(t.label, (x, t.forward), xytext=(-4, 0), textcoords="offset points", ha="right", va="center",
-                           fontsize=7, color=colours[f])
     b.axvspan(end, end + band, color="0.92", zorder=0)
     b.axhline(0, color="0.7", lw=0.8)
     b.set_xlim(0, end + 1.3 * band)
