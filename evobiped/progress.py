@@ -65,6 +65,13 @@ class Progress:
         self.last = self.t0
         self.done = 0.0
 
+    def restart(self, total: float, unit: str | None = None) -> None:
+        """The work is ``total`` (in ``unit``, default unchanged) and begins now (its clock restarts)."""
+        self.total = float(total)
+        self.unit = self.unit if unit is None else unit
+        self.t0 = self.last = time.perf_counter()
+        self.done = 0.0
+
     def say(self, message: str) -> None:
         """One free-form line (unless quiet)."""
         if self.quiet:

@@ -111,11 +111,11 @@ def render_frames(trajs: list[Trajectory], names: list[str], *, fps: float = FPS
                   renderer: FrameRenderer | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Frames of the trajectories side by side -> ``(frames (F, H, W, 3) uint8, times (F,) s)``, each panel
     ``size`` = (width, height) pixels, at most :data:`COLUMNS` panels per row (empty panels grey).
-    ``progress`` (optional, a :class:`~evobiped.progress.Progress`) hears the frames done (its total is set here);
+    ``progress`` (optional, a :class:`~evobiped.progress.Progress`) hears the frames done (restarted here with their number);
     ``renderer`` (optional, of that size): one opened earlier (the caller closes it), else one opened and closed here."""
     times = frame_times(trajs, fps, window)
     if progress is not None:
-        progress.total = float(len(times))
+        progress.restart(len(times))
     width, height = size
     cols = min(COLUMNS, len(trajs))
     rows = -(-len(trajs) // cols)
