@@ -263,6 +263,9 @@ def run_evolve_cmd(args) -> int:
         try:
             for repair in run.repairs:
                 print(f"evobiped: repaired: {repair}", file=sys.stderr)
+            if run.environment_differences:
+                print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
+                      " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
             if run.done:
                 print(f"run {args.resume} is already complete ({run.ga.generation} generations)")
                 run.close()
@@ -370,7 +373,7 @@ def add_replay(sub) -> None:
     p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd or next to the genome file)")
+    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, or runs/<stem>/replay_<stem>.rrd for a genome file)")
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
@@ -423,15 +426,32 @@ def run_replay_cmd(args) -> int:
         print(f"stored fitness not compared: {why}")
     elif r.stored_fitness is None:
         print("stored fitness: none in the genome file")
-    else:
+    elif not r.environment_differences:
         verdict = "equals it bit for bit" if r.matches else f"DIFFERS by {r.fitness - r.stored_fitness:.3g}"
-        print(f"stored fitness   = {r.stored_fitness!r}: the replay {verdict}")
+        print(f"stored fitness   = {r.stored_fitness!r}: the replay {verdict} (same numerical environment)")
+    else:
+        print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
+        print(f"stored fitness   = {r.stored_fitness!r}: "
+              + ("the replay equals it bit for bit all the same" if r.matches else f"drift {drift_text(r.fitness, r.stored_fitness)}"))
+    if r.outcome_checked:
+        if r.environment_differences and not r.compared:
+            print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
+        print("outcome drift: " + "; ".join(r.drift))
+        print("outcome holds within the declared tolerance" if not r.outcome_failures
+              else "outcome DIFFERS: " + "; ".join(r.outcome_failures))
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")
     if r.video is not None:
         print(f"video: {r.video}")
-    return 0 if (r.matches or not r.compared or r.stored_fitness is None) else 1
+    return 0 if r.reproduced else 1
+
+
+def drift_text(value: float, stored: float) -> str:
+    """``+3.4e-06 (8.2e-05 relative)``: how far a replayed fitness drifted from the stored one."""
+    d = value - stored
+    rel = f" ({abs(d) / abs(stored):.2g} relative)" if stored else ""
+    return f"{d:+.3g}{rel}"
 
 
 # ---------------------------------------------------------------- robustness
@@ -442,7 +462,7 @@ def add_robustness(sub) -> None:
     p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
     p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
                    help="pushes fall in the first stride after S s (default 10)")
-    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or beside the genome file)")
+    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or runs/<stem>/ for a genome file)")
     p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
                    help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -457,12 +477,12 @@ def run_robustness_cmd(args) -> int:
     from .record.robustness_figure import robustness_figure
     from .record.source import resolve
     from .robustness import battery, summarise, table
-    from .rundir import robustness_stem
+    from .rundir import genome_outputs, robustness_stem
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
     source = resolve(args.source, args.generation)
-    out = Path(args.out) if args.out else (source.run_dir or source.genome_path.parent)
+    out = Path(args.out) if args.out else (source.run_dir or genome_outputs(source.genome_path))
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
     stem = robustness_stem(source.label) if source.run_dir is not None else f"{source.genome_path.stem}_robustness"
@@ -650,18 +670,19 @@ def _nan_to_null(row: dict) -> dict:
 
 def run_taga_cmd(args) -> int:
     from .bodies import TagaBiped
+    from .controllers.matsuoka import MatsuokaOptions
     from .experiments.taga import walking as tx
-    from .options import option_bounds
+    from .options import check_value, option_bounds
     from .validate import number
 
     if args.preset not in tx.PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")
     for u in args.u0:
-        tx.check_u0(u)
-    low, high = option_bounds(TagaBiped.Options, "slope")  # the body's one declared limit, in % here
+        check_value(MatsuokaOptions, "u0", u, "--u0")
+    low, high = option_bounds(TagaBiped.Options, "slope")  # the body's declared limit, in % here
     number(args.slope, "--slope", low=100 * low, high=100 * high, unit="%")
-    if args.bg < 0:
-        raise UserError(f"--bg must be >= 0, got {args.bg:g}")
+    for flag in ("kg", "bg", "timestep", "slope_start"):
+        check_value(TagaBiped.Options, flag, getattr(args, flag), f"--{flag.replace('_', '-')}")
     seconds = 20.0 if args.seconds is None else args.seconds
     window = min(10.0, seconds) if args.window is None else args.window
     if args.push:
@@ -751,7 +772,75 @@ def run_bench_cmd(args) -> int:
     return 0
 
 
-SUBCOMMANDS = [add_episode, add_evolve, add_presets, add_robustness, add_study, add_bench, add_replay, add_taga, add_g3]
+# ---------------------------------------------------------------- distill
+def add_distill(sub) -> None:
+    p = sub.add_parser("distill", help="train a CTRNN to imitate a walker (DAgger + backpropagation through time); writes a genome file")
+    p.add_argument("teacher", metavar="TEACHER", help="a run directory (its best.json) or a genome JSON file, any controller")
+    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    p.add_argument("--config", metavar="FILE.toml", help="[distill] settings and [student] controller options")
+    p.add_argument("--neurons", type=int, metavar="N", help="the student's neurons (default 40)")
+    p.add_argument("--iterations", type=positive_int, metavar="I", help="DAgger iterations (default 5)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the rollouts' noise and the fit (default 0)")
+    p.add_argument("--out", metavar="FILE.json", help="the student's genome file (default runs/distill_<teacher>_seed<S>/student.json)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_distill_cmd)
+
+
+def run_distill_cmd(args) -> int:
+    from pathlib import Path
+
+    from .distill import distill, parse_options, student_config
+    from .fileio import read_toml, write_json
+    from .genome_file import save_genome
+    from .outcome import outcome
+    from .record.source import resolve
+
+    source = resolve(args.teacher, args.generation)
+    table = read_toml(args.config) if args.config else {}
+    unknown = sorted(set(table) - {"distill", "student"})
+    if unknown:
+        raise UserError(f"{args.config}: unknown section {unknown[0]!r} (choose from distill, student)")
+    settings = dict(table.get("distill", {}))
+    if args.iterations is not None:
+        settings["iterations"] = args.iterations
+    options = parse_options(settings)
+    overrides = dict(table.get("student", {}))
+    body = overrides.pop("body", source.config.body)
+    if body != source.config.body:
+        raise UserError(f"the student's body {body!r} differs from the teacher's {source.config.body!r}: a student imitates "
+                        "its teacher on the teacher's body")
+    if args.neurons is not None:
+        overrides["n_neurons"] = args.neurons
+    student = student_config(source.config, overrides)
+    student.layout()  # the contract (sensors, normalisation) checked before anything runs
+    out = Path(args.out) if args.out else Path("runs") / f"distill_{source.genome_path.stem}_seed{args.seed}" / "student.json"
+    if out.exists() and not out.is_file():
+        raise UserError(f"--out {out} exists and is not a file")
+    teacher_cfg = dataclasses.replace(source.config, perturbations={})
+    check = teacher_cfg.build().run(source.genome)
+    if check.fell[0]:
+        raise UserError(f"the teacher {source.genome_path} falls at {check.end_time[0]:.1f} s of its own episode "
+                        f"(latency {teacher_cfg.controller_options.get('latency', 0)} ticks): it cannot teach walking")
+    walk = check.walk()
+    progress = Progress("distill", 1.0, quiet=args.quiet)
+    progress.say(f"teacher {source.genome_path}: up {check.end_time[0]:g} s, {walk_line(walk)}")
+    report = distill(teacher_cfg, source.genome, student=student, options=options, seed=args.seed, progress=progress.say)
+    progress.finish()
+    episode = student.build()
+    done = episode.run(report.genome)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    save_genome(out, report.genome, student, fitness=float(done.fitness[0]), fell=bool(done.fell[0]),
+                end_time=float(done.end_time[0]), seed=args.seed, teacher=str(source.genome_path),
+                distill=dataclasses.asdict(options), iterations=report.iterations, outcome=outcome(done, episode.task.targets()))
+    write_json(out.with_name(out.stem + "_distill.json"), {"teacher": str(source.genome_path), "options": dataclasses.asdict(options),
+                                                          "iterations": report.iterations})
+    state = f"fell at t = {done.end_time[0]:.2f} s" if done.fell[0] else f"stayed up for {done.end_time[0]:.1f} s"
+    print(f"student ({student.controller_options['n_neurons']} neurons): {state}; {walk_line(done.walk())}")
+    print(f"genome file: {out}")
+    return 0
+
+
+SUBCOMMANDS = [add_episode, add_evolve, add_presets, add_robustness, add_study, add_bench, add_replay, add_distill, add_taga, add_g3]
 
 
 def build_parser() -> argparse.ArgumentParser:

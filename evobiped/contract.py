@@ -59,6 +59,8 @@ class Needs:
     max_actuators: int | None = None
     #: taken whole when the body and task satisfy it (e.g. feedback sensors), left out otherwise
     optional: "Needs | None" = None
+    #: reads its inputs normalised: each sensor it reads must have a declared standing value and scale
+    normalised: bool = False
 
 
 @dataclass(frozen=True)
@@ -70,6 +72,8 @@ class Offer:
     sensors: Mapping[str, int]
     #: the names of the task's sensors
     task_sensors: tuple[str, ...] = ()
+    #: sensor name -> (standing values, scales), for a controller that normalises its inputs
+    norms: Mapping[str, tuple] = field(default_factory=dict)
 
 
 def problem(needs: Needs, offer: Offer) -> str | None:
@@ -126,4 +130,18 @@ def wire(needs: Needs, offer: Offer, *, chosen: list[str] | None = None, what: s
         if needs.deaf and chosen:
             raise ConfigError(f"{what} reads no sensors; its inputs name {', '.join(chosen)}")
         names = list(chosen)
+    if needs.normalised:
+        bare = [n for n in names if n not in offer.norms]
+        if bare:
+            raise ConfigError(f"{what} normalises its inputs, but no standing value and scale is declared for "
+                              f"{', '.join(bare)} (declared: {', '.join(sorted(offer.norms)) or 'none'})")
     return {n: int(offer.sensors[n]) for n in names}
+
+
+def normaliser(inputs: Mapping[str, int], norms: Mapping[str, tuple]) -> tuple:
+    """``(centre (k,), scale (k,))`` for inputs ``{sensor: width}`` in order, from declared norms."""
+    import numpy as np
+
+    centre = np.concatenate([np.asarray(norms[n][0], float) for n in inputs]) if inputs else np.zeros(0)
+    scale = np.concatenate([np.asarray(norms[n][1], float) for n in inputs]) if inputs else np.ones(0)
+    return centre, scale

@@ -5,11 +5,14 @@ names the body, controller and task with their options, which is all a replay
 needs to rebuild the simulation)::
 
     {"format": "evobiped-genome/1", "genome": [...G floats...],
-     "episode": {EpisodeConfig fields}, ...metadata..., "version": "0.1.0"}
+     "episode": {EpisodeConfig fields}, ...metadata..., "version": "0.1.0",
+     "environment": {versions, numpy's SIMD kernels, machine: evobiped.provenance.current()}}
 
 The metadata is whatever the writer passes: a run's generation files carry
 ``fitness``, ``fell``, ``end_time`` (s), ``seed`` and ``generation``;
-``evobiped taga --save-genome`` carries ``preset``.  A reader returns it as a dict.
+``evobiped taga --save-genome`` carries ``preset``; a shipped walker carries ``outcome``
+(:func:`evobiped.outcome.outcome`), what a replay in another numerical environment checks.  A reader returns the
+metadata, ``environment`` included, as a dict.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from . import __version__
+from . import __version__, provenance
 from .episode import EpisodeConfig
 from .options import refuse_unknown
 from .errors import ConfigError, UserError
@@ -30,13 +33,15 @@ FORMAT = "evobiped-genome/1"
 
 
 def genome_text(genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> str:
-    """The exact content of a genome file for one genome ``(G,)``, its episode config and metadata."""
+    """The exact content of a genome file for one genome ``(G,)``, its episode config and metadata, with the
+    numerical environment of this process (:func:`evobiped.provenance.current`)."""
     obj = {
         "format": FORMAT,
         "genome": [float(x) for x in np.asarray(genome, float).ravel()],
         "episode": dataclasses.asdict(episode),
         **{k: _plain(v) for k, v in meta.items()},
         "version": __version__,
+        "environment": provenance.current(),
     }
     return json_text(obj)
 

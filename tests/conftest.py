@@ -1,7 +1,21 @@
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from evobiped.cli import main
+
+#: the repository's root: tests name its files by absolute path, since every test runs elsewhere
+ROOT = Path(__file__).resolve().parents[1]
+#: the shipped walkers
+WALKERS = ROOT / "docs" / "walkers"
+
+
+@pytest.fixture(autouse=True)
+def _outside_the_repository(tmp_path_factory, monkeypatch):
+    """Every test runs in an empty directory of its own, so that a command's default outputs (``runs/...``)
+    land there and never in the repository (tests/test_replay.py checks where they go)."""
+    monkeypatch.chdir(tmp_path_factory.mktemp("cwd"))
 
 
 @pytest.fixture

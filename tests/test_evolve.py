@@ -17,19 +17,20 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
+from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
 from evobiped.evolution.run import HISTORY_COLUMNS
 
 from .conftest import cli
 
-SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAConfig(population=8), generations=3, seed=7, backend="serial")
+SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAOptions(population=8), generations=3, seed=7, backend="serial")
 
 
 def fitness_history(run_dir) -> list[list[str]]:
-    """history.csv without the wall-clock column."""
+    """history.csv without the wall-clock column (the best's terms after the fixed columns)."""
     with open(Path(run_dir) / "history.csv") as f:
         rows = list(csv.reader(f))
-    assert rows[0] == list(HISTORY_COLUMNS)
+    assert rows[0][: len(HISTORY_COLUMNS)] == list(HISTORY_COLUMNS)
+    assert all(c.startswith("best_") for c in rows[0][len(HISTORY_COLUMNS) :])
     wall = HISTORY_COLUMNS.index("wall_seconds")
     return [r[:wall] + r[wall + 1 :] for r in rows[1:]]
 
@@ -248,7 +249,7 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
     """PD gains far beyond what the 20 ms step can integrate blow every walker up: the run goes on."""
     cfg = RunConfig(
         episode=EpisodeConfig(seconds=1.0, body_options={"timestep": 0.02, "kp": 1e6, "kv": 0.0}),
-        ga=GAConfig(population=6),
+        ga=GAOptions(population=6),
         generations=2,
         backend="serial",
     )
@@ -328,3 +329,20 @@ def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
         signal.signal(signal.SIGINT, old)
     ck = json.loads((run.dir / "checkpoint.json").read_text())
     assert len(ck["history"]) == len(fitness_history(run.dir)) == 1
+
+
+def test_a_resume_in_another_numerical_environment_says_so(tmp_path, capsys):
+    """config.json records where the run started; a resume elsewhere notes that bit-identity ends there."""
+    from evobiped.cli import main
+
+    run = tmp_path / "run"
+    assert main(["evolve", "--population", "4", "--generations", "1", "--episode-seconds", "0.2", "--backend", "serial",
+                 "--out", str(run), "--quiet"]) == 0
+    assert main(["evolve", "--resume", str(run)]) == 0
+    assert "numerical environment" not in capsys.readouterr().err
+    cfg = json.loads((run / "config.json").read_text())
+    cfg["environment"]["numpy_simd"] = ["ELSEWHERE"]
+    (run / "config.json").write_text(json.dumps(cfg))
+    assert main(["evolve", "--resume", str(run)]) == 0
+    err = capsys.readouterr().err
+    assert "note: this run started in another numerical environment (numpy SIMD ELSEWHERE -> " in err

@@ -10,14 +10,16 @@ from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError
 from evobiped.genome_file import load_genome
 from evobiped.models import model_path
-from evobiped.perturb import PerturbationConfig, Trials
+from evobiped.perturb import PerturbationOptions, Trials
 
-WALKER = "docs/walkers/simbicon_seed1.json"
+from .conftest import WALKERS
+
+WALKER = str(WALKERS / "simbicon_seed1.json")
 PERTURBED = dict(presentations=3, pushes=2, push_force=10.0, target_noise=0.01, target_offset=0.02, pose_noise=0.02, friction=[0.8, 1.2])
 
 
 def test_trials_depend_on_seed_and_generation_only():
-    cfg = PerturbationConfig(**PERTURBED)
+    cfg = PerturbationOptions(**PERTURBED)
     a, b, c = (cfg.draw(k, seconds=20.0, n_actuators=6) for k in ((1, 4), (1, 4), (1, 5)))
     assert np.array_equal(a.push_start, b.push_start) and a.friction == b.friction and a.noise_seed == b.noise_seed
     assert not np.array_equal(a.push_start, c.push_start)

@@ -74,18 +74,24 @@ def test_run_directory_recording_holds_the_evolution_and_figures(run_dir, tmp_pa
     assert names == ["fitness.png", "ground_trajectory.png", "motion_sequence.png", "motor_neurons.png", "stick_figure.png"]
 
 
-def test_replay_of_a_genome_file_writes_next_to_it(tmp_path, capsys):
+def test_replay_of_a_genome_file_writes_under_runs_not_beside_it(tmp_path, capsys):
+    """A genome file may sit in a repository: the default recording goes to ./runs/<stem>/, not beside it."""
+    from pathlib import Path
+
     cfg = EpisodeConfig(seconds=1.0)
     ep = cfg.build()
     g = random_genomes(ep.controller.layout, 1, seed=3)[0]
     r = ep.run(g)
-    save_genome(tmp_path / "walker.json", g, cfg, fitness=r.fitness[0])
-    assert main(["replay", str(tmp_path / "walker.json")]) == 0
+    (tmp_path / "repo").mkdir()
+    save_genome(tmp_path / "repo" / "walker.json", g, cfg, fitness=r.fitness[0])
+    assert main(["replay", str(tmp_path / "repo" / "walker.json"), "--figures"]) == 0
     out = capsys.readouterr().out
     assert replayed(out) == r.fitness[0]
-    assert (tmp_path / "walker.rrd").is_file()
+    assert sorted(p.name for p in (tmp_path / "repo").iterdir()) == ["walker.json"]
+    assert (Path.cwd() / "runs" / "walker" / "replay_walker.rrd").is_file()
+    assert (Path.cwd() / "runs" / "walker" / "figures_walker" / "ground_trajectory.png").is_file()
     # a shorter replay is not compared with the stored fitness
-    assert main(["replay", str(tmp_path / "walker.json"), "--seconds", "0.1", "--out", str(tmp_path / "short.rrd")]) == 0
+    assert main(["replay", str(tmp_path / "repo" / "walker.json"), "--seconds", "0.1", "--out", str(tmp_path / "short.rrd")]) == 0
     assert "not compared" in capsys.readouterr().out
 
 
@@ -95,7 +101,55 @@ def test_a_different_stored_fitness_is_reported_and_fails(tmp_path, capsys):
     g = random_genomes(ep.controller.layout, 1, seed=3)[0]
     save_genome(tmp_path / "w.json", g, cfg, fitness=float(ep.run(g).fitness[0]) + 1e-12)
     assert main(["replay", str(tmp_path / "w.json")]) == 1
-    assert "DIFFERS" in capsys.readouterr().out
+    assert "DIFFERS by" in capsys.readouterr().out
+
+
+def _walker_file(path, *, environment=None, outcome_change=None, fitness_change=0.0):
+    """A shipped walker copied to ``path`` with its recorded environment, outcome and fitness altered."""
+    from evobiped.genome_file import load_genome
+
+    from .conftest import WALKERS
+
+    g, cfg, meta = load_genome(WALKERS / "simbicon_cma_seed5.json")
+    r = cfg.build().run(g)
+    from evobiped.outcome import outcome
+
+    done = outcome(r)
+    if outcome_change:
+        done["rows"][0].update(outcome_change)
+    save_genome(path, g, cfg, fitness=float(r.fitness[0]) + fitness_change, fell=False, end_time=50.0, outcome=done)
+    if environment is not None:
+        obj = json.loads(path.read_text())
+        obj["environment"].update(environment)
+        path.write_text(json.dumps(obj))
+
+
+def test_a_replay_in_another_numerical_environment_reports_the_drift_and_checks_the_outcome(tmp_path, capsys):
+    """Recorded under other numpy kernels: a fitness 1e-9 off is drift, not failure (exit 0) while the outcome
+    holds; an outcome 5 m and 10 deg away from the replay's is a failure (exit 1)."""
+    _walker_file(tmp_path / "w.json", environment={"numpy_simd": ["SOME_OTHER_KERNELS"]}, fitness_change=1e-9)
+    assert main(["replay", str(tmp_path / "w.json"), "--quiet", "--out", str(tmp_path / "w.rrd")]) == 0
+    out = capsys.readouterr().out
+    assert "numerical environment differs from the stored one: numpy SIMD SOME_OTHER_KERNELS -> " in out
+    assert "drift -1e-09" in out and "outcome holds within the declared tolerance" in out and "up 50 s (as stored)" in out
+    _walker_file(tmp_path / "far.json", environment={"numpy_simd": ["SOME_OTHER_KERNELS"]}, outcome_change={"distance": 33.0})
+    assert main(["replay", str(tmp_path / "far.json"), "--quiet", "--out", str(tmp_path / "w.rrd")]) == 1
+    assert "outcome DIFFERS: distance 38.63 m, stored 33.00 m (allowed +-1.65 m)" in capsys.readouterr().out
+    # in the recorded environment the same 1e-9 is a failure: bit for bit is promised there
+    _walker_file(tmp_path / "same.json", fitness_change=1e-9)
+    assert main(["replay", str(tmp_path / "same.json"), "--quiet", "--out", str(tmp_path / "w.rrd")]) == 1
+    assert "DIFFERS by -1e-09" in capsys.readouterr().out
+
+
+def test_every_written_file_records_its_numerical_environment(run_dir):
+    """config.json and every genome file of a run: versions, numpy's SIMD kernels, the machine."""
+    from evobiped import provenance
+
+    here = provenance.current()
+    for path in [run_dir / "config.json", run_dir / "best.json", *sorted((run_dir / "generations").glob("*.json"))]:
+        env = json.loads(path.read_text())["environment"]
+        assert env == json.loads(json.dumps(here)), path
+        assert set(env) >= {"evobiped", "python", "mujoco", "numpy", "numpy_simd", "machine", "system"}
 
 
 def _bad_sources(tmp_path, run_dir):

@@ -1,16 +1,20 @@
 """The robustness battery: its trial set, its numbers against direct episodes, and bad input."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from evobiped.cli import main
+from evobiped.errors import UserError
 from evobiped.genome_file import load_genome, save_genome
 from evobiped.perturb import Trials
 from evobiped.robustness import battery, summarise
 
-WALKER = "docs/walkers/simbicon_seed1.json"
+from .conftest import WALKERS
+
+WALKER = str(WALKERS / "simbicon_seed1.json")
 
 
 @pytest.fixture(scope="module")
@@ -48,9 +52,10 @@ def test_cli_writes_table_json_and_png(tmp_path, capsys):
     assert main(["robustness", str(tmp_path / "w.json"), "--seconds", "8", "--push-after", "4"]) == 0
     out = capsys.readouterr().out
     assert "push 10 N" in out and "offset 0.05 rad" in out
-    report = json.loads((tmp_path / "w_robustness.json").read_text())
+    report = json.loads((Path.cwd() / "runs" / "w" / "w_robustness.json").read_text())  # never beside the genome file
     assert len(report["trials"]) == 117 and report["seconds"] == 8.0
-    assert (tmp_path / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
+    assert (Path.cwd() / "runs" / "w" / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]
 
 
 @pytest.mark.parametrize("args, msg", [
@@ -64,13 +69,26 @@ def test_bad_arguments_one_line(tmp_path, capsys, args, msg):
     assert not (tmp_path / "o").exists()
 
 
-def test_a_body_without_pd_targets_is_refused(tmp_path, capsys):
+def test_on_the_sagittal_taga_body_the_battery_is_the_forward_and_backward_pushes():
+    """Found by role: Taga's left-foot contacts time the pushes; no hip-roll or PD-target offsets, no MuJoCo
+    ground to change, no sideways pushes.  Taga's walker pushed forward goes further than pushed back."""
     from evobiped.episode import EpisodeConfig
 
-    cfg = EpisodeConfig(body="taga", controller="ctrnn", seconds=2.0)
-    ep = cfg.build()
-    save_genome(tmp_path / "t.json", ep.controller.layout.init_mean, cfg)
-    assert main(["robustness", str(tmp_path / "t.json")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "PD targets" in err[0]
-    assert not (tmp_path / "t_robustness.json").exists()
+    ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=3.0).build()
+    trials = battery(ep, ep.controller.preset_genome(), seconds=3.0, push_after=1.0)
+    assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15) for _ in range(16)]
+    assert {t.label.split(",")[0] for t in trials} == {"forward", "backward"}
+    fwd = {t.label: t.forward for t in trials if t.family == "push 15 N"}
+    assert all(fwd[f"forward, phase {i}/8"] > fwd[f"backward, phase {i}/8"] + 0.01 for i in range(8))
+
+
+def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):
+    from evobiped.bodies.taga import TagaBiped
+    from evobiped.episode import Episode, EpisodeConfig
+
+    class Numb(TagaBiped):
+        contact_sensor = None
+
+    _, ctrl, task = EpisodeConfig(body="taga", controller="matsuoka").parts()
+    with pytest.raises(UserError, match="needs a body that declares its left foot's contact sensor; 'taga' does not"):
+        battery(Episode(Numb(), ctrl, task, seconds=2.0), ctrl.preset_genome(), seconds=2.0, push_after=1.0)

@@ -9,7 +9,7 @@ from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 from evobiped.tasks.steer import ear_signal
 
-from .conftest import cli
+from .conftest import WALKERS, cli
 
 E = 0.25  # the Reil pelvis: ears 0.25 m either side of its centre
 
@@ -188,7 +188,7 @@ def test_bad_sources_are_one_line(hearing_walker, tmp_path, capsys, argv, words)
 
 
 def test_a_source_for_a_walking_task_and_a_two_source_battery_are_refused(hearing_walker, tmp_path, capsys):
-    assert main(["episode", "--genome", "docs/walkers/simbicon_cma_seed5.json", "--source", "3", "3"]) == 2
+    assert main(["episode", "--genome", str(WALKERS / "simbicon_cma_seed5.json"), "--source", "3", "3"]) == 2
     assert main(["evolve", "--source", "3", "3", "--out", str(tmp_path / "y")]) == 2 and not (tmp_path / "y").exists()
     assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet"]) == 2
     assert "runs one presentation" in capsys.readouterr().err

@@ -1,28 +1,34 @@
-"""The walkers shipped in docs/walkers: each still walks as docs/walkers.md says, and still
-reaches its documented robustness-battery figures (docs/walkers/<name>_robustness.json)."""
+"""The walkers shipped in docs/walkers behave as docs/walkers.md says, on any machine.
+
+These tests assert behaviour (stays up, walks forward, reaches its sources, survives the battery's trials within
+one per family), never a stored fitness: the last bits of a 50 s walk depend on the numerical environment
+(evobiped.provenance), and the files were stored in one environment.  Bit-identity is tested between runs made on
+the machine running the tests (tests/test_evolve.py, tests/test_replay.py), and here in a subprocess whose numpy
+uses the other family of SIMD kernels.
+"""
 
 import dataclasses
 import json
-from pathlib import Path
 
 import pytest
 
 from evobiped.genome_file import load_genome
 from evobiped.robustness import battery, summarise
 
-WALKERS = Path(__file__).parents[1] / "docs" / "walkers"
-#: name -> (least distance in the first 50 s (m), largest |heading| (deg) from the initial facing)
-FORWARD_WALKERS = {"simbicon_cma_seed5": (35.0, 10.0), "simbicon_cma_seed3": (25.0, 20.0)}
+from .conftest import ROOT, WALKERS
+
+#: a forward walker (docs/walkers.md): no fall in 200 s, at least 20 m in its first 50 s, within 30 deg of the
+#: direction it faced at the start
+FORWARD_WALKERS = ["simbicon_cma_seed5", "simbicon_cma_seed3"]
 
 
-@pytest.mark.parametrize("name", sorted(FORWARD_WALKERS))
+@pytest.mark.parametrize("name", FORWARD_WALKERS)
 def test_a_forward_walker_walks_forwards_and_stays_up_200_s(name):
     genome, cfg, meta = load_genome(WALKERS / f"{name}.json")
     first = cfg.nominal().build().run(genome)
     walk = first.walk()
-    least, widest = FORWARD_WALKERS[name]
-    assert not first.fell[0] and first.fitness[0] == pytest.approx(meta["fitness"], rel=1e-9)
-    assert walk["distance"] >= least and abs(walk["heading_deg"]) <= widest
+    assert not first.fell[0] and first.end_time[0] == 50.0
+    assert walk["distance"] >= 20.0 and abs(walk["heading_deg"]) <= 30.0
     long = dataclasses.replace(cfg.nominal(), seconds=200.0).build().run(genome)
     assert not long.fell[0] and long.end_time[0] == 200.0
 
@@ -33,7 +39,9 @@ def test_a_shipped_walker_still_reaches_its_documented_battery_figures(name):
     genome, cfg, _ = load_genome(WALKERS / f"{name}.json")
     rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"]))
     got = {r["family"]: r["survived"] for r in rows}
-    assert got == {r["family"]: r["survived"] for r in documented["families"]}
+    want = {r["family"]: r["survived"] for r in documented["families"]}
+    assert got.keys() == want.keys()
+    assert all(abs(got[f] - want[f]) <= 1 for f in want), (got, want)  # one trial per family may tip across machines
 
 
 def test_a_forward_fitness_walker_replays_with_its_fitness_so_far(tmp_path, capsys):
@@ -55,12 +63,13 @@ def test_the_shipped_steering_walker_reaches_both_paper_sources_without_falling(
     assert not rows.fell.any() and np.all(rows.end_time == 50.0)
     distances = np.linalg.norm(rows.end_position - np.array([[10.0, 3.0], [10.0, -3.0]]), axis=1)
     assert np.all(distances < 1.0)
-    assert r.fitness[0] == pytest.approx(-distances.mean()) == pytest.approx(meta["fitness"], rel=1e-9)
+    assert r.fitness[0] == pytest.approx(-distances.mean())
 
 
 def test_the_six_source_steering_walker_reaches_sources_it_never_heard():
     """docs/walkers/steer_simbicon_six_sources.json on 15 sources at bearings -60..60 deg and 6, 10, 14 m (none a
-    training source): median final distance at most 1.5 m (documented: 0.48 m; it falls on arrival)."""
+    training source): median final distance at most 1.5 m (documented: 0.48 m on the machine that made the files;
+    it falls on arrival)."""
     import numpy as np
 
     from evobiped.tasks.steer import with_sources
@@ -70,4 +79,30 @@ def test_the_six_source_steering_walker_reaches_sources_it_never_heard():
                [7, -12.124], [12.124, -7], [14, 0], [12.124, 7], [7, 12.124]]  # as in docs/steering.md
     rows = with_sources(cfg, sources).build().run(genome).rows
     distances = np.linalg.norm(rows.end_position - np.array(sources), axis=1)
-    assert np.median(distances) <= 1.5 and np.median(distances) == pytest.approx(0.48, abs=0.01)
+    assert np.median(distances) <= 1.5
+
+
+@pytest.mark.parametrize("disable", ["", "X86_V4 AVX512_ICL"])
+def test_a_shipped_walker_replays_under_either_family_of_numpy_kernels(disable, tmp_path):
+    """`evobiped replay` in a subprocess with numpy's AVX-512 kernels allowed and disabled: bit for bit where the
+    subprocess's numerical environment is the recorded one, the same outcome within tolerance where it is not;
+    exit 0 either way (on a CPU without AVX-512 both runs are the recorded environment)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NPY_DISABLE_CPU_FEATURES": disable, "PYTHONPATH": str(ROOT)}
+    walker = WALKERS / "steer_simbicon_seed0.json"
+    probe = "import json, evobiped.provenance as p; print(json.dumps(p.current()))"
+    here = json.loads(subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True).stdout)
+    _, _, meta = load_genome(walker)
+    from evobiped.provenance import differences
+
+    same = not differences(meta["environment"], here)
+    run = subprocess.run([sys.executable, "-m", "evobiped", "replay", str(walker), "--quiet", "--out", str(tmp_path / "r.rrd")],
+                         env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    if same:
+        assert "equals it bit for bit (same numerical environment)" in run.stdout
+    else:
+        assert "numerical environment differs" in run.stdout and "outcome holds" in run.stdout

@@ -85,6 +85,7 @@ class ReilBiped(Body):
     action_kind: ClassVar[str] = "position"
     trunk: ClassVar[str] = "pelvis"
     floor_geom: ClassVar[str | None] = "floor"
+    contact_sensor: ClassVar[tuple[str, tuple[str, ...]]] = ("foot_contact", ("left", "right"))
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, a.split("_", 1)[0], a.split("_", 1)[1]) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {
@@ -95,6 +96,17 @@ class ReilBiped(Body):
         "pelvis_tilt_rate": 2,
         "com_from_feet": 4,
         "com_velocity": 2,
+    }
+    #: standing values (the reset pose: straight legs, feet under the hips 0.25 m either side of the centre of
+    #: mass) and scales of about one standard deviation of each reading in a 50 s walk of a balance walker
+    sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {
+        "joint_angles": ((0.0,) * 6, (0.5,) * 6),
+        "joint_velocities": ((0.0,) * 6, (4.0,) * 6),
+        "foot_contact": ((0.5, 0.5), (0.5, 0.5)),
+        "pelvis_tilt": ((0.0, 0.0), (0.2, 0.2)),
+        "pelvis_tilt_rate": ((0.0, 0.0), (1.5, 1.5)),
+        "com_from_feet": ((0.0, -0.25, 0.0, 0.25), (0.1, 0.1, 0.1, 0.1)),
+        "com_velocity": ((0.0, 0.0), (0.5, 0.5)),
     }
 
     Options: ClassVar[type] = ReilOptions

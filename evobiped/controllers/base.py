@@ -24,7 +24,7 @@ class Controller(ABC):
     name: ClassVar[str]
     #: how :func:`evobiped.mapping.to_action` reads the outputs: "unit": in [0, 1] spanning the joint's range;
     #: "centred": in [0, 1] with 0.5 at 0 rad; "signed": real-valued, centred on 0; "angle": joint targets in rad
-    output_kind: ClassVar[Literal["unit", "centred", "signed", "angle"]]
+    output_kind: ClassVar[Literal["unit", "centred", "centred_full", "signed", "angle"]]
 
     #: number of motor outputs (= the body's actuators)
     n_outputs: int
@@ -32,6 +32,10 @@ class Controller(ABC):
     input_names: tuple[str, ...] = ()
     #: control period in s, or None to step at every physics step
     dt: float | None
+    #: whether the episode hands it its inputs normalised (``Needs.normalised``), and with what:
+    #: ``(centre (k,), scale (k,))`` set by the episode; None: raw readings
+    normalises_inputs: bool = False
+    input_norm: tuple | None = None
 
     #: the controller's options (a dataclass of :func:`evobiped.options.option` fields)
     Options: ClassVar[type] = NoOptions
@@ -43,8 +47,10 @@ class Controller(ABC):
         ``cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)``."""
         return Needs()
 
-    def bind_period(self, dt: float) -> None:
-        """Told the control period (s) once the episode knows it (the physics step when ``dt`` is None)."""
+    def bound(self, dt: float) -> "Controller":
+        """This controller stepping at control period ``dt`` (s; the physics step when ``dt`` is None):
+        itself where the period makes no difference, else a copy (this one is left unchanged)."""
+        return self
 
     @property
     @abstractmethod

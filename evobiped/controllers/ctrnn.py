@@ -23,6 +23,28 @@ about a second; any [low, high] with low > dt / 2 can be configured.
 Genome (Fig. 4): n*n weights, then n time constants, then n biases (120 values
 for n = 10), then, if the controller has external inputs, k*n input weights.
 Weight w_ij (from neuron i to neuron j) is gene i*n + j.
+
+A network fit for senses (options beyond the paper; the paper's genome and
+order stay the default):
+
+- ``normalise_inputs``: each sensor reaches the network as (reading - its
+  standing value) / its scale, as the body (and task) declare beside each
+  sensor, so that a standing body gives inputs near 0, not constant biases;
+- ``input_weights`` / ``input_sigma``: the input weights' own range and initial
+  sigma (default: the recurrent weights' [-16, 16], sigma 8);
+- ``tau_scale = "log"``: the time-constant genes are ln tau, so a search that
+  starts mid-range starts at the geometric mean of ``time_constants`` (0.32 s
+  for [0.02, 5]) rather than the arithmetic (2.5 s); ``time_constants`` may go
+  down to the control period;
+- ``outputs = "after"``: the motor outputs are read after the Euler step,
+  O(t + dt), so a sense reaches a motor within the same tick (the paper reads
+  them before: one tick of latency on every sense-to-motor path);
+- ``centre_crossing``: biases alpha_j = gene + 1/2 sum_i w_ij (Mathayomchan &
+  Beer 2002), so a network whose bias genes are 0 sits in the sensitive middle
+  of its sigmoids instead of saturating;
+- ``motor = "full"``: target = clip((o - 1/2) * 2 max(|low|, |high|), low, high):
+  o = 0.5 stands straight, as with ``centred``, and the whole Table II range is
+  reachable (``centred`` reaches only -0.7 rad at the knee).
 """
 
 from __future__ import annotations
@@ -45,7 +67,7 @@ BIAS = dict(low=-4.0, high=4.0, init_mean=0.0, init_sigma=3.0, mutation_sigma=3.
 
 
 #: motor map name -> output kind (see evobiped.mapping)
-MOTOR_MAPS = {"range": "unit", "centred": "centred"}
+MOTOR_MAPS = {"range": "unit", "centred": "centred", "full": "centred_full"}
 
 
 def sigmoid(x: np.ndarray) -> np.ndarray:
@@ -58,6 +80,15 @@ def _pair(v) -> None:
         raise ConfigError(f"must be [low, high] in s, got {v!r}")
 
 
+def _range(v, what: str) -> None:
+    if v is None:
+        return
+    ok = isinstance(v, (list, tuple)) and len(v) == 2
+    ok = ok and all(isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in v)
+    if not ok or not v[0] < v[1]:
+        raise ConfigError(f"{what} must be [low, high] with low < high, got {v!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class CTRNNOptions:
     """Options of the ctrnn controller."""
@@ -68,9 +99,18 @@ class CTRNNOptions:
                         "(o = 0.5 stands straight)", choices=tuple(MOTOR_MAPS))
     time_constants: tuple = option((TAU["low"], TAU["high"]), "range of the time-constant genes, [low, high] with low > dt / 2",
                                    unit="s", check=_pair, span="0 < dt / 2 < low < high")
+    tau_scale: str = option("linear", "time-constant genes: tau itself (`linear`, the paper's) or ln tau (`log`)",
+                            choices=("linear", "log"))
+    outputs: str = option("before", "motor outputs read `before` the Euler step (the paper's: one tick of latency) "
+                          "or `after` it", choices=("before", "after"))
+    normalise_inputs: bool = option(False, "feed (reading - standing value) / scale, as the body declares, not raw readings")
+    input_weights: tuple | None = option(None, "range of the input-weight genes, [low, high] (default: the weights' [-16, 16])",
+                                         check=lambda v: _range(v, "input weights"), span="low < high")
+    input_sigma: float | None = option(None, "initial and mutation sigma of the input weights (default: the weights' 8)", above=0)
+    centre_crossing: bool = option(False, "biases alpha_j = gene + sum_i w_ij / 2: a network of zero bias genes sits mid-sigmoid")
 
     def __post_init__(self):
-        _tau_block(self.time_constants, self.dt)
+        _tau_block(self.time_constants, self.dt, self.tau_scale)
 
 
 class CTRNN(Controller):
@@ -83,17 +123,20 @@ class CTRNN(Controller):
 
     @classmethod
     def needs(cls, options: CTRNNOptions) -> Needs:
-        """Any body of at most ``n_neurons`` actuators; reads the task's sensors (or the ``inputs`` option's)."""
-        return Needs(task_sensors=True, max_actuators=options.n_neurons)
+        """Any body of at most ``n_neurons`` actuators; reads the task's sensors (or the ``inputs`` option's),
+        normalised if ``normalise_inputs``."""
+        return Needs(task_sensors=True, max_actuators=options.n_neurons, normalised=options.normalise_inputs)
 
     def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **options):
         o = self.options = parse(CTRNNOptions, options, "ctrnn controller_options")
         n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
         self.output_kind = MOTOR_MAPS[motor]
-        if n_neurons < n_outputs:
-            raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
-        tau = _tau_block(time_constants, dt)
+        tau = _tau_block(time_constants, dt, o.tau_scale)
+        self.log_tau = o.tau_scale == "log"
+        self.outputs_after = o.outputs == "after"
+        self.centre_crossing = bool(o.centre_crossing)
+        self.normalises_inputs = bool(o.normalise_inputs)
         self.n = int(n_neurons)
         self.n_outputs = int(n_outputs)
         self.input_names = tuple(inputs)
@@ -106,7 +149,10 @@ class CTRNN(Controller):
             GeneBlock(name="biases", size=n, **BIAS),
         ]
         if k:
-            blocks.append(GeneBlock(name="input_weights", size=k * n, **WEIGHT))
+            lo, hi = o.input_weights if o.input_weights is not None else (WEIGHT["low"], WEIGHT["high"])
+            sigma = o.input_sigma if o.input_sigma is not None else WEIGHT["init_sigma"]
+            blocks.append(GeneBlock(name="input_weights", size=k * n, low=float(lo), high=float(hi),
+                                    init_mean=0.5 * (lo + hi), init_sigma=float(sigma), mutation_sigma=float(sigma)))
         self._layout = GenomeLayout(tuple(blocks))
 
     @property
@@ -116,7 +162,10 @@ class CTRNN(Controller):
     def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
         p = super().decode(genomes)
         P, n = p["biases"].shape[0], self.n
-        out = {"W": p["weights"].reshape(P, n, n), "tau": p["time_constants"], "alpha": p["biases"]}
+        W = p["weights"].reshape(P, n, n)
+        tau = np.exp(p["time_constants"]) if self.log_tau else p["time_constants"]
+        alpha = p["biases"] + 0.5 * W.sum(axis=1) if self.centre_crossing else p["biases"]
+        out = {"W": W, "tau": tau, "alpha": alpha}
         out["V"] = p["input_weights"].reshape(P, self.n_inputs, n) if self.n_inputs else np.zeros((P, 0, n))
         return out
 
@@ -134,23 +183,28 @@ class CTRNN(Controller):
         if self.n_inputs:
             net = net + (inputs[:, :, None] * params["V"]).sum(axis=1)
         A = state + (self.dt / params["tau"]) * (net - state)
+        if self.outputs_after:
+            O = self.outputs_of(params, A)
         return A, O[:, : self.n_outputs]
 
     def neuron_outputs(self, params, state):
         return self.outputs_of(params, state)
 
 
-def _tau_block(time_constants, dt: float) -> dict:
+def _tau_block(time_constants, dt: float, scale: str = "linear") -> dict:
     """The time-constant gene block for a ``[low, high]`` range (s): Table III's for the paper's
     [0.5, 5]; otherwise initial mean mid-range, initial and mutation sigma a third of the range
-    (Table III's proportions).  ``low`` must keep forward Euler stable at ``dt`` (low > dt / 2)."""
+    (Table III's proportions); with ``scale = "log"`` the same in ln tau.  ``low`` must keep forward
+    Euler stable at ``dt`` (low > dt / 2)."""
     ok = isinstance(time_constants, (list, tuple)) and len(time_constants) == 2
     ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in time_constants)
     if not ok or not dt / 2 < time_constants[0] < time_constants[1]:
         raise ConfigError(f"time_constants must be [low, high] s with {dt / 2:g} < low < high "
                           f"(forward Euler at dt = {dt:g} s), got {time_constants!r}")
     low, high = float(time_constants[0]), float(time_constants[1])
-    if (low, high) == (TAU["low"], TAU["high"]):
+    if scale == "log":
+        low, high = float(np.log(low)), float(np.log(high))
+    elif (low, high) == (TAU["low"], TAU["high"]):
         return TAU
     third = (high - low) / 3
     return dict(low=low, high=high, init_mean=0.5 * (low + high), init_sigma=third, mutation_sigma=third)

@@ -247,7 +247,8 @@ def init_ray(address: str | None, workers: int | None):
     if address:
         check_reachable(address)
     try:
-        kw = {"address": address} if address else {"num_cpus": workers or os.cpu_count()}
+        # no address: a fresh local instance, even where a cluster started by `ray start` is running
+        kw = {"address": address} if address else {"address": "local", "num_cpus": workers or os.cpu_count()}
         with _silenced_stderr():  # Ray's C++ client logs a warning per connection retry
             ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
     except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...

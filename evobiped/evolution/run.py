@@ -21,15 +21,16 @@ from typing import Callable
 
 import numpy as np
 
-from .. import __version__, rundir
+from .. import __version__, provenance, rundir
 from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
-from .cma import CMAES, CMAConfig
+from .cma import CMAES, CMAOptions
 from .evaluate import BACKENDS, Evaluator
-from .ga import GA, GAConfig
+from .ga import GA, GAOptions
+from .individuals import Individuals
 from ..rundir import HISTORY_COLUMNS
 
 #: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation/outcome) with state_dict/load_state_dict
@@ -52,8 +53,8 @@ class RunConfig:
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
     optimizer: str = option("ga", "`ga` (Reil & Husbands' GA) or `cma` (CMA-ES)", choices=tuple(OPTIMIZERS))
-    ga: GAConfig = field(default_factory=GAConfig)
-    cma: CMAConfig = field(default_factory=CMAConfig)
+    ga: GAOptions = field(default_factory=GAOptions)
+    cma: CMAOptions = field(default_factory=CMAOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
     seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
     backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
@@ -78,7 +79,7 @@ class RunConfig:
         try:
             d = dict(refuse_unknown(cls, d, ""))
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
-            ga, cma = parse(GAConfig, d.pop("ga", {}), "ga"), parse(CMAConfig, d.pop("cma", {}), "cma")
+            ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, ga=ga, cma=cma, **d)
@@ -115,13 +116,23 @@ class Run:
     """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
     def __init__(self, directory: Path, config: RunConfig, ga: GA, history: list[list], best: dict | None, wall: float,
-                 best_genome: list[float] | None = None):
+                 best_genome: list[float] | None = None, individuals: Individuals | None = None,
+                 history_terms: list[dict] | None = None, best_walk: dict | None = None):
         self.dir, self.config, self.ga = directory, config, ga
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
         self.best_genome = best_genome
+        #: the outcome of each individual of the optimizer's population (rows as its population)
+        self.individuals = individuals if individuals is not None else Individuals()
+        #: the best individual's terms per generation (name -> mean over its presentations), history.csv's term columns
+        self.history_terms = history_terms if history_terms is not None else []
+        #: where the best walker went in its evaluation (``EpisodeResult.walk``; None: not known)
+        self.best_walk = best_walk
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
         self.repairs: list[str] = []
+        #: how this process's numerical environment differs from the one the run started in (a resume's; empty:
+        #: the resumed run is bit-identical to an uninterrupted one)
+        self.environment_differences: list[str] = []
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
 
     # ---- creating and resuming
@@ -145,7 +156,7 @@ class Run:
             except OSError as exc:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
             rundir.remove_stale_temporaries(directory)
-            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict()})
+            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": provenance.current()})
             run = cls(directory, config, ga, [], None, 0.0)
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
@@ -170,12 +181,20 @@ class Run:
 
     @classmethod
     def _load(cls, directory: Path) -> "Run":
+        run, started_in = cls._read(directory)
+        run.environment_differences = provenance.differences(started_in)
+        return run
+
+    @classmethod
+    def _read(cls, directory: Path) -> tuple["Run", dict | None]:
+        """The run in ``directory`` and the numerical environment its config.json records (None: none)."""
         if not (directory / rundir.CONFIG).exists() and rundir.is_unused(directory):
             raise UserError(f"{directory} holds no run yet (stopped before its config was written): start it again with evobiped evolve --out {directory}")
         cfg = read_json(directory / rundir.CONFIG, what="run config")
         if not isinstance(cfg, dict):
             raise UserError(f"run config {directory / rundir.CONFIG} is not a table of settings")
         cfg.pop("evobiped", None)
+        started_in = cfg.pop("environment", None)
         config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
         ga = make_ga(config)
         path = directory / rundir.CHECKPOINT
@@ -183,7 +202,7 @@ class Run:
             committed = cls._committed_files(directory)
             if committed:
                 raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
-            return cls(directory, config, ga, [], None, 0.0)  # killed before its first commit: start over
+            return cls(directory, config, ga, [], None, 0.0), started_in  # killed before its first commit: start over
         ck = read_json(path, what="checkpoint")
         if ck is None:
             raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
@@ -195,8 +214,9 @@ class Run:
         history, best = ck["history"], ck["best"]
         if len(history) != ga.generation:
             raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
-        ga.load_outcome(ck.get("outcome", {}))
-        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"))
+        individuals = Individuals.from_dict(ck.get("outcome", {}), len(ga.population))
+        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
+                   ck.get("history_terms", []), ck.get("best_walk")), started_in
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -245,13 +265,13 @@ class Run:
         """history.csv, best.json and evolution.rrd from the committed state."""
         from ..record.evolution_log import recording_matches, write_recording
 
-        self._sync(rundir.HISTORY, rundir.history_text(self.history), repair=repair)
+        self._sync(rundir.HISTORY, rundir.history_text(self.history, self.history_terms), repair=repair)
         self._sync(rundir.BEST, self._best_text(), repair=repair)
         rec = self.dir / rundir.RECORDING
         if not self.history:
             self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None
             return
-        columns = rundir.history_columns(self.history)
+        columns = rundir.history_columns(self.history, self.history_terms)
         if repair:
             if recording_matches(rec, columns):
                 return
@@ -292,7 +312,8 @@ class Run:
         pop, unknown = ga.ask()
         result = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
         ga.tell(result)
-        f, outcome = ga.fitness, ga.outcome
+        self.individuals.told(unknown, result)
+        f, outcome = ga.fitness, self.individuals.outcome
         b = int(ga.ranking()[0])
         g = ga.generation
         stats = GenerationStats(
@@ -310,12 +331,16 @@ class Run:
             simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
             longest_seconds=float(np.max(result.end_time, initial=0.0)),
         )
-        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed, generation=g)
+        terms = self.individuals.terms_of(b)
+        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
+                    generation=g, terms=terms)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
         if self.best is None or meta["fitness"] > self.best["fitness"]:
-            self.best, self.best_genome = meta, [float(x) for x in pop[b]]
+            self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
         self.history.append(stats.row())
-        ga.next_generation()  # the individuals it keeps keep their fitness and outcome
+        means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
+        self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
+        self.individuals.carry(ga.next_generation())  # the individuals it keeps keep their outcome
         return stats
 
     # ---- files
@@ -326,15 +351,20 @@ class Run:
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
-                 "wall_seconds": self.wall, "outcome": self.ga.outcome_dict()},
+                 "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
+                 "best_walk": self.best_walk},
             )
             self._derive()
 
     def _best_walk(self) -> dict | None:
-        """Distance and walking direction of the best walker, re-simulated on the nominal episode
-        (``EpisodeResult.walk``; the fitness of a perturbed run aggregates other presentations)."""
+        """Distance and walking direction of the best walker in the nominal episode (``EpisodeResult.walk``): kept from
+        its evaluation.  A perturbed run's evaluation has no nominal presentation (its walks are perturbed), so its
+        best is walked once, nominally, for the summary (what a replay checks); so is the best of a checkpoint
+        written before walks were kept."""
         if self.best is None or not (self.dir / rundir.BEST).is_file():
             return None
+        if self.best_walk is not None and not self.config.episode.perturbations:
+            return self.best_walk
         genome, cfg, _ = load_genome(self.dir / rundir.BEST)
         return cfg.nominal().build().run(genome).walk()
 

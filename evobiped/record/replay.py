@@ -2,8 +2,10 @@
 
 The replay is the same episode the GA ran (``EpisodeConfig(**stored).build()``
 with the genome alone; batch size does not change results) with a
-:class:`~.rerun_recorder.RerunRecorder` attached, so the replayed fitness
-equals the stored one to the last bit.  The ``.rrd`` is made in memory and
+:class:`~.rerun_recorder.RerunRecorder` attached, so in the numerical environment
+the genome was stored in (:mod:`evobiped.provenance`) the replayed fitness
+equals the stored one to the last bit; in another, the report says what differs
+and how far the outcome drifted (:mod:`evobiped.outcome`).  The ``.rrd`` is made in memory and
 written whole by :func:`~evobiped.fileio.atomic_write` at the end: a failed
 replay leaves nothing half-written.
 """
@@ -17,6 +19,8 @@ from pathlib import Path
 
 from .. import rundir
 from ..fileio import atomic_write
+from ..outcome import compare, outcome
+from ..provenance import differences
 from .source import Source
 from .trajectory import Trajectory, TrajectoryRecorder
 from ..tasks.steer import with_sources
@@ -36,6 +40,14 @@ class ReplayReport:
     recording: Path | None
     figures: list[Path]
     trajectory: Trajectory
+    #: what the walker did (:func:`evobiped.outcome.outcome`)
+    outcome: dict
+    #: how this process's numerical environment differs from the recorded one (:func:`evobiped.provenance.differences`);
+    #: empty: the replay must be bit-identical
+    environment_differences: list[str]
+    #: how far the outcome drifted from the stored one, and what lies outside the tolerance (:func:`evobiped.outcome.compare`)
+    drift: list[str]
+    outcome_failures: list[str]
     video: Path | None = None
 
     @property
@@ -43,12 +55,24 @@ class ReplayReport:
         """Replayed fitness equals the stored one bit for bit."""
         return self.compared and self.stored_fitness is not None and self.fitness == self.stored_fitness
 
+    @property
+    def outcome_checked(self) -> bool:
+        """The outcome was checked against the stored one: in another numerical environment, or where the stored
+        fitness cannot be compared (a run under perturbations; its file's ``outcome`` is the nominal episode's)."""
+        return bool(self.drift or self.outcome_failures) and (bool(self.environment_differences) or not self.compared)
+
+    @property
+    def reproduced(self) -> bool:
+        """What the reproducibility contract promises holds: bit for bit in the recorded numerical environment,
+        the same outcome within :data:`evobiped.outcome.TOLERANCE` in another (True when nothing is compared)."""
+        bits = self.matches or not self.compared or self.stored_fitness is None or bool(self.environment_differences)
+        return bits and not (self.outcome_checked and self.outcome_failures)
+
 
 def default_out(source: Source) -> Path:
-    """``RUN/replay_best.rrd``, ``RUN/replay_gen_0007.rrd``, or ``<genome>.rrd`` next to a genome file."""
-    if source.run_dir is not None:
-        return rundir.replay_file(source.run_dir, source.label)
-    return source.genome_path.with_suffix(".rrd")
+    """``RUN/replay_best.rrd``, ``RUN/replay_gen_0007.rrd``, or ``runs/<stem>/replay_<stem>.rrd`` for a lone
+    genome file (:func:`evobiped.rundir.genome_outputs`: never beside the file)."""
+    return rundir.replay_file(source.run_dir or rundir.genome_outputs(source.genome_path), source.label)
 
 
 def replay(
@@ -158,6 +182,10 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         if others:
             figs += steering_figures(trajs, figures_dir, who=who)
     stored = source.meta.get("fitness")
+    done = outcome(result, episode.task.targets())
+    unchanged = cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options
+    stored_outcome = source.stored_outcome() if unchanged else None
+    drift, failures = compare(stored_outcome, done) if stored_outcome is not None else ([], [])
     return ReplayReport(
         fitness=float(result.fitness[0]),
         stored_fitness=float(stored) if isinstance(stored, (int, float)) else None,
@@ -168,6 +196,10 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         recording=target,
         figures=figs,
         trajectory=traj,
+        outcome=done,
+        environment_differences=differences(source.environment),
+        drift=drift,
+        outcome_failures=failures,
         video=video,
     )
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..episode import EpisodeConfig
 from ..errors import UserError
+from ..fileio import read_json
 from .. import rundir
 from ..genome_file import load_genome
 
@@ -28,6 +29,33 @@ class Source:
     meta: dict
     genome_path: Path
     run_dir: Path | None  # None for a lone genome file
+
+    @property
+    def environment(self) -> dict | None:
+        """The numerical environment the genome's stored results were made in (:mod:`evobiped.provenance`);
+        None for files written before it was recorded."""
+        env = self.meta.get("environment")
+        return env if isinstance(env, dict) else None
+
+    def stored_outcome(self) -> dict | None:
+        """What the walker did when it was stored, as :func:`evobiped.outcome.compare` reads it: the file's
+        ``outcome`` (always of the nominal episode), else, for a run without perturbations, its ``fell`` and
+        ``end_time`` with, for a run's best, the distance and direction in the run's summary.json; None when the
+        file says nothing of it."""
+        if isinstance(self.meta.get("outcome"), dict):
+            return self.meta["outcome"]
+        if self.config.perturbations:
+            return None  # its fell and end time are of the perturbed presentations, not of the nominal replay
+        stored = {k: self.meta[k] for k in ("fell", "end_time") if isinstance(self.meta.get(k), (bool, int, float))}
+        summary = self.run_dir / rundir.SUMMARY if self.run_dir is not None and self.label == "best" else None
+        if summary is not None and summary.is_file():
+            try:
+                walk = read_json(summary, what="run summary").get("best_walk") or {}
+            except (UserError, AttributeError):
+                walk = {}
+            if isinstance(walk.get("distance"), (int, float)):
+                stored["rows"] = [{"distance": walk["distance"], "heading_deg": walk.get("heading_deg")}]
+        return stored or None
 
     @property
     def label(self) -> str:

@@ -60,6 +60,10 @@ class Task:
         """Widths of the sensor arrays this task adds, by name (its part of the controller contract)."""
         return {}
 
+    def sensor_norms(self) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
+        """Standing value and scale of each sensor the task adds (as ``Body.sensor_norms``); default none."""
+        return {}
+
     def start(self, body: Body, sims: Sims) -> dict[str, Any]:
         """Task state at t = 0 (after the body's reset)."""
         return {}

@@ -111,6 +111,9 @@ class SteerTask(Task):
     def sensor_widths(self):
         return {"sound": 1}
 
+    def sensor_norms(self):
+        return {"sound": ((0.0,), (1.0,))}  # already in [-1, 1], 0 when the source is straight ahead or behind
+
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
         return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)]}
