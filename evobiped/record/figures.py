@@ -382,7 +382,8 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | 
             axes[-1].plot(running(tr.command_time), running(tr.neurons[:, neuron]), color=c, lw=2.0)
     if len(trajs) == 2:  # two sources: every output's mean over the walk (after the first 2 s), source 1 minus source 2
         names = [trajs[0].actuator_names[i] if i < len(trajs[0].actuator_names) else f"output {i + 1}" for i in range(trajs[0].n_motor)]
-        bias = [1000 * (tr0.neurons[tr0.command_time >= 2.0, i].mean() - tr1.neurons[tr1.command_time >= 2.0, i].mean())
+        after = min(2.0, 0.5 * min(float(tr.command_time[-1]) for tr in trajs))  # the start-up aside (short episodes: their second half)
+        bias = [1000 * (tr0.neurons[tr0.command_time >= after, i].mean() - tr1.neurons[tr1.command_time >= after, i].mean())
                 for tr0, tr1 in [trajs] for i in range(trajs[0].n_motor)]
         bars = axes[-1].bar(np.arange(len(names)), bias, color="0.5")
         axes[-1].bar_label(bars, fmt="%+.1f", fontsize=7)
@@ -397,7 +398,7 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | 
         axes[1].set_xlabel("time (s)", fontsize=8)
     if len(trajs) == 2:
         unit_text = "(1/1000)" if unit else "(mrad)" if target else "(1/1000 of the unit)"
-        axes[-1].set_ylabel(f"mean after 2 s, source 1\nminus source 2 {unit_text}", fontsize=8)
+        axes[-1].set_ylabel(f"mean after {after:g} s, source 1\nminus source 2 {unit_text}", fontsize=8)
         axes[-1].set_xlabel("motor neuron" if unit else "joint target" if target else "output", fontsize=8)
         what = "each output's bias between the two sources"
     else:
