@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import math
 import os
 import signal
 import threading
@@ -104,6 +103,10 @@ class GenerationStats:
     best_fell: bool = False
     evals_per_second: float = 0.0
     generations_total: int = 0
+    #: simulated seconds of this generation's evaluations, every presentation's row until it ended (a fall or T)
+    simulated_seconds: float = 0.0
+    #: the longest of those episodes (s): the batches wait for their longest row
+    longest_seconds: float = 0.0
 
     def row(self) -> list:
         return [getattr(self, c) for c in HISTORY_COLUMNS]
@@ -325,6 +328,8 @@ class Run:
             wall_seconds=0.0,
             best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
+            simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
+            longest_seconds=float(np.max(result.end_time, initial=0.0)),
         )
         terms = self.individuals.terms_of(b)
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
@@ -477,11 +482,3 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     if len(genome) < layout.size and cfg.controller_options == {k: v for k, v in episode.controller_options.items() if k != "inputs"}:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
     return layout.validate(genome, what=f"genome in {path}")
-
-
-def eta_seconds(stats: GenerationStats, history: list[list]) -> float:
-    done = len(history)
-    if not done:
-        return math.nan
-    walls = rundir.column(history, "wall_seconds")
-    return float(np.mean(walls[-5:])) * (stats.generations_total - done)
