@@ -43,7 +43,7 @@ from mujoco import rollout
 from .episode import EpisodeConfig
 from .errors import ConfigError
 from .evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
-from .evolution.ga import GA, GAConfig
+from .evolution.ga import GA, GAOptions
 from .progress import Progress
 
 #: the disturbances of measurement (e), per presentation (see evobiped.perturb)
@@ -115,7 +115,7 @@ def bench(
     ep = config.build()
     if ep.body.has_custom_forces:
         raise ConfigError(f"bench: body {config.body!r} adds forces in Python between physics steps; (a) cannot replay it open-loop")
-    genomes = GA(ep.controller.layout, GAConfig(population=max(2, population)), seed=seed).ask()[0][:population]
+    genomes = GA(ep.controller.layout, GAOptions(population=max(2, population)), seed=seed).ask()[0][:population]
     sim_seconds = population * ep.n_ticks * ep.control_dt
 
     ep.run(genomes[:1], seconds=ep.control_dt)  # warm up (allocations)

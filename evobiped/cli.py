@@ -635,18 +635,19 @@ def _nan_to_null(row: dict) -> dict:
 
 def run_taga_cmd(args) -> int:
     from .bodies import TagaBiped
+    from .controllers.matsuoka import MatsuokaOptions
     from .experiments.taga import walking as tx
-    from .options import option_bounds
+    from .options import check_value, option_bounds
     from .validate import number
 
     if args.preset not in tx.PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")
     for u in args.u0:
-        tx.check_u0(u)
-    low, high = option_bounds(TagaBiped.Options, "slope")  # the body's one declared limit, in % here
+        check_value(MatsuokaOptions, "u0", u, "--u0")
+    low, high = option_bounds(TagaBiped.Options, "slope")  # the body's declared limit, in % here
     number(args.slope, "--slope", low=100 * low, high=100 * high, unit="%")
-    if args.bg < 0:
-        raise UserError(f"--bg must be >= 0, got {args.bg:g}")
+    for flag in ("kg", "bg", "timestep", "slope_start"):
+        check_value(TagaBiped.Options, flag, getattr(args, flag), f"--{flag.replace('_', '-')}")
     seconds = 20.0 if args.seconds is None else args.seconds
     window = min(10.0, seconds) if args.window is None else args.window
     if args.push:

@@ -35,7 +35,7 @@ from .episode import EpisodeConfig
 from .errors import ConfigError, UserError
 from .mapping import to_action
 from .options import option, parse
-from .perturb import PerturbationConfig
+from .perturb import PerturbationOptions
 
 #: the student's controller options: every sense of the Reil body normalised, 40 neurons whose outputs follow
 #: the update, ln-tau genes down to the control period, centre-crossing biases, the full-range motor map
@@ -169,7 +169,7 @@ def collect(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, student_cfg:
     from .episode import Episode
 
     ep = Episode(t_body, blend, task, seconds=options.seconds)
-    pert = PerturbationConfig(presentations=options.rollouts, target_noise=options.target_noise, pose_noise=options.pose_noise)
+    pert = PerturbationOptions(presentations=options.rollouts, target_noise=options.target_noise, pose_noise=options.pose_noise)
     trials = pert.draw(key, seconds=options.seconds, n_actuators=len(t_body.actuators))
     alive_log: list[np.ndarray] = []
 

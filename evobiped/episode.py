@@ -27,7 +27,7 @@ from .genome import GenomeLayout
 from .options import parse, refuse_unknown
 from .validate import number
 from .mapping import MAPS, to_action
-from .perturb import PerturbationConfig, Trials
+from .perturb import PerturbationOptions, Trials
 from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
@@ -73,7 +73,7 @@ class EpisodeConfig:
         number(self.controller_options.get("latency", 0), "episode.controller_options.latency:", low=0, high=MAX_LATENCY,
                integer=True, unit="control ticks")
         parse(TASKS[self.task].Options, self.task_options, "episode.task_options")
-        PerturbationConfig.from_dict(self.perturbations)
+        PerturbationOptions.from_dict(self.perturbations)
 
     def nominal(self) -> "EpisodeConfig":
         """The same episode without perturbations (replays, the robustness battery)."""
@@ -81,7 +81,20 @@ class EpisodeConfig:
 
     def parts(self) -> tuple[Body, Controller, Task]:
         """The body, controller and task, the controller wired to the sensors it needs: the controller
-        contract checked (one ConfigError line on a mismatch); no model is compiled."""
+        contract checked (one ConfigError line on a mismatch); no model is compiled.  Built once per config
+        and shared by :meth:`layout` and every :meth:`build` (parts keep no episode state: that is the
+        :class:`EpisodeState`'s, and an episode binds its own copy of the controller)."""
+        cached = self.__dict__.get("_parts")
+        if cached is None:
+            cached = self._make_parts()
+            object.__setattr__(self, "_parts", cached)
+        return cached
+
+    def __getstate__(self) -> dict:
+        """Pickled and copied without the built parts (a worker builds its own)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_parts"}
+
+    def _make_parts(self) -> tuple[Body, Controller, Task]:
         body = BODIES[self.body](**self.body_options)
         task = TASKS[self.task](**self.task_options)
         cls = CONTROLLERS[self.controller]
@@ -108,7 +121,7 @@ class EpisodeConfig:
     def build(self) -> "Episode":
         """The episode, its model compiled once."""
         body, controller, task = self.parts()
-        perturbations = PerturbationConfig.from_dict(self.perturbations)
+        perturbations = PerturbationOptions.from_dict(self.perturbations)
         return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
                        perturbations=perturbations if perturbations.active else None,
                        latency=int(self.controller_options.get("latency", 0)))
@@ -133,19 +146,20 @@ class EpisodeResult:
     terms: dict[str, np.ndarray] = field(default_factory=dict)
 
 
-    def walk(self, i: int = 0) -> dict:
-        """Where walker ``i`` went (its first presentation when there are several): distance (m) and
-        direction (``heading_deg``, see :func:`evobiped.tasks.walk.displacement_heading`; None: it did not move)
-        and displacement (x, y) in m."""
+    def displacements(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where each walker went in its first presentation: displacement ``(P, 2)`` m and direction ``(P,)``
+        degrees (see :func:`evobiped.tasks.walk.displacement_heading`; NaN: it did not move)."""
         from .tasks.walk import displacement_heading
 
         rows = self.rows if self.rows is not None else self
         S = len(rows.fitness) // len(self.fitness)
-        j = i * S
-        a, b, f = rows.start_position[j : j + 1], rows.end_position[j : j + 1], rows.start_facing[j : j + 1]
-        heading = float(displacement_heading(a, b, f)[0])
-        return {"distance": float(np.linalg.norm(b - a, axis=1)[0]), "heading_deg": None if not np.isfinite(heading) else round(heading, 2),
-                "displacement": [round(float(v), 4) for v in (b - a)[0]]}
+        a, b, f = rows.start_position[::S], rows.end_position[::S], rows.start_facing[::S]
+        return b - a, displacement_heading(a, b, f)
+
+    def walk(self, i: int = 0) -> dict:
+        """Where walker ``i`` went (its first presentation when there are several), see :func:`walk_summary`."""
+        d, h = self.displacements()
+        return walk_summary(d[i], h[i])
 
     def per_genome(self, S: int, combine) -> "EpisodeResult":
         """Rows p * S + j -> one entry per genome: fitness combined by ``combine`` ``(P, S) -> (P,)``,
@@ -162,6 +176,14 @@ class EpisodeResult:
             rows=self,
             terms={k: by(v) for k, v in self.terms.items()},
         )
+
+
+def walk_summary(displacement: np.ndarray, heading_deg: float) -> dict:
+    """A walk as runs and replays report it: distance (m), direction (``heading_deg``, None: it did not move)
+    and displacement (x, y) in m, from the displacement ``(2,)`` m and direction in degrees."""
+    d, h = np.asarray(displacement, float)[None], float(heading_deg)
+    return {"distance": float(np.linalg.norm(d, axis=1)[0]), "heading_deg": None if not np.isfinite(h) else round(h, 2),
+            "displacement": [round(float(v), 4) for v in d[0]]}
 
 
 class Listener(Protocol):
@@ -195,7 +217,10 @@ class Listeners:
 class EpisodeState:
     """A batch of simulations part-way through an episode (:meth:`Episode.start`, :meth:`Episode.advance`).
 
-    Every per-row array is ``(n,)`` over the simulation rows of :meth:`Episode.run`.
+    Every per-row array is ``(n,)`` over the simulation rows of :meth:`Episode.run`.  A state is a
+    value: it owns its simulations (and the body's state kept in them), so two states never share
+    anything, and :meth:`copy` forks it: both copies continue independently, each exactly as a
+    fresh run would.
     """
 
     sims: Sims
@@ -233,12 +258,16 @@ class EpisodeState:
         """Simulated time so far, s."""
         return self.ticks * self.control_dt
 
+    def copy(self) -> "EpisodeState":
+        """An independent state equal to this one (simulations, controller, task, noise streams)."""
+        return copy.deepcopy(self)
+
 
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
     def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True,
-                 perturbations: PerturbationConfig | None = None, latency: int = 0):
+                 perturbations: PerturbationOptions | None = None, latency: int = 0):
         self.body, self.controller, self.task = body, controller, task
         #: control ticks by which each action reaches the body late (a real controller's computation and
         #: transmission delay; the first action is held until the pipeline is full)
@@ -265,9 +294,10 @@ class Episode:
         if round(ticks) * round(ratio) > MAX_STEPS:
             raise ConfigError(f"an episode of {seconds:g} s at a physics step of {body.timestep:g} s takes "
                               f"{round(ticks) * round(ratio):.3g} steps per walker, more than {MAX_STEPS:.0e}")
-        controller.bind_period(dt)
+        # the controller told its period: a bound copy, the caller's controller unchanged
+        self.controller = controller.bound(dt)
         self.substeps = int(round(ratio))
-        self._sims: dict[tuple, Sims] = {}
+        self._models: dict[tuple, Any] = {}
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)
         self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
@@ -277,9 +307,9 @@ class Episode:
         return int(round(self.seconds / self.control_dt))
 
     def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0) -> Sims:
-        """A batch of ``n`` simulations, created once per size (and ground) and reused."""
-        key = (n, friction, slope)
-        if key not in self._sims:
+        """A new batch of ``n`` simulations (each :meth:`start` owns one), on the model with this ground."""
+        key = (friction, slope)
+        if key not in self._models:
             model = self.model
             if friction is not None or slope:
                 model = copy.deepcopy(self.model)
@@ -291,8 +321,8 @@ class Episode:
                     g = float(np.linalg.norm(self.model.opt.gravity))
                     a = np.arctan(slope)
                     model.opt.gravity[:] = (-g * np.sin(a), 0.0, -g * np.cos(a))
-            self._sims[key] = Sims(model, n)
-        return self._sims[key]
+            self._models[key] = model
+        return Sims(self._models[key], n)
 
     def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
         """The perturbed presentations of generation key = (run seed, generation); None: nominal."""

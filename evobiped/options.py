@@ -104,6 +104,13 @@ def parse(cls: type, values: Any, where: str, *, skip: tuple[str, ...] = ()) -> 
         raise ConfigError(f"{where}: {exc}") from None
 
 
+def check_value(cls: type, name: str, value: Any, label: str) -> Any:
+    """``value`` if option ``name`` of ``cls`` takes it (as :func:`parse` checks it), else ConfigError naming ``label``
+    (a command-line flag such as ``--bg``): a command's flags go through the same declarations as a config."""
+    _check(next(f for f in fields(cls) if f.name == name), value, label)
+    return value
+
+
 def option_bounds(cls: type, name: str) -> tuple[float | None, float | None]:
     """The declared ``(low, high)`` of option ``name`` of ``cls`` (e.g. to check it in another unit)."""
     m = next(f for f in fields(cls) if f.name == name).metadata

@@ -11,7 +11,7 @@ with its own disturbances (:class:`Trials`, one row per presentation):
 * **ground**: the floor's sliding friction and a slope (grade, rise over run,
   uphill along +x, the walker's initial facing), the same for every row of a batch.
 
-:class:`PerturbationConfig` (``[episode.perturbations]`` in a config) says how
+:class:`PerturbationOptions` (``[episode.perturbations]`` in a config) says how
 the trials of an evolutionary run are drawn: from (run seed, generation) only,
 so every genome of a generation meets the same disturbances (common random
 numbers: selection compares like with like), and neither a resume nor the
@@ -52,7 +52,7 @@ def _friction(v) -> None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class PerturbationConfig:
+class PerturbationOptions:
     """How an evolutionary run draws each generation's perturbed presentations."""
 
     presentations: int = option(1, "R, presentations per genome (each with its own draws)", low=1, high=64, integer=True)
@@ -74,7 +74,7 @@ class PerturbationConfig:
         object.__setattr__(self, "friction", tuple(float(v) for v in self.friction))
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PerturbationConfig":
+    def from_dict(cls, d: dict) -> "PerturbationOptions":
         return parse(cls, d, "episode.perturbations")
 
     @property

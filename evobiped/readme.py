@@ -13,10 +13,10 @@ from pathlib import Path
 
 from .bodies import BODIES
 from .controllers import CONTROLLERS
-from .evolution.cma import CMAConfig
-from .evolution.ga import GAConfig
+from .evolution.cma import CMAOptions
+from .evolution.ga import GAOptions
 from .options import markdown_table
-from .perturb import PerturbationConfig
+from .perturb import PerturbationOptions
 from .tasks import TASKS
 
 README = Path(__file__).resolve().parent.parent / "README.md"
@@ -30,9 +30,9 @@ def tables() -> dict[str, str]:
     for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
         for name, cls in reg.items():
             out[f"{kind} {name}"] = markdown_table(cls.Options)
-    out["episode perturbations"] = markdown_table(PerturbationConfig)
-    out["optimizer ga"] = markdown_table(GAConfig)
-    out["optimizer cma"] = markdown_table(CMAConfig)
+    out["episode perturbations"] = markdown_table(PerturbationOptions)
+    out["optimizer ga"] = markdown_table(GAOptions)
+    out["optimizer cma"] = markdown_table(CMAOptions)
     return out
 
 

@@ -1,7 +1,13 @@
-"""The robustness battery: one fixed set of disturbed trials for any walker on the Reil body.
+"""The robustness battery: one fixed set of disturbed trials for any walker whose body declares its foot contacts.
 
 Every trial starts from the nominal initial state and runs ``seconds`` (30 s
 by default); a trial is survived when the walker has not fallen at the end.
+Joints and contacts are found by role (``Actuator.leg``/``joint``,
+``Body.contact_sensor``), never by name or column, and each family runs where it
+applies: offsets on bodies of PD targets with hip pitch (and roll) roles,
+friction and slope on bodies with a MuJoCo ground, sideways pushes on bodies
+that are not sagittal.  On the sagittal Taga body (torques, its own ground) the
+battery is the forward and backward pushes (48 trials).
 
 ============  ======  ==============================================================
 family        trials  disturbance
@@ -26,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .contract import index
 from .episode import Episode
 from .errors import UserError
 from .perturb import Trials
@@ -54,15 +61,18 @@ class Trial:
 
 
 def _hip_columns(episode: Episode) -> dict[str, tuple[int, int]]:
-    names = episode.body.actuator_names
-    try:
-        return {axis: (names.index(f"left_hip_{axis}"), names.index(f"right_hip_{axis}")) for axis in ("pitch", "roll")}
-    except ValueError:
-        raise UserError(f"the robustness battery needs a body with hip pitch and roll PD targets (reil), not {episode.body.name!r}") from None
+    """Axis (pitch, roll) -> the (left, right) actuator columns of the hips with that role; only axes both legs have,
+    and none on a body of torques (the offsets are PD-target angles)."""
+    body = episode.body
+    if body.action_kind != "position":
+        return {}
+    roles = {(a.leg, a.joint) for a in body.actuators}
+    return {axis: (index(body.actuators, "left", f"hip_{axis}"), index(body.actuators, "right", f"hip_{axis}"))
+            for axis in ("pitch", "roll") if {("left", f"hip_{axis}"), ("right", f"hip_{axis}")} <= roles}
 
 
 class _Touchdowns:
-    """Listener: left-foot touchdown times (s) of row 0."""
+    """Listener: left-foot touchdown times (s) of row 0 (the body's contact sensor, its left leg's column)."""
 
     def __init__(self):
         self.times: list[float] = []
@@ -70,9 +80,11 @@ class _Touchdowns:
 
     def start(self, episode, sims):
         self.body = episode.body
+        self.sensor, legs = self.body.contact_sensor
+        self.column = legs.index("left")
 
     def tick(self, t, sims, ids, neurons, action, task_state):
-        down = bool(self.body.sensors(sims)["foot_contact"][0, 0] > 0)
+        down = bool(self.body.sensors(sims)[self.sensor][0, self.column] > 0)
         if down and not self._down:
             self.times.append(t)
         self._down = down
@@ -95,8 +107,9 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
             progress: Progress | None = None) -> list[Trial]:
     """Run every trial of the battery for one genome ``(G,)``; the episode must be nominal (no perturbations).
     ``progress`` (optional) hears the simulated seconds of its batches."""
-    if episode.body.action_kind != "position" or episode.body.floor_geom is None:
-        raise UserError(f"the robustness battery needs a body with PD targets and MuJoCo ground contact (reil), not {episode.body.name!r}")
+    body = episode.body
+    if body.contact_sensor is None or "left" not in body.contact_sensor[1]:
+        raise UserError(f"the robustness battery needs a body that declares its left foot's contact sensor; {body.name!r} does not")
     if episode.task.presentations != 1:
         raise UserError(f"the robustness battery runs one presentation per trial; this {episode.task.name!r} episode has "
                         f"{episode.task.presentations} (give a steering walker one source)")
@@ -107,8 +120,9 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     t0, period = stride(episode, genome, seconds, push_after)
     labels: list[tuple[str, str]] = []
     starts, forces, offsets = [], [], []
+    directions = {d: u for d, u in DIRECTIONS.items() if not (body.sagittal and u[1])}
     for f in PUSH_FORCES:
-        for d, (ux, uy) in DIRECTIONS.items():
+        for d, (ux, uy) in directions.items():
             for i in range(PHASES):
                 labels.append((f"push {f:g} N", f"{d}, phase {i}/{PHASES}"))
                 starts.append([t0 + period * i / PHASES])
@@ -128,8 +142,9 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     main = Trials.nominal(len(labels), n_act, push_start=np.array(starts), push_force=np.array(forces),
                           push_duration=PUSH_DURATION, target_offset=np.array(offsets))
     runs = [(labels, main)]
-    runs += [([("friction", f"mu = {mu:g}")], Trials.nominal(1, n_act, friction=mu)) for mu in FRICTIONS]
-    runs += [([("slope", f"{100 * s:+g} %")], Trials.nominal(1, n_act, slope=s)) for s in SLOPES]
+    if body.floor_geom is not None:
+        runs += [([("friction", f"mu = {mu:g}")], Trials.nominal(1, n_act, friction=mu)) for mu in FRICTIONS]
+        runs += [([("slope", f"{100 * s:+g} %")], Trials.nominal(1, n_act, slope=s)) for s in SLOPES]
     out = []
     if progress is not None:
         progress.total, progress.unit = float(seconds * len(runs)), "s simulated (batches in turn)"

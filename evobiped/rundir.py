@@ -51,6 +51,9 @@ LOCK = ".lock"
 OUTCOME = "outcome.json"
 
 HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
+#: history.csv's further columns: the best individual's task terms (``best_distance``, ...; the mean over its
+#: presentations), one per term; nan where undefined, or for generations of a checkpoint written before terms were kept
+TERM_PREFIX = "best_"
 #: columns holding counts (whole numbers >= 0) and fitness values (a number or -inf)
 _COUNTS = ("generation", "evaluations", "falls", "unstable")
 _FITNESS = ("best", "mean", "median", "worst")
@@ -103,9 +106,18 @@ def robustness_stem(label: str) -> str:
 
 
 # ---- history.csv
-def history_columns(rows: list[list]) -> dict[str, np.ndarray]:
-    """History rows (HISTORY_COLUMNS each) -> ``{column: (n_generations,) array}``, as :func:`read_history` gives."""
-    return {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
+def _term_names(terms: list[dict] | None) -> list[str]:
+    return list(dict.fromkeys(k for t in terms or () for k in t))
+
+
+def history_columns(rows: list[list], terms: list[dict] | None = None) -> dict[str, np.ndarray]:
+    """History rows (HISTORY_COLUMNS each) and the best's terms per generation (name -> value) ->
+    ``{column: (n_generations,) array}``, as :func:`read_history` gives (a missing term: NaN)."""
+    out = {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
+    padded = [*(terms or ()), *[{}] * (len(rows) - len(terms or ()))]
+    for name in _term_names(terms):
+        out[TERM_PREFIX + name] = np.array([np.nan if t.get(name) is None else float(t[name]) for t in padded])
+    return out
 
 
 def column(rows: list[list], name: str) -> list:
@@ -132,12 +144,15 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
         raise UserError(f"{path}: not a number in the history ({exc})") from None
 
 
-def history_text(rows: list[list]) -> str:
-    """history.csv's exact content for ``rows`` (one per generation, HISTORY_COLUMNS)."""
+def history_text(rows: list[list], terms: list[dict] | None = None) -> str:
+    """history.csv's exact content for ``rows`` (one per generation, HISTORY_COLUMNS) and the best's terms
+    per generation (name -> value; the TERM_PREFIX columns)."""
+    names = _term_names(terms)
+    padded = [*(terms or ()), *[{}] * (len(rows) - len(terms or ()))]
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(HISTORY_COLUMNS)
-    w.writerows(rows)
+    w.writerow([*HISTORY_COLUMNS, *(TERM_PREFIX + n for n in names)])
+    w.writerows([*r, *("nan" if t.get(n) is None else t[n] for n in names)] for r, t in zip(rows, padded))
     return buf.getvalue()
 
 
@@ -283,8 +298,24 @@ def validate_checkpoint(ck: Any, *, generations: int, low: np.ndarray, high: np.
                 if not low[i] <= v <= high[i]:
                     raise _bad(f"best_genome[{i}]", f"must be within the gene's bounds [{low[i]:g}, {high[i]:g}], got {v!r}")
     outcome = ck.get("outcome", {})
-    if not isinstance(outcome, dict) or not set(outcome) <= {"fell", "unstable", "end_time"}:
-        raise _bad("outcome", "must be a table of fell, unstable and end_time lists")
-    for key, vals in outcome.items():
+    if not isinstance(outcome, dict) or not set(outcome) <= {"fell", "unstable", "end_time", "terms", "walk"}:
+        raise _bad("outcome", "must be a table of fell, unstable and end_time lists (and tables of terms and walk)")
+    nested = {f"{k}.{n}": v for k in ("terms", "walk") if isinstance(outcome.get(k), dict) for n, v in outcome[k].items()}
+    for key in ("terms", "walk"):
+        if key in outcome and not isinstance(outcome[key], dict):
+            raise _bad(f"outcome.{key}", "must be a table of lists")
+    plain = {k: v for k, v in outcome.items() if k not in ("terms", "walk")}
+    for key, vals in plain.items():
         if not isinstance(vals, list) or not all(isinstance(v, (bool, int, float)) for v in vals):
             raise _bad(f"outcome.{key}", "must be a list of numbers or booleans")
+    entry = lambda v: v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))  # noqa: E731
+    for key, vals in nested.items():
+        if not isinstance(vals, list) or not all(entry(v) or (isinstance(v, list) and all(map(entry, v))) for v in vals):
+            raise _bad(f"outcome.{key}", "must be a list of numbers (or of lists of numbers)")
+    walk = ck.get("best_walk")
+    if walk is not None and not (isinstance(walk, dict) and isinstance(walk.get("distance"), (int, float))):
+        raise _bad("best_walk", "must be a table with the best walker's distance, or null")
+    terms = ck.get("history_terms", [])
+    if not isinstance(terms, list) or len(terms) > len(history) or not all(
+            isinstance(t, dict) and all(map(entry, t.values())) for t in terms):
+        raise _bad("history_terms", "must be a list of tables of numbers (or nulls), at most one per generation")

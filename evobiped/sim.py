@@ -25,13 +25,31 @@ MAX_SPEED = 100.0
 
 
 class Sims:
-    """``n`` simulations of ``model``; fields are ``(n, ...)`` arrays."""
+    """``n`` simulations of ``model``; fields are ``(n, ...)`` arrays.
+
+    A batch is a value: :meth:`copy` (and ``copy.deepcopy``) gives an independent batch in the same
+    state, which continues bit for bit as the original would.  ``extra`` holds what a body keeps per
+    simulation beside MuJoCo's state (the Taga ground's contact points and pushes): name -> table of
+    ``(n, ...)`` arrays, copied with the batch.
+    """
 
     def __init__(self, model: mujoco.MjModel, n: int, *, nthread: int = 1):
         self.model = model
         self.n = n
         self.batch = Batch(model, nsim=n, nthread=nthread, persistent=True)
         self._fields: dict[str, np.ndarray] = {}
+        self.extra: dict[str, dict[str, np.ndarray]] = {}
+
+    def copy(self) -> "Sims":
+        """An independent batch of the same model in this batch's state (MuJoCo's full state and ``extra``)."""
+        other = Sims(self.model, self.n, nthread=self.batch.nthread)
+        other.batch.state[:] = self.batch.state
+        other.batch.forward(stage=_VEL)
+        other.extra = {k: {name: a.copy() for name, a in table.items()} for k, table in self.extra.items()}
+        return other
+
+    def __deepcopy__(self, memo: dict) -> "Sims":
+        return self.copy()
 
     def __getattr__(self, name: str) -> np.ndarray:
         # qpos, qvel, ctrl, xpos, xquat, subtree_com, sensordata, ...: live views

@@ -40,7 +40,7 @@ import numpy as np
 
 from evobiped.episode import EpisodeConfig
 from evobiped.errors import UserError
-from evobiped.evolution.cma import CMAES, CMAConfig
+from evobiped.evolution.cma import CMAES, CMAOptions
 from evobiped.genome_file import save_genome
 from evobiped.models import model_path
 
@@ -84,7 +84,7 @@ def truncation(episode, score, args, rng) -> None:
 
 def cma(episode, score, args) -> None:
     """CMA-ES (pycma) over the layout's bounded genes, stopping early when pycma's rules fire and no restart is left."""
-    es = CMAES(episode.controller.layout, CMAConfig(population=args.population, sigma0=args.sigma0, restarts=args.restarts), seed=args.seed)
+    es = CMAES(episode.controller.layout, CMAOptions(population=args.population, sigma0=args.sigma0, restarts=args.restarts), seed=args.seed)
     t0 = time.time()
     for g in range(args.rounds):
         pop, _ = es.ask()

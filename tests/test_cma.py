@@ -9,7 +9,8 @@ from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError, UserError
 from evobiped.evolution import Run, RunConfig, make_evaluator
-from evobiped.evolution.cma import CMAES, CMAConfig
+from evobiped.evolution.cma import CMAES, CMAOptions
+from evobiped.evolution.individuals import Individuals
 from evobiped.genome import GeneBlock, GenomeLayout
 
 from .test_evolve import fitness_history
@@ -25,16 +26,16 @@ def optimise(opt, f, generations):
     return opt
 
 
-def test_outcome_is_told_and_not_carried():
-    """CMA-ES samples a fresh population each generation: the outcome told is there until next_generation, then unknown (zeros)."""
-    from types import SimpleNamespace
-
-    opt = CMAES(LAYOUT, CMAConfig(population=4), seed=2)
-    f = np.array([1.0, 4.0, 2.0, 3.0])
-    opt.tell(SimpleNamespace(fitness=f, fell=f < 2, unstable=f > 3.5, end_time=f / 2))
-    assert opt.outcome["end_time"].tolist() == [0.5, 2.0, 1.0, 1.5] and opt.outcome["fell"].tolist() == [True, False, False, False]
-    opt.next_generation()
-    assert opt.outcome["end_time"].tolist() == [0.0] * 4 and not opt.outcome["unstable"].any()
+def test_nothing_is_carried():
+    """CMA-ES samples a fresh population each generation: every new row is a new individual, so a run's outcomes
+    are unknown (zeros) after it."""
+    opt = CMAES(LAYOUT, CMAOptions(population=4), seed=2)
+    opt.tell(np.array([1.0, 4.0, 2.0, 3.0]))
+    ind = Individuals(outcome={"end_time": np.array([0.5, 2.0, 1.0, 1.5])})
+    rows = opt.next_generation()
+    assert rows.tolist() == [-1] * 4
+    ind.carry(rows)
+    assert ind.outcome["end_time"].tolist() == [0.0] * 4
 
 
 def test_minimises_a_sphere_inside_the_bounds():
@@ -46,7 +47,7 @@ def test_minimises_a_sphere_inside_the_bounds():
         seen.append(pop.copy())
         return -((pop - c) ** 2).sum(axis=1)
 
-    opt = optimise(CMAES(LAYOUT, CMAConfig(sigma0=0.3), seed=1), f, 150)
+    opt = optimise(CMAES(LAYOUT, CMAOptions(sigma0=0.3), seed=1), f, 150)
     best = opt.population[opt.ranking()[0]] if not np.isnan(opt.fitness).all() else None
     assert best is None  # a fresh, not yet evaluated generation
     pop, _ = opt.ask()
@@ -59,9 +60,9 @@ def test_minimises_a_sphere_inside_the_bounds():
 def test_state_round_trip_asks_the_same():
     """A checkpointed strategy replays its told fitness and asks the identical next population."""
     f = lambda pop: -np.abs(pop).sum(axis=1)  # noqa: E731
-    a = optimise(CMAES(LAYOUT, CMAConfig(population=6, restarts=1), seed=3), f, 12)
+    a = optimise(CMAES(LAYOUT, CMAOptions(population=6, restarts=1), seed=3), f, 12)
     state = json.loads(json.dumps(a.state_dict()))
-    b = CMAES(LAYOUT, CMAConfig(population=6, restarts=1), seed=3)
+    b = CMAES(LAYOUT, CMAOptions(population=6, restarts=1), seed=3)
     b.load_state_dict(state)
     assert b.generation == 12 and np.array_equal(a.ask()[0], b.ask()[0])
     optimise(a, f, 3)
@@ -71,26 +72,26 @@ def test_state_round_trip_asks_the_same():
 
 def test_ipop_restart_doubles_the_population():
     """A flat fitness stops pycma (tolflatfitness); the restart doubles lambda."""
-    opt = optimise(CMAES(LAYOUT, CMAConfig(population=4, restarts=1), seed=0), lambda pop: np.zeros(len(pop)), 40)
+    opt = optimise(CMAES(LAYOUT, CMAOptions(population=4, restarts=1), seed=0), lambda pop: np.zeros(len(pop)), 40)
     assert opt.restart == 1 and len(opt.ask()[0]) == 8
 
 
 @pytest.mark.parametrize("bad", [dict(population=1), dict(sigma0=0.0), dict(sigma0=float("nan")), dict(sigma0=2.0), dict(restarts=-1), dict(population=True)])
 def test_bad_settings(bad):
     with pytest.raises(ConfigError):
-        CMAConfig(**bad)
+        CMAOptions(**bad)
 
 
 def test_tampered_state_is_refused():
-    opt = CMAES(LAYOUT, CMAConfig(population=4), seed=0)
-    good = optimise(CMAES(LAYOUT, CMAConfig(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state_dict()
+    opt = CMAES(LAYOUT, CMAOptions(population=4), seed=0)
+    good = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state_dict()
     for bad in ({**good, "told": [[1.0] * 3, [1.0] * 4]}, {**good, "generation": 5}, {**good, "told": "x"}, {"optimizer": "ga"}):
         with pytest.raises(UserError):
             opt.load_state_dict(bad)
 
 
 SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task_options={"fitness": "forward"}),
-                  optimizer="cma", cma=CMAConfig(population=6), generations=4, seed=2, backend="serial")
+                  optimizer="cma", cma=CMAOptions(population=6), generations=4, seed=2, backend="serial")
 
 
 def test_cma_run_resumes_bit_identically(tmp_path):

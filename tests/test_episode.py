@@ -62,12 +62,13 @@ def constant_episode():
 
 def test_neutral_targets_stand_50s(constant_episode):
     """Upright, legs straight, all targets 0: the symmetric stance holds for 50 s, no drift."""
-    r = constant_episode.run(np.array(NEUTRAL))
-    assert np.all(constant_episode.sims(1).ctrl == 0.0)
+    state = constant_episode.advance(constant_episode.start(np.array(NEUTRAL)), 50.0)
+    r = constant_episode.result(state)
+    assert np.all(state.sims.ctrl == 0.0)
     assert not r.fell[0] and not r.unstable[0]
     assert r.end_time[0] == pytest.approx(50.0)
     assert r.fitness[0] < 1e-9  # standing still
-    com = constant_episode.body.com(constant_episode.sims(1))[0]
+    com = constant_episode.body.com(state.sims)[0]
     # COM of the upright pose: (1 * 1.08 + 1.2 * 0.83 + 0.9 * 0.33 + 0.3 * 0.08) / 3.4, less contact penetration
     assert com[2] == pytest.approx((1.08 + 1.2 * 0.83 + 0.9 * 0.33 + 0.3 * 0.08) / 3.4, abs=2e-3)
 
@@ -224,9 +225,10 @@ def test_a_runaway_simulation_is_unstable_and_keeps_its_last_plausible_distance(
     """MuJoCo warns only at 1e10: a state running away at 300 m/s would carry the walker 6 m
     in one control tick.  It is flagged unstable, ends as a fall, and scores where it was before."""
     ep = Episode(Launched(), Constant(), WalkTask(), seconds=1.0)
-    r = ep.run(np.array([NEUTRAL, NEUTRAL]))
-    assert ep.sims(2).qpos[0, 0] > 5.0  # the physics really did carry it off, and MuJoCo said nothing
-    assert not ep.sims(2).batch.warning[0, :, 0].any()
+    state = ep.advance(ep.start(np.array([NEUTRAL, NEUTRAL])), 1.0)
+    r = ep.result(state)
+    assert state.sims.qpos[0, 0] > 5.0  # the physics really did carry it off, and MuJoCo said nothing
+    assert not state.sims.batch.warning[0, :, 0].any()
     assert r.unstable.tolist() == [True, False] and r.fell.tolist() == [True, False]
     assert r.end_time[0] == pytest.approx(0.02)
     assert r.fitness[0] == 0.0 and r.fitness[1] < 1e-9

@@ -17,19 +17,20 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
+from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
 from evobiped.evolution.run import HISTORY_COLUMNS
 
 from .conftest import cli
 
-SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAConfig(population=8), generations=3, seed=7, backend="serial")
+SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAOptions(population=8), generations=3, seed=7, backend="serial")
 
 
 def fitness_history(run_dir) -> list[list[str]]:
-    """history.csv without the wall-clock column."""
+    """history.csv without the wall-clock column (the best's terms after the fixed columns)."""
     with open(Path(run_dir) / "history.csv") as f:
         rows = list(csv.reader(f))
-    assert rows[0] == list(HISTORY_COLUMNS)
+    assert rows[0][: len(HISTORY_COLUMNS)] == list(HISTORY_COLUMNS)
+    assert all(c.startswith("best_") for c in rows[0][len(HISTORY_COLUMNS) :])
     wall = HISTORY_COLUMNS.index("wall_seconds")
     return [r[:wall] + r[wall + 1 :] for r in rows[1:]]
 
@@ -248,7 +249,7 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
     """PD gains far beyond what the 20 ms step can integrate blow every walker up: the run goes on."""
     cfg = RunConfig(
         episode=EpisodeConfig(seconds=1.0, body_options={"timestep": 0.02, "kp": 1e6, "kv": 0.0}),
-        ga=GAConfig(population=6),
+        ga=GAOptions(population=6),
         generations=2,
         backend="serial",
     )

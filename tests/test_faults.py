@@ -47,11 +47,11 @@ def contents(d: Path) -> dict:
         if not p.is_file() or name == ".lock":
             continue
         if name == "evolution.rrd":
-            for s in ("best", "mean", "median", "worst", "counts/evaluations", "counts/falls", "counts/unstable"):
+            for s in ("best", "mean", "median", "worst", "counts/evaluations", "counts/falls", "counts/unstable", "terms/best_distance"):
                 out[f"{name}:{s}"] = recording_series(p, f"/evolution/{s}")
         elif name == "history.csv":
             wall = HISTORY_COLUMNS.index("wall_seconds")
-            out[name] = [r[:wall] for r in csv.reader(p.read_text().splitlines())]
+            out[name] = [r[:wall] + r[wall + 1 :] for r in csv.reader(p.read_text().splitlines())]
         elif name in ("checkpoint.json", "summary.json"):
             obj = json.loads(p.read_text())
             obj.pop("wall_seconds")

@@ -1,18 +1,22 @@
 """The GA of Reil & Husbands (Table III, Sect. II-C1): operator statistics and search."""
 
+import json
+
 import numpy as np
 import pytest
 
 from evobiped.controllers import CTRNN
 from evobiped.errors import ConfigError
-from evobiped.evolution.ga import GA, GAConfig
+from evobiped.episode import EpisodeResult
+from evobiped.evolution.ga import GA, GAOptions
+from evobiped.evolution.individuals import Individuals
 from evobiped.genome import GeneBlock, GenomeLayout
 
 LAYOUT = CTRNN(n_outputs=6).layout
 
 
 def test_initial_population_table_III():
-    ga = GA(LAYOUT, GAConfig(population=4000), seed=1)
+    ga = GA(LAYOUT, GAOptions(population=4000), seed=1)
     pop = ga.population
     w, tau, b = pop[:, :100], pop[:, 100:110], pop[:, 110:]
     assert pop.min() >= -16 and pop.max() <= 16
@@ -26,7 +30,7 @@ def test_initial_population_table_III():
 
 
 def test_one_mutation_per_chromosome_on_average():
-    ga = GA(LAYOUT, GAConfig(), seed=2)
+    ga = GA(LAYOUT, GAOptions(), seed=2)
     assert ga.mutation_rate == pytest.approx(1 / 120)
     parents = np.zeros((20000, 120)) + LAYOUT.init_mean
     children = ga.mutate(parents, np.random.default_rng(0))
@@ -44,7 +48,7 @@ def test_one_mutation_per_chromosome_on_average():
 
 def test_mutation_clips_to_range():
     lay = GenomeLayout((GeneBlock(name="x", size=1, low=-1, high=1, init_mean=0, init_sigma=0, mutation_sigma=100),))
-    ga = GA(lay, GAConfig(population=2), seed=0)
+    ga = GA(lay, GAOptions(population=2), seed=0)
     out = ga.mutate(np.zeros((10000, 1)), np.random.default_rng(1))
     assert out.min() == -1.0 and out.max() == 1.0
     # rate 1 for a one-gene genome; P(|N(0, 100)| > 1) = 0.992, half of it clipped to each bound
@@ -53,7 +57,7 @@ def test_mutation_clips_to_range():
 
 
 def test_truncation_keeps_top_half_unchanged():
-    ga = GA(LAYOUT, GAConfig(population=10), seed=3)
+    ga = GA(LAYOUT, GAOptions(population=10), seed=3)
     pop0 = ga.population.copy()
     fit = np.array([5, 1, 9, 3, 7, 0, 8, 2, 6, 4], float)
     ga.tell(fit)
@@ -68,31 +72,46 @@ def test_truncation_keeps_top_half_unchanged():
     assert unknown.tolist() == [False] * 5 + [True] * 5
 
 
-def test_survivors_keep_their_outcome():
-    """An EpisodeResult told to the GA: each survivor's fell / unstable / end_time move with it (best first),
-    the children's are unknown (zeros) until told; a second tell fills only the children's rows."""
-    from types import SimpleNamespace
+def _result(fitness, fell, unstable, end_time):
+    """An EpisodeResult of walkers that went ``fitness`` m along +x, with the term ``distance`` beside it."""
+    n = len(fitness)
+    end = np.stack([fitness, np.zeros(n)], 1)
+    return EpisodeResult(fitness=fitness, fell=fell, unstable=unstable, end_time=end_time, start_position=np.zeros((n, 2)),
+                         end_position=end, start_facing=np.tile([1.0, 0.0], (n, 1)), terms={"distance": fitness.copy()})
 
-    ga = GA(LAYOUT, GAConfig(population=6), seed=5)
+
+def test_survivors_keep_their_outcome():
+    """The rows the GA keeps (next_generation's answer) carry each survivor's fell / unstable / end_time, terms and
+    walk along (best first); the children's are unknown (zeros) until told; a second tell fills only their rows."""
+    ga = GA(LAYOUT, GAOptions(population=6), seed=5)
+    ind = Individuals()
     fit = np.array([3.0, 1.0, 5.0, 0.0, 4.0, 2.0])
-    ga.tell(SimpleNamespace(fitness=fit, fell=fit < 2.5, unstable=fit == 0.0, end_time=10 * fit))
-    assert ga.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
-    ga.next_generation()  # survivors 2, 4, 0 (fitness 5, 4, 3)
-    assert ga.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 0.0, 0.0, 0.0]
-    assert ga.outcome["fell"].tolist() == [False] * 6
-    ga.tell(SimpleNamespace(fitness=np.array([6.0, 1.0, 2.0]), fell=np.array([False, True, True]),
-                            unstable=np.array([False, False, True]), end_time=np.array([60.0, 1.5, 2.5])))
-    assert ga.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
-    assert ga.outcome["unstable"].tolist() == [False] * 5 + [True]
-    assert ga.outcome_dict()["fell"] == [False, False, False, False, True, True]
-    ga.next_generation()  # survivors: rows 3 (6.0), 0 (5.0), 1 (4.0)
-    assert ga.outcome["end_time"].tolist() == [60.0, 50.0, 40.0, 0.0, 0.0, 0.0]
+    _, unknown = ga.ask()
+    r = _result(fit, fit < 2.5, fit == 0.0, 10 * fit)
+    ga.tell(r)
+    ind.told(unknown, r)
+    assert ind.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
+    ind.carry(ga.next_generation())  # survivors 2, 4, 0 (fitness 5, 4, 3)
+    assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 0.0, 0.0, 0.0]
+    assert ind.outcome["fell"].tolist() == [False] * 6
+    assert ind.terms_of(1) == {"distance": 4.0} and ind.walk_of(0) == {"distance": 5.0, "heading_deg": 0.0, "displacement": [5.0, 0.0]}
+    _, unknown = ga.ask()
+    r = _result(np.array([6.0, 1.0, 2.0]), np.array([False, True, True]), np.array([False, False, True]), np.array([60.0, 1.5, 2.5]))
+    ga.tell(r)
+    ind.told(unknown, r)
+    assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
+    assert ind.outcome["unstable"].tolist() == [False] * 5 + [True]
+    back = Individuals.from_dict(json.loads(json.dumps(ind.to_dict())), 6)
+    assert back.to_dict() == ind.to_dict() and back.to_dict()["fell"] == [False, False, False, False, True, True]
+    ind.carry(ga.next_generation())  # survivors: rows 3 (6.0), 0 (5.0), 1 (4.0)
+    assert ind.outcome["end_time"].tolist() == [60.0, 50.0, 40.0, 0.0, 0.0, 0.0]
+    assert ind.terms["distance"].tolist() == [6.0, 5.0, 4.0, 0.0, 0.0, 0.0]
 
 
 def test_frozen_genes_never_change():
     mutable = np.zeros(120, bool)
     mutable[110:] = True
-    ga = GA(LAYOUT, GAConfig(population=6), seed=4, initial=LAYOUT.init_mean, mutable=mutable)
+    ga = GA(LAYOUT, GAOptions(population=6), seed=4, initial=LAYOUT.init_mean, mutable=mutable)
     assert ga.mutation_rate == pytest.approx(1 / 10)
     for g in range(30):
         _, unknown = ga.ask()
@@ -106,7 +125,7 @@ def test_ga_improves_a_known_function():
     """Maximise -||x - x*||^2 on a 12-gene layout: the GA gets close to x*."""
     lay = GenomeLayout((GeneBlock(name="x", size=12, low=-5, high=5, init_mean=0, init_sigma=2, mutation_sigma=0.3),))
     target = np.linspace(-3, 3, 12)
-    ga = GA(lay, GAConfig(population=50), seed=5)
+    ga = GA(lay, GAOptions(population=50), seed=5)
     first = None
     for g in range(400):
         pop, unknown = ga.ask()
@@ -122,12 +141,12 @@ def test_ga_improves_a_known_function():
 
 
 def test_same_seed_same_population_and_bad_configs():
-    a, b = GA(LAYOUT, GAConfig(), seed=9), GA(LAYOUT, GAConfig(), seed=9)
+    a, b = GA(LAYOUT, GAOptions(), seed=9), GA(LAYOUT, GAOptions(), seed=9)
     assert np.array_equal(a.population, b.population)
-    assert not np.array_equal(a.population, GA(LAYOUT, GAConfig(), seed=10).population)
+    assert not np.array_equal(a.population, GA(LAYOUT, GAOptions(), seed=10).population)
     for bad in (dict(population=1), dict(fittest_fraction=1.0), dict(mutations_per_genome=0), dict(population=2.5)):
         with pytest.raises(ConfigError):
-            GAConfig(**bad)
+            GAOptions(**bad)
 
 
 def test_table_iii_numbers_are_config_values(tmp_path):
@@ -136,7 +155,7 @@ def test_table_iii_numbers_are_config_values(tmp_path):
     from evobiped.evolution import Run, RunConfig, make_evaluator
 
     genes = {"weights": {"init_mean": 2.0, "init_sigma": 0.0}, "time_constants": {"mutation_sigma": 0.0, "low": 1.0, "high": 3.0}}
-    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), ga=GAConfig(population=10), generations=3, backend="serial")
+    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), ga=GAOptions(population=10), generations=3, backend="serial")
     run = Run.create(tmp_path / "r", cfg)
     layout = cfg.episode.build().controller.layout
     s = layout.slices()

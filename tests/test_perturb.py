@@ -10,7 +10,7 @@ from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError
 from evobiped.genome_file import load_genome
 from evobiped.models import model_path
-from evobiped.perturb import PerturbationConfig, Trials
+from evobiped.perturb import PerturbationOptions, Trials
 
 from .conftest import WALKERS
 
@@ -19,7 +19,7 @@ PERTURBED = dict(presentations=3, pushes=2, push_force=10.0, target_noise=0.01, 
 
 
 def test_trials_depend_on_seed_and_generation_only():
-    cfg = PerturbationConfig(**PERTURBED)
+    cfg = PerturbationOptions(**PERTURBED)
     a, b, c = (cfg.draw(k, seconds=20.0, n_actuators=6) for k in ((1, 4), (1, 4), (1, 5)))
     assert np.array_equal(a.push_start, b.push_start) and a.friction == b.friction and a.noise_seed == b.noise_seed
     assert not np.array_equal(a.push_start, c.push_start)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from evobiped.cli import main
+from evobiped.errors import UserError
 from evobiped.genome_file import load_genome, save_genome
 from evobiped.perturb import Trials
 from evobiped.robustness import battery, summarise
@@ -68,13 +69,26 @@ def test_bad_arguments_one_line(tmp_path, capsys, args, msg):
     assert not (tmp_path / "o").exists()
 
 
-def test_a_body_without_pd_targets_is_refused(tmp_path, capsys):
+def test_on_the_sagittal_taga_body_the_battery_is_the_forward_and_backward_pushes():
+    """Found by role: Taga's left-foot contacts time the pushes; no hip-roll or PD-target offsets, no MuJoCo
+    ground to change, no sideways pushes.  Taga's walker pushed forward goes further than pushed back."""
     from evobiped.episode import EpisodeConfig
 
-    cfg = EpisodeConfig(body="taga", controller="ctrnn", seconds=2.0)
-    ep = cfg.build()
-    save_genome(tmp_path / "t.json", ep.controller.layout.init_mean, cfg)
-    assert main(["robustness", str(tmp_path / "t.json")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "PD targets" in err[0]
-    assert not (tmp_path / "t_robustness.json").exists()
+    ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=3.0).build()
+    trials = battery(ep, ep.controller.preset_genome(), seconds=3.0, push_after=1.0)
+    assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15) for _ in range(16)]
+    assert {t.label.split(",")[0] for t in trials} == {"forward", "backward"}
+    fwd = {t.label: t.forward for t in trials if t.family == "push 15 N"}
+    assert all(fwd[f"forward, phase {i}/8"] > fwd[f"backward, phase {i}/8"] + 0.01 for i in range(8))
+
+
+def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):
+    from evobiped.bodies.taga import TagaBiped
+    from evobiped.episode import Episode, EpisodeConfig
+
+    class Numb(TagaBiped):
+        contact_sensor = None
+
+    _, ctrl, task = EpisodeConfig(body="taga", controller="matsuoka").parts()
+    with pytest.raises(UserError, match="needs a body that declares its left foot's contact sensor; 'taga' does not"):
+        battery(Episode(Numb(), ctrl, task, seconds=2.0), ctrl.preset_genome(), seconds=2.0, push_after=1.0)

@@ -5,11 +5,15 @@ import numpy as np
 import pytest
 
 from evobiped.bodies import ReilBiped, TagaBiped
+from evobiped.contract import Offer, problem
 from evobiped.controllers.simbicon import RANGES, SENSORS, Simbicon
 from evobiped.episode import Episode, EpisodeConfig, build_episode
 from evobiped.errors import ConfigError
 from evobiped.sim import Sims
 from evobiped.tasks import WalkTask
+
+#: the Reil body's sensors wired to simbicon's inputs, as the episode wires them
+WIRED = {n: ReilBiped.sensor_widths[n] for n in SENSORS}
 
 
 def _sims(body, qpos=None, qvel=None):
@@ -103,7 +107,7 @@ def _genome(ctrl, **values):
 
 
 def _inputs(ctrl, **x):
-    out = np.zeros((1, sum(SENSORS.values())))
+    out = np.zeros((1, sum(WIRED.values())))
     for k, v in x.items():
         out[0, ctrl._at[k]] = v
     return out
@@ -111,7 +115,7 @@ def _inputs(ctrl, **x):
 
 def test_swing_and_stance_targets_by_hand():
     """Left stance, early swing: every target from the module docstring's formulas."""
-    ctrl = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
+    ctrl = Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators)
     g = _genome(ctrl, step_time=0.3, hip_early=0.5, knee_early=-1.0, stance_knee=-0.1, cd=0.4, cv=0.2,
                 roll_offset=0.05, cd_lateral=0.5, cv_lateral=0.3, pelvis_gain=0.6, pelvis_damping=0.1)
     params = ctrl.decode(g)
@@ -133,7 +137,7 @@ def test_swing_and_stance_targets_by_hand():
 
 
 def test_the_legs_swap_when_the_swing_foot_lands_after_step_time():
-    ctrl = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
+    ctrl = Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators)
     params = ctrl.decode(_genome(ctrl, step_time=0.3))
     st = ctrl.initial_state(params)
     touching = _inputs(ctrl, foot_contact=[1, 1])
@@ -179,11 +183,13 @@ def test_bad_pairings_are_one_clear_error():
                                           "hip_pitch, hip_roll, knee, the body has right: hip, knee, ankle; left: hip, knee, ankle"):
         EpisodeConfig(body="taga", controller="simbicon").layout()
     with pytest.raises(ConfigError, match="gives angle outputs, which body 'taga' cannot take as torques"):
-        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators), WalkTask(), seconds=1.0)
+        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators), WalkTask(), seconds=1.0)
     with pytest.raises(ConfigError, match="needs the sensors foot_contact, pelvis_tilt, .*; its inputs leave them out"):
         EpisodeConfig(controller="simbicon", controller_options={"inputs": ["joint_angles"]}).layout()
-    with pytest.raises(ConfigError, match="simbicon: needs the sensors com_velocity .2 wide, offered 1."):
-        Simbicon(n_outputs=6, inputs={**SENSORS, "com_velocity": 1}, actuators=ReilBiped.actuators)
+    # the episode checks the contract (once): a body whose centre-of-mass velocity is 1 wide is refused
+    offer = Offer(ReilBiped.actuators, {**ReilBiped.sensor_widths, "com_velocity": 1})
+    assert problem(Simbicon.needs(Simbicon.Options()), offer) == "needs the sensors com_velocity (2 wide, offered 1)"
+    assert problem(Simbicon.needs(Simbicon.Options()), Offer(ReilBiped.actuators, ReilBiped.sensor_widths)) is None
 
 
 def test_simbicon_finds_its_joints_by_role_not_by_column():
@@ -191,8 +197,8 @@ def test_simbicon_finds_its_joints_by_role_not_by_column():
     from evobiped.contract import index
 
     mirrored = ReilBiped.actuators[3:] + ReilBiped.actuators[:3]  # right leg first
-    a = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
-    b = Simbicon(n_outputs=6, inputs=SENSORS, actuators=mirrored)
+    a = Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators)
+    b = Simbicon(n_outputs=6, inputs=WIRED, actuators=mirrored)
     g = _genome(a, step_time=0.3, hip_early=0.5, cd=0.4, pelvis_gain=0.6)
     q = np.array([0.1, 0.02, -0.05, -0.2, 0.03, -0.3])
     x = dict(foot_contact=[1, 1], pelvis_tilt=[0.05, -0.04], com_from_feet=[0.1, -0.2, 0.0, 0.3], com_velocity=[0.5, -0.1])
@@ -205,7 +211,7 @@ def test_simbicon_finds_its_joints_by_role_not_by_column():
 
 
 def test_genes_and_layout():
-    ctrl = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
+    ctrl = Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators)
     assert ctrl.layout.size == len(RANGES) == 13
     assert np.all(ctrl.layout.low < ctrl.layout.init_mean) and np.all(ctrl.layout.init_mean < ctrl.layout.high)
 
@@ -262,12 +268,12 @@ def test_com_velocity_equals_mujocos_subtree_velocity_in_motion():
 def test_hearing_biases_the_swing_targets_by_the_sound_signal():
     """With the sound input: two more genes; s shifts the forward swing target by -side sound_forward s
     and the outward one by side sound_lateral s (side +1 for the left leg); deaf genes change nothing."""
-    heard = {"sound": 1, **SENSORS}
+    heard = {"sound": 1, **WIRED}
     ctrl = Simbicon(n_outputs=6, inputs=heard, actuators=ReilBiped.actuators)
     assert ctrl.layout.size == 15 and ctrl.layout.init_mean[-2:].tolist() == [0.0, 0.0]
-    deaf = Simbicon(n_outputs=6, inputs=SENSORS, actuators=ReilBiped.actuators)
+    deaf = Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators)
     base = dict(step_time=0.3, hip_early=0.5, knee_early=-1.0, stance_knee=-0.1, cd=0.4, cv=0.2, roll_offset=0.05)
-    x = np.zeros((1, 1 + sum(SENSORS.values())))
+    x = np.zeros((1, 1 + sum(WIRED.values())))
     x[0, ctrl._at["foot_contact"]] = [1, 1]
     x[0, ctrl._at["com_from_feet"]] = [0.1, -0.2, 0.0, 0.3]
     _, quiet = deaf.step(deaf.decode(_genome(deaf, **base)), deaf.initial_state(deaf.decode(_genome(deaf, **base))), x[:, 1:])

@@ -95,10 +95,10 @@ def test_tiny_study_end_to_end(tmp_path, capsys):
 def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     """A run stopped after generation 1 of 3 is resumed from its checkpoint and ends as an uninterrupted one."""
     from evobiped.episode import EpisodeConfig
-    from evobiped.evolution import GAConfig, Run, RunConfig, make_evaluator
+    from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
     from evobiped.experiments.reil.study import StudyConfig, open_study, run_dir, run_study
 
-    cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), ga=GAConfig(population=4), generations=3),
+    cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), ga=GAOptions(population=4), generations=3),
                       runs=1, conditions=("plain",), recheck_seconds=3.0)
     ref = run_study(tmp_path / "whole", cfg, backend="serial")
 

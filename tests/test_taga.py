@@ -246,7 +246,9 @@ def test_cli_push_on_a_walker_that_falls_first_says_so(capsys):
     "argv,needle",
     [
         (["--preset", "nope"], "unknown preset"),
-        (["--u0", "-1"], "u0 must be"),
+        (["--u0", "-1"], "--u0: must be >= 0, got -1.0"),
+        (["--bg", "-1"], "--bg: must be a number >= 0 (or a list, one per simulation), got -1.0"),
+        (["--timestep", "0.01"], "--timestep: must be in [1e-05, 0.005] s, got 0.01"),
         (["--slope", "60"], "--slope must be in [-50, 50] %, got 60"),
         (["--slope", "-51"], "--slope must be in [-50, 50] %, got -51"),
     ],

@@ -49,6 +49,10 @@ class Body(ABC):
     #: action order, each with its leg and joint role, and its sensors, name -> width (see :meth:`sensors`)
     actuators: ClassVar[tuple[Actuator, ...]]
     sensor_widths: ClassVar[dict[str, int]] = {}
+    #: the sensor telling which feet touch the ground (1/0), and the leg of each of its columns (None: none)
+    contact_sensor: ClassVar[tuple[str, tuple[str, ...]] | None] = None
+    #: True for a walker confined to its sagittal plane (nothing moves it sideways)
+    sagittal: ClassVar[bool] = False
     #: how a controller that normalises its inputs reads each sensor: name -> (standing values, scales), one per
     #: component, in the sensor's units; the controller sees (reading - standing value) / scale
     sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}

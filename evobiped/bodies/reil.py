@@ -85,6 +85,7 @@ class ReilBiped(Body):
     action_kind: ClassVar[str] = "position"
     trunk: ClassVar[str] = "pelvis"
     floor_geom: ClassVar[str | None] = "floor"
+    contact_sensor: ClassVar[tuple[str, tuple[str, ...]]] = ("foot_contact", ("left", "right"))
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, a.split("_", 1)[0], a.split("_", 1)[1]) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {

@@ -30,7 +30,6 @@ docs/taga.md).
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -96,6 +95,8 @@ class TagaBiped(Body):
     action_kind: ClassVar[str] = "torque"
     trunk: ClassVar[str] = "hip"
     has_custom_forces: ClassVar[bool] = True
+    contact_sensor: ClassVar[tuple[str, tuple[str, ...]]] = ("ground_contact", ("right", "left"))
+    sagittal: ClassVar[bool] = True
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}
@@ -109,7 +110,6 @@ class TagaBiped(Body):
         self.p = dict(APPENDIX_D, kg=np.asarray(o.kg, float), bg=np.asarray(o.bg, float))
         self.slope, self.slope_start = float(o.slope), float(o.slope_start)
         self.max_torque, self.fall_height = float(o.max_torque), float(o.fall_height)
-        self._state: weakref.WeakKeyDictionary[Sims, dict] = weakref.WeakKeyDictionary()
 
     # ------------------------------------------------------------ structure
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -134,10 +134,11 @@ class TagaBiped(Body):
 
     # ------------------------------------------------------------ state
     def _ground(self, sims: Sims) -> dict:
-        st = self._state.get(sims)
+        """This body's state in the batch (``sims.extra``, copied with it): ground contacts, forces, torques, pushes."""
+        st = sims.extra.get(self.name)
         if st is None:
             n = sims.n
-            st = self._state[sims] = dict(
+            st = sims.extra[self.name] = dict(
                 rest=np.zeros((n, 2, 2)),  # (P, leg, xy) rest points
                 contact=np.zeros((n, 2), bool),  # ankle below the terrain (right, left)
                 force=np.zeros((n, 4)),  # F_g1..F_g4 (N)
@@ -161,8 +162,6 @@ class TagaBiped(Body):
         sims.qvel[rows] = 0.0
         sims.qfrc_applied[rows] = 0.0
         sims.forward(ids)
-        if ids is None:
-            self._state.pop(sims, None)
         for a in self._ground(sims).values():
             a[rows] = 0
 

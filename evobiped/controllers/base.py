@@ -47,8 +47,10 @@ class Controller(ABC):
         ``cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)``."""
         return Needs()
 
-    def bind_period(self, dt: float) -> None:
-        """Told the control period (s) once the episode knows it (the physics step when ``dt`` is None)."""
+    def bound(self, dt: float) -> "Controller":
+        """This controller stepping at control period ``dt`` (s; the physics step when ``dt`` is None):
+        itself where the period makes no difference, else a copy (this one is left unchanged)."""
+        return self
 
     @property
     @abstractmethod

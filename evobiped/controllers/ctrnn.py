@@ -132,8 +132,6 @@ class CTRNN(Controller):
         n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
         self.output_kind = MOTOR_MAPS[motor]
-        if n_neurons < n_outputs:
-            raise ConfigError(f"ctrnn: n_neurons ({n_neurons}) must be >= the body's {n_outputs} actuators")
         tau = _tau_block(time_constants, dt, o.tau_scale)
         self.log_tau = o.tau_scale == "log"
         self.outputs_after = o.outputs == "after"

@@ -31,6 +31,8 @@ structure option (the experiments' control parameter), not a gene.
 
 from __future__ import annotations
 
+import copy
+
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -128,13 +130,10 @@ class Matsuoka(Controller):
                  **options):
         o = self.options = parse(MatsuokaOptions, options, "matsuoka controller_options")
         inputs = dict(inputs or {})
-        if n_outputs < 2 or n_outputs % 2:
-            raise ConfigError(f"matsuoka: needs two legs with the same joints (an even number of actuators), got {n_outputs}")
+        # the episode checked needs(): two legs, and Taga's legs and sensors where the feedback is "taga"; "auto"
+        # takes the feedback where the wiring gave its sensors
         taga_body = actuators is not None and problem(Needs(joints=TAGA_JOINTS), Offer(actuators, {})) is None
         has = taga_body and all(s in inputs for s in FEEDBACK_SENSORS)
-        if o.feedback == "taga" and not has:
-            raise ConfigError(f"matsuoka: Taga feedback needs actuators of the joints {', '.join(TAGA_JOINTS)} per leg "
-                              f"and the inputs {', '.join(FEEDBACK_SENSORS)}")
         self.feedback = "taga" if (o.feedback == "taga" or (o.feedback == "auto" and has)) else "none"
         u0, initial_u, dt = o.u0, o.initial_u, o.dt
         self.n_outputs = self.n_osc = int(n_outputs)
@@ -174,9 +173,11 @@ class Matsuoka(Controller):
         parts["feedback"] = np.array(TAGA_FEEDBACK)
         return np.concatenate([parts[b.name] for b in self.layout.blocks])
 
-    def bind_period(self, dt: float) -> None:
-        """The control period in s (the physics step when ``dt`` is None)."""
-        self.period = float(dt)
+    def bound(self, dt: float) -> "Matsuoka":
+        """A copy integrating with Euler steps of ``dt`` s (the physics step when ``dt`` is None)."""
+        other = copy.copy(self)
+        other.period = float(dt)
+        return other
 
     def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
         g = super().decode(genomes)
@@ -226,7 +227,7 @@ class Matsuoka(Controller):
 
     def step(self, params, state, inputs):
         if self.period is None:
-            raise ConfigError("matsuoka: the control period is unknown (call bind_period or give dt)")
+            raise ConfigError("matsuoka: the control period is unknown (step the controller bound(dt) returns, or give dt)")
         u, v = state["u"], state["v"]
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)

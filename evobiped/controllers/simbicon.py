@@ -44,15 +44,17 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Actuator, Needs, Offer, index, problem
+from ..contract import Actuator, Needs, index
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
 from ..options import option, parse
 from .base import Controller
 
-#: body sensors read by name (see ReilBiped.sensors), with their widths
+#: body sensors read by name, with the widths their meaning fixes: joint angles in action order (one per
+#: actuator, however many the body has), foot contacts (left, right), pelvis pitch and roll and their rates,
+#: the centre of mass from each foot (forward, left) and its velocity (forward, left)
 SENSORS = {
-    "joint_angles": 6,
+    "joint_angles": None,
     "foot_contact": 2,
     "pelvis_tilt": 2,
     "pelvis_tilt_rate": 2,
@@ -115,9 +117,6 @@ class Simbicon(Controller):
     def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **options):
         self.options = parse(SimbiconOptions, options, "simbicon controller_options")
         inputs = dict(inputs or {})
-        why = problem(self.needs(self.options), Offer(tuple(actuators), inputs))
-        if why:
-            raise ConfigError(f"simbicon: {why}")
         self.n_outputs = len(actuators)
         self.dt = float(self.options.dt)
         # actuator columns per leg (left = 0, right = 1)

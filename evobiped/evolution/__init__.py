@@ -2,7 +2,7 @@
 
 from .base import Optimizer
 from .evaluate import BACKENDS, make_evaluator
-from .ga import GA, GAConfig
+from .ga import GA, GAOptions
 from .run import Run, RunConfig
 
-__all__ = ["BACKENDS", "GA", "GAConfig", "Optimizer", "Run", "RunConfig", "make_evaluator"]
+__all__ = ["BACKENDS", "GA", "GAOptions", "Optimizer", "Run", "RunConfig", "make_evaluator"]

@@ -46,7 +46,7 @@ def _population(p) -> None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class CMAConfig:
+class CMAOptions:
     """CMA-ES settings."""
 
     population: int = option(0, "lambda, offspring per generation; 0: pycma's default 4 + floor(3 ln G)", check=_population,
@@ -82,10 +82,9 @@ class CMAES(Optimizer):
 
     name = "cma"
 
-    def __init__(self, layout: GenomeLayout, config: CMAConfig, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
+    def __init__(self, layout: GenomeLayout, config: CMAOptions, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
         if importlib.util.find_spec("cma") is None:  # pragma: no cover - a core dependency
             raise UserError("the cma optimizer needs pycma: pip install cma")
-        super().__init__()
         self.layout, self.config, self.seed = layout, config, int(seed)
         self.low, self.high = layout.low, layout.high
         self.span = np.where(self.high > self.low, self.high - self.low, 1.0)
@@ -142,10 +141,12 @@ class CMAES(Optimizer):
         self.fitness = np.full(len(self.population), np.nan)
 
     # ---- the next generation
-    def next_generation(self) -> None:
+    def next_generation(self) -> np.ndarray:
+        """Tell pycma the generation and sample the next; every new row is a new individual (all -1)."""
         if np.isnan(self.fitness).any():
             raise RuntimeError("next_generation before every individual was evaluated")
         self._advance(self.fitness.copy())
+        return np.full(len(self.population), -1)
 
     def _advance(self, f: np.ndarray) -> None:
         self.told.append(f)
@@ -160,7 +161,6 @@ class CMAES(Optimizer):
             self.restart += 1
             self._start(self.restart)
         self._sample()
-        self._carry(np.full(len(self.population), -1))  # nothing is carried over
 
     def stop(self) -> list[str]:
         """The names of pycma's stopping rules that fired (e.g. ``tolfun``) with no restart left; empty while it goes on."""

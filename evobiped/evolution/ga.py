@@ -32,7 +32,7 @@ MAX_POPULATION = 10**7
 
 
 @dataclass(frozen=True, kw_only=True)
-class GAConfig:
+class GAOptions:
     """GA settings, the paper's values by default."""
 
     population: int = option(50, "individuals per generation", low=2, high=MAX_POPULATION, integer=True)
@@ -69,13 +69,12 @@ class GA(Optimizer):
     def __init__(
         self,
         layout: GenomeLayout,
-        config: GAConfig,
+        config: GAOptions,
         *,
         seed: int,
         initial: np.ndarray | None = None,
         mutable: np.ndarray | None = None,
     ):
-        super().__init__()
         self.layout, self.config, self.seed = layout, config, int(seed)
         self.low, self.high = layout.low, layout.high
         self.sigma = layout.mutation_sigma
@@ -97,8 +96,9 @@ class GA(Optimizer):
         """Per-locus probability: on average ``mutations_per_genome`` mutable genes change."""
         return min(1.0, self.config.mutations_per_genome / int(self.mutable.sum()))
 
-    def next_generation(self) -> None:
-        """Truncation selection + mutation; call after the population is fully told."""
+    def next_generation(self) -> np.ndarray:
+        """Truncation selection + mutation; call after the population is fully told.  Returns the previous row of
+        each new individual (the survivors, best first), -1 for each child."""
         if np.isnan(self.fitness).any():
             raise RuntimeError("next_generation before every individual was evaluated")
         P, k = self.config.population, self.config.n_survivors
@@ -113,7 +113,7 @@ class GA(Optimizer):
         if not self.config.reevaluate_survivors:
             fit[:k] = self.fitness[parents]
         self.fitness = fit
-        self._carry(np.concatenate([parents, np.full(P - k, -1)]))  # the survivors keep their outcome
+        return np.concatenate([parents, np.full(P - k, -1)])
 
     def mutate(self, genomes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Gaussian mutation per locus with probability :attr:`mutation_rate`, clipped."""

@@ -28,9 +28,10 @@ from ..errors import ConfigError, UserError
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
-from .cma import CMAES, CMAConfig
+from .cma import CMAES, CMAOptions
 from .evaluate import BACKENDS, Evaluator
-from .ga import GA, GAConfig
+from .ga import GA, GAOptions
+from .individuals import Individuals
 from ..rundir import HISTORY_COLUMNS
 
 #: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation/outcome) with state_dict/load_state_dict
@@ -53,8 +54,8 @@ class RunConfig:
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
     optimizer: str = option("ga", "`ga` (Reil & Husbands' GA) or `cma` (CMA-ES)", choices=tuple(OPTIMIZERS))
-    ga: GAConfig = field(default_factory=GAConfig)
-    cma: CMAConfig = field(default_factory=CMAConfig)
+    ga: GAOptions = field(default_factory=GAOptions)
+    cma: CMAOptions = field(default_factory=CMAOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
     seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
     backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
@@ -79,7 +80,7 @@ class RunConfig:
         try:
             d = dict(refuse_unknown(cls, d, ""))
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
-            ga, cma = parse(GAConfig, d.pop("ga", {}), "ga"), parse(CMAConfig, d.pop("cma", {}), "cma")
+            ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, ga=ga, cma=cma, **d)
@@ -112,11 +113,18 @@ class Run:
     """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
     def __init__(self, directory: Path, config: RunConfig, ga: GA, history: list[list], best: dict | None, wall: float,
-                 best_genome: list[float] | None = None):
+                 best_genome: list[float] | None = None, individuals: Individuals | None = None,
+                 history_terms: list[dict] | None = None, best_walk: dict | None = None):
         self.dir, self.config, self.ga = directory, config, ga
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
         self.best_genome = best_genome
+        #: the outcome of each individual of the optimizer's population (rows as its population)
+        self.individuals = individuals if individuals is not None else Individuals()
+        #: the best individual's terms per generation (name -> mean over its presentations), history.csv's term columns
+        self.history_terms = history_terms if history_terms is not None else []
+        #: where the best walker went in its evaluation (``EpisodeResult.walk``; None: not known)
+        self.best_walk = best_walk
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
         self.repairs: list[str] = []
         #: how this process's numerical environment differs from the one the run started in (a resume's; empty:
@@ -203,8 +211,9 @@ class Run:
         history, best = ck["history"], ck["best"]
         if len(history) != ga.generation:
             raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
-        ga.load_outcome(ck.get("outcome", {}))
-        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome")), started_in
+        individuals = Individuals.from_dict(ck.get("outcome", {}), len(ga.population))
+        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
+                   ck.get("history_terms", []), ck.get("best_walk")), started_in
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -253,13 +262,13 @@ class Run:
         """history.csv, best.json and evolution.rrd from the committed state."""
         from ..record.evolution_log import recording_matches, write_recording
 
-        self._sync(rundir.HISTORY, rundir.history_text(self.history), repair=repair)
+        self._sync(rundir.HISTORY, rundir.history_text(self.history, self.history_terms), repair=repair)
         self._sync(rundir.BEST, self._best_text(), repair=repair)
         rec = self.dir / rundir.RECORDING
         if not self.history:
             self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None
             return
-        columns = rundir.history_columns(self.history)
+        columns = rundir.history_columns(self.history, self.history_terms)
         if repair:
             if recording_matches(rec, columns):
                 return
@@ -298,8 +307,10 @@ class Run:
         """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
         ga = self.ga
         pop, unknown = ga.ask()
-        ga.tell(evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation)))
-        f, outcome = ga.fitness, ga.outcome
+        result = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
+        ga.tell(result)
+        self.individuals.told(unknown, result)
+        f, outcome = ga.fitness, self.individuals.outcome
         b = int(ga.ranking()[0])
         g = ga.generation
         stats = GenerationStats(
@@ -315,12 +326,16 @@ class Run:
             best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
         )
-        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed, generation=g)
+        terms = self.individuals.terms_of(b)
+        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
+                    generation=g, terms=terms)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
         if self.best is None or meta["fitness"] > self.best["fitness"]:
-            self.best, self.best_genome = meta, [float(x) for x in pop[b]]
+            self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
         self.history.append(stats.row())
-        ga.next_generation()  # the individuals it keeps keep their fitness and outcome
+        means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
+        self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
+        self.individuals.carry(ga.next_generation())  # the individuals it keeps keep their outcome
         return stats
 
     # ---- files
@@ -331,15 +346,20 @@ class Run:
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
-                 "wall_seconds": self.wall, "outcome": self.ga.outcome_dict()},
+                 "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
+                 "best_walk": self.best_walk},
             )
             self._derive()
 
     def _best_walk(self) -> dict | None:
-        """Distance and walking direction of the best walker, re-simulated on the nominal episode
-        (``EpisodeResult.walk``; the fitness of a perturbed run aggregates other presentations)."""
+        """Distance and walking direction of the best walker in the nominal episode (``EpisodeResult.walk``): kept from
+        its evaluation.  A perturbed run's evaluation has no nominal presentation (its walks are perturbed), so its
+        best is walked once, nominally, for the summary (what a replay checks); so is the best of a checkpoint
+        written before walks were kept."""
         if self.best is None or not (self.dir / rundir.BEST).is_file():
             return None
+        if self.best_walk is not None and not self.config.episode.perturbations:
+            return self.best_walk
         genome, cfg, _ = load_genome(self.dir / rundir.BEST)
         return cfg.nominal().build().run(genome).walk()
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..fileio import atomic_write
+from ..rundir import TERM_PREFIX
 from .viewer import connect_url, flush, require_viewer
 
 TIMELINE = "generation"
@@ -47,7 +48,7 @@ def log_history(rec, history: dict[str, np.ndarray]) -> None:
     for name, vals in history.items():
         if name == "generation":
             continue
-        path = f"evolution/{name}" if name in _STYLE else f"evolution/counts/{name}"
+        path = f"evolution/{name}" if name in _STYLE else f"evolution/terms/{name}" if name.startswith(TERM_PREFIX) else f"evolution/counts/{name}"
         rec.send_columns(path, indexes=idx, columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
 
 
@@ -57,8 +58,9 @@ def _blueprint():
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.TimeSeriesView(origin="evolution", contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"], name="fitness per generation"),
+            rrb.TimeSeriesView(origin="evolution/terms", name="the best individual's terms"),
             rrb.TimeSeriesView(origin="evolution/counts", name="evaluations, falls, time"),
-            row_shares=[3, 1],
+            row_shares=[3, 1, 1],
         ),
         collapse_panels=True,
     )

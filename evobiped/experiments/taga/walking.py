@@ -19,9 +19,10 @@ from typing import Callable
 import numpy as np
 
 from ...bodies.taga import TagaBiped
-from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka
+from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka, MatsuokaOptions
 from ...errors import UserError
 from ...episode import Episode
+from ...options import check_value
 from ...tasks.walk import WalkTask
 from .stride import StrideMetrics, analyse_strides
 
@@ -29,9 +30,8 @@ PRESETS = ("taga",)
 
 
 def check_u0(u0: float) -> float:
-    if not (np.isfinite(u0) and u0 >= 0):
-        raise UserError(f"u0 must be a number >= 0, got {u0}")
-    return float(u0)
+    """``u0`` as the matsuoka controller's option declares it (ConfigError otherwise)."""
+    return float(check_value(MatsuokaOptions, "u0", float(u0), "u0"))
 
 
 @dataclass
@@ -76,7 +76,7 @@ class TagaWalker:
         ctrl = Matsuoka(n_outputs=6, inputs=inputs, actuators=TagaBiped.actuators, u0=float(u0[0]))
         # open-ended: the episode's planned length (one step) only fills end_time for walkers still up
         self.episode = Episode(body, ctrl, WalkTask(), seconds=timestep, stop_on_fall=True)
-        self.body, self.ctrl, self.model, self.P = body, ctrl, self.episode.model, len(u0)
+        self.body, self.ctrl, self.model, self.P = body, self.episode.controller, self.episode.model, len(u0)
         self.state = self.episode.start(np.tile(ctrl.preset_genome(preset), (self.P, 1)))
         self.sims, self.params = self.state.sims, self.state.params
         self.params["u0"] = u0[:, None].copy()
@@ -262,8 +262,7 @@ def u0_sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: floa
 
 def isolated_activity(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
     """Fig. 6B: the rhythm generator alone (Feed = 0): times (T,) s and inner states u (T, 12)."""
-    ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u)
-    ctrl.bind_period(timestep)
+    ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u).bound(timestep)
     params = ctrl.decode(ctrl.preset_genome()[None])
     state = ctrl.initial_state(params)
     n = int(round(seconds / timestep))

@@ -1,0 +1,101 @@
+"""An episode state is a value: it owns its simulations, starts are independent, a fork continues as a fresh run."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from evobiped.episode import Episode, EpisodeConfig
+from evobiped.genome_file import load_genome
+
+from .conftest import WALKERS, random_genomes
+
+
+def _same(a, b) -> None:
+    """Bit-for-bit equal states: MuJoCo's full state, the body's own, the controller's, the task's, the outcome."""
+    assert np.array_equal(a.sims.batch.state, b.sims.batch.state)
+    assert a.sims.extra.keys() == b.sims.extra.keys()
+    for k, table in a.sims.extra.items():
+        for name, arr in table.items():
+            assert np.array_equal(arr, b.sims.extra[k][name]), (k, name)
+    ca, cb = (s.controller if isinstance(s.controller, dict) else {"state": s.controller} for s in (a, b))
+    for name in ca:
+        assert np.array_equal(ca[name], cb[name]), name
+    for name in ("alive", "fell", "end_time"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert a.ticks == b.ticks
+
+
+def _taga_changes(ep, state, which: str) -> None:
+    """Two ways to go on: a faster rhythm and a push on the hip, or a slower one and none."""
+    if which == "fast":
+        state.params["u0"][:] = 6.5
+        ep.body.set_push(state.sims, np.arange(2), "hip", 60.0)
+    else:
+        state.params["u0"][:] = 4.5
+
+
+def test_a_taga_walk_forked_mid_walk_continues_each_way_as_a_fresh_run():
+    """Fork at 0.6 s; one copy speeds up and is pushed, the other slows down.  Each equals a fresh run
+    that made the same change at 0.6 s, bit for bit (ground contacts and pushes included)."""
+    ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=1.2).build()
+    g = np.tile(ep.controller.preset_genome(), (2, 1))
+    state = ep.advance(ep.start(g), 0.6)
+    fork = state.copy()
+    assert fork.sims is not state.sims and fork.sims.extra["taga"]["rest"] is not state.sims.extra["taga"]["rest"]
+    for s, which in ((state, "fast"), (fork, "slow")):
+        _taga_changes(ep, s, which)
+        ep.advance(s, 0.6)
+    fast, slow = (ep.advance(ep.start(g), 0.6) for _ in range(2))
+    _taga_changes(ep, fast, "fast")
+    _taga_changes(ep, slow, "slow")
+    ep.advance(fast, 0.6)
+    ep.advance(slow, 0.6)
+    _same(state, fast)
+    _same(fork, slow)
+    # the two ways really differ: the pushed, faster walker is further on
+    assert state.sims.qpos[0, 0] > fork.sims.qpos[0, 0] + 0.01
+    assert np.array_equal(ep.result(state).fitness, ep.result(fast).fitness)
+
+
+def test_a_perturbed_reil_walk_forked_keeps_its_noise_streams_and_pushes():
+    """The shipped SIMBICON walker under target noise and pushes: forked at 1 s, one copy's gains are
+    halved; each copy equals a fresh run with the same change, and the unchanged one the uninterrupted run."""
+    g, cfg, _ = load_genome(str(WALKERS / "simbicon_seed1.json"))
+    cfg = dataclasses.replace(cfg, seconds=3.0, perturbations=dict(pushes=1, push_after=0.5, push_force=40.0, target_noise=0.02))
+    ep = cfg.build()
+    g = np.tile(g, (2, 1))
+    trials = ep.trials_for((1, 0))
+    whole = ep.advance(ep.start(g, trials=trials), 3.0)
+    state = ep.advance(ep.start(g, trials=trials), 1.0)
+    fork = state.copy()
+    name = next(iter(fork.params))
+    fork.params[name] = fork.params[name] * 0.5
+    ep.advance(state, 2.0)
+    ep.advance(fork, 2.0)
+    _same(state, whole)
+    again = ep.advance(ep.start(g, trials=trials), 1.0)
+    again.params[name] = again.params[name] * 0.5
+    ep.advance(again, 2.0)
+    _same(fork, again)
+    assert state.alive.all() and not np.array_equal(state.sims.qpos, fork.sims.qpos)
+
+
+def test_two_starts_are_independent_states():
+    """Advancing one state leaves another started from the same genomes at t = 0."""
+    ep = EpisodeConfig(seconds=1.0).build()
+    g = random_genomes(ep.controller.layout, 2, seed=1)
+    a, b = ep.start(g), ep.start(g)
+    q0 = b.sims.qpos.copy()
+    ep.advance(a, 0.5)
+    assert a.sims is not b.sims and np.array_equal(b.sims.qpos, q0) and not np.array_equal(a.sims.qpos, q0)
+    assert b.ticks == 0
+
+
+def test_the_episode_binds_a_copy_of_the_controller():
+    """Building an episode tells a copy of the controller its period; the caller's is unchanged."""
+    cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=0.1)
+    body, ctrl, task = cfg.parts()
+    ep = Episode(body, ctrl, task, seconds=0.1)
+    assert ctrl.period is None and ep.controller.period == body.timestep
