@@ -253,7 +253,7 @@ class Fitter:
         self._update, self._loss = update, jax.jit(loss)
         self._targets = jax.jit(targets)
         self.rng = np.random.default_rng([seed, 0xD15])
-        self.genome = jnp.asarray(initial_genome(self.layout, n, k, self.rng))
+        self.genome = jnp.asarray(random_start(self.layout, n, k, self.rng))
         self.opt_state = self.opt.init(self.genome)
 
     def fit(self, data: list[Rollouts], progress: Callable[[int, float], None] | None = None) -> float:
@@ -295,7 +295,7 @@ class Fitter:
         return np.clip(np.asarray(self.genome, float), self.layout.low, self.layout.high)
 
 
-def initial_genome(layout, n: int, k: int, rng: np.random.Generator) -> np.ndarray:
+def random_start(layout, n: int, k: int, rng: np.random.Generator) -> np.ndarray:
     """A random start for the fit (identical hidden neurons would stay identical under gradient descent): weights
     N(0, 1/n) and input weights N(0, 1/k) (fan-in scaling, so net inputs start near unit size), ln tau and biases
     their initial mean + N(0, 0.5^2); inside the bounds."""
