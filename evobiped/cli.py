@@ -781,7 +781,8 @@ def add_distill(sub) -> None:
     p.add_argument("--neurons", type=int, metavar="N", help="the student's neurons (default 40)")
     p.add_argument("--iterations", type=positive_int, metavar="I", help="DAgger iterations (default 5)")
     p.add_argument("--seed", type=int, default=0, help="seed of the rollouts' noise and the fit (default 0)")
-    p.add_argument("--out", metavar="FILE.json", help="the student's genome file (default runs/distill_<teacher>_seed<S>/student.json)")
+    p.add_argument("--seconds", type=positive_float, default=50.0, metavar="S", help="the student's episode length in s (default 50)")
+    p.add_argument("--out", metavar="FILE.json", help="the student's genome file (default runs/distill_<teacher run or file>_seed<S>/student.json)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_distill_cmd)
 
@@ -811,9 +812,10 @@ def run_distill_cmd(args) -> int:
                         "its teacher on the teacher's body")
     if args.neurons is not None:
         overrides["n_neurons"] = args.neurons
-    student = student_config(source.config, overrides)
+    student = student_config(source.config, overrides, seconds=args.seconds)
     student.layout()  # the contract (sensors, normalisation) checked before anything runs
-    out = Path(args.out) if args.out else Path("runs") / f"distill_{source.genome_path.stem}_seed{args.seed}" / "student.json"
+    name = source.run_dir.name if source.run_dir is not None else source.genome_path.stem
+    out = Path(args.out) if args.out else Path("runs") / f"distill_{name}_seed{args.seed}" / "student.json"
     if out.exists() and not out.is_file():
         raise UserError(f"--out {out} exists and is not a file")
     teacher_cfg = dataclasses.replace(source.config, perturbations={})

@@ -319,15 +319,18 @@ class DistillReport:
     iterations: list[dict]
 
 
-def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None = None) -> EpisodeConfig:
-    """The student's episode: the teacher's body, task and length, the ``ctrnn`` controller with :data:`STUDENT`
-    (and ``overrides``) reading every sensor the body declares a standing value for; no latency, no perturbations."""
+def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None = None, *,
+                   seconds: float | None = None) -> EpisodeConfig:
+    """The student's episode: the teacher's body and task, ``seconds`` long (default the teacher's), the ``ctrnn``
+    controller with :data:`STUDENT` (and ``overrides``) reading every sensor the body declares a standing value for;
+    no latency, no perturbations."""
     from .bodies import BODIES
 
     opts = {**STUDENT, "inputs": [n for n in BODIES[teacher_cfg.body].sensor_norms], **(overrides or {})}
     if isinstance(opts.get("n_neurons"), (int, float)) and not isinstance(opts["n_neurons"], bool) and opts["n_neurons"] <= 0:
         raise ConfigError(f"student n_neurons must be > 0, got {opts['n_neurons']}")
-    return dataclasses.replace(teacher_cfg, controller="ctrnn", controller_options=opts, perturbations={})
+    return dataclasses.replace(teacher_cfg, controller="ctrnn", controller_options=opts, perturbations={},
+                               seconds=teacher_cfg.seconds if seconds is None else float(seconds))
 
 
 def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: EpisodeConfig, options: DistillOptions,
