@@ -17,7 +17,7 @@ import sys
 import numpy as np
 
 from . import __version__
-from .errors import UserError
+from .errors import UserError, exit_status, stop_on_signals
 from .progress import Progress, hms
 from .tasks.steer import with_sources
 
@@ -161,7 +161,8 @@ def walk_line(walk: dict) -> str:
 
 # ---------------------------------------------------------------- evolve
 def add_evolve(sub) -> None:
-    p = sub.add_parser("evolve", help="evolve controllers with the GA of Reil & Husbands (defaults: the paper's)")
+    what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings) or CMA-ES (--optimizer cma)"
+    p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
@@ -294,7 +295,7 @@ def run_evolve_cmd(args) -> int:
 
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
-    from .evolution.run import eta_seconds
+    from .progress import time_left
     from .rundir import HISTORY
 
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
@@ -305,21 +306,32 @@ def _evolve(run, evaluator, backend: str, args) -> int:
     with evaluator, contextlib.ExitStack() as stack:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
+        line = Progress("evolve", c.generations, "generations", quiet=args.quiet)
+        walls, clocks = [], []  # per generation of this session: wall s, longest episode s
+
         def progress(s):
             if log is not None:
                 log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
-            eta = eta_seconds(s, run.history)
-            say(f"gen {s.generation:4d}/{s.generations_total - 1}  best {s.best:8.3f}{' (fell)' if s.best_fell else ' (up) '}  "
-                f"mean {s.mean:7.3f}  worst {s.worst:7.3f}  {s.evals_per_second:6.1f} eval/s  "
-                f"elapsed {hms(run.wall)}  left ~{hms(eta)}")
+            walls.append(s.wall_seconds)
+            clocks.append(s.longest_seconds)
+            # episodes lengthen as walkers learn to stay up: the time left if every generation's longest episode runs
+            # its T (the run's aim), and if they stay as short as now
+            steps = s.generations_total - s.generation - 1
+            full, short = time_left(walls, clocks, steps, ahead=c.episode.seconds), time_left(walls, clocks, steps)
+            shorter = f"; {hms(short)} if episodes stay as short as now" if short < 0.75 * full else ""
+            best = run.best or {"fitness": s.best, "fell": s.best_fell}
+            line.report(s.generation + 1, f"best {best['fitness']:.3f} {'(fell)' if best['fell'] else '(up)'}, this generation's "
+                        f"{s.best:.3f} {'(fell)' if s.best_fell else '(up)'}, mean {s.mean:.3f}, worst {s.worst:.3f}; "
+                        f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated, longest episode "
+                        f"{s.longest_seconds:.1f} s{shorter}", left=full)
 
         try:
             summary = run.evolve(evaluator, progress)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
             print(f"evobiped: interrupted after generation {run.ga.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
                   f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
-            return 130
+            return exit_status(exc)
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
@@ -365,6 +377,13 @@ def add_replay(sub) -> None:
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    p.add_argument("--video", metavar="FILE", help="also render a video, MP4 or GIF by the suffix, without a display "
+                   "(MuJoCo's offscreen renderer; MUJOCO_GL unset: a display's GLFW, else EGL, else OSMesa); "
+                   "the frames go into the recording too")
+    p.add_argument("--video-size", nargs=2, type=positive_int, metavar=("W", "H"), default=[480, 360],
+                   help="size of each panel in pixels, even numbers (default 480 360; a steering walker gets one panel per source)")
+    p.add_argument("--video-fps", type=positive_float, default=25.0, metavar="FPS", help="frames per simulated second (default 25: real time)")
+    p.add_argument("--video-window", nargs=2, type=float, metavar=("T0", "T1"), help="only simulated times T0..T1 s (default: all)")
     add_source_flag(p)
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_replay_cmd)
@@ -377,6 +396,13 @@ def run_replay_cmd(args) -> int:
     from .record.source import resolve
     from .rundir import figures_dir
 
+    video_flags = args.video_window is not None or args.video_size != [480, 360] or args.video_fps != 25.0
+    if args.video is None and video_flags:
+        refuse("--video-size/--video-fps/--video-window", "they shape the video: give --video FILE too")
+    if any(v % 2 for v in args.video_size):
+        refuse("--video-size", f"width and height must be even (H.264), got {args.video_size[0]} {args.video_size[1]}")
+    if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
+        refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
     source = resolve(args.source, args.generation)
     figures = args.figures
     if figures == "":
@@ -384,9 +410,13 @@ def run_replay_cmd(args) -> int:
         figures = figures_dir(base, source.label)
     seconds = args.seconds or source.config.seconds
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
+    frames = Progress("replay video", 1.0, "frames rendered", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
-               listener=progress.listener(), sources=args.sources)
+               listener=progress.listener(), sources=args.sources, video=args.video,
+               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window, progress=frames))
     progress.finish()
+    if args.video:
+        frames.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if not r.compared:
@@ -412,6 +442,8 @@ def run_replay_cmd(args) -> int:
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")
+    if r.video is not None:
+        print(f"video: {r.video}")
     return 0 if r.reproduced else 1
 
 
@@ -463,7 +495,10 @@ def run_robustness_cmd(args) -> int:
     report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after,
               "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
     write_json(out / f"{stem}.json", report)
-    png = robustness_figure(trials, out / f"{stem}.png", title=f"Robustness battery: {source.genome_path}")
+    seed = source.meta.get("seed")
+    who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
+    png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
+                            title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s)\n{who}")
     if args.json:
         print(json.dumps(rows))
     else:
@@ -590,9 +625,9 @@ def run_study_cmd(args) -> int:
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     try:
         outcomes = run_study(args.out, cfg, backend=args.backend, workers=args.workers, address=args.address, progress=say)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("evobiped: study interrupted; run the same command again to resume (finished runs are kept, the others resume from their checkpoints)", file=sys.stderr)
-        return 130
+        return exit_status(exc)
     for path in write_results(args.out, cfg, outcomes):
         say(f"wrote {path}")
     if args.replays:
@@ -746,7 +781,8 @@ def add_distill(sub) -> None:
     p.add_argument("--neurons", type=int, metavar="N", help="the student's neurons (default 40)")
     p.add_argument("--iterations", type=positive_int, metavar="I", help="DAgger iterations (default 5)")
     p.add_argument("--seed", type=int, default=0, help="seed of the rollouts' noise and the fit (default 0)")
-    p.add_argument("--out", metavar="FILE.json", help="the student's genome file (default runs/distill_<teacher>_seed<S>/student.json)")
+    p.add_argument("--seconds", type=positive_float, default=50.0, metavar="S", help="the student's episode length in s (default 50)")
+    p.add_argument("--out", metavar="FILE.json", help="the student's genome file (default runs/distill_<teacher run or file>_seed<S>/student.json)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_distill_cmd)
 
@@ -776,9 +812,10 @@ def run_distill_cmd(args) -> int:
                         "its teacher on the teacher's body")
     if args.neurons is not None:
         overrides["n_neurons"] = args.neurons
-    student = student_config(source.config, overrides)
+    student = student_config(source.config, overrides, seconds=args.seconds)
     student.layout()  # the contract (sensors, normalisation) checked before anything runs
-    out = Path(args.out) if args.out else Path("runs") / f"distill_{source.genome_path.stem}_seed{args.seed}" / "student.json"
+    name = source.run_dir.name if source.run_dir is not None else source.genome_path.stem
+    out = Path(args.out) if args.out else Path("runs") / f"distill_{name}_seed{args.seed}" / "student.json"
     if out.exists() and not out.is_file():
         raise UserError(f"--out {out} exists and is not a file")
     teacher_cfg = dataclasses.replace(source.config, perturbations={})
@@ -819,6 +856,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
     try:
         return int(args.func(args) or 0)
     except UserError as exc:
@@ -835,11 +873,13 @@ def main(argv: list[str] | None = None) -> int:
         where = Path(exc.filename)
         if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
             where = where.parent
-        print(f"evobiped: error: {exc.strerror or exc}: {where}", file=sys.stderr)
+        print(f"evobiped: error: cannot access {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("evobiped: interrupted", file=sys.stderr)
-        return 130
+        return exit_status(exc)
+    finally:
+        restore()
 
 
 if __name__ == "__main__":

@@ -12,8 +12,8 @@ would do there, add those to a growing data set, refit, repeat.  Here:
   within the tick, is labelled with what the teacher's body *executes*: the teacher's action of ``latency``
   ticks before.
 - **Fitting** by backpropagation through time (JAX's ``lax.scan`` over the CTRNN's Euler steps, optax's Adam)
-  on windows of the recorded rollouts: each window starts from rest and the first ``burn_in`` ticks are not
-  scored; the loss is the mean squared error of the student's PD targets (after its motor map), in rad^2.
+  on windows of the recorded rollouts: each window starts from rest, and the first ``burn_in`` ticks are not
+  scored unless the window starts with its episode (where the network too starts from rest); the loss is the mean squared error of the student's PD targets (after its motor map), in rad^2.
   Genes are kept inside their bounds after every step.  JAX is an optional dependency
   (``pip install 'evobiped[distill]'``): it differentiates the network's recurrence exactly, fast on a CPU.
 
@@ -59,9 +59,10 @@ class DistillOptions:
     window: int = option(200, "length of the windows fitted", unit="control ticks", low=2, high=10000, integer=True)
     burn_in: int = option(50, "ticks at the start of a window not scored (the network settles from rest)",
                           unit="control ticks", low=0, integer=True)
-    steps: int = option(400, "Adam steps after each iteration's data", low=1, high=10**6, integer=True)
+    steps: int = option(2000, "Adam steps after each iteration's data", low=1, high=10**6, integer=True)
     batch: int = option(32, "windows per Adam step", low=1, high=10**5, integer=True)
-    learning_rate: float = option(3e-3, "Adam's learning rate (gene units)", above=0, high=1)
+    learning_rate: float = option(1e-2, "Adam's initial learning rate (gene units), decaying tenfold over all the steps",
+                                  above=0, high=1)
 
     def __post_init__(self):
         if self.burn_in >= self.window:
@@ -233,25 +234,26 @@ class Fitter:
 
             return jax.lax.scan(tick, jnp.zeros(n), x)[1]
 
-        burn = options.burn_in
-
-        def loss(genome, xb, yb):
+        def loss(genome, xb, yb, wb):
+            """Mean squared target error (rad^2) over the scored ticks ``wb`` (B, T) of windows ``xb``, ``yb``."""
             pred = jax.vmap(targets, in_axes=(None, 0))(genome, xb)
-            return jnp.mean((pred[:, burn:] - yb[:, burn:]) ** 2)
+            return jnp.sum(wb[..., None] * (pred - yb) ** 2) / (jnp.sum(wb) * m)
 
-        self.opt = optax.adam(options.learning_rate)
+        # the rate decays tenfold over all the iterations' steps: coarse early, fine at the end
+        total = options.steps * options.iterations
+        self.opt = optax.adam(optax.exponential_decay(options.learning_rate, transition_steps=total, decay_rate=0.1))
         lo, hi = jnp.asarray(self.layout.low), jnp.asarray(self.layout.high)
 
         @jax.jit
-        def update(genome, opt_state, xb, yb):
-            value, grad = jax.value_and_grad(loss)(genome, xb, yb)
+        def update(genome, opt_state, xb, yb, wb):
+            value, grad = jax.value_and_grad(loss)(genome, xb, yb, wb)
             updates, opt_state = self.opt.update(grad, opt_state)
             return jnp.clip(genome + updates, lo, hi), opt_state, value
 
         self._update, self._loss = update, jax.jit(loss)
         self._targets = jax.jit(targets)
         self.rng = np.random.default_rng([seed, 0xD15])
-        self.genome = jnp.asarray(self.layout.init_mean)
+        self.genome = jnp.asarray(random_start(self.layout, n, k, self.rng))
         self.opt_state = self.opt.init(self.genome)
 
     def fit(self, data: list[Rollouts], progress: Callable[[int, float], None] | None = None) -> float:
@@ -265,12 +267,19 @@ class Fitter:
         index = np.array(index)
 
         def batch(rows):
+            """Inputs, labels and scored ticks of windows ``rows`` (set, rollout, start tick): a window that starts
+            with its episode starts from rest as the network does, so every tick counts; any other skips its burn-in."""
             xb = np.stack([sets[i][0].x[r, t : t + o.window] for i, r, t in rows])
             yb = np.stack([sets[i][0].y[r, t : t + o.window] for i, r, t in rows])
-            return xb, yb
+            wb = np.ones(xb.shape[:2])
+            wb[rows[:, 2] > 0, : o.burn_in] = 0.0
+            return xb, yb, wb
 
+        starts = index[index[:, 2] == 0]  # the episode's first ticks, where the walker sets off: a quarter of each batch
         for s in range(o.steps):
             rows = index[self.rng.integers(len(index), size=o.batch)]
+            if len(starts):
+                rows[: o.batch // 4] = starts[self.rng.integers(len(starts), size=o.batch // 4)]
             self.genome, self.opt_state, value = self._update(self.genome, self.opt_state, *batch(rows))
             if progress is not None and (s + 1) % 50 == 0:
                 progress(s + 1, float(np.sqrt(value)))
@@ -286,6 +295,20 @@ class Fitter:
         return np.clip(np.asarray(self.genome, float), self.layout.low, self.layout.high)
 
 
+def random_start(layout, n: int, k: int, rng: np.random.Generator) -> np.ndarray:
+    """A random start for the fit (identical hidden neurons would stay identical under gradient descent): weights
+    N(0, 1/n) and input weights N(0, 1/k) (fan-in scaling, so net inputs start near unit size), ln tau and biases
+    their initial mean + N(0, 0.5^2); inside the bounds."""
+    g = layout.init_mean.copy()
+    sl = layout.slices()
+    g[sl["weights"]] += rng.normal(0.0, 1.0 / np.sqrt(n), n * n)
+    for name in ("time_constants", "biases"):
+        g[sl[name]] += rng.normal(0.0, 0.5, n)
+    if k:
+        g[sl["input_weights"]] += rng.normal(0.0, 1.0 / np.sqrt(k), k * n)
+    return np.clip(g, layout.low, layout.high)
+
+
 @dataclass
 class DistillReport:
     """What a distillation did: per iteration the teacher's share, data size (ticks), fit error (rad) and how the
@@ -296,15 +319,18 @@ class DistillReport:
     iterations: list[dict]
 
 
-def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None = None) -> EpisodeConfig:
-    """The student's episode: the teacher's body, task and length, the ``ctrnn`` controller with :data:`STUDENT`
-    (and ``overrides``) reading every sensor the body declares a standing value for; no latency, no perturbations."""
+def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None = None, *,
+                   seconds: float | None = None) -> EpisodeConfig:
+    """The student's episode: the teacher's body and task, ``seconds`` long (default the teacher's), the ``ctrnn``
+    controller with :data:`STUDENT` (and ``overrides``) reading every sensor the body declares a standing value for;
+    no latency, no perturbations."""
     from .bodies import BODIES
 
     opts = {**STUDENT, "inputs": [n for n in BODIES[teacher_cfg.body].sensor_norms], **(overrides or {})}
     if isinstance(opts.get("n_neurons"), (int, float)) and not isinstance(opts["n_neurons"], bool) and opts["n_neurons"] <= 0:
         raise ConfigError(f"student n_neurons must be > 0, got {opts['n_neurons']}")
-    return dataclasses.replace(teacher_cfg, controller="ctrnn", controller_options=opts, perturbations={})
+    return dataclasses.replace(teacher_cfg, controller="ctrnn", controller_options=opts, perturbations={},
+                               seconds=teacher_cfg.seconds if seconds is None else float(seconds))
 
 
 def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: EpisodeConfig, options: DistillOptions,

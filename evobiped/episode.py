@@ -38,6 +38,36 @@ MAX_TICKS = 10**7
 MAX_STEPS = 10**8
 
 
+def check_timing(body: Body, controller: Controller | None, seconds: float, *,
+                 control_dt: float | None = None) -> tuple[float, int]:
+    """``(control period in s, physics steps per control tick)`` of an episode of ``seconds`` s; ConfigError
+    when the controller's outputs do not map onto the body's actions, the period is no multiple of the
+    physics step, or the episode is not 1 to MAX_TICKS ticks and at most MAX_STEPS physics steps per walker.
+    Without a controller (actions from outside) the period is ``control_dt``."""
+    if controller is None:
+        if control_dt is None:
+            raise ConfigError("an episode without a controller needs its control period (control_dt)")
+        number(control_dt, "control_dt:", above=0, unit="s")
+        dt = float(control_dt)
+    else:
+        if (controller.output_kind, body.action_kind) not in MAPS:
+            raise ConfigError(
+                f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} cannot take as {body.action_kind}s"
+            )
+        dt = controller.dt if controller.dt is not None else body.timestep
+    ratio = dt / body.timestep
+    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
+    ticks = seconds / dt
+    if not 1 <= round(ticks) <= MAX_TICKS:
+        raise ConfigError(f"episode seconds = {seconds!r} gives {ticks:.3g} control ticks of {dt:g} s; "
+                          f"an episode needs 1 to {MAX_TICKS:.0e}")
+    if round(ticks) * round(ratio) > MAX_STEPS:
+        raise ConfigError(f"an episode of {seconds:g} s at a physics step of {body.timestep:g} s takes "
+                          f"{round(ticks) * round(ratio):.3g} steps per walker, more than {MAX_STEPS:.0e}")
+    return dt, int(round(ratio))
+
+
 @dataclass(frozen=True, kw_only=True)
 class EpisodeConfig:
     """What to simulate: registry names, their options, and the episode length (s).
@@ -124,7 +154,14 @@ class EpisodeConfig:
                 controller.override_genes(opts.genes)
             except ConfigError as exc:
                 raise ConfigError(f"episode.controller_options.{exc}") from None
+        check_timing(body, controller, float(self.seconds))
         return body, controller, task
+
+    def check(self) -> None:
+        """Every value checked in this process, without compiling a model: the options, the controller
+        contract, the output mapping and the episode's length in control ticks and physics steps (what a worker
+        building the episode would refuse); one ConfigError line otherwise."""
+        self.parts()
 
     def layout(self) -> GenomeLayout:
         """The genome layout of this episode's controller, from the declarations alone (no simulation)."""
@@ -293,33 +330,13 @@ class Episode:
         self.seconds = float(seconds)
         self.stop_on_fall = stop_on_fall
         self.perturbations = perturbations
+        dt, self.substeps = check_timing(body, controller, self.seconds, control_dt=control_dt)
         self.model = body.build_model()
         task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
-        if controller is None:
-            if control_dt is None:
-                raise ConfigError("an episode without a controller needs its control period (control_dt)")
-            number(control_dt, "control_dt:", above=0, unit="s")
-            dt = float(control_dt)
-        else:
-            if (controller.output_kind, body.action_kind) not in MAPS:
-                raise ConfigError(f"controller {controller.name!r} gives {controller.output_kind} outputs, "
-                                  f"which body {body.name!r} cannot take as {body.action_kind}s")
-            dt = controller.dt if controller.dt is not None else body.timestep
-        ratio = dt / body.timestep
-        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-            raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
         self.control_dt = dt
-        ticks = seconds / dt
-        if not 1 <= round(ticks) <= MAX_TICKS:
-            raise ConfigError(f"episode seconds = {seconds!r} gives {ticks:.3g} control ticks of {dt:g} s; "
-                              f"an episode needs 1 to {MAX_TICKS:.0e}")
-        if round(ticks) * round(ratio) > MAX_STEPS:
-            raise ConfigError(f"an episode of {seconds:g} s at a physics step of {body.timestep:g} s takes "
-                              f"{round(ticks) * round(ratio):.3g} steps per walker, more than {MAX_STEPS:.0e}")
         # the controller told its period: a bound copy, the caller's controller unchanged
         self.controller = None if controller is None else controller.bound(dt)
-        self.substeps = int(round(ratio))
         self._models: dict[tuple, Any] = {}
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)

@@ -1,7 +1,14 @@
 """Errors a user can cause (bad config, genome, argument, model).
 
-The CLI turns a :class:`UserError` into one line on stderr and exit status 2.
+The CLI turns a :class:`UserError` into one line on stderr and exit status 2,
+and an :class:`Interrupted` (SIGINT, SIGTERM, SIGHUP) into exit status 128 + n.
 """
+
+from __future__ import annotations
+
+import signal
+import threading
+from typing import Callable
 
 
 class UserError(Exception):
@@ -14,3 +21,41 @@ class ConfigError(UserError):
 
 class GenomeError(UserError):
     """A genome does not fit its controller's layout (length, NaN, range)."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (or Ctrl-C): the command stops as on Ctrl-C; its exit status is 128 + the signal number."""
+
+    def __init__(self, signum: int = signal.SIGINT):
+        self.signum = int(signum)
+        super().__init__(signal.Signals(self.signum).name)
+
+
+#: the signals that stop a command as Ctrl-C does (a shell's ``kill``, a closed terminal)
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
+
+
+def raise_interrupted(signum: int, frame) -> None:
+    """The handler :func:`stop_on_signals` installs: raise :class:`Interrupted` in the main thread."""
+    raise Interrupted(signum)
+
+
+def stop_on_signals() -> Callable[[], None]:
+    """Make SIGTERM and SIGHUP raise :class:`Interrupted` (as SIGINT raises KeyboardInterrupt); a signal this
+    process ignores (``nohup``) stays ignored.  Returns the function that restores the previous handlers."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    old = {s: signal.getsignal(s) for s in STOP_SIGNALS if signal.getsignal(s) is signal.SIG_DFL}
+    for s in old:
+        signal.signal(s, raise_interrupted)
+
+    def restore() -> None:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+    return restore
+
+
+def exit_status(exc: KeyboardInterrupt) -> int:
+    """128 + the number of the signal that interrupted the command (130 for Ctrl-C)."""
+    return 128 + getattr(exc, "signum", int(signal.SIGINT))

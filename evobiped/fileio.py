@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import sys
 import tempfile
 import tomllib
 from pathlib import Path
@@ -101,10 +102,19 @@ def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, er
         return loads(path.read_text())
     except (*errors, UnicodeDecodeError) as exc:
         raise error(f"{what} {path} is not valid {form} ({exc})") from None
+    except ValueError:  # Python's limit on the digits of a whole number read from text
+        raise error(f"{what} {path} is not valid {form} (a whole number of more than {sys.get_int_max_str_digits()} digits)") from None
 
 
-def read_json(path: str | Path, *, what: str = "file") -> Any:
-    return _parse_file(path, what, json.loads, (json.JSONDecodeError,), "JSON")
+def read_json(path: str | Path, *, what: str = "file", file_format: str | None = None) -> Any:
+    """The JSON value in ``path``; UserError (one line naming the file) if it is missing or malformed, or if it is a
+    table whose ``format`` is not ``file_format`` (a file without a format of its own must name none; a
+    ``format`` is not required)."""
+    obj = _parse_file(path, what, json.loads, (json.JSONDecodeError,), "JSON")
+    if isinstance(obj, dict) and "format" in obj and (file_format is None or obj["format"] != file_format):
+        reads = f"this evobiped reads {file_format}" if file_format else "evobiped writes no format there"
+        raise UserError(f"{what} {path} is in format {obj['format']!r}; {reads}")
+    return obj
 
 
 def read_toml(path: str | Path, *, what: str = "config file") -> dict:

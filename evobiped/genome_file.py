@@ -1,6 +1,6 @@
 """Genome JSON files: a genome with everything needed to re-simulate it.
 
-Format (``genome`` and ``episode`` required on reading; the episode config
+Format (``genome`` and ``episode`` required on reading, a ``format`` other than this one refused; the episode config
 names the body, controller and task with their options, which is all a replay
 needs to rebuild the simulation)::
 
@@ -52,7 +52,7 @@ def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **
 
 def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
     """Read a genome file -> ``(genome (G,), EpisodeConfig, metadata)``; UserError if malformed."""
-    obj = read_json(path, what="genome file")
+    obj = read_json(path, what="genome file", file_format=FORMAT)
     if not isinstance(obj, dict) or "genome" not in obj or "episode" not in obj:
         raise UserError(f"{path} is not an evobiped genome file (needs 'genome' and 'episode')")
     if not isinstance(obj["genome"], list) or not all(isinstance(x, (int, float)) for x in obj["genome"]):

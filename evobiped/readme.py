@@ -1,7 +1,7 @@
-"""The README's option tables, generated from the declarations (:mod:`evobiped.options`).
+"""The option tables of docs/usage.md, generated from the declarations (:mod:`evobiped.options`).
 
 Each table sits between ``<!-- options: ID -->`` and ``<!-- end options -->`` in
-README.md, ID naming the component (``body reil``, ``controller ctrnn``,
+docs/usage.md, ID naming the component (``body reil``, ``controller ctrnn``,
 ``task walk``, ``episode perturbations``, ``optimizer ga``, ``environment``, ...).  ``python -m evobiped.readme`` rewrites
 them; tests/test_options.py checks that they agree with the declarations.
 """
@@ -21,7 +21,8 @@ from .options import markdown_table
 from .perturb import PerturbationOptions
 from .tasks import TASKS
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+#: the page that holds the tables
+USAGE = Path(__file__).resolve().parent.parent / "docs" / "usage.md"
 #: a generated section: its id, the table
 MARKER = re.compile(r"(<!-- options: (?P<id>[a-z0-9_ -]+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.S)
 
@@ -41,7 +42,7 @@ def tables() -> dict[str, str]:
 
 
 def render(text: str) -> str:
-    """``text`` (the README) with every generated table replaced by the current declarations
+    """``text`` (docs/usage.md) with every generated table replaced by the current declarations
     (KeyError for a section that names no registered component)."""
     found = tables()
     return MARKER.sub(lambda m: m.group(1) + found[m["id"]] + m.group(4), text)
@@ -53,4 +54,4 @@ def sections(text: str) -> list[str]:
 
 
 if __name__ == "__main__":
-    README.write_text(render(README.read_text()))
+    USAGE.write_text(render(USAGE.read_text()))

@@ -144,12 +144,17 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     runs = [(labels, main)]
     if body.floor_geom is not None:
         runs += [([("friction", f"mu = {mu:g}")], Trials.nominal(1, n_act, friction=mu)) for mu in FRICTIONS]
-        runs += [([("slope", f"{100 * s:+g} %")], Trials.nominal(1, n_act, slope=s)) for s in SLOPES]
+        runs += [([("slope", f"{100 * s:+g} % ({'uphill' if s > 0 else 'downhill'})")], Trials.nominal(1, n_act, slope=s))
+                 for s in SLOPES]
     out = []
-    if progress is not None:
-        progress.total, progress.unit = float(seconds * len(runs)), "s simulated (batches in turn)"
-    for k, (names, trials) in enumerate(runs):
-        watch = progress.listener(offset=k * seconds) if progress is not None else None
+    n_trials = sum(len(names) for names, _ in runs)
+    if progress is not None:  # trial-seconds: each trial's own simulated time, a fallen trial's rest counted at its batch's end
+        progress.total, progress.unit = float(seconds * n_trials), f"trial-s of {n_trials} trials of {seconds:g} s"
+    offset = 0.0
+    for names, trials in runs:
+        bound = seconds * len(names)
+        watch = progress.listener(offset=offset, rows=True, bound=bound) if progress is not None else None
+        offset += bound
         r = episode.run(genome, seconds=seconds, trials=trials, listener=watch).rows
         disp = r.end_position - r.start_position
         fwd = disp[:, 0]  # the Reil walker faces +x at the start
@@ -177,9 +182,10 @@ def summarise(trials: list[Trial]) -> list[dict]:
 
 
 def table(rows: list[dict]) -> str:
-    """The summary as an aligned text table."""
-    lines = [f"{'family':<16}{'survived':>12}{'forward (m)':>14}{'median fall (s)':>18}"]
+    """The summary as an aligned text table, one header per column."""
+    head = ("family", "survived", "of", "survival", "mean forward (m)", "median fall time of the fallen (s)")
+    lines = [f"{head[0]:<16}{head[1]:>9}{head[2]:>5}{head[3]:>10}{head[4]:>18}{head[5]:>36}"]
     for r in rows:
         fall = "-" if r["median_fall_s"] is None else f"{r['median_fall_s']:.2f}"
-        lines.append(f"{r['family']:<16}{r['survived']:>5}/{r['trials']:<3} {100 * r['survival']:3.0f}%{r['forward_m']:>14.2f}{fall:>18}")
+        lines.append(f"{r['family']:<16}{r['survived']:>9}{r['trials']:>5}{100 * r['survival']:>9.0f}%{r['forward_m']:>18.2f}{fall:>36}")
     return "\n".join(lines)

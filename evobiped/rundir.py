@@ -170,11 +170,14 @@ def remove_stale_temporaries(directory: Path) -> list[Path]:
 
 def is_unused(directory: Path) -> bool:
     """True for a directory that holds no run: nothing, or only what a run killed before writing its config leaves
-    (the lock, an empty generations folder, temporaries)."""
-    for p in Path(directory).iterdir():
-        temporary = p.name.startswith(".") and p.name.endswith(".tmp")
-        if not (p.name == LOCK or temporary or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
-            return False
+    (the lock, an empty generations folder, temporaries); a directory that cannot be listed is a WriteError."""
+    try:
+        for p in Path(directory).iterdir():
+            temporary = p.name.startswith(".") and p.name.endswith(".tmp")
+            if not (p.name == LOCK or temporary or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
+                return False
+    except OSError as exc:
+        raise WriteError(exc.filename or directory, exc) from None
     return True
 
 
@@ -187,29 +190,50 @@ def lock(directory: str | Path) -> None:
 
     The kernel releases it when the process ends, however it ends, so a lock is
     never stale.  A second process gets a UserError; the same process may lock again.
+    A pid that cannot be written (disk full) is a WriteError, and an empty lock file
+    is removed again: a lock file is never left empty.
     """
     key = Path(directory).resolve()
     if key in _held:
         _held[key][1] += 1
         return
     path = key / LOCK
-    try:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError as exc:
-        raise WriteError(path, exc) from None
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError as exc:
-        owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
-        os.close(fd)
-        if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-            raise UserError(f"run directory {directory} is in use by process {owner}") from None
-        raise WriteError(path, exc) from None
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise WriteError(path, exc) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            owner = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise UserError(f"run directory {directory} is in use by process {owner}") from None
+            raise WriteError(path, exc) from None
+        if _same_file(fd, path):
+            break
+        os.close(fd)  # the file was removed (by a writer that failed) after we opened it: lock the one there now
     pid = f"{os.getpid()}\n".encode()
-    if os.pread(fd, 32, 0) != pid:  # the owner's pid, for the message a second writer gets
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, pid, 0)
+    try:
+        if os.pread(fd, 32, 0) != pid:  # the owner's pid, for the message a second writer gets
+            os.pwrite(fd, pid, 0)  # over the old pid, then cut: the file is never empty
+            os.ftruncate(fd, len(pid))
+    except OSError as exc:
+        if os.fstat(fd).st_size == 0:
+            path.unlink(missing_ok=True)  # still holding the lock: nobody else can be using it
+        os.close(fd)
+        raise WriteError(path, exc) from None
     _held[key] = [fd, 1]
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """True while ``path`` still names the open file ``fd``."""
+    try:
+        a, b = os.fstat(fd), os.stat(path)
+    except OSError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
 def unlock(directory: str | Path) -> None:

@@ -9,6 +9,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
 
 #: bottom to top; a unit may import its own modules and units of lower layers only
 LAYERS: list[set[str]] = [
+    {"glbackend"},
     {"errors", "__version__"},
     {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping", "provenance"},
     {"contract", "options"},

@@ -1,5 +1,5 @@
-"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a dead worker, two writers,
-a full disk, tampered files and hostile configs.
+"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a killed run's processes, a dead worker, a lost Ray node, two writers,
+a full disk, tampered files (huge numbers, foreign formats) and hostile configs.
 
 Each fault ends in a completed run equal to an undisturbed one (wall times aside) or in one line on
 stderr with exit status 2 and nothing lost.  Runs are tiny (4 walkers, 0.5 s episodes, 2 generations):
@@ -9,6 +9,7 @@ a whole evolve takes about a second.
 import csv
 import json
 import os
+import re
 import resource
 import shutil
 import signal
@@ -360,3 +361,307 @@ def test_replaying_a_genome_with_a_hostile_episode_is_one_line(reference, tmp_pa
     f.write_text(json.dumps(g))
     assert cli("replay", f, "--out", tmp_path / "r.rrd", "--quiet") == 2
     one_line_error(capsys.readouterr().err, words)
+
+
+# ---- the process that evolves is killed: no worker, no resource tracker outlives it
+def children(pid: int) -> list[int]:
+    """The live processes whose parent is ``pid`` (zombies left out)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.append(int(stat.parent.name))
+    return out
+
+
+def alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
+#: a process-backend run long enough to be killed in the middle
+LONG = [*RUN[:2], "--generations", "2000", *RUN[4:6], "--seed", "3", "--backend", "process", "--workers", "2"]
+
+
+def start_long(d: Path) -> tuple[subprocess.Popen, list[int]]:
+    """A long process-backend run into ``d``, once its first generation is committed; its pool workers and resource tracker."""
+    def defaults():  # as a terminal delivers them, even where this test runs under nohup or in a background job
+        for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            signal.signal(s, signal.SIG_DFL)
+
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *LONG, "--quiet", "--out", str(d)], stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=defaults)
+    deadline = time.time() + 60
+    while not (d / "checkpoint.json").exists() and time.time() < deadline:
+        time.sleep(0.05)
+    kids = children(proc.pid)
+    assert len(kids) == 3, kids  # two workers and the resource tracker
+    return proc, kids
+
+
+def gone(pids: list[int], within: float = 5.0) -> list[int]:
+    """Those of ``pids`` still alive after ``within`` s."""
+    deadline = time.time() + within
+    while any(map(alive, pids)) and time.time() < deadline:
+        time.sleep(0.05)
+    return [p for p in pids if alive(p)]
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGHUP], ids=lambda s: s.name)
+def test_no_process_of_a_killed_run_survives_it(tmp_path, sig):
+    """SIGKILL (the out-of-memory killer), SIGTERM, SIGHUP: the workers and the resource tracker end with the run;
+    SIGTERM and SIGHUP stop it as Ctrl-C does (checkpoint kept, one line with the resume command, exit 128 + n)."""
+    d = tmp_path / "run"
+    proc, kids = start_long(d)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert gone(kids) == []
+    if sig == signal.SIGKILL:
+        assert proc.returncode == -sig
+        return
+    assert proc.returncode == 128 + sig, err
+    one_line = err.count("\n") == 1 and "Traceback" not in err
+    assert one_line and f"checkpoint saved; continue with: evobiped evolve --resume {d}" in err, err
+    done = len(json.loads((d / "checkpoint.json").read_text())["history"])
+    assert f"interrupted after generation {done - 1} " in err
+    assert (d / "history.csv").read_text().count("\n") == done + 1
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+def test_a_killed_resource_tracker_prints_nothing(tmp_path):
+    d = tmp_path / "run"
+    proc, kids = start_long(d)
+    tracker = next(p for p in kids if b"resource_tracker" in Path(f"/proc/{p}/cmdline").read_bytes())
+    os.kill(tracker, signal.SIGKILL)
+    time.sleep(1)
+    proc.send_signal(signal.SIGTERM)  # the pool shuts down: its semaphores are unregistered with a relaunched tracker
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM
+    assert err.count("\n") == 1 and "interrupted after generation" in err, err
+    assert gone(children(proc.pid) + kids) == []
+
+
+def test_sigterm_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
+    """SIGTERM between writing checkpoint.json and history.csv is raised (as Interrupted) only after both are written."""
+    import evobiped.evolution.run as runmod
+    from evobiped.errors import Interrupted, stop_on_signals
+    from evobiped.evolution.evaluate import make_evaluator
+    from evobiped.evolution.run import Run, RunConfig
+
+    config = RunConfig.from_dict({"episode": {"seconds": 0.5}, "ga": {"population": 4}, "generations": 2, "backend": "serial"})
+    run = Run.create(tmp_path / "r", config)
+    write = runmod.write_json
+
+    def write_then_terminate(path, obj):
+        write(path, obj)
+        if Path(path).name == "checkpoint.json":
+            signal.raise_signal(signal.SIGTERM)
+
+    monkeypatch.setattr(runmod, "write_json", write_then_terminate)
+    old = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    restore = stop_on_signals()
+    try:
+        with make_evaluator(config.episode, "serial") as ev, pytest.raises(Interrupted) as caught:
+            run.evolve(ev)
+    finally:
+        restore()
+        signal.signal(signal.SIGTERM, old)
+        run.close()
+    assert caught.value.signum == signal.SIGTERM
+    ck = json.loads((run.dir / "checkpoint.json").read_text())
+    assert len(ck["history"]) == 1 and (run.dir / "history.csv").read_text().count("\n") == 2
+
+
+# ---- a value only a worker would have refused: checked once, in this process, before anything is written
+TIMING = {"seconds = 1e-9": "control ticks", "seconds = 1e300": "control ticks"}
+
+
+@pytest.mark.parametrize("backend", ["serial", "thread", "process", "ray"])
+@pytest.mark.parametrize("text", TIMING)
+def test_episode_length_is_refused_before_any_worker_or_file(tmp_path, capsys, backend, text):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(f"[episode]\n{text}\n")
+    workers = [] if backend == "serial" else ["--workers", "2"]
+    assert cli("evolve", "--config", cfg, "--out", tmp_path / "run", "--backend", backend, *workers, "--quiet") == 2
+    one_line_error(capsys.readouterr().err, TIMING[text])
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("backend", ["serial", "thread", "process", "ray"])
+def test_episode_seconds_flag_is_refused_before_any_worker_or_file(tmp_path, capsys, backend):
+    workers = [] if backend == "serial" else ["--workers", "2"]
+    assert cli("evolve", *RUN[:4], "--episode-seconds", "1e-9", "--backend", backend, *workers, "--quiet", "--out", tmp_path / "run") == 2
+    one_line_error(capsys.readouterr().err, "episode seconds = 1e-09 gives 5e-08 control ticks")
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("backend", ["serial", "process"])
+def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, backend):
+    (done / "summary.json").unlink()
+    cfg = json.loads((done / "config.json").read_text())
+    cfg["episode"]["seconds"] = 1e-9
+    (done / "config.json").write_text(json.dumps(cfg))
+    before = files(done)
+    assert cli("evolve", "--resume", done, "--backend", backend) == 2
+    one_line_error(capsys.readouterr().err, "control ticks")
+    assert files(done) == before
+
+
+# ---- no room for the lock's pid
+def test_full_disk_at_the_lock_is_one_line_and_leaves_no_empty_lock(tmp_path, capsys, monkeypatch, reference):
+    import errno
+
+    from evobiped import rundir
+
+    def full(fd, data, offset):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    d = tmp_path / "run"
+    d.mkdir()
+    (d / ".lock").touch()  # an empty lock an earlier version left
+    monkeypatch.setattr(rundir.os, "pwrite", full)
+    assert cli("evolve", *RUN, "--out", d) == 2
+    one_line_error(capsys.readouterr().err, f"cannot write {d.resolve() / '.lock'}: No space left on device")
+    assert list(d.iterdir()) == []
+    done = tmp_path / "done"
+    shutil.copytree(reference, done)
+    (done / ".lock").unlink()
+    (done / "summary.json").unlink()
+    before = files(done)
+    assert cli("evolve", "--resume", done) == 2  # the same on resume
+    one_line_error(capsys.readouterr().err, "cannot write", ".lock: No space left on device")
+    assert files(done) == before and not (done / ".lock").exists()
+    monkeypatch.undo()  # space again: the run completes
+    assert cli("evolve", "--resume", done, "--quiet") == 0
+    assert contents(done) == contents(reference)
+
+
+# ---- files evobiped reads: numbers too long to read, formats of other programs
+HUGE = "9" * 5000
+
+
+@pytest.mark.parametrize("command", ["evolve --resume", "replay", "episode --genome", "robustness"])
+def test_a_number_of_5000_digits_is_one_line(done, capsys, command):
+    if command == "evolve --resume":
+        path = done / "checkpoint.json"
+        path.write_text(re.sub(r'"wall_seconds": [0-9.e+-]+', f'"wall_seconds": {HUGE}', path.read_text()))
+        (done / "summary.json").unlink()
+        args = ["evolve", "--resume", done]
+    else:
+        path = done / "best.json"
+        path.write_text(re.sub(r'"generation": [0-9]+', f'"generation": {HUGE}', path.read_text()))
+        args = [*command.split(), path, *(["--out", done / "x.rrd"] if command == "replay" else [])]
+    before = files(done)
+    assert cli(*args) == 2
+    one_line_error(capsys.readouterr().err, str(path), "a whole number of more than 4300 digits")
+    assert files(done) == before
+
+
+@pytest.mark.parametrize("name", ["best.json", "generations/gen_0001.json", "checkpoint.json"])
+def test_a_file_in_another_format_is_one_line(done, capsys, name):
+    path = done / name
+    obj = json.loads(path.read_text())
+    obj["format"] = "other/9"
+    path.write_text(json.dumps(obj))
+    if name == "checkpoint.json":
+        (done / "summary.json").unlink()
+        args = ["evolve", "--resume", done]
+    else:
+        args = ["episode", "--genome", path]
+    before = files(done)
+    assert cli(*args) == 2
+    one_line_error(capsys.readouterr().err, str(path), "is in format 'other/9'")
+    assert files(done) == before
+
+
+def test_a_run_directory_that_cannot_be_listed(tmp_path, capsys):
+    d = tmp_path / "run"
+    d.mkdir(mode=0o333)  # write and enter, not list
+    try:
+        if os.geteuid() == 0:
+            if shutil.which(AS_USER[0]) is None:
+                pytest.skip("root lists any directory and there is no setpriv to drop that power")
+            r = subprocess.run([*AS_USER, sys.executable, "-m", "evobiped", "evolve", *RUN, "--out", str(d)], capture_output=True, text=True,
+                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+            rc, err = r.returncode, r.stderr
+        else:
+            rc, err = cli("evolve", *RUN, "--out", d), capsys.readouterr().err
+        assert rc == 2
+        one_line_error(err, f"cannot write {d}: Permission denied")
+    finally:
+        d.chmod(0o755)
+
+
+# ---- a Ray worker lost for good (its node died)
+class FakeActorPool:
+    """Ray's ActorPool whose results are ``outcome()`` (an exception to raise)."""
+
+    outcome = None
+
+    def __init__(self, actors):
+        self.pending = 0
+
+    def submit(self, fn, value):
+        self.pending += 1
+
+    def has_next(self):
+        return self.pending > 0
+
+    def get_next(self, timeout=None):
+        raise self.outcome()
+
+
+@pytest.mark.parametrize("how", ["node died error", "node dead while waiting"])
+def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
+    ray = pytest.importorskip("ray")
+    from types import SimpleNamespace
+
+    from evobiped.episode import EpisodeConfig
+    from evobiped.errors import UserError
+    from evobiped.evolution.evaluate import RayEvaluator
+
+    if how == "node died error":  # the result of a task on the lost node
+        monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))
+        words = r"^Ray lost a worker \(NodeDiedError: .*resume the run with evobiped evolve --resume$"
+    else:  # Ray waits for room to restart the actor: no result, ever
+        monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: TimeoutError("Timed out waiting for result")))
+        words = r"^a Ray node running this run's workers died \(1 of 2 nodes lost\); .*evobiped evolve --resume$"
+    ev = RayEvaluator.__new__(RayEvaluator)  # no cluster: actors on nodes a and b, b dead
+    ev.config, ev.chunk, ev.actors, ev.nodes = EpisodeConfig(seconds=0.1), None, [None, None], {"a", "b"}
+    nodes = lambda: [{"NodeID": "a", "Alive": True}, {"NodeID": "b", "Alive": False}]  # noqa: E731
+    ev.ray = SimpleNamespace(util=SimpleNamespace(ActorPool=FakeActorPool), exceptions=ray.exceptions, nodes=nodes)
+    with pytest.raises(UserError, match=words):
+        ev.evaluate(np.zeros((2, 3)))
+
+
+def test_a_generation_lost_to_the_evaluator_keeps_the_run_resumable(tmp_path, capsys, monkeypatch, reference):
+    """The UserError of a lost Ray node in the middle of a run: exit 2, one line, and --resume completes the run
+    as if nothing had happened."""
+    from evobiped.errors import UserError
+    from evobiped.evolution import evaluate
+
+    real = evaluate.make_evaluator
+
+    class LosesSecondGeneration(evaluate.SerialEvaluator):
+        calls = 0
+
+        def evaluate(self, genomes, key=None):
+            LosesSecondGeneration.calls += 1
+            if LosesSecondGeneration.calls == 2:
+                raise UserError("Ray lost a worker (NodeDiedError: ...); the last checkpoint is kept: resume the run with evobiped evolve --resume")
+            return super().evaluate(genomes, key)
+
+    monkeypatch.setattr(evaluate, "make_evaluator", lambda episode, *a, **k: LosesSecondGeneration(episode))
+    d = tmp_path / "run"
+    assert cli("evolve", *RUN, "--out", d) == 2
+    one_line_error(capsys.readouterr().err, "Ray lost a worker")
+    assert len(json.loads((d / "checkpoint.json").read_text())["history"]) == 1
+    monkeypatch.setattr(evaluate, "make_evaluator", real)
+    assert cli("evolve", "--resume", d, "--quiet") == 0
+    assert contents(d) == contents(reference)

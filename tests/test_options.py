@@ -1,4 +1,4 @@
-"""Typed options: the declarations, their one-line errors with the setting's path, and the README's tables."""
+"""Typed options: the declarations, their one-line errors with the setting's path, and the option tables of docs/usage.md."""
 
 import dataclasses
 
@@ -10,13 +10,13 @@ from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError
 from evobiped.evolution.run import RunConfig
 from evobiped.options import markdown_table, option, parse
-from evobiped.readme import README, render, sections, tables
+from evobiped.readme import USAGE, render, sections, tables
 from evobiped.tasks import TASKS
 
 
-def test_the_readme_tables_are_the_declarations():
-    """Regenerate with ``python -m evobiped.readme``."""
-    text = README.read_text()
+def test_the_usage_pages_tables_are_the_declarations():
+    """docs/usage.md's option tables; regenerate with ``python -m evobiped.readme``."""
+    text = USAGE.read_text()
     assert sections(text) == list(tables())  # every component has its section, in registry order
     assert render(text) == text
 

@@ -1,6 +1,7 @@
 """What a user sees: flags that do not apply are refused, -h names the choices, long work shows progress."""
 
 import os
+import re
 
 import numpy as np
 import pytest
@@ -96,6 +97,50 @@ def test_progress_line_format(capsys):
     assert capsys.readouterr().err == ""
 
 
+def test_time_left_counts_the_simulated_seconds_still_to_go():
+    """Generations whose episodes lengthen: the time left follows the simulated seconds, not the generation count.
+    The numbers are the quick start's first five generations (walker-simbicon, seed 5): wall s, longest episode s."""
+    wall, clock = [1.34, 0.39, 0.36, 0.90, 0.44], [3.12, 2.18, 2.16, 14.3, 6.48]
+    rate = (0.36 + 0.90 + 0.44) / (2.16 + 14.3 + 6.48)  # wall s per simulated s, the last 3 generations
+    # 145 generations to go, each waiting for one 50 s episode: 537 s (the run took 642 s more)
+    assert progress.time_left(wall, clock, 145, ahead=50.0) == pytest.approx(rate * 50 * 145)
+    assert 0.7 * 642 < progress.time_left(wall, clock, 145, ahead=50.0) < 1.3 * 642
+    # episodes as short as now: at least the latest generation's and the window's mean (7.65 s)
+    assert progress.time_left(wall, clock, 145) == pytest.approx(rate * (2.16 + 14.3 + 6.48) / 3 * 145)
+    assert progress.time_left([1.0, 1.0, 4.0], [10.0, 10.0, 40.0], 2) == pytest.approx(2 * 40 * 6 / 60)
+    assert progress.time_left([2.0, 4.0], [0.0, 0.0], 3) == pytest.approx(9.0)  # nothing simulated: wall per step
+    assert np.isnan(progress.time_left([], [], 5))
+
+
+def test_every_long_command_reports_in_one_line_shape(capsys):
+    p = progress.Progress("evolve", 150, "generations")
+    p.t0 -= 62.0
+    p.report(6, "best 21.000 (up), this generation's 6.060 (fell)", left=760.0)
+    err = capsys.readouterr().err
+    assert err == ("evolve:   4% (6 of 150 generations; best 21.000 (up), this generation's 6.060 (fell))  "
+                   "elapsed 0:01:02  left ~0:12:40\n")
+    got = []
+    progress.Progress("study", 4, "runs", emit=got.append).report(1, "last: plain seed 0")
+    assert len(got) == 1 and re.fullmatch(r"study:  25% \(1 of 4 runs; last: plain seed 0\)  elapsed 0:00:00  left ~0:00:00", got[0])
+
+
+def test_the_robustness_table_has_one_header_per_column_and_names_its_statistics():
+    from evobiped.robustness import table
+
+    rows = [{"family": "push 5 N", "trials": 32, "survived": 30, "survival": 30 / 32, "forward_m": 12.345, "median_fall_s": 14.5},
+            {"family": "slope", "trials": 2, "survived": 2, "survival": 1.0, "forward_m": -1.0, "median_fall_s": None}]
+    head, *lines = table(rows).splitlines()
+    cols = re.split(r" {2,}", head.strip())
+    assert cols == ["family", "survived", "of", "survival", "mean forward (m)", "median fall time of the fallen (s)"]
+    for line in lines:
+        assert len(re.split(r" {2,}", line.strip())) == len(cols)  # one value under each header
+    assert re.split(r" {2,}", lines[0].strip()) == ["push 5 N", "30", "32", "94%", "12.35", "14.50"]
+    assert lines[1].split()[-1] == "-"
+    # each value ends where its header ends (right-aligned columns)
+    ends = [m.end() for m in re.finditer(r"\S+(?: \S+)*", head)]
+    assert [m.end() for m in re.finditer(r"\S+(?: \S+)*", lines[0])][1:] == ends[1:]
+
+
 def test_taga_shows_progress_unless_quiet(capsys, monkeypatch):
     monkeypatch.setattr(progress, "INTERVAL", 0.0)
     assert main(["taga", "--seconds", "1.5", "--window", "1"]) == 0
@@ -121,7 +166,8 @@ def test_robustness_shows_progress_unless_quiet(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(progress, "INTERVAL", 0.0)
     assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5"]) == 0
     lines = [l for l in capsys.readouterr().err.splitlines() if l.startswith("robustness: ")]
-    assert lines and "s simulated" in lines[-1] and lines[-1].startswith("robustness: 100%")
+    # what it really simulates: 117 trials of 1 s, each counted for its own simulated time
+    assert lines and lines[-1].startswith("robustness: 100% (117 of 117 trial-s of 117 trials of 1 s)")
     assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5", "--quiet"]) == 0
     assert "robustness: " not in capsys.readouterr().err
 

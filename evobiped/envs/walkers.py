@@ -26,6 +26,7 @@ from gymnasium.vector.utils import batch_space
 from ..bodies import BODIES
 from ..episode import Episode, EpisodeState
 from ..errors import ConfigError
+from ..glbackend import no_backend_message
 from ..options import markdown_table, option, parse
 from ..tasks import TASKS
 
@@ -167,11 +168,7 @@ class Camera:
         try:
             self.renderer = mujoco.Renderer(walkers.model, height=int(height), width=int(width))
         except Exception as exc:  # mujoco.FatalError, ValueError (size beyond the offscreen buffer), ...
-            first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise ConfigError(
-                f"rgb_array rendering needs an OpenGL context and none could be made here "
-                f"(try MUJOCO_GL=egl or MUJOCO_GL=osmesa): {first}"
-            ) from None
+            raise ConfigError(f"rgb_array: {no_backend_message(exc)}") from None
         self.data = mujoco.MjData(walkers.model)
         self.camera = mujoco.MjvCamera()
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FREE

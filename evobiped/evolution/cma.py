@@ -53,6 +53,8 @@ class CMAOptions:
                              span=f"0, or 2 to {MAX_POPULATION:.0e}")
     sigma0: float = option(0.1, "initial step size, a fraction of every gene's range", above=0, high=1)
     restarts: int = option(0, "IPOP restarts allowed (the population doubles at each)", low=0, high=10, integer=True)
+    diagonal: bool = option(False, "separable CMA-ES: a diagonal covariance (linear cost per gene: for thousands of genes, "
+                            "e.g. tuning a distilled network)")
 
     def __post_init__(self):
         check_fields(self, "cma")
@@ -137,6 +139,8 @@ class CMAES(Optimizer):
             "verb_disp": 0,
             "verb_log": 0,
         }
+        if self.config.diagonal:
+            opts["CMA_diagonal"] = True
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             self.es = cma.CMAEvolutionStrategy(z0, self.config.sigma0, opts)

@@ -8,11 +8,10 @@ does not depend on the backend or on the number of workers.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import queue
 import signal
-import sys
+import threading
 from abc import ABC, abstractmethod
 from concurrent.futures import ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -21,9 +20,9 @@ import dataclasses
 import numpy as np
 
 from ..episode import Episode, EpisodeConfig, EpisodeResult
-from ..errors import ConfigError, UserError
+from ..errors import STOP_SIGNALS, ConfigError, UserError
 from ..net import connect_error
-from .pool import spawn_pool, stop_pool
+from .pool import silenced_stderr, spawn_pool, stop_pool
 
 BACKENDS = ("serial", "process", "thread", "ray")
 
@@ -98,6 +97,8 @@ _worker_episode: Episode | None = None
 
 #: times a generation's lost batches are sent again after worker deaths before the run gives up
 MAX_RETRIES = 3
+#: seconds between checks, while a generation waits for Ray actors, that their nodes are alive
+NODE_CHECK_PERIOD = 5.0
 
 
 def _init_worker(config: EpisodeConfig) -> None:
@@ -201,20 +202,6 @@ class ThreadEvaluator(Evaluator):
         self.pool.shutdown(wait=True)
 
 
-@contextlib.contextmanager
-def _silenced_stderr():
-    """Send file descriptor 2 (C/C++ libraries' logs too) to /dev/null for a while."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-        yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-
-
 def check_reachable(address: str, timeout: float = 5.0) -> None:
     """UserError unless ``host:port`` (or ``ray://host:port``) accepts a TCP connection.
 
@@ -246,10 +233,11 @@ def init_ray(address: str | None, workers: int | None):
         return ray, False
     if address:
         check_reachable(address)
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, *STOP_SIGNALS)}
     try:
         # no address: a fresh local instance, even where a cluster started by `ray start` is running
         kw = {"address": address} if address else {"address": "local", "num_cpus": workers or os.cpu_count()}
-        with _silenced_stderr():  # Ray's C++ client logs a warning per connection retry
+        with silenced_stderr():  # Ray's C++ client logs a warning per connection retry
             ray.init(include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kw)
     except Exception as exc:  # ConnectionError, ValueError, RuntimeError, ...
         where = f" at {address}" if address else ""
@@ -257,11 +245,20 @@ def init_ray(address: str | None, workers: int | None):
         if address and os.environ.get("RAY_AUTH_MODE") != "token":
             hint = " (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and its token: see `ray get-auth-token`)"
         raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
+    if threading.current_thread() is threading.main_thread():
+        for s, h in handlers.items():  # ray.init puts its own in place (SIGTERM: exit status 15, no checkpoint line)
+            if h is not None:
+                signal.signal(s, h)
     return ray, True
 
 
 class RayEvaluator(Evaluator):
-    """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode."""
+    """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode.
+
+    An actor that dies is restarted and its batch sent again, at most :data:`MAX_RETRIES` times.  One lost for
+    good, or one whose node died (checked every :data:`NODE_CHECK_PERIOD` s while a generation waits: Ray would
+    wait forever for room to restart it), stops the generation with a UserError, the run's last checkpoint intact.
+    """
 
     def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None):
         super().__init__(episode)
@@ -280,13 +277,39 @@ class RayEvaluator(Evaluator):
                 _fault_point()
                 return _evaluate(self.episode, genomes, key)
 
+            def node(self):
+                return ray.get_runtime_context().get_node_id()
+
         self.actors = [_Worker.remote(episode) for _ in range(max(1, n))]
+        self.nodes = set(ray.get([a.node.remote() for a in self.actors]))  # where they run
+
+    def _check_nodes(self) -> None:
+        """UserError if a node that runs one of the actors has died."""
+        alive = {n["NodeID"] for n in self.ray.nodes() if n["Alive"]}
+        if not self.nodes <= alive:
+            raise UserError(f"a Ray node running this run's workers died ({len(self.nodes - alive)} of {len(self.nodes)} nodes lost); "
+                            "the last checkpoint is kept: resume the run with evobiped evolve --resume")
 
     def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
-        return concat(list(pool.map(lambda a, g: a.evaluate.remote(g, key), pieces)))
+        for g in pieces:
+            pool.submit(lambda a, g: a.evaluate.remote(g, key), g)
+        parts = []
+        try:
+            while pool.has_next():
+                try:
+                    parts.append(pool.get_next(timeout=NODE_CHECK_PERIOD))
+                except TimeoutError:
+                    self._check_nodes()
+            return concat(parts)
+        except self.ray.exceptions.RayError as exc:
+            if isinstance(exc, self.ray.exceptions.RayTaskError):
+                raise  # an error in evobiped's own code, not a lost worker
+            # a worker beyond its restarts, or one on a node that died: the generation is lost, not the run
+            raise UserError(f"Ray lost a worker ({type(exc).__name__}: a node died, or a worker died {MAX_RETRIES + 1} times); "
+                            "the last checkpoint is kept: resume the run with evobiped evolve --resume") from None
 
     def close(self):
         for a in self.actors:
@@ -304,6 +327,7 @@ def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: in
         raise ConfigError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
     if workers is not None and workers < 1:
         raise ConfigError(f"workers must be >= 1, got {workers}")
+    episode.check()  # here, once, whatever the backend: a worker never meets a bad value
     if backend == "serial":
         return SerialEvaluator(episode)
     if backend == "ray":

@@ -1,26 +1,105 @@
-"""The one process pool: spawned workers that leave Ctrl-C to the parent, and a stop that ends them now.
+"""The one process pool: spawned workers that leave Ctrl-C to the parent, die with it, and a stop that ends them now.
 
 The evaluation backend (one Episode per worker, genomes in batches) and a study
 (one whole evolutionary run per task) both use it.
+
+A worker never outlives the process that started it, however that one ends
+(SIGKILL by the out-of-memory killer included): on Linux the kernel kills it
+the moment its parent ends (``prctl(PR_SET_PDEATHSIG)``), and on every system
+a watch thread ends it within :data:`WATCH_PERIOD` s of finding itself
+re-parented.  The pool must therefore be fed from a thread that lives as long
+as the pool (the main thread here): Linux counts the death of the thread that
+started a worker as its parent's.  With the workers gone, multiprocessing's
+resource tracker, whose pipe they held, ends too.  The tracker writes to
+/dev/null: what it would print after an abnormal end (leaked-semaphore
+warnings, or ``KeyError`` tracebacks from a tracker relaunched after it was
+killed) is noise to a user whose run already said what happened.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import multiprocessing as mp
+import os
 import signal
+import sys
+import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import resource_tracker
 from typing import Callable
 
+#: seconds between a worker's checks that its parent still lives (where the kernel does not kill it at once)
+WATCH_PERIOD = 0.5
+_PR_SET_PDEATHSIG = 1
 
-def _start(initializer: Callable | None, initargs: tuple) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+
+@contextlib.contextmanager
+def silenced_stderr():
+    """Send file descriptor 2 (C/C++ libraries' logs, and processes started meanwhile) to /dev/null for a while."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def _die_with(parent: int) -> None:
+    """End this process when process ``parent`` ends, however it ends."""
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass  # no prctl: the watch thread below still ends us
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(WATCH_PERIOD)
+        os._exit(1)
+
+    if os.getppid() != parent:  # it ended before we got here
+        os._exit(1)
+    threading.Thread(target=watch, name="evobiped-parent-watch", daemon=True).start()
+
+
+def _start(parent: int, initializer: Callable | None, initargs: tuple) -> None:
+    _die_with(parent)
+    for sig in (signal.SIGINT, signal.SIGHUP):  # Ctrl-C and a closed terminal are the parent's to handle
+        signal.signal(sig, signal.SIG_IGN)
     if initializer is not None:
         initializer(*initargs)
 
 
+def _quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker now with its stderr on /dev/null, and have every relaunch
+    (after the tracker was killed) do the same, so that neither its warnings nor its tracebacks reach the user."""
+    tracker = resource_tracker._resource_tracker
+    if not getattr(tracker, "_evobiped_quiet", False):
+        launch = tracker.ensure_running
+
+        def ensure_running() -> None:
+            if getattr(tracker, "_fd", None) is not None and tracker._check_alive():
+                return
+            with silenced_stderr():
+                launch()
+
+        tracker.ensure_running = ensure_running  # what register, unregister and getfd call
+        tracker._evobiped_quiet = True
+    tracker.ensure_running()
+
+
 def spawn_pool(workers: int, initializer: Callable | None = None, initargs: tuple = ()) -> ProcessPoolExecutor:
-    """``workers`` fresh (spawned, not forked) processes that ignore SIGINT; each runs ``initializer(*initargs)`` first."""
-    return ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_start, initargs=(initializer, initargs))
+    """``workers`` fresh (spawned, not forked) processes that ignore SIGINT and SIGHUP and die with this process;
+    each runs ``initializer(*initargs)`` first."""
+    _quiet_resource_tracker()
+    return ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_start,
+                               initargs=(os.getpid(), initializer, initargs))
 
 
 def stop_pool(pool: ProcessPoolExecutor) -> None:

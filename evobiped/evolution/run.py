@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import math
 import os
 import signal
 import threading
@@ -24,7 +23,7 @@ import numpy as np
 
 from .. import __version__, provenance, rundir
 from ..episode import EpisodeConfig
-from ..errors import ConfigError, UserError
+from ..errors import STOP_SIGNALS, ConfigError, Interrupted, UserError, raise_interrupted
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
@@ -106,6 +105,10 @@ class GenerationStats:
     best_fell: bool = False
     evals_per_second: float = 0.0
     generations_total: int = 0
+    #: simulated seconds of this generation's evaluations, every presentation's row until it ended (a fall or T)
+    simulated_seconds: float = 0.0
+    #: the longest of those episodes (s): the batches wait for their longest row
+    longest_seconds: float = 0.0
 
     def row(self) -> list:
         return [getattr(self, c) for c in HISTORY_COLUMNS]
@@ -332,6 +335,8 @@ class Run:
             wall_seconds=0.0,
             best_fell=bool(outcome["fell"][b]),
             generations_total=self.config.generations,
+            simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
+            longest_seconds=float(np.max(result.end_time, initial=0.0)),
         )
         terms = self.individuals.terms_of(b)
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
@@ -348,8 +353,8 @@ class Run:
     # ---- files
     def checkpoint(self) -> None:
         """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
-        Ctrl-C waits until all are written."""
-        with _sigint_deferred():
+        Ctrl-C (SIGTERM, SIGHUP) waits until all are written."""
+        with _signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {"optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
@@ -411,23 +416,27 @@ class Run:
 
 
 @contextlib.contextmanager
-def _sigint_deferred():
-    """Hold Ctrl-C back for the duration and raise it right after (main thread only).
+def _signals_deferred():
+    """Hold Ctrl-C (and SIGTERM/SIGHUP where they stop the command, see :func:`~evobiped.errors.stop_on_signals`)
+    back for the duration and raise it right after (main thread only).
 
     A Python-level handler, not a signal mask: the signal may be delivered to
     any thread (Rerun's, for one), but Python handlers always run in the main thread.
+    Signals this process ignores or handles otherwise (pool workers) are left alone.
     """
-    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        yield  # another thread, or a process that ignores or handles Ctrl-C itself (pool workers)
+    if threading.current_thread() is not threading.main_thread():
+        yield
         return
+    raising = {signal.SIGINT: signal.default_int_handler, **{s: raise_interrupted for s in STOP_SIGNALS}}
     caught = []
-    old = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    old = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s, h in raising.items() if signal.getsignal(s) is h}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        for s, h in old.items():
+            signal.signal(s, h)
     if caught:
-        raise KeyboardInterrupt
+        raise Interrupted(caught[0])
 
 
 #: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
@@ -481,11 +490,3 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     if len(genome) < layout.size and same:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
     return layout.validate(genome, what=f"genome in {path}")
-
-
-def eta_seconds(stats: GenerationStats, history: list[list]) -> float:
-    done = len(history)
-    if not done:
-        return math.nan
-    walls = rundir.column(history, "wall_seconds")
-    return float(np.mean(walls[-5:])) * (stats.generations_total - done)

@@ -9,6 +9,7 @@ Both are imported lazily inside the modules that need them
 * :mod:`.rerun_recorder` - a trajectory as a Rerun recording with a blueprint;
 * :mod:`.evolution_log` - best/mean/worst fitness per generation to Rerun;
 * :mod:`.figures` - the papers' figures as PNG;
+* :mod:`.video` - frames of a replay without a display (MuJoCo's offscreen renderer) as MP4/GIF and into Rerun;
 * :mod:`.viewer` - streaming to a running viewer (address check, bounded flush);
 * :mod:`.source` - what ``evobiped replay SOURCE`` reads (run directory or genome file);
 * :mod:`.replay` - re-simulate, record, compare fitness.

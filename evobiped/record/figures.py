@@ -2,8 +2,8 @@
 
 * :func:`fitness_graph` - top and mean fitness per generation (Reil & Husbands Fig. 6);
 * :func:`motor_activations` - motor neuron outputs over time (Fig. 7);
-* :func:`motion_sequence` - the walker in side view at evenly spaced times (Fig. 8);
-* :func:`stick_figure` - strobed stick figures along the ground (Taga Figs. 5, 9);
+* :func:`motion_sequence` - the walker in side view through one stride of steady walking (Fig. 8);
+* :func:`stick_figure` - strobed stick figures along the ground, spaced apart (Taga Figs. 5, 9);
 * :func:`ground_trajectory` - the path on the ground plane, sources if any (Fig. 12).
 
 Drawing is generic over the model: every shape of :mod:`.geometry` is drawn
@@ -11,7 +11,10 @@ as its long axis (spheres as circles), so a sagittal biped draws as well as the
 3D one.  Side views look along the direction the walker faced at the start
 (walking backwards goes to the left), never along the direction it travelled.
 Every figure of the package is written by :func:`save_figure`: atomically,
-at a pixel size bounded whatever the episode length.
+at a pixel size bounded whatever the episode length.  Every title names what
+the figure shows and whose it is (``who``: the walker, e.g. its run directory
+and seed; default the body's name); paths on the ground have equal scales on
+both axes.
 """
 
 from __future__ import annotations
@@ -63,6 +66,11 @@ def walk_text(traj: Trajectory) -> str:
     return f"{float(np.linalg.norm(b - a)):.2f} m, {direction_words(heading)}"
 
 
+def _title(what: str, who: str, traj: Trajectory | None = None) -> str:
+    """A figure's title: what it shows, then (second line) whose it is."""
+    return f"{what}\n{who or (traj.body_name if traj is not None else '')}".rstrip()
+
+
 def fitness_label(config) -> str:
     """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit (``Task.fitness_label``)."""
     from ..tasks import TASKS
@@ -71,9 +79,9 @@ def fitness_label(config) -> str:
 
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",
-                  ylabel: str = "fitness: distance from the start (m)") -> Path:
+                  ylabel: str = "fitness: distance from the start (m)", who: str = "") -> Path:
     """Top (black) and mean (grey) fitness per generation, as in Fig. 6; ``history`` from :func:`evobiped.rundir.read_history`;
-    ``ylabel`` from :func:`fitness_label`."""
+    ``ylabel`` from :func:`fitness_label`.  The last tick is the last generation."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     g = history["generation"]
@@ -82,10 +90,14 @@ def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: st
     from matplotlib.ticker import MaxNLocator
 
     ax.set_xlabel("generation (from 0)")
-    ax.set_ylabel(ylabel)
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.set_xlim(g.min(), max(g.max(), g.min() + 1))
-    ax.set_title(title)
+    ax.set_ylabel(ylabel, fontsize=8 if len(ylabel) > 45 else 10)
+    lo, hi = int(g.min()), int(max(g.max(), g.min() + 1))
+    ticks = [t for t in MaxNLocator(nbins=7, integer=True).tick_values(lo, hi) if lo <= t <= hi]
+    if hi - ticks[-1] < 0.08 * (hi - lo):
+        ticks = ticks[:-1]
+    ax.set_xticks([*ticks, hi])  # the last generation is a tick
+    ax.set_xlim(lo, hi)
+    ax.set_title(_title(title, who), fontsize=10)
     ax.legend(frameon=False)
     ax.grid(alpha=0.3)
     return save_figure(fig, path)
@@ -100,7 +112,7 @@ def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:
     return unit, target, quantity
 
 
-def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | None = 10.0) -> Path:
+def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | None = 10.0, who: str = "") -> Path:
     """One panel per motor output against time (Fig. 7): a neuron's output in [0, 1], or what the
     controller commands (joint target angles in rad, torques in N m).
 
@@ -122,9 +134,9 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
         ax.tick_params(labelsize=7)
     fig.supylabel(quantity, fontsize=9)
     axes[-1, 0].set_xlabel("time (s)")
-    what = "Motor neuron outputs" if unit else "Joint target angles commanded by the controller" if target else "Motor outputs"
+    what = "Motor neuron outputs" if unit else "Joint target angles (the controller's outputs)" if target else "Motor outputs"
     shown = f"first {seconds:g} s of {traj.end_time:g} s" if keep.sum() < len(t) else f"{traj.end_time:g} s"
-    axes[0, 0].set_title(f"{what} ({traj.body_name}, {shown}); walked {walk_text(traj)}", fontsize=9)
+    fig.suptitle(_title(f"{what}, {shown}", f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=9)
     return save_figure(fig, path)
 
 
@@ -183,27 +195,42 @@ def _draw_walker(ax, traj: Trajectory, parts: list[Shape], rows: np.ndarray, axi
                 ax.plot(h[r], z[r], color=col, lw=3.0, alpha=alpha, solid_capstyle="round")
 
 
-def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, columns: int = 4, every: float = 0.2) -> Path:
-    """The walker in side view every ``every`` s from the start (``frames`` frames), left to right, top to
-    bottom (Fig. 8).  Each panel's horizontal axis is the position along the initial facing (m), so its
-    tick labels show the progress (negative: backwards)."""
+def steady_stride(traj: Trajectory, after: float = 10.0) -> tuple[float, float, str]:
+    """(start s, end s, what it is) of one stride of steady walking: from the first left-foot touchdown after
+    ``after`` s to the next; without two such touchdowns (no touch sensors, a fall, no steps) the 2.4 s
+    from ``after`` (or the episode's last 2.4 s)."""
+    left = [k for k, name in enumerate(traj.touch_names) if "left" in name.lower()]
+    if left and traj.n_ticks:
+        down = traj.touch[:, left[0]] > 0
+        rises = traj.tick_time[1:][down[1:] & ~down[:-1]]
+        rises = rises[rises >= after]
+        if len(rises) >= 2:
+            return float(rises[0]), float(rises[1]), "one stride (left touchdown to left touchdown)"
+    end = float(traj.state_time[-1])
+    t0 = max(0.0, min(after, end - 2.4))
+    return t0, min(end, t0 + 2.4), "no stride found: 2.4 s"
+
+
+def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, columns: int = 4, after: float = 10.0,
+                    who: str = "") -> Path:
+    """The walker in side view at ``frames`` evenly spaced times through one stride of steady walking
+    (:func:`steady_stride` after ``after`` s), left to right, top to bottom (Fig. 8).  Every panel shows the
+    same window of the position along the initial facing (m), so the walker moves across the panels."""
     plt = pyplot()
-    step = max(1, int(round(every / traj.dt)))
-    idx = np.arange(0, len(traj.state_time), step)[:frames]
-    every = step * traj.dt
+    t0, t1, what = steady_stride(traj, after)
+    idx = np.unique(np.searchsorted(traj.state_time, np.linspace(t0, t1, frames) - 1e-9).clip(0, len(traj.state_time) - 1))
     rows_n = int(np.ceil(len(idx) / columns))
     axis, parts = _side_axis(traj), shapes(traj.model)
-    fig, axes = plt.subplots(rows_n, columns, figsize=(2.4 * columns, 2.4 * rows_n + 0.6), squeeze=False, sharey=True)
-    centres = traj.com[idx, :2] @ axis
+    fig, axes = plt.subplots(rows_n, columns, figsize=(2.4 * columns, 2.2 * rows_n + 0.8), squeeze=False, sharex=True, sharey=True)
     h, z = _side_points(traj, parts, idx, axis)
     height = max(float(z.max()) + 0.1, 0.5)
-    half = max(0.75, float(np.abs(h - centres[:, None]).max()) + 0.1)
+    lo, hi = float(h.min()) - 0.1, float(h.max()) + 0.1
     for ax in axes.ravel()[len(idx):]:
         ax.axis("off")
-    for ax, k, centre in zip(axes.ravel(), idx, centres):
+    for ax, k in zip(axes.ravel(), idx):
         ax.axhline(0.0, color="0.5", lw=1.0)
         _draw_walker(ax, traj, parts, np.array([k]), axis)
-        ax.set_xlim(centre - half, centre + half)
+        ax.set_xlim(lo, hi)
         ax.set_ylim(-0.05, height)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=7)
@@ -211,37 +238,48 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
     fig.supxlabel("position along the initial facing (m)", fontsize=9)
     fig.supylabel("height (m)", fontsize=9)
     _side_key(axes[0, -1])
-    fig.suptitle(f"Motion sequence, side view, every {every:g} s ({traj.body_name}); walked {walk_text(traj)}", fontsize=10)
+    fig.suptitle(_title(f"Side view through {what}, t = {t0:.2f}-{t1:.2f} s of {traj.end_time:g} s",
+                        f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=10)
     return save_figure(fig, path)
 
 
-def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, max_figures: int = 40, span: float = 4.0) -> Path:
-    """Stick figures every ``every`` s (at most ``max_figures``), drawn where they were along the initial
-    facing (Taga Figs. 5, 9), from the start until the walker is ``span`` m from it: the figure's size does
-    not grow with the episode."""
+def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, spacing: float = 0.3, max_figures: int = 16,
+                 span: float = 4.0, who: str = "") -> Path:
+    """Stick figures drawn where they were along the initial facing (Taga Figs. 5, 9): one at least every
+    ``every`` s and at least ``spacing`` m (along the facing) after the previous one, so that they do not
+    pile up into a blob, at most ``max_figures``, from the start until the walker is ``span`` m from it
+    (the figure's size does not grow with the episode)."""
     plt = pyplot()
     axis, parts = _side_axis(traj), shapes(traj.model)
     h = traj.com[:, :2] @ axis
     far = np.flatnonzero(np.abs(h - h[0]) > span)
     last = int(far[0]) if far.size else len(h) - 1
-    step = max(1, int(round(every / traj.dt)), int(np.ceil((last + 1) / max_figures)))
-    every = step * traj.dt
-    rows = np.arange(0, last + 1, step)
-    fig, ax = plt.subplots(figsize=(min(14.0, max(6.0, 2.0 + 2.0 * float(np.ptp(h[: last + 1])))), 3.4))
+    step = max(1, int(round(every / traj.dt)))
+    rows = [0]
+    for k in range(step, last + 1, step):
+        if abs(h[k] - h[rows[-1]]) >= spacing and len(rows) < max_figures:
+            rows.append(k)
+    rows = np.array(rows)
+    fig, ax = plt.subplots(figsize=(min(14.0, max(6.0, 2.0 + 2.0 * float(np.ptp(h[: last + 1])))), 3.6))
     ax.axhline(0.0, color="0.5", lw=1.0)
-    _draw_walker(ax, traj, parts, rows, axis, alpha=0.45)
+    _draw_walker(ax, traj, parts, rows, axis, alpha=0.6)
     ax.plot(h[: last + 1], traj.com[: last + 1, 2], color="black", lw=0.8)
+    for k in rows[:: max(1, len(rows) // 6)]:
+        ax.text(h[k], -0.02, f"{traj.state_time[k]:.1f} s", ha="center", va="top", fontsize=6, color="0.3")
     ax.set_aspect("equal")
     ax.set_xlabel("position along the initial facing (m; negative = backwards)")
     ax.set_ylabel("height (m)")
     shown = f"first {traj.state_time[last]:.1f} s of {traj.end_time:g} s" if last < len(h) - 1 else f"{traj.end_time:g} s"
-    ax.set_title(f"Stick figure every {every:g} s ({traj.body_name}, {shown}); walked {walk_text(traj)}", fontsize=9)
+    ax.set_title(_title(f"Stick figures {spacing:g} m or more apart ({len(rows)} in the {shown}); times below the ground line",
+                        f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=9)
     _side_key(ax, com=True)
     return save_figure(fig, path)
 
 
-def ground_trajectory(trajs: Trajectory | list[Trajectory], path: str | Path, *, labels: list[str] | None = None) -> Path:
-    """The walker's path on the ground plane, start (circle), end (square, x if it fell), sources (star) (Fig. 12)."""
+def ground_trajectory(trajs: Trajectory | list[Trajectory], path: str | Path, *, labels: list[str] | None = None,
+                      who: str = "") -> Path:
+    """The walker's path on the ground plane, equal scales on both axes: start (circle), initial facing (arrow),
+    end (square, x if it fell), sources (star) (Fig. 12); markers drawn above every path."""
     from matplotlib.lines import Line2D
 
     plt = pyplot()
@@ -250,81 +288,140 @@ def ground_trajectory(trajs: Trajectory | list[Trajectory], path: str | Path, *,
     colors = plt.get_cmap("tab10").colors
     every = np.concatenate([tr.planar for tr in trajs])
     scale = max(float(np.ptp(every[:, 0])), float(np.ptp(every[:, 1])), 0.5)
+    marks = dict(mec="black", mew=0.8, zorder=5)
     for i, tr in enumerate(trajs):
         xy, c = tr.planar, colors[i % 10]
-        ax.plot(xy[:, 0], xy[:, 1], lw=1.5, color=c, label=labels[i] if labels else f"path: {walk_text(tr)}")
-        ax.plot(*xy[0], "o", color=c)
-        ax.plot(*xy[-1], "x" if tr.fell else "s", color=c, ms=8)
+        ax.plot(xy[:, 0], xy[:, 1], lw=1.5, color=c, zorder=2, label=labels[i] if labels else f"path: {walk_text(tr)}")
         f = _side_axis(tr) * 0.12 * scale
-        ax.annotate("", xy=xy[0] + f, xytext=xy[0], arrowprops=dict(arrowstyle="->", color=c, lw=1.5))
+        ax.annotate("", xy=xy[0] + f, xytext=xy[0], arrowprops=dict(arrowstyle="->", color=c, lw=1.5), zorder=4)
         ax.plot(*(xy[0] + f), alpha=0.0)  # keep the arrow inside the axes
+        ax.plot(*xy[-1], "X" if tr.fell else "s", color=c, ms=9, **marks)
+        ax.plot(*xy[0], "o", color="white", ms=8, **marks)
         if tr.source is not None:  # this walker's source, in its colour
-            ax.plot(*tr.source[-1], "*", color=c, ms=15, mec="black", mew=0.5)
-    keys = [Line2D([], [], marker="o", ls="", color="0.3", label="start"),
+            ax.plot(*tr.source[-1], "*", color=c, ms=16, **marks)
+    keys = [Line2D([], [], marker="o", ls="", color="white", mec="black", label="start"),
             Line2D([], [], marker=r"$\rightarrow$", ls="", color="0.3", ms=12, label="initial facing"),
-            Line2D([], [], marker="s", ls="", color="0.3", label="end, stayed up"),
-            Line2D([], [], marker="x", ls="", color="0.3", label="end, fell")]
+            Line2D([], [], marker="s", ls="", color="0.6", mec="black", label="end, stayed up"),
+            Line2D([], [], marker="X", ls="", color="0.6", mec="black", label="end, fell")]
     if any(t.source is not None for t in trajs):
-        keys.append(Line2D([], [], marker="*", ls="", color="0.5", mec="black", ms=12, label="sound source"))
+        keys.append(Line2D([], [], marker="*", ls="", color="0.6", mec="black", ms=12, label="sound source"))
     lines, names = ax.get_legend_handles_labels()
     ax.legend(handles=lines + keys, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(alpha=0.3)
-    if float(np.ptp(every[:, 1])) < 0.05 * scale:  # a planar walker: no empty square around a line
-        ax.set_ylim(-0.1 * scale, 0.1 * scale)
-    else:
-        ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable="datalim")  # 1 m is as long across as up: a drift looks as large as it is
     if len(trajs) > 1:
-        ax.set_title(f"Paths on the ground toward each sound source ({trajs[0].body_name})", fontsize=10)
+        what = f"Paths on the ground toward each of {len(trajs)} sound sources"
     else:
-        ax.set_title(f"Path on the ground ({trajs[0].body_name}, {trajs[0].end_time:g} s)", fontsize=10)
+        what = f"Path on the ground, {trajs[0].end_time:g} s; walked {walk_text(trajs[0])}"
+    ax.set_title(_title(what, who, trajs[0]), fontsize=9)
     return save_figure(fig, path)
 
 
 def replay_figures(traj: Trajectory, out_dir: str | Path, *, history: dict[str, np.ndarray] | None = None,
-                   fitness_ylabel: str = "fitness: distance from the start (m)") -> list[Path]:
-    """Every figure of one replay (and the fitness graph if a history is given) into ``out_dir``."""
+                   fitness_ylabel: str = "fitness: distance from the start (m)", who: str = "") -> list[Path]:
+    """Every figure of one replay (and the fitness graph if a history is given) into ``out_dir``;
+    ``who`` names the walker in every title."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     if history is not None:
-        paths.append(fitness_graph(history, out / "fitness.png", ylabel=fitness_ylabel))
-    paths.append(motor_activations(traj, out / "motor_neurons.png"))
-    paths.append(motion_sequence(traj, out / "motion_sequence.png"))
-    paths.append(stick_figure(traj, out / "stick_figure.png"))
-    paths.append(ground_trajectory(traj, out / "ground_trajectory.png"))
+        paths.append(fitness_graph(history, out / "fitness.png", ylabel=fitness_ylabel, who=who))
+    paths.append(motor_activations(traj, out / "motor_neurons.png", who=who))
+    paths.append(motion_sequence(traj, out / "motion_sequence.png", who=who))
+    paths.append(stick_figure(traj, out / "stick_figure.png", who=who))
+    paths.append(ground_trajectory(traj, out / "ground_trajectory.png", who=who))
     return paths
 
 
-def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int = 3, labels: list[str] | None = None,
-                    seconds: float | None = 10.0) -> Path:
-    """One motor output per presentation (Fig. 13: right hip sagittal = neuron 4, index 3): a neuron's
-    output in [0, 1], or the joint target (rad) a controller such as the balance controller commands.
-    ``seconds``: the first this many seconds (default 10, so that the rhythm stays visible; None: all)."""
+def _travel_heading(traj: Trajectory, window: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(times s, direction of travel over the last ``window`` s relative to the initial facing, deg) of ``traj``."""
+    k = max(1, int(round(window / traj.dt)))
+    d = traj.planar[k:] - traj.planar[:-k]
+    f = traj.start_facing
+    ang = np.degrees(np.arctan2(f[0] * d[:, 1] - f[1] * d[:, 0], d @ f))
+    return traj.state_time[k:], ang
+
+
+def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | None = None, labels: list[str] | None = None,
+                    seconds: float | None = None, who: str = "") -> Path:
+    """How the walker steers, one colour per presentation (sound source), as in Fig. 12 (Fig. 13's question):
+    the direction it travels relative to its initial facing (deg, over 1 s), the ear signal it hears if it
+    has ears, and what the controller does differently: with two sources every output's mean after the first
+    2 s, source 1 minus source 2 (the bias that steers), else one output per source overlaid, as
+    commanded and as its 1 s running mean: ``neuron`` (the paper's Fig. 13: right hip sagittal = neuron 4, index 3), by default the one whose
+    running means differ most between the sources.  ``seconds``: the motor output's first this many seconds
+    (default None: all; 10 keeps the rhythm visible)."""
     plt = pyplot()
-    fig, axes = plt.subplots(len(trajs), 1, figsize=(7.0, 1.2 + 1.3 * len(trajs)), sharex=True, squeeze=False)
-    name = trajs[0].actuator_names[neuron] if neuron < len(trajs[0].actuator_names) else f"neuron {neuron + 1}"
+    colors = plt.get_cmap("tab10").colors
+    labels = labels or [f"presentation {j + 1}" for j in range(len(trajs))]
+    k = max(1, int(round(1.0 / trajs[0].dt)))  # the running mean over 1 s: the bias that steers, not the rhythm
+
+    def running(x):
+        return np.convolve(x, np.ones(k) / k, mode="valid") if len(x) >= k else x
+
+    if neuron is None:  # the output whose 1 s running means differ most between the presentations: where steering acts
+        n = min(len(tr.command_time) for tr in trajs)
+        means = np.stack([[running(tr.neurons[:n, i]) for i in range(tr.n_motor)] for tr in trajs])  # (S, M, n')
+        neuron = int(np.argmax(np.ptp(means, axis=0).mean(axis=-1)))
+    name = trajs[0].actuator_names[neuron] if neuron < len(trajs[0].actuator_names) else f"output {neuron + 1}"
     unit, target, quantity = _motor_quantity(trajs[0])
-    for ax, tr, label in zip(axes[:, 0], trajs, labels or [None] * len(trajs)):
-        keep = tr.command_time <= seconds if seconds else np.ones(len(tr.command_time), bool)
-        ax.plot(tr.command_time[keep], tr.neurons[keep, neuron], color="black", lw=1.0)
-        if unit:
-            ax.set_ylim(-0.05, 1.05)
-        ax.set_ylabel(quantity, fontsize=8)
-        ax.set_title(label or "", fontsize=9)
-    axes[-1, 0].set_xlabel("time (s)")
-    shown = f", first {seconds:g} s" if seconds and trajs[0].command_time[-1] > seconds else ""
-    what = f"Motor neuron {neuron + 1} ({name})" if unit else f"{name} {'target' if target else 'command'}"
-    fig.suptitle(f"{what} per sound source{shown}", fontsize=10)
+    hearing = all("sound" in tr.sensors for tr in trajs)
+    fig, axes = plt.subplots(3 if hearing else 2, 1, figsize=(7.5, 7.5 if hearing else 5.4), squeeze=False)
+    axes = axes[:, 0]
+    for j, (tr, label) in enumerate(zip(trajs, labels)):
+        c = colors[j % 10]
+        t, ang = _travel_heading(tr)
+        axes[0].plot(t, ang, color=c, lw=1.3, label=label)
+        if hearing:
+            axes[1].plot(tr.tick_time, tr.sensors["sound"][:, 0], color=c, lw=1.0)
+        if len(trajs) != 2:
+            keep = tr.command_time <= seconds if seconds else np.ones(len(tr.command_time), bool)
+            axes[-1].plot(tr.command_time[keep], tr.neurons[keep, neuron], color=c, lw=0.6, alpha=0.35)
+            axes[-1].plot(running(tr.command_time), running(tr.neurons[:, neuron]), color=c, lw=2.0)
+    if len(trajs) == 2:  # two sources: every output's mean over the walk (after the first 2 s), source 1 minus source 2
+        names = [trajs[0].actuator_names[i] if i < len(trajs[0].actuator_names) else f"output {i + 1}" for i in range(trajs[0].n_motor)]
+        after = min(2.0, 0.5 * min(float(tr.command_time[-1]) for tr in trajs))  # the start-up aside (short episodes: their second half)
+        bias = [1000 * (tr0.neurons[tr0.command_time >= after, i].mean() - tr1.neurons[tr1.command_time >= after, i].mean())
+                for tr0, tr1 in [trajs] for i in range(trajs[0].n_motor)]
+        bars = axes[-1].bar(np.arange(len(names)), bias, color="0.5")
+        axes[-1].bar_label(bars, fmt="%+.1f", fontsize=7)
+        axes[-1].set_xticks(np.arange(len(names)), names, fontsize=7)
+        axes[-1].axhline(0.0, color="0.6", lw=0.8)
+    axes[0].axhline(0.0, color="0.6", lw=0.8)
+    axes[0].set_ylabel("direction of travel from\nthe initial facing (deg)", fontsize=8)
+    axes[0].set_xlabel("time (s)", fontsize=8)
+    axes[0].legend(frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    if hearing:
+        axes[1].set_ylabel("ear signal s", fontsize=8)
+        axes[1].set_xlabel("time (s)", fontsize=8)
+    if len(trajs) == 2:
+        unit_text = "(1/1000)" if unit else "(mrad)" if target else "(1/1000 of the unit)"
+        axes[-1].set_ylabel(f"mean after {after:g} s, source 1\nminus source 2 {unit_text}", fontsize=8)
+        axes[-1].set_xlabel("motor neuron" if unit else "joint target" if target else "output", fontsize=8)
+        what = "each output's bias between the two sources"
+    else:
+        axes[-1].set_ylabel(f"{name}\n{quantity}", fontsize=8)
+        axes[-1].set_xlabel("time (s)" + (f", first {seconds:g} s" if seconds else "") + "; thin: as commanded, thick: 1 s running mean",
+                            fontsize=8)
+        what = f"motor neuron {neuron + 1} ({name})" if unit else f"{name} {'target' if target else 'command'}"
+    if unit and len(trajs) != 2:
+        axes[-1].set_ylim(-0.05, 1.05)
+    for ax in axes:
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+    fig.suptitle(_title(f"Steering toward each source: direction of travel{', ear signal' if hearing else ''} and {what}",
+                        who, trajs[0]), fontsize=9)
+    fig.tight_layout()
     return save_figure(fig, path)
 
 
-def steering_figures(trajs: list[Trajectory], out_dir: str | Path) -> list[Path]:
-    """Fig. 12 (paths toward every source) and Fig. 13 (right-hip sagittal neuron per source)."""
+def steering_figures(trajs: list[Trajectory], out_dir: str | Path, *, who: str = "") -> list[Path]:
+    """Fig. 12 (paths toward every source) and Fig. 13 (how it steers toward each)."""
     out = Path(out_dir)
     labels = [f"toward source {i + 1} at ({tr.source[0, 0]:g}, {tr.source[0, 1]:g}) m" for i, tr in enumerate(trajs)]
     return [
-        ground_trajectory(trajs, out / "steering_trajectories.png", labels=labels),
-        steering_neuron(trajs, out / "steering_neuron.png", labels=labels),
+        ground_trajectory(trajs, out / "steering_trajectories.png", labels=labels, who=who),
+        steering_neuron(trajs, out / "steering_neuron.png", labels=labels, who=who),
     ]

@@ -48,6 +48,7 @@ class ReplayReport:
     #: how far the outcome drifted from the stored one, and what lies outside the tolerance (:func:`evobiped.outcome.compare`)
     drift: list[str]
     outcome_failures: list[str]
+    video: Path | None = None
 
     @property
     def matches(self) -> bool:
@@ -84,26 +85,49 @@ def replay(
     figures_dir: str | Path | None = None,
     listener=None,
     sources=None,
+    video: str | Path | None = None,
+    video_options: dict | None = None,
 ) -> ReplayReport:
     """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``).
     ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`;
-    ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources."""
-    import rerun as rr
-
-    from .evolution_log import log_history
-    from ..episode import Listeners
-    from .figures import fitness_label, replay_figures, steering_figures
-    from .rerun_recorder import RerunRecorder, blueprint, log_presentations
-    from .viewer import connect_url, flush, require_display, require_viewer
+    ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources;
+    ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the recording
+    (``video_options``: :func:`~.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``)."""
+    from .viewer import require_display
 
     if spawn:
         require_display()
+    if video is not None:
+        from .video import check_video_path
+
+        video = check_video_path(video)
     cfg = source.config
     if seconds is not None:
         cfg = dataclasses.replace(cfg, seconds=float(seconds))
     cfg = with_sources(cfg, sources)
     episode = cfg.build()
     history = _history(source)
+    opts = dict(video_options or {})
+    if video is not None:  # an OpenGL context first: without one, the one line comes before anything is recorded
+        from .video import SIZE, FrameRenderer
+
+        opts["renderer"] = FrameRenderer(episode.model, *opts.get("size", SIZE))
+    try:
+        return _replay(source, cfg, episode, history, out=out, spawn=spawn, connect=connect, figures_dir=figures_dir,
+                       listener=listener, video=video, video_options=opts)
+    finally:
+        if video is not None:
+            opts["renderer"].close()
+
+
+def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options):
+    import rerun as rr
+
+    from .evolution_log import log_history
+    from ..episode import Listeners
+    from .figures import fitness_label, replay_figures, steering_figures
+    from .rerun_recorder import RerunRecorder, blueprint, log_presentations
+    from .viewer import connect_url, flush, require_viewer
 
     streaming = spawn or connect is not None
     target = None if streaming and out is None else Path(out) if out is not None else default_out(source)
@@ -125,22 +149,38 @@ def replay(
     watchers = [recorder, *others] + ([listener] if listener is not None else [])
     result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
     traj = recorder.trajectory
+    trajs = [traj] + [o.trajectory for o in others]
     if others:
-        log_presentations(rec, [traj] + [o.trajectory for o in others])
+        log_presentations(rec, trajs)
     if history is not None:
         log_history(rec, history)
-    rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=bool(others)))
+    frames = None
+    if video is not None:
+        from .video import FPS, log_frames, render_frames
+
+        opts = video_options
+        names = [source.name] if not others else [f"{source.name}, source ({q[0]:g}, {q[1]:g}) m" for q in traj.sources]
+        frames, times = render_frames(trajs, names, **opts)
+        log_frames(rec, frames, times)
+    rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=bool(others),
+                                 with_video=video is not None))
     if stream is None:
         flush(rec, streaming=True)
     else:
         data = stream.read(flush=True) or b""
         rec.disconnect()
         atomic_write(target, data)
+    if video is not None:
+        from .video import write_video
+
+        write_video(video, frames, opts.get("fps", FPS))
     figs = []
     if figures_dir is not None:
-        figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg))
+        seed = source.meta.get("seed")
+        who = f"{source.name}: {cfg.body}/{cfg.controller}" + (f", run seed {seed}" if seed is not None else "")
+        figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg), who=who)
         if others:
-            figs += steering_figures([traj] + [o.trajectory for o in others], figures_dir)
+            figs += steering_figures(trajs, figures_dir, who=who)
     stored = source.meta.get("fitness")
     done = outcome(result, episode.task.targets())
     unchanged = cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options
@@ -160,6 +200,7 @@ def replay(
         environment_differences=differences(source.environment),
         drift=drift,
         outcome_failures=failures,
+        video=video,
     )
 
 

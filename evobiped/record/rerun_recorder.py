@@ -185,8 +185,9 @@ def _path(times: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.concatenate([points[::step], points[-1:]])
 
 
-def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentations: bool = False):
-    """3D view (tracking the first moving body) beside time-series panels."""
+def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentations: bool = False, with_video: bool = False):
+    """3D view (tracking the first moving body) beside time-series panels; ``with_video``: the rendered
+    frames (entity ``video``) in a tab beside the 3D view."""
     import rerun.blueprint as rrb
 
     names = body_names(traj.model)
@@ -206,6 +207,8 @@ def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentati
         name="walker",
         eye_controls=rrb.EyeControls3D(tracking_entity=f"world/bodies/{names[1]}") if traj.model.nbody > 1 else None,
     )
+    if with_video:
+        view3d = rrb.Tabs(view3d, rrb.Spatial2DView(origin="video", name="video"))
     left = rrb.Vertical(view3d, rrb.TimeSeriesView(origin="fitness", name="fitness so far"), row_shares=[3, 1])
     return rrb.Blueprint(rrb.Horizontal(left, rrb.Vertical(*plots), column_shares=[3, 2]), collapse_panels=True)
 

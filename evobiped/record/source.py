@@ -62,6 +62,11 @@ class Source:
         """``best`` / ``gen_0007`` for a run directory, the file stem otherwise."""
         return rundir.label(self.genome_path)
 
+    @property
+    def name(self) -> str:
+        """What a figure or video calls the walker: ``reil_simbicon_seed5 (best)``, or the genome file's stem."""
+        return f"{self.run_dir.name} ({self.label})" if self.run_dir is not None else self.genome_path.stem
+
 
 def resolve(source: str | Path, generation: int | None = None) -> Source:
     """Load the genome named by ``source`` (``generation``: a run directory's best of that generation)."""

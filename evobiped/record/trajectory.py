@@ -43,6 +43,7 @@ class Trajectory:
     com: np.ndarray  # (T+1, 3) m
     planar: np.ndarray  # (T+1, 2) m
     joint_angle: np.ndarray  # (T+1, A) rad (nan where an actuator has no joint)
+    qpos: np.ndarray  # (T+1, nq) the generalised positions (what a video re-poses the model from)
     command_time: np.ndarray  # (T,) s
     neurons: np.ndarray  # (T, N) outputs, motor neurons first
     action: np.ndarray  # (T, A) rad (PD targets) or N m (torques)
@@ -128,6 +129,7 @@ class TrajectoryRecorder:
             com=np.stack([r[3] for r in st]),
             planar=np.stack([r[4] for r in st]),
             joint_angle=np.stack([r[5] for r in st]),
+            qpos=np.stack([r[6] for r in st]),
             command_time=np.array([r[0] for r in cmd]),
             neurons=_stack([r[1] for r in cmd], (0, 0)),
             action=_stack([r[2] for r in cmd], (0, n_act)),
@@ -156,6 +158,7 @@ class TrajectoryRecorder:
                 np.array(body.com(sims)[p], float),
                 np.array(body.planar_position(sims)[p], float),
                 angles,
+                q.copy(),
             )
         )
 

@@ -173,9 +173,9 @@ class WalkTask(Task):
 
     def fitness_label(self):
         if self.fitness_name == "forward":
-            return "fitness: (forward m + credit) x time up / T (m)"
+            return f"fitness (m): (forward displacement + {self.survival_credit:g} m for staying up) × time up / T"
         if self.cyclic_weight:
-            return "fitness: distance x (1 + cyclic activity) (m)"
+            return "fitness (m): distance × (1 + cyclic activity)"
         return "fitness: distance from the start (m)"
 
     def forward(self, state) -> np.ndarray:

@@ -32,7 +32,6 @@ import csv
 import dataclasses
 import io
 import os
-import time
 from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,6 +47,7 @@ from ...tasks import TASKS
 from ...evolution.run import OPTIMIZERS, Run, RunConfig
 from ...fileio import atomic_write, read_json, write_json
 from ...genome_file import load_genome
+from ...progress import Progress
 from .stats import histogram_edges, mean_std, wilson_interval
 
 #: the fitness terms a study needs of the run's task (besides the criteria its conditions name, ``Task.criteria``)
@@ -216,18 +216,15 @@ def run_study(
     todo = [t for t in tasks if not (Path(t[0]) / rundir.OUTCOME).is_file()]
     say(f"study {d}: {len(config.condition_names)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already done, "
         f"{config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
-    t0, done = time.perf_counter(), 0
+    line = Progress("study", len(todo), "runs", emit=say)
+    done = 0
 
     def report(o: dict) -> None:
         nonlocal done
         done += 1
-        el = time.perf_counter() - t0
-        eta = el / done * (len(todo) - done)
         state = "stayed up" if not o["fell"] else f"fell at {o['end_time']:.1f} s"
         way = "" if o["heading_deg"] is None else f" at {o['heading_deg']:+.0f} deg"
-        say(f"run {done}/{len(todo)}: {o['condition']} seed {o['seed']}: best fitness {o['fitness']:.2f}, "
-            f"{o['distance']:.1f} m{way} ({state})  "
-            f"elapsed {el:.0f} s, left ~{eta:.0f} s")
+        line.report(done, f"last: {o['condition']} seed {o['seed']}, best fitness {o['fitness']:.2f}, {o['distance']:.1f} m{way} ({state})")
 
     if todo and backend == "serial":
         for t in todo:
@@ -328,5 +325,5 @@ def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dic
     histories = {c: [rundir.read_history(run_dir(d, c, k, config) / rundir.HISTORY) for k in range(config.runs)] for c in config.condition_names}
     return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
             distance_histograms(outcomes, config.condition_names, edges, d / "distances.png"),
-            fitness_graphs(histories, d / "fitness_graphs.png")]
+            fitness_graphs(histories, d / "fitness_graphs.png", seeds=[config.first_seed + k for k in range(config.runs)])]
 

@@ -35,32 +35,36 @@ def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, pat
 
 
 #: the y-axis label per study condition: the quantity each one's fitness measures
-FITNESS_LABELS = {"plain": "fitness: distance (m)", "cyclic": "fitness: distance x (1 + cyclic activity) (m)",
-                  "forward": "fitness: (forward m + credit) x time up / T (m)"}
+FITNESS_LABELS = {"plain": "fitness (m): distance", "cyclic": "fitness (m): distance × (1 + cyclic activity)",
+                  "forward": "fitness (m): (forward displacement + survival credit) × time up / T"}
 
 
-def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str | Path) -> Path:
-    """Best fitness per generation of every run, one panel per condition (Fig. 6 for all runs at once)."""
+def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str | Path, *, seeds: list[int] | None = None) -> Path:
+    """Best fitness per generation of every run, one panel per condition (Fig. 6 for all runs at once), one
+    colour per run (``seeds``: the run seed of each run, in order; default 0, 1, ...) named in a legend."""
     from matplotlib.ticker import MaxNLocator
 
     plt = pyplot()
     n = len(histories)
     cols = min(3, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.4 * rows + 0.5), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols + 1.0, 3.4 * rows + 0.5), squeeze=False)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    for i, (ax, (c, runs)) in enumerate(zip(axes.ravel(), histories.items())):
-        for h in runs:
-            ax.plot(h["generation"], h["best"], color=_COLORS.get(c, "0.3"), lw=1.0, alpha=0.6)
-        ax.set_title(f"{c}\nbest fitness of each of {len(runs)} runs", fontsize=9)
+    for ax, (c, runs) in zip(axes.ravel(), histories.items()):
+        names = [f"seed {s}" for s in (seeds or range(len(runs)))]
+        cmap = plt.get_cmap("tab10" if len(runs) <= 10 else "tab20")
+        for k, (h, name) in enumerate(zip(runs, names)):
+            ax.plot(h["generation"], h["best"], color=cmap(k % cmap.N), lw=1.1, label=name)
+        ax.set_title(f"condition {c} ({len(runs)} runs)", fontsize=9)
         ax.set_xlabel("generation (from 0)", fontsize=9)
         base = c.split("-")[-1] if c.split("-")[-1] in FITNESS_LABELS else c.split("-")[0]
-        ax.set_ylabel(FITNESS_LABELS.get(base, "fitness"), fontsize=8)
+        ax.set_ylabel(FITNESS_LABELS.get(base, "fitness"), fontsize=7)
         ax.ticklabel_format(useOffset=False)
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.tick_params(labelsize=8)
         ax.grid(alpha=0.3)
+        ax.legend(frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), title="run", title_fontsize=7)
     fig.suptitle("Best fitness per generation, one line per run", fontsize=11)
     fig.tight_layout()
     return save_figure(fig, path)
