@@ -137,11 +137,6 @@ class Run:
         self.environment_differences: list[str] = []
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
 
-    @property
-    def ga(self) -> Optimizer:
-        """The optimizer (GA or CMA-ES), by the name the command line still uses."""
-        return self.optimizer
-
     # ---- creating and resuming
     @classmethod
     def create(cls, directory: str | Path, config: RunConfig) -> "Run":
