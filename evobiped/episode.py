@@ -451,8 +451,9 @@ class Episode:
     def advance(self, state: EpisodeState, seconds: float | None = None, *, ticks: int | None = None,
                 listener: Listener | None = None) -> EpisodeState:
         """Continue ``state`` by ``seconds`` (or ``ticks`` control ticks), in place; rows that are down stay
-        where they fell, and an all-down batch stops early (its clock stops with it).  Between calls an
-        experiment may change ``state.params``, the body's ground or forces on ``state.sims``."""
+        where they fell, and an all-down batch stops early (its clock stops with it).  Each tick is the
+        controller's action (from its inputs) through :meth:`step`, the one loop every episode runs.  Between
+        calls an experiment may change ``state.params``, the body's ground or forces on ``state.sims``."""
         n = int(round(seconds / self.control_dt)) if ticks is None else int(ticks)
         ctrl, st = self.controller, state
         if ctrl is None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -35,7 +36,7 @@ def run_episode_cmd(args) -> int:
         cfg = EpisodeConfig(body=args.body or "reil", controller=args.controller or "ctrnn")
         genome = None
     if args.seconds:
-        cfg = EpisodeConfig(**{**cfg.__dict__, "seconds": args.seconds})
+        cfg = dataclasses.replace(cfg, seconds=args.seconds)
     cfg = with_sources(cfg, args.sources)
     ep = cfg.build()
     if genome is None:
