@@ -161,7 +161,7 @@ def collect(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, student_cfg:
     under target and pose noise drawn from ``key`` = (seed, iteration)."""
     t_body, teacher, task = teacher_cfg.parts()
     _, student, _ = student_cfg.parts()
-    latency = int(teacher_cfg.controller_options.get("latency", 0))
+    latency = teacher_cfg.latency
     low, high = t_body.action_bounds()
     blend = Blend(teacher, teacher_genome, student, low=low, high=high, action_kind=t_body.action_kind, latency=latency,
                   beta=beta)

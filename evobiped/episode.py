@@ -13,7 +13,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
@@ -24,7 +24,7 @@ from .contract import Offer, normaliser, wire
 from .controllers.base import Controller
 from .errors import ConfigError
 from .genome import GenomeLayout
-from .options import parse, refuse_unknown
+from .options import given, parse, refuse_unknown
 from .validate import number
 from .mapping import MAPS, to_action
 from .perturb import PerturbationOptions, Trials
@@ -33,27 +33,28 @@ from .tasks import TASKS
 from .tasks.base import Task
 
 
-#: controller options every controller takes, handled by the episode: ``inputs`` (sensor names to feed,
-#: replacing the controller's default choice), ``genes`` (gene-block overrides, see GenomeLayout.with_overrides)
-#: and ``latency`` (control ticks by which its actions reach the body late: see :class:`Episode`)
-GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes", "latency")
-#: the longest control latency, in control ticks
-MAX_LATENCY = 100
-
 #: the most control ticks, and physics steps, one walker's episode may take
 MAX_TICKS = 10**7
 MAX_STEPS = 10**8
 
 
-def check_timing(body: Body, controller: Controller, seconds: float) -> tuple[float, int]:
+def check_timing(body: Body, controller: Controller | None, seconds: float, *,
+                 control_dt: float | None = None) -> tuple[float, int]:
     """``(control period in s, physics steps per control tick)`` of an episode of ``seconds`` s; ConfigError
     when the controller's outputs do not map onto the body's actions, the period is no multiple of the
-    physics step, or the episode is not 1 to MAX_TICKS ticks and at most MAX_STEPS physics steps per walker."""
-    if (controller.output_kind, body.action_kind) not in MAPS:
-        raise ConfigError(
-            f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} cannot take as {body.action_kind}s"
-        )
-    dt = controller.dt if controller.dt is not None else body.timestep
+    physics step, or the episode is not 1 to MAX_TICKS ticks and at most MAX_STEPS physics steps per walker.
+    Without a controller (actions from outside) the period is ``control_dt``."""
+    if controller is None:
+        if control_dt is None:
+            raise ConfigError("an episode without a controller needs its control period (control_dt)")
+        number(control_dt, "control_dt:", above=0, unit="s")
+        dt = float(control_dt)
+    else:
+        if (controller.output_kind, body.action_kind) not in MAPS:
+            raise ConfigError(
+                f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} cannot take as {body.action_kind}s"
+            )
+        dt = controller.dt if controller.dt is not None else body.timestep
     ratio = dt / body.timestep
     if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
         raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
@@ -69,7 +70,14 @@ def check_timing(body: Body, controller: Controller, seconds: float) -> tuple[fl
 
 @dataclass(frozen=True, kw_only=True)
 class EpisodeConfig:
-    """What to simulate: registry names, their options, and the episode length (s)."""
+    """What to simulate: registry names, their options, and the episode length (s).
+
+    The options are given as tables (a config file's, keyword settings) or as parsed objects; each table
+    is parsed once, here, into its component's frozen ``Options`` (``body_options``: the body's,
+    ``controller_options``: the controller's, with the options every controller takes, ``task_options``:
+    the task's, ``perturbations``: :class:`PerturbationOptions`), which the parts are built from.
+    :meth:`to_dict` writes back the settings the tables gave.
+    """
 
     body: str = "reil"
     controller: str = "ctrnn"
@@ -77,11 +85,11 @@ class EpisodeConfig:
     seconds: float = 50.0
     #: end a walker's episode when it falls (False: run to the end; only blow-ups stop, e.g. for benchmarks)
     stop_on_fall: bool = True
-    body_options: dict = field(default_factory=dict)
-    controller_options: dict = field(default_factory=dict)
-    task_options: dict = field(default_factory=dict)
+    body_options: Any = field(default_factory=dict)
+    controller_options: Any = field(default_factory=dict)
+    task_options: Any = field(default_factory=dict)
     #: how an evolutionary run perturbs each generation (see evobiped.perturb); {} = none
-    perturbations: dict = field(default_factory=dict)
+    perturbations: Any = field(default_factory=dict)
 
     def __post_init__(self):
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
@@ -90,12 +98,26 @@ class EpisodeConfig:
         number(self.seconds, "episode.seconds:", above=0, unit="s")
         if not isinstance(self.stop_on_fall, bool):
             raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
-        parse(BODIES[self.body].Options, self.body_options, "episode.body_options")
-        parse(CONTROLLERS[self.controller].Options, self.controller_options, "episode.controller_options", skip=GENERIC_CONTROLLER_OPTIONS)
-        number(self.controller_options.get("latency", 0), "episode.controller_options.latency:", low=0, high=MAX_LATENCY,
-               integer=True, unit="control ticks")
-        parse(TASKS[self.task].Options, self.task_options, "episode.task_options")
-        PerturbationOptions.from_dict(self.perturbations)
+        for name, cls in (("body_options", BODIES[self.body].Options), ("controller_options", CONTROLLERS[self.controller].Options),
+                          ("task_options", TASKS[self.task].Options), ("perturbations", PerturbationOptions)):
+            object.__setattr__(self, name, parse(cls, getattr(self, name), f"episode.{name}"))
+
+    def to_dict(self) -> dict:
+        """The config as a table (config.json, genome files): every option table as its settings were given."""
+        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        for name in ("body_options", "controller_options", "task_options", "perturbations"):
+            d[name] = copy.deepcopy(given(d[name]))
+        return d
+
+    @property
+    def perturbed(self) -> bool:
+        """The config perturbs its episodes (it has a perturbations table)."""
+        return bool(given(self.perturbations)) or self.perturbations.active
+
+    @property
+    def latency(self) -> int:
+        """Control ticks by which the controller's actions reach the body late."""
+        return int(self.controller_options.latency)
 
     def nominal(self) -> "EpisodeConfig":
         """The same episode without perturbations (replays, the robustness battery)."""
@@ -117,21 +139,19 @@ class EpisodeConfig:
         return {k: v for k, v in self.__dict__.items() if k != "_parts"}
 
     def _make_parts(self) -> tuple[Body, Controller, Task]:
-        body = BODIES[self.body](**self.body_options)
-        task = TASKS[self.task](**self.task_options)
-        cls = CONTROLLERS[self.controller]
-        opts = {k: v for k, v in self.controller_options.items() if k not in GENERIC_CONTROLLER_OPTIONS}
+        body = BODIES[self.body](self.body_options)
+        task = TASKS[self.task](self.task_options)
+        cls, opts = CONTROLLERS[self.controller], self.controller_options
         added = task.sensor_widths()
         offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()})
-        inputs = wire(cls.needs(parse(cls.Options, opts, "episode.controller_options")), offer,
-                      chosen=self.controller_options.get("inputs"),
+        inputs = wire(cls.needs(opts), offer, chosen=opts.inputs,
                       what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
-        controller = cls(n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators, **opts)
+        controller = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
         if controller.normalises_inputs:
             controller.input_norm = normaliser(inputs, offer.norms)
-        if "genes" in self.controller_options:
+        if "genes" in given(opts):
             try:
-                controller.override_genes(self.controller_options["genes"])
+                controller.override_genes(opts.genes)
             except ConfigError as exc:
                 raise ConfigError(f"episode.controller_options.{exc}") from None
         check_timing(body, controller, float(self.seconds))
@@ -150,10 +170,8 @@ class EpisodeConfig:
     def build(self) -> "Episode":
         """The episode, its model compiled once."""
         body, controller, task = self.parts()
-        perturbations = PerturbationOptions.from_dict(self.perturbations)
         return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
-                       perturbations=perturbations if perturbations.active else None,
-                       latency=int(self.controller_options.get("latency", 0)))
+                       perturbations=self.perturbations if self.perturbations.active else None, latency=self.latency)
 
 
 @dataclass
@@ -213,6 +231,10 @@ def walk_summary(displacement: np.ndarray, heading_deg: float) -> dict:
     d, h = np.asarray(displacement, float)[None], float(heading_deg)
     return {"distance": float(np.linalg.norm(d, axis=1)[0]), "heading_deg": None if not np.isfinite(h) else round(h, 2),
             "displacement": [round(float(v), 4) for v in d[0]]}
+
+
+#: ``pose(sims, ids)``: moves rows ``ids`` off the body's initial pose (and calls ``sims.forward(ids)``)
+Pose = Callable[[Sims, np.ndarray], None]
 
 
 class Listener(Protocol):
@@ -281,6 +303,8 @@ class EpisodeState:
     pushed: bool = False
     #: the actions computed but not yet applied, oldest first (``Episode.latency`` > 0)
     pending: list = field(default_factory=list)
+    #: the tick at which each row began ``(n,)`` (0; later for a row :meth:`Episode.restart` began anew)
+    born: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
     @property
     def time(self) -> float:
@@ -295,8 +319,10 @@ class EpisodeState:
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
-    def __init__(self, body: Body, controller: Controller, task: Task, *, seconds: float, stop_on_fall: bool = True,
-                 perturbations: PerturbationOptions | None = None, latency: int = 0):
+    def __init__(self, body: Body, controller: Controller | None, task: Task, *, seconds: float, stop_on_fall: bool = True,
+                 perturbations: PerturbationOptions | None = None, latency: int = 0, control_dt: float | None = None):
+        """``controller`` None: the actions come from outside (:meth:`step`, the Gymnasium environments), one
+        every ``control_dt`` s (a multiple of the body's physics step)."""
         self.body, self.controller, self.task = body, controller, task
         #: control ticks by which each action reaches the body late (a real controller's computation and
         #: transmission delay; the first action is held until the pipeline is full)
@@ -304,13 +330,13 @@ class Episode:
         self.seconds = float(seconds)
         self.stop_on_fall = stop_on_fall
         self.perturbations = perturbations
-        dt, self.substeps = check_timing(body, controller, self.seconds)
+        dt, self.substeps = check_timing(body, controller, self.seconds, control_dt=control_dt)
         self.model = body.build_model()
         task.bind_model(self.model)
         self.low, self.high = body.action_bounds()
         self.control_dt = dt
         # the controller told its period: a bound copy, the caller's controller unchanged
-        self.controller = controller.bound(dt)
+        self.controller = None if controller is None else controller.bound(dt)
         self._models: dict[tuple, Any] = {}
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)
@@ -364,15 +390,23 @@ class Episode:
             listener.end(result)
         return result
 
-    def start(self, genomes: np.ndarray, *, seconds: float | None = None, trials: Trials | None = None) -> EpisodeState:
+    def start(self, genomes: np.ndarray | int, *, seconds: float | None = None, trials: Trials | None = None,
+              pose: Pose | None = None) -> EpisodeState:
         """Every genome ``(P, G)`` (or one ``(G,)``) at t = 0, rows as in :meth:`run`; ``seconds`` (default the
-        episode's) is the planned length: each row's end time until it falls, and the task's ``seconds``."""
-        params = self.controller.decode(genomes)
+        episode's) is the planned length: each row's end time until it falls, and the task's ``seconds``.
+        An episode without a controller takes the number of simulation rows instead of genomes (row i has
+        the task's presentation i mod S and trial i // S mod R).  ``pose(sims, ids)``
+        moves rows ``ids`` off the body's initial pose before the task starts (and calls ``sims.forward``)."""
         S = self.task.presentations
         R = 1 if trials is None else trials.R
-        if S * R > 1:
-            params = {k: np.repeat(v, S * R, axis=0) for k, v in params.items()}
-        P = next(iter(params.values())).shape[0]
+        if self.controller is None:
+            params: dict[str, np.ndarray] = {}
+            P = int(genomes)
+        else:
+            params = self.controller.decode(genomes)
+            if S * R > 1:
+                params = {k: np.repeat(v, S * R, axis=0) for k, v in params.items()}
+            P = next(iter(params.values())).shape[0]
         n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
         body = self.body
         sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope)
@@ -381,66 +415,104 @@ class Episode:
         if trials is not None and trials.pose_offset is not None and trials.pose_offset.any():
             sims.qpos[:, self._act_qadr] += trials.pose_offset[trial]
             sims.forward()
+        if pose is not None:
+            pose(sims, np.arange(P))
         end_time = np.full(P, n_ticks * self.control_dt)
         tstate = self.task.start(body, sims)
         # the task sees when each walker's episode ends: the full length until it falls (so a
         # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
         tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
         return EpisodeState(
-            sims=sims, params=params, controller=self.controller.initial_state(params), task=tstate,
+            sims=sims, params=params, task=tstate,
+            controller=None if self.controller is None else self.controller.initial_state(params),
             alive=np.ones(P, bool), fell=np.zeros(P, bool), unstable=np.zeros(P, bool), end_time=end_time,
             start_position=body.planar_position(sims).copy(), start_facing=body.heading(sims).copy(),
-            control_dt=self.control_dt, n_ticks=n_ticks, trials=trials, trial=trial,
+            control_dt=self.control_dt, n_ticks=n_ticks, trials=trials, trial=trial, born=np.zeros(P, int),
             noise=trials.noise() if trials is not None else None,
             offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
         )
 
+    def restart(self, state: EpisodeState, ids: np.ndarray, *, pose: Pose | None = None) -> EpisodeState:
+        """Rows ``ids`` of ``state`` begin anew, in place, while the others go on (a vector environment's
+        autoreset): the body's initial state, moved by ``pose`` as in :meth:`start`, the task's bookkeeping
+        of those rows from its start, up again with their own clock (:attr:`EpisodeState.born`)."""
+        body, sims = self.body, state.sims
+        body.reset(sims, ids)
+        if pose is not None:
+            pose(sims, ids)
+        self.task.restart(body, sims, state.task, ids)
+        state.alive[ids], state.fell[ids], state.unstable[ids] = True, False, False
+        state.end_time[ids] = state.n_ticks * self.control_dt
+        state.start_position[ids] = body.planar_position(sims)[ids]
+        state.start_facing[ids] = body.heading(sims)[ids]
+        state.born[ids] = state.ticks
+        return state
+
     def advance(self, state: EpisodeState, seconds: float | None = None, *, ticks: int | None = None,
                 listener: Listener | None = None) -> EpisodeState:
         """Continue ``state`` by ``seconds`` (or ``ticks`` control ticks), in place; rows that are down stay
-        where they fell, and an all-down batch stops early (its clock stops with it).  Between calls an
-        experiment may change ``state.params``, the body's ground or forces on ``state.sims``."""
+        where they fell, and an all-down batch stops early (its clock stops with it).  Each tick is the
+        controller's action (from its inputs) through :meth:`step`, the one loop every episode runs.  Between
+        calls an experiment may change ``state.params``, the body's ground or forces on ``state.sims``."""
         n = int(round(seconds / self.control_dt)) if ticks is None else int(ticks)
-        body, ctrl, task, sims, st = self.body, self.controller, self.task, state.sims, state
-        params, tstate, alive, trials, trial = st.params, st.task, st.alive, st.trials, st.trial
+        ctrl, st = self.controller, state
+        if ctrl is None:
+            raise ConfigError("this episode has no controller: its actions come from outside (Episode.step)")
+        params, alive = st.params, st.alive
         P = len(alive)
-        for k in range(st.ticks, st.ticks + n):
-            ids = np.flatnonzero(alive)
-            if ids.size == 0:
+        for _ in range(n):
+            if not alive.any():
                 break
             neurons = ctrl.neuron_outputs(params, st.controller)
-            inputs = self._inputs(sims, tstate, P)
+            inputs = self._inputs(st.sims, st.task, P)
             st.controller, out = ctrl.step(params, st.controller, inputs)
-            action = to_action(ctrl.output_kind, self.low, self.high, body.action_kind, out)
-            if trials is not None:
-                jitter = st.noise.next()
-                if st.offset is not None or jitter is not None:
-                    disturbed = action + st.offset if st.offset is not None else action.copy()
-                    if jitter is not None:
-                        disturbed += jitter[trial]
-                    action = np.clip(disturbed, self.low, self.high)
-                if trials.push_start.size > 0:
-                    force = trials.push_at(k * self.control_dt)  # (R, 3) N
-                    if st.pushed or force.any():  # write only while a push is on or just ended
-                        sims.xfrc_applied[:, self._trunk, :3] = force[trial]
-                        st.pushed = bool(force.any())
-            if self.latency:
-                st.pending.append(action)
-                action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
-            body.apply(sims, ids, action[ids])
-            bad = self._advance(sims, ids)
-            st.ticks = k + 1
-            t = (k + 1) * self.control_dt
-            task.on_tick(body, sims, tstate, ids, ~bad, neurons)
-            if listener is not None:
-                listener.tick(t, sims, ids, neurons, action, tstate)
-            down = bad | body.fallen(sims, ids) if self.stop_on_fall else bad
-            if down.any():
-                st.unstable[ids[bad]] = True
-                st.fell[ids[down]] = True
-                alive[ids[down]] = False
-                st.end_time[ids[down]] = t
+            self.step(st, to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out),
+                      neurons=neurons, listener=listener)
         return state
+
+    def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,
+             listener: Listener | None = None, rows: np.ndarray | None = None) -> np.ndarray:
+        """One control tick of ``state``, in place: ``action`` ``(n, n_act)`` (rad targets or N m torques, the
+        body's action kind; a controller's, or an agent's from outside) for every row, the rows that are up
+        take it after the episode's perturbations and latency; then the physics, the task's bookkeeping
+        (``neurons`` ``(n, k)``: the controller's outputs the task may read; default none) and the falls.
+        ``rows``: only these take the tick (default all; a row that is down never does).  Returns the rows
+        that were stepped."""
+        body, task, sims, st = self.body, self.task, state.sims, state
+        tstate, alive, trials, trial = st.task, st.alive, st.trials, st.trial
+        k = st.ticks
+        ids = np.flatnonzero(alive) if rows is None else rows[alive[rows]]
+        if neurons is None:
+            neurons = np.zeros((len(alive), 0))
+        if trials is not None:
+            jitter = st.noise.next()
+            if st.offset is not None or jitter is not None:
+                disturbed = action + st.offset if st.offset is not None else action.copy()
+                if jitter is not None:
+                    disturbed += jitter[trial]
+                action = np.clip(disturbed, self.low, self.high)
+            if trials.push_start.size > 0:
+                force = trials.push_at(k * self.control_dt)  # (R, 3) N
+                if st.pushed or force.any():  # write only while a push is on or just ended
+                    sims.xfrc_applied[:, self._trunk, :3] = force[trial]
+                    st.pushed = bool(force.any())
+        if self.latency:
+            st.pending.append(action)
+            action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
+        body.apply(sims, ids, action[ids])
+        bad = self._advance(sims, ids)
+        st.ticks = k + 1
+        t = (k + 1) * self.control_dt
+        task.on_tick(body, sims, tstate, ids, ~bad, neurons)
+        if listener is not None:
+            listener.tick(t, sims, ids, neurons, action, tstate)
+        down = bad | body.fallen(sims, ids) if self.stop_on_fall else bad
+        if down.any():
+            st.unstable[ids[bad]] = True
+            st.fell[ids[down]] = True
+            alive[ids[down]] = False
+            st.end_time[ids[down]] = (k + 1 - st.born[ids[down]]) * self.control_dt
+        return ids
 
     def result(self, state: EpisodeState) -> EpisodeResult:
         """The outcome of ``state`` so far, one entry per genome (see :meth:`run`)."""

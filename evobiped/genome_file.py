@@ -17,7 +17,6 @@ metadata, ``environment`` included, as a dict.
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +37,7 @@ def genome_text(genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> str:
     obj = {
         "format": FORMAT,
         "genome": [float(x) for x in np.asarray(genome, float).ravel()],
-        "episode": dataclasses.asdict(episode),
+        "episode": episode.to_dict(),
         **{k: _plain(v) for k, v in meta.items()},
         "version": __version__,
         "environment": provenance.current(),

@@ -3,7 +3,9 @@
 A field is declared with :func:`option` (default, meaning, unit and bounds in
 its metadata); :func:`parse` checks a table of settings against the dataclass
 once, when a config is loaded, and names the setting's path in the one-line
-error (``episode.body_options.kp: must be > 0, got -5``).  Checks that relate
+error (``episode.body_options.kp: must be > 0, got -5``).  The parsed object is
+frozen and is what every constructor takes; it remembers which settings its
+table gave (:func:`given`), so a config writes back what it read.  Checks that relate
 several fields live in the dataclass's ``__post_init__`` (ConfigError).
 :func:`markdown_table` renders the declarations (:mod:`evobiped.readme` puts
 them in the README).
@@ -71,7 +73,8 @@ def refuse_unknown(cls: type, values: Any, where: str, *, skip: tuple[str, ...] 
     """``values`` if it is a table of ``cls``'s fields (and ``skip``); ConfigError naming the first unknown one."""
     if not isinstance(values, dict):
         raise ConfigError(f"{where or 'settings'}: must be a table of options, got {values!r}")
-    known = [f.name for f in fields(cls)]
+    inherited = {f.name for base in cls.__mro__[1:] if dataclasses.is_dataclass(base) for f in fields(base)}
+    known = [f.name for f in fields(cls) if f.name not in inherited] + [f.name for f in fields(cls) if f.name in inherited]
     for name in values:
         if name not in known and name not in skip:
             raise ConfigError(f"{join(where, name)}: unknown option (choose from {', '.join([*known, *skip])})")
@@ -99,9 +102,31 @@ def parse(cls: type, values: Any, where: str, *, skip: tuple[str, ...] = ()) -> 
         if name not in skip:
             _check(known[name], value, join(where, name))
     try:
-        return cls(**{k: v for k, v in values.items() if k not in skip})
+        parsed = cls(**{k: v for k, v in values.items() if k not in skip})
     except ConfigError as exc:
         raise ConfigError(f"{where}: {exc}") from None
+    object.__setattr__(parsed, "_given", tuple(k for k in values if k not in skip))
+    return parsed
+
+
+def taken(cls: type, options: Any, keywords: dict, where: str) -> Any:
+    """What a constructor takes: the parsed ``options`` (an instance of ``cls``) as it is, or (Python use) the
+    ``keywords`` parsed; ConfigError for both at once."""
+    if options is not None and keywords:
+        raise ConfigError(f"{where}: give one Options object or keyword settings, not both")
+    return parse(cls, keywords if options is None else options, where)
+
+
+def given(options: Any) -> dict:
+    """The settings of a parsed options object that its table gave, in their order (what a config file
+    writes back: the defaults it left out stay out); {} for one made with its defaults."""
+    return {k: getattr(options, k) for k in getattr(options, "_given", ())}
+
+
+def replace(options: Any, where: str, **changes: Any) -> Any:
+    """``options`` with ``changes`` (checked as :func:`parse` checks them), the changed settings given beside
+    the ones it had."""
+    return parse(type(options), {**given(options), **changes}, where)
 
 
 def check_value(cls: type, name: str, value: Any, label: str) -> Any:
@@ -147,10 +172,12 @@ def _shown(v: Any) -> str:
     return str(v)
 
 
-def markdown_table(cls: type) -> str:
-    """The options of ``cls`` as a markdown table: name, default, unit, allowed values, meaning."""
+def markdown_table(cls: type, *, skip: tuple[str, ...] = ()) -> str:
+    """The options of ``cls`` (but ``skip``) as a markdown table: name, default, unit, allowed values, meaning."""
     rows = ["| option | default | unit | values | meaning |", "|---|---|---|---|---|"]
     for f in fields(cls):
+        if f.name in skip:
+            continue
         m = f.metadata
         default = f.default if f.default is not MISSING else f.default_factory()
         rows.append(f"| `{f.name}` | `{_shown(default)}` | {m.get('unit', '')} | {_span(m, default)} | {m.get('doc', '')} |")

@@ -2,7 +2,7 @@
 
 Each table sits between ``<!-- options: ID -->`` and ``<!-- end options -->`` in
 docs/usage.md, ID naming the component (``body reil``, ``controller ctrnn``,
-``task walk``, ``episode perturbations``, ``optimizer ga``, ...).  ``python -m evobiped.readme`` rewrites
+``task walk``, ``episode perturbations``, ``optimizer ga``, ``environment``, ...).  ``python -m evobiped.readme`` rewrites
 them; tests/test_options.py checks that they agree with the declarations.
 """
 
@@ -13,6 +13,8 @@ from pathlib import Path
 
 from .bodies import BODIES
 from .controllers import CONTROLLERS
+from .controllers.base import GENERIC_CONTROLLER_OPTIONS
+from .envs.walkers import EnvOptions
 from .evolution.cma import CMAOptions
 from .evolution.ga import GAOptions
 from .options import markdown_table
@@ -30,10 +32,12 @@ def tables() -> dict[str, str]:
     out = {}
     for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
         for name, cls in reg.items():
-            out[f"{kind} {name}"] = markdown_table(cls.Options)
+            # every controller's generic options (inputs, genes, latency) are described once, beside the tables
+            out[f"{kind} {name}"] = markdown_table(cls.Options, skip=GENERIC_CONTROLLER_OPTIONS if kind == "controller" else ())
     out["episode perturbations"] = markdown_table(PerturbationOptions)
     out["optimizer ga"] = markdown_table(GAOptions)
     out["optimizer cma"] = markdown_table(CMAOptions)
+    out["environment"] = markdown_table(EnvOptions)
     return out
 
 

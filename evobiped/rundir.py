@@ -3,7 +3,7 @@
 A run directory (``evobiped evolve --out DIR``)::
 
     config.json            the full resolved RunConfig
-    checkpoint.json        the commit point: optimizer state, history, best genome, outcomes after the last generation
+    checkpoint.json        the commit point: optimizer state (key ``optimizer``), history, best genome, outcomes after the last generation
     history.csv            one row per generation (HISTORY_COLUMNS)           } derived from the checkpoint,
     best.json              best genome of the run so far                      } rebuilt by a resume when
     evolution.rrd          fitness per generation, a Rerun recording          } missing, stale or damaged
@@ -262,19 +262,31 @@ def _number(v: Any, field: str, *, integer: bool = False, low: float | None = No
     return v
 
 
+#: the checkpoint's key for the optimizer's state (``OptimizerState.to_dict``); checkpoints written before it was
+#: named for what it holds kept the state, the GA's or CMA-ES's, under ``ga``
+OPTIMIZER_KEY, OLD_OPTIMIZER_KEY = "optimizer", "ga"
+
+
+def optimizer_table(ck: dict) -> Any:
+    """The optimizer's state in checkpoint ``ck`` (under ``optimizer``, or ``ga`` in an older checkpoint)."""
+    return ck[OPTIMIZER_KEY] if OPTIMIZER_KEY in ck else ck[OLD_OPTIMIZER_KEY]
+
+
 def validate_checkpoint(ck: Any, *, generations: int, low: np.ndarray, high: np.ndarray) -> None:
     """Check every field's type and range before use; a UserError names the first bad field (e.g. "best.fitness must be finite").
 
     ``generations``: the run's total; ``low``/``high`` ``(G,)``: the gene bounds.
-    (The optimizer's own state is checked by its ``load_state_dict``.)
+    (The optimizer's own state is checked by its ``state_from`` and ``restore``.)
     """
     if not isinstance(ck, dict):
         raise UserError(f"expected a table of fields, got {type(ck).__name__}")
-    for key in ("ga", "history", "best", "wall_seconds"):
+    if OPTIMIZER_KEY not in ck and OLD_OPTIMIZER_KEY not in ck:
+        raise _bad(OPTIMIZER_KEY, "is missing")
+    for key in ("history", "best", "wall_seconds"):
         if key not in ck:
             raise _bad(key, "is missing")
-    if not isinstance(ck["ga"], dict):
-        raise _bad("ga", "must be a table")
+    if not isinstance(optimizer_table(ck), dict):
+        raise _bad(OPTIMIZER_KEY if OPTIMIZER_KEY in ck else OLD_OPTIMIZER_KEY, "must be a table")
     history = ck["history"]
     if not isinstance(history, list):
         raise _bad("history", f"must be a list of rows, got {type(history).__name__}")

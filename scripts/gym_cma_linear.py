@@ -4,7 +4,8 @@ The policy maps the 24 sensor readings to the 6 PD targets,
 ``action = mid + half * tanh(W obs + b)`` (``mid``, ``half``: centre and half-width of
 Table II's ranges), 150 parameters.  Each CMA-ES generation is one batch: candidate i
 drives walker i of a ``ReilBipedVectorEnv`` with ``num_envs = popsize`` for one episode
-(its return: forward progress in m plus ``alive_bonus`` per step up), all stepped together.
+(its return: the increments of the walk task's forward fitness, F = (forward m + credit) * time up / T,
+summed: F at the end minus the credit), all stepped together.
 
     python scripts/gym_cma_linear.py --generations 60 --popsize 24 --seconds 5 --seed 0
 """
@@ -31,9 +32,9 @@ def episode_returns(venv: ReilBipedVectorEnv, params: np.ndarray, seed: int):
     live = np.ones(n, bool)
     while live.any():
         action = mid + half * np.tanh(np.einsum("nij,nj->ni", W, obs) + b)
-        obs, r, te, tr, _ = venv.step(action)
+        obs, r, te, tr, info = venv.step(action)
         total += np.where(live, r, 0.0)
-        progress += np.where(live, r - venv.walkers.alive_bonus * ~te, 0.0)
+        progress = np.where(live, info["forward"], progress)
         steps += live & ~te
         live &= ~(te | tr)
     return total, steps, progress
@@ -44,17 +45,18 @@ def main() -> None:
     ap.add_argument("--generations", type=int, default=60)
     ap.add_argument("--popsize", type=int, default=24)
     ap.add_argument("--seconds", type=float, default=5.0, help="episode length (s)")
-    ap.add_argument("--alive-bonus", type=float, default=0.02, help="reward per 0.02 s step up (default: 1 per second)")
+    ap.add_argument("--survival-credit", type=float, default=5.0, help="the forward fitness's survival credit (m, default 5)")
     ap.add_argument("--sigma", type=float, default=0.1, help="CMA-ES initial step")
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args()
-    if a.generations < 1 or a.popsize < 2 or not a.seconds > 0 or not a.sigma > 0:
-        ap.error("--generations must be >= 1, --popsize >= 2, --seconds and --sigma > 0")
-    venv = ReilBipedVectorEnv(a.popsize, seconds=a.seconds, alive_bonus=a.alive_bonus)
+    if a.generations < 1 or a.popsize < 2 or not a.seconds > 0 or not a.sigma > 0 or not a.survival_credit >= 0:
+        ap.error("--generations must be >= 1, --popsize >= 2, --seconds and --sigma > 0, --survival-credit >= 0")
+    venv = ReilBipedVectorEnv(a.popsize, seconds=a.seconds,
+                              task_options={"fitness": "forward", "survival_credit": a.survival_credit})
     n_params = (venv.walkers.obs_size + 1) * len(venv.walkers.low)
     es = cma.CMAEvolutionStrategy(np.zeros(n_params), a.sigma, {"popsize": a.popsize, "seed": a.seed + 1, "verbose": -9})
     t0 = time.perf_counter()
-    max_steps = venv.walkers.max_steps
+    max_steps = venv.walkers.episode.n_ticks
     for g in range(a.generations):
         X = np.array(es.ask())
         ret, steps, prog = episode_returns(venv, X, seed=a.seed * 100_003 + g)

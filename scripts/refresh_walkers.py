@@ -35,7 +35,7 @@ def shipped() -> list[Path]:
 def refresh(path: Path, write: bool) -> bool:
     """Report ``path``'s drift in this environment; rewrite it if ``write`` and its outcome holds. True: it holds."""
     genome, cfg, meta = load_genome(path)
-    nominal = not cfg.perturbations
+    nominal = not cfg.perturbed
     episode = cfg.nominal().build()
     result = episode.run(genome)
     done = outcome(result, episode.task.targets())

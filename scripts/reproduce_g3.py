@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from evobiped.controllers import g3_network as g3net
+from evobiped.experiments.g3 import network as g3net
 from evobiped.experiments.g3 import gaits
 from evobiped.experiments.g3 import simulation as g3sim
 from evobiped.experiments.g3.g3_figures import run_figure, sweep_figures

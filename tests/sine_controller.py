@@ -13,13 +13,13 @@ from typing import ClassVar
 import numpy as np
 
 from evobiped.contract import Needs
-from evobiped.controllers.base import Controller
+from evobiped.controllers.base import Controller, ControllerOptions
 from evobiped.genome import GeneBlock, GenomeLayout
-from evobiped.options import option, parse
+from evobiped.options import option
 
 
 @dataclass(frozen=True, kw_only=True)
-class SineOptions:
+class SineOptions(ControllerOptions):
     """Options of the sine controller."""
 
     dt: float = option(0.02, "control period", unit="s", above=0)
@@ -36,8 +36,8 @@ class Sine(Controller):
     def needs(cls, options: SineOptions) -> Needs:
         return Needs()
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **options):
-        self.options = parse(SineOptions, options, "sine controller_options")
+    def __init__(self, options: SineOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
+        self.options = self.own_options(options, given)
         self.n_outputs, self.dt, self.input_names = int(n_outputs), float(self.options.dt), ()
         n = self.n_outputs
         self._layout = GenomeLayout((

@@ -61,9 +61,9 @@ def test_state_round_trip_asks_the_same():
     """A checkpointed strategy replays its told fitness and asks the identical next population."""
     f = lambda pop: -np.abs(pop).sum(axis=1)  # noqa: E731
     a = optimise(CMAES(LAYOUT, CMAOptions(population=6, restarts=1), seed=3), f, 12)
-    state = json.loads(json.dumps(a.state_dict()))
+    state = json.loads(json.dumps(a.state().to_dict()))
     b = CMAES(LAYOUT, CMAOptions(population=6, restarts=1), seed=3)
-    b.load_state_dict(state)
+    b.restore(b.state_from(state))
     assert b.generation == 12 and np.array_equal(a.ask()[0], b.ask()[0])
     optimise(a, f, 3)
     optimise(b, f, 3)
@@ -84,10 +84,22 @@ def test_bad_settings(bad):
 
 def test_tampered_state_is_refused():
     opt = CMAES(LAYOUT, CMAOptions(population=4), seed=0)
-    good = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state_dict()
-    for bad in ({**good, "told": [[1.0] * 3, [1.0] * 4]}, {**good, "generation": 5}, {**good, "told": "x"}, {"optimizer": "ga"}):
+    good = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state().to_dict()
+    for bad in ({**good, "told": [[1.0] * 3, [1.0] * 4]}, {**good, "generation": 5}, {**good, "told": "x"}, {"name": "ga"},
+                {**good, "told": [[1.0] * 4, ["x"] * 4]}, {**good, "fitness": [1.0]}):
         with pytest.raises(UserError):
-            opt.load_state_dict(bad)
+            opt.restore(opt.state_from(bad))
+
+
+def test_a_cma_state_of_an_older_checkpoint_is_read():
+    """Before the state had a ``name`` it said ``optimizer``: such a table restores the same strategy."""
+    a = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=1), lambda p: -np.abs(p).sum(axis=1), 3)
+    old = json.loads(json.dumps(a.state().to_dict()))
+    old["optimizer"] = old.pop("name")
+    b = CMAES(LAYOUT, CMAOptions(population=4), seed=1)
+    b.restore(b.state_from(old))
+    assert b.generation == 3 and np.array_equal(a.ask()[0], b.ask()[0])
+    assert not a.state().told[0].flags.writeable
 
 
 SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task_options={"fitness": "forward"}),

@@ -9,6 +9,7 @@ import pytest
 from evobiped.distill import DistillOptions, Fitter, collect, student_config
 from evobiped.episode import EpisodeConfig
 from evobiped.genome_file import load_genome
+from evobiped.options import given
 from evobiped.mapping import to_action
 
 from .conftest import WALKERS
@@ -38,7 +39,7 @@ def test_rollouts_label_the_student_s_states_with_the_teacher_s_executed_actions
     """With the teacher's share 1 the rollout is the teacher's own (latency included), and each label is the
     action its body executed, which a plain teacher episode shows its listener."""
     g, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed3.json")
-    teacher = dataclasses.replace(cfg.nominal(), seconds=2.0, controller_options={**cfg.controller_options, "latency": 1})
+    teacher = dataclasses.replace(cfg.nominal(), seconds=2.0, controller_options={**given(cfg.controller_options), "latency": 1})
     student = student_config(teacher, {"n_neurons": 12})
     opts = DistillOptions(rollouts=1, seconds=2.0, target_noise=0.0, pose_noise=0.0)
     roll = collect(teacher, g, student, student.layout().init_mean, beta=1.0, options=opts, key=(0, 0))

@@ -1,4 +1,5 @@
-"""The Gymnasium environments: the checker, seeding, the vector env against single envs, rewards, bad input."""
+"""The Gymnasium environments: the checker, seeding, the vector env against single envs, rewards (the task's
+fitness increments), bad input."""
 
 import os
 import subprocess
@@ -77,7 +78,7 @@ def _single_runs(cls, n, seed, actions, **kw):
 
 
 @pytest.mark.parametrize("single, vector, steps, kw", [
-    (ReilBipedEnv, ReilBipedVectorEnv, 60, dict(seconds=0.8, alive_bonus=0.1)),
+    (ReilBipedEnv, ReilBipedVectorEnv, 60, dict(seconds=0.8)),
     (TagaBipedEnv, TagaBipedVectorEnv, 12, dict(seconds=0.1)),
 ])
 def test_the_vector_env_gives_the_trajectories_of_single_envs(single, vector, steps, kw):
@@ -99,24 +100,51 @@ def test_the_vector_env_gives_the_trajectories_of_single_envs(single, vector, st
     assert (ends.sum(axis=0) >= 1).all()  # every walker's episode ended (a fall or the time limit) and restarted
 
 
-def test_rewards_sum_to_the_forward_progress_and_the_alive_bonus():
-    env = ReilBipedEnv(seconds=2.0, alive_bonus=0.5, reset_noise_scale=0.0)
+def test_rewards_are_the_increments_of_the_task_fitness_and_info_carries_its_terms():
+    """The default task: the walk task's forward fitness F = (forward + credit) * t_up / T, credit 5 m.
+    The rewards sum to F at the end minus F at reset (the credit); at the fall the walker loses the
+    credit for the time it will not be up."""
+    T, dt = 2.0, 0.02
+    env = ReilBipedEnv(seconds=T, reset_noise_scale=0.0)
     env.reset(seed=0)
-    start = env.walkers.position[0].copy()
-    facing = env.walkers.facing[0].copy()
+    start = env.walkers.info()["position"][0].copy()
+    facing = env.walkers.state.start_facing[0].copy()
     lean = np.array([0.4, 0, -0.2, 0.4, 0, -0.2], np.float32)  # both hips flexed: it topples forward
-    total, steps, up = 0.0, 0, 0
+    rewards, forwards = [], [0.0]
     while True:
         _, r, te, tr, info = env.step(lean)
-        total += r
-        steps += 1
-        up += not te
+        rewards.append(r)
+        forwards.append(info["forward"])
         if te or tr:
             break
-    assert te and not tr and steps < 100  # it fell before the end
-    progress = float(np.dot(info["position"] - start, facing))
-    assert total == pytest.approx(progress + 0.5 * up, abs=1e-12)
-    assert abs(progress) > 0.05
+    assert te and not tr and len(rewards) < 100  # it fell before the end
+    forward = float(np.dot(info["position"] - start, facing))
+    assert info["forward"] == pytest.approx(forward, abs=1e-12) and abs(forward) > 0.05
+    assert info["distance"] == pytest.approx(float(np.linalg.norm(info["position"] - start)), abs=1e-12)
+    assert "cyclicity" not in info  # undefined without the cyclic criterion
+    t_fall = len(rewards) * dt
+    assert info["fitness"] == pytest.approx((forward + 5.0) * t_fall / T, abs=1e-12)
+    assert sum(rewards) == pytest.approx(info["fitness"] - 5.0, abs=1e-12)
+    # while it is up a step pays its forward progress; the fall costs the credit of the time lost
+    assert np.allclose(rewards[:-1], np.diff(forwards[:-1]), rtol=0, atol=1e-12)
+    assert rewards[-1] == pytest.approx(forward - forwards[-2] - (forward + 5.0) * (1 - t_fall / T), abs=1e-12)
+
+
+def test_the_task_and_its_options_are_environment_options():
+    env = ReilBipedEnv(seconds=1.0, task_options={"fitness": "distance"}, reset_noise_scale=0.0)
+    env.reset(seed=0)
+    back = np.array([-0.4, 0, -0.2, -0.4, 0, -0.2], np.float32)
+    total = 0.0
+    for _ in range(20):
+        _, r, te, tr, info = env.step(back)
+        total += r
+        if te:
+            break
+    assert total == pytest.approx(info["distance"], abs=1e-12) and info["fitness"] == info["distance"] > 0
+    with pytest.raises(ConfigError, match="neurons"):
+        ReilBipedEnv(task_options={"cyclic_weight": 1.0})
+    with pytest.raises(ConfigError, match="task_options.fitness"):
+        ReilBipedEnv(task_options={"fitness": "far"})
 
 
 def test_truncated_at_the_episode_length_while_standing():
@@ -145,7 +173,7 @@ def test_a_bad_action_raises_and_leaves_the_simulation_untouched(bad, words):
 
 @pytest.mark.parametrize("kw, words", [
     (dict(stiffness=3), "unknown option"),
-    (dict(seconds=-1), "bad seconds"),
+    (dict(seconds=-1), "seconds: must be > 0"),
     (dict(control_dt=0.007), "not a multiple"),
     (dict(render_mode="human"), "render_mode"),
 ])
@@ -189,6 +217,7 @@ def test_a_blow_up_ends_the_episode_and_the_next_reset_is_clean():
     env = ReilBipedEnv(kp=1e7, kv=0.0, reset_noise_scale=0.0)
     first, _ = env.reset(seed=0)
     obs, r, te, tr, info = env.step(np.array([1.6, 0.8, -1.4, -1.3, -0.8, 0.0], np.float32))
-    assert te and not tr and info["unstable"] and r == 0.0 and np.isfinite(obs).all()
+    assert te and not tr and info["unstable"] and np.isfinite(obs).all()
+    assert r == pytest.approx(-5.0 * (1 - 0.02 / 50.0), abs=1e-12)  # it did not move: it lost the survival credit
     again, _ = env.reset(seed=0)
     assert np.array_equal(again, first) and np.isfinite(env.walkers.sims.qpos).all()

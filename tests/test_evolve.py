@@ -5,6 +5,7 @@ measured by ``evobiped bench`` and real runs.
 """
 
 import csv
+import dataclasses
 import json
 import os
 import signal
@@ -105,13 +106,57 @@ def test_resume_equals_uninterrupted(tmp_path):
         run.evolve(ev, stop_after_two)
     assert len(fitness_history(run.dir)) == 2 and not (run.dir / "summary.json").exists()
     resumed = Run.resume(run.dir)
-    assert resumed.ga.generation == 2
+    assert resumed.optimizer.generation == 2
     with make_evaluator(config.episode, "process", 2) as ev:
         summary = resumed.evolve(ev)
     assert fitness_history(run.dir) == ref
     best = json.loads((run.dir / "best.json").read_text())
     assert best["genome"] == ref_best["genome"] and summary["best"]["fitness"] == ref_best["fitness"]
     assert sorted(p.name for p in (run.dir / "generations").iterdir()) == [f"gen_{g:04d}.json" for g in range(5)]
+
+
+def test_the_optimizer_state_is_a_frozen_value(tmp_path):
+    """The GA's state is a value: read-only arrays that later generations leave alone; restored into a fresh
+    GA, it asks the same and both continue alike."""
+    from evobiped.evolution.run import make_optimizer
+
+    run = Run.create(tmp_path / "r", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        run.step(ev)
+        state = run.optimizer.state()
+        kept = state.population.copy()
+        with pytest.raises(ValueError):
+            state.population[0, 0] = 0.0
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            state.generation = 5
+        other = make_optimizer(SMALL)
+        other.restore(other.state_from(json.loads(json.dumps(state.to_dict()))))
+        assert other.generation == 1 and np.array_equal(other.ask()[0], run.optimizer.ask()[0])
+        run.step(ev)
+    assert np.array_equal(state.population, kept) and state.generation == 1 and run.optimizer.generation == 2
+
+
+def test_a_checkpoint_of_before_the_optimizer_key_resumes_bit_identically(tmp_path):
+    """Checkpoints written before the state was named ``optimizer`` kept it under ``ga`` (its name under
+    ``optimizer``): such a run resumes exactly as an uninterrupted one."""
+    config = RunConfig(**{**SMALL.__dict__, "generations": 3})
+    ref, ref_best = evolve_with(tmp_path, "whole", "serial", config=config)
+    run = Run.create(tmp_path / "old", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.step(ev)
+        run.checkpoint()
+    path = run.dir / "checkpoint.json"
+    ck = json.loads(path.read_text())
+    state = ck.pop("optimizer")
+    state["optimizer"] = state.pop("name")
+    path.write_text(json.dumps({"ga": state, **ck}))
+    run.close()
+    resumed = Run.resume(run.dir)
+    with make_evaluator(config.episode, "serial") as ev:
+        resumed.evolve(ev)
+    assert fitness_history(run.dir) == ref
+    assert json.loads((run.dir / "best.json").read_text())["genome"] == ref_best["genome"]
+    assert "optimizer" in json.loads(path.read_text())  # the next commit writes the current key
 
 
 def test_resume_discards_files_of_an_unfinished_generation(tmp_path):
@@ -121,13 +166,13 @@ def test_resume_discards_files_of_an_unfinished_generation(tmp_path):
         run.step(ev)
         run.checkpoint()
         kept = (run.dir / "best.json").read_text()
-        run.ga.population[:] = run.ga.population[::-1]  # a different generation 1...
+        run.optimizer.population[:] = run.optimizer.population[::-1]  # a different generation 1...
         run.step(ev)  # ...whose files are written, but no checkpoint
     (run.dir / "best.json").write_text(kept.replace('"generation": 0', '"generation": 1'))
     resumed = Run.resume(run.dir)
     assert not (run.dir / "generations" / "gen_0001.json").exists()
     assert (run.dir / "best.json").read_text() == kept
-    assert resumed.ga.generation == 1
+    assert resumed.optimizer.generation == 1
 
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from evobiped.controllers import g3_network as g3net
+from evobiped.experiments.g3 import network as g3net
 from evobiped.experiments.g3 import gaits
 from evobiped.experiments.g3 import simulation as g3sim
 from evobiped.errors import ConfigError, UserError
@@ -229,3 +229,15 @@ def test_g3_controller_rows_do_not_depend_on_the_batch():
     g = lay.sample(np.random.default_rng(3), 3)
     alone = ep.run(g[1]).fitness[0]
     assert ep.run(g).fitness[1] == alone
+
+
+def test_every_published_parameter_set_takes_the_cell_constants_the_controller_names():
+    """The G3 controller's ``preset`` option names cell constants (the core's CELLS); each published
+    parameter set of the experiment uses exactly those constants."""
+    from evobiped.controllers.g3_network import CELLS, Shunting
+
+    assert set(g3net.PRESETS) == set(CELLS)
+    for name, p in g3net.PRESETS.items():
+        assert p.network.cells == CELLS[name]
+    assert CELLS["fig5b"] == Shunting(B=1.05) and CELLS["fig4"] == Shunting()
+

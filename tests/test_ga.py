@@ -159,12 +159,12 @@ def test_table_iii_numbers_are_config_values(tmp_path):
     run = Run.create(tmp_path / "r", cfg)
     layout = cfg.episode.build().controller.layout
     s = layout.slices()
-    first = run.ga.ask()[0].copy()
+    first = run.optimizer.ask()[0].copy()
     assert np.all(first[:, s["weights"]] == 2.0)
     assert first[:, s["time_constants"]].min() >= 1.0 and first[:, s["time_constants"]].max() <= 3.0
     with make_evaluator(cfg.episode, "serial") as ev:
         run.evolve(ev)
-    taus = run.ga.population[:, s["time_constants"]]
+    taus = run.optimizer.population[:, s["time_constants"]]
     assert {tuple(t) for t in taus} <= {tuple(t) for t in first[:, s["time_constants"]]}  # never mutated
 
 

@@ -75,3 +75,28 @@ def test_a_bad_option_is_refused_when_the_config_is_loaded_naming_its_path(episo
 def test_bad_run_settings_name_their_path(table, words):
     with pytest.raises(ConfigError, match="^c.toml: " + words.replace("[", r"\[").replace("+", r"\+")):
         RunConfig.from_dict(table, where="c.toml")
+
+
+def test_a_config_parses_each_table_once_and_writes_back_what_it_was_given(monkeypatch):
+    """EpisodeConfig parses its tables into frozen Options when it is made; building the episode (body,
+    controller, task, perturbations) parses nothing again, and to_dict gives back the tables as given."""
+    import evobiped.options as options
+    from evobiped.bodies.reil import ReilOptions
+    from evobiped.controllers.ctrnn import CTRNNOptions
+
+    tables = dict(body_options={"kp": 60.0}, controller_options={"n_neurons": 8, "latency": 2},
+                  task_options={"fitness": "distance"}, perturbations={"pushes": 1})
+    cfg = EpisodeConfig(seconds=1.0, **tables)
+    assert isinstance(cfg.body_options, ReilOptions) and cfg.body_options.kp == 60.0 and cfg.body_options.kv == 2.0
+    assert isinstance(cfg.controller_options, CTRNNOptions) and cfg.controller_options.latency == 2 == cfg.latency
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.body_options.kp = 1.0
+    parses = []
+    monkeypatch.setattr(options, "refuse_unknown", lambda *a, **k: parses.append(a) or a[1])
+    episode = dataclasses.replace(cfg, seconds=0.5).build()
+    assert parses == [] and episode.latency == 2 and episode.perturbations.pushes == 1
+    assert episode.body.options is cfg.body_options and episode.controller.options is cfg.controller_options
+    monkeypatch.undo()
+    d = cfg.to_dict()
+    assert {k: d[k] for k in tables} == tables
+    assert EpisodeConfig(**d) == cfg and EpisodeConfig(**d).to_dict() == d

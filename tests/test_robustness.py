@@ -8,6 +8,7 @@ import pytest
 
 from evobiped.cli import main
 from evobiped.errors import UserError
+from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.genome_file import load_genome, save_genome
 from evobiped.perturb import Trials
 from evobiped.robustness import battery, summarise
@@ -75,7 +76,7 @@ def test_on_the_sagittal_taga_body_the_battery_is_the_forward_and_backward_pushe
     from evobiped.episode import EpisodeConfig
 
     ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=3.0).build()
-    trials = battery(ep, ep.controller.preset_genome(), seconds=3.0, push_after=1.0)
+    trials = battery(ep, preset_genome(ep.controller), seconds=3.0, push_after=1.0)
     assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15) for _ in range(16)]
     assert {t.label.split(",")[0] for t in trials} == {"forward", "backward"}
     fwd = {t.label: t.forward for t in trials if t.family == "push 15 N"}
@@ -91,4 +92,4 @@ def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):
 
     _, ctrl, task = EpisodeConfig(body="taga", controller="matsuoka").parts()
     with pytest.raises(UserError, match="needs a body that declares its left foot's contact sensor; 'taga' does not"):
-        battery(Episode(Numb(), ctrl, task, seconds=2.0), ctrl.preset_genome(), seconds=2.0, push_after=1.0)
+        battery(Episode(Numb(), ctrl, task, seconds=2.0), preset_genome(ctrl), seconds=2.0, push_after=1.0)

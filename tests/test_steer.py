@@ -79,7 +79,7 @@ def test_clamped_cpg_weights_never_change(walker, tmp_path):
     assert cli("evolve", "--task", "steer", "--from", walker, "--freeze", CPG, *SMALL, "--out", out) == 0
     cpg = json.loads((walker / "best.json").read_text())["genome"]
     assert len(cpg) == 120
-    pop = np.array(json.loads((out / "checkpoint.json").read_text())["ga"]["population"])
+    pop = np.array(json.loads((out / "checkpoint.json").read_text())["optimizer"]["population"])
     assert pop.shape == (6, 130)
     assert np.all(pop[:, :120] == cpg)  # every individual keeps the walker's CPG
     assert np.any(pop[:, 120:] != 0)  # while the 10 sensory weights evolved
@@ -91,7 +91,7 @@ def test_unclamped_cpg_weights_do_change(walker, tmp_path):
     out = tmp_path / "free"
     assert cli("evolve", "--task", "steer", "--from", walker, *SMALL, "--generations", 6, "--out", out) == 0
     cpg = np.array(json.loads((walker / "best.json").read_text())["genome"])
-    pop = np.array(json.loads((out / "checkpoint.json").read_text())["ga"]["population"])
+    pop = np.array(json.loads((out / "checkpoint.json").read_text())["optimizer"]["population"])
     assert np.any(pop[:, :120] != cpg)
 
 

@@ -8,9 +8,11 @@ import pytest
 
 from evobiped.experiments.taga import stride
 from evobiped.experiments.taga import walking as tx
+from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.bodies.taga import TagaBiped
 from evobiped.cli import main
 from evobiped.controllers.matsuoka import Matsuoka, taga_feedback
+from evobiped.errors import UserError
 from evobiped.sim import Sims
 
 
@@ -115,7 +117,7 @@ def test_knee_stop_is_a_one_sided_spring():
 
 def test_taga_weights_from_j_to_i():
     c = Matsuoka(n_outputs=6, actuators=TagaBiped.actuators)
-    W = c.decode(c.preset_genome()[None])["W"][0]
+    W = c.decode(preset_genome(c)[None])["W"][0]
     order = c._taga_order  # Taga's neuron k (0-based) -> internal index
     Wt = W[np.ix_(order, order)]  # Taga numbering
     fe = [(1, 2), (2, 1), (3, 4), (4, 3), (5, 6), (6, 5), (7, 8), (8, 7), (9, 10), (10, 9), (11, 12), (12, 11)]
@@ -331,7 +333,7 @@ def test_matsuoka_drives_reil_pd_targets_within_range():
             seen.append(action[0].copy())
         def end(self, result): ...
 
-    ep.run(ep.controller.preset_genome(), listener=Grab())
+    ep.run(preset_genome(ep.controller), listener=Grab())
     a = np.array(seen)
     low, high = ep.low, ep.high
     assert (a >= low).all() and (a <= high).all()
@@ -346,7 +348,7 @@ def test_replay_records_the_taga_stick_figure(tmp_path, capsys):
 
     cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=0.5, controller_options={"u0": 5.5})
     ep = cfg.build()
-    g = ep.controller.preset_genome()
+    g = preset_genome(ep.controller)
     save_genome(tmp_path / "taga.json", g, cfg, fitness=float(ep.run(g).fitness[0]))
     out = tmp_path / "taga.rrd"
     assert main(["replay", str(tmp_path / "taga.json"), "--out", str(out)]) == 0
@@ -354,3 +356,26 @@ def test_replay_records_the_taga_stick_figure(tmp_path, capsys):
     paths = {c.entity_path for c in rr.chunk.RrdReader(out).stream()}
     for link in ("hip", "right_thigh", "right_shank", "left_thigh", "left_shank"):
         assert any(link in p for p in paths), link
+
+
+def test_a_push_acts_at_the_hip_and_at_a_shank_s_centre():
+    """Fig. 7's pushes are MuJoCo's applied forces at a body's centre of mass: the hip's point mass and the
+    middle of a uniform shank (checked against the Appendix A kinematics, bent legs); "none" removes them."""
+    body = TagaBiped()
+    sims = Sims(body.build_model(), 2)
+    body.reset(sims)
+    sims.qpos[:, 2:] = [0.3, 0.5, -0.2, 0.1]
+    sims.forward()
+    k, m = body.links(sims), sims.model
+    for leg, name in enumerate(("right_shank", "left_shank")):
+        centre = 0.5 * (k["knee"][:, leg] + k["ankle"][:, leg])
+        assert np.allclose(sims.xipos[:, m.body(name).id][:, [0, 2]], centre, atol=1e-12)
+    assert np.allclose(sims.xipos[:, m.body("hip").id][:, [0, 2]], k["hip"], atol=1e-12)
+    tx.set_push(sims, np.array([1]), "right_shank", 200.0)
+    assert sims.xfrc_applied[1, m.body("right_shank").id, 0] == 200.0 and not sims.xfrc_applied[0].any()
+    tx.set_push(sims, np.array([1]), "hip", 288.0)
+    assert sims.xfrc_applied[1, m.body("hip").id, 0] == 288.0 and np.count_nonzero(sims.xfrc_applied[1]) == 1
+    tx.set_push(sims, np.array([1]), "none", 0.0)
+    assert not sims.xfrc_applied.any()
+    with pytest.raises(UserError, match="push target"):
+        tx.set_push(sims, np.array([0]), "knee", 1.0)

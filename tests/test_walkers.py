@@ -13,6 +13,7 @@ import json
 import pytest
 
 from evobiped.genome_file import load_genome
+from evobiped.options import given
 from evobiped.robustness import battery, summarise
 
 from .conftest import ROOT, WALKERS
@@ -57,7 +58,7 @@ def test_the_shipped_steering_walker_reaches_both_paper_sources_without_falling(
     import numpy as np
 
     genome, cfg, meta = load_genome(WALKERS / "steer_simbicon_seed0.json")
-    assert cfg.task == "steer" and cfg.task_options.get("sources") is None  # the paper's two sources, the default
+    assert cfg.task == "steer" and "sources" not in given(cfg.task_options)  # the paper's two sources, the default
     r = cfg.build().run(genome)
     rows = r.rows
     assert not rows.fell.any() and np.all(rows.end_time == 50.0)
@@ -112,8 +113,8 @@ def test_the_distilled_ctrnn_walks_200_s_with_the_network_alone():
     """docs/walkers/ctrnn_distilled_seed3.json: a 40-neuron CTRNN sets every joint target (no balance law in the
     loop): no fall in 200 s, at least 12 m in its first 50 s (documented: 14.6 m), within 30 deg of its facing."""
     genome, cfg, _ = load_genome(WALKERS / "ctrnn_distilled_seed3.json")
-    assert cfg.controller == "ctrnn" and cfg.controller_options["n_neurons"] == 40 and not cfg.perturbations
-    assert not cfg.controller_options.get("latency")
+    assert cfg.controller == "ctrnn" and cfg.controller_options.n_neurons == 40 and not cfg.perturbed
+    assert cfg.latency == 0
     first = cfg.build().run(genome)
     walk = first.walk()
     assert not first.fell[0] and walk["distance"] >= 12.0 and abs(walk["heading_deg"]) <= 30.0

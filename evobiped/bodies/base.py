@@ -9,7 +9,7 @@ batch and return ``(P, ...)`` arrays; ``ids`` selects the simulations to touch.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 import mujoco
 import numpy as np
@@ -18,7 +18,7 @@ from ..contract import Actuator
 from ..errors import ConfigError
 from ..models import load_model, model_path
 from ..sim import Sims
-from ..options import option, parse
+from ..options import option, taken
 
 
 def model_file_option(stem: str):
@@ -58,11 +58,11 @@ class Body(ABC):
     sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}
 
     #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
-    #: ``timestep`` and a ``model_file``); constructed as ``cls(**options)``
+    #: ``timestep`` and a ``model_file``); constructed as ``cls(options)`` (or ``cls(**settings)``)
     Options: ClassVar[type]
 
-    def __init__(self, **options):
-        self.options = parse(self.Options, options, f"{self.name} body_options")
+    def __init__(self, options: Any = None, **given):
+        self.options = taken(self.Options, options, given, f"{self.name} body_options")
         self.timestep = float(self.options.timestep)
         self.model_file = self.options.model_file or str(model_path(self.model_name))
 

@@ -111,8 +111,8 @@ class ReilBiped(Body):
 
     Options: ClassVar[type] = ReilOptions
 
-    def __init__(self, **options):
-        super().__init__(**options)
+    def __init__(self, options=None, **given):
+        super().__init__(options, **given)
         o = self.options
         self.kp, self.kv, self.fall_height = float(o.kp), float(o.kv), float(o.fall_height)
         self.fall_tilt = float(o.fall_tilt)

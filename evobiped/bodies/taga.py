@@ -18,8 +18,10 @@ of Appendix A that MJCF cannot express, as generalized forces in
   (the literal k_k h(x_5 - x_11) is a constant 1e4 N m step, numerically
   ill-posed);
 * the joint torques T_r1..T_r6 (actions, N m), the ankle torques only while
-  that ankle is in contact (h(F_g2), h(F_g4) with h(0) = 0);
-* optional horizontal pushes on the hip or a shank's centre (Fig. 7).
+  that ankle is in contact (h(F_g2), h(F_g4) with h(0) = 0).
+
+Other external forces (a perturbation's push, Fig. 7's) act through MuJoCo's
+``xfrc_applied``, as on any body.
 
 Angles are Taga's inertial angles from the horizontal (pi/2 = vertical,
 increasing as the distal end swings backward): thigh x_5 = pi/2 + hip,
@@ -49,8 +51,6 @@ APPENDIX_D = dict(l1=0.5, l2=0.6, b1=10.0, b2=10.0, bk=1000.0, kk=10000.0, kg=10
 #: Appendix E: hip (x_1, x_2) in m, thigh and shank angles (rad) of the right and left legs
 INITIAL_HIP = (0.0, 1.09)
 INITIAL_ANGLES = {"right": 0.45 * np.pi, "left": 0.57 * np.pi}
-#: pushes: where a horizontal force may act
-PUSH_TARGETS = ("none", "hip", "right_shank", "left_shank")
 
 
 def _per_simulation(low: float, strict: bool):
@@ -103,8 +103,8 @@ class TagaBiped(Body):
 
     Options: ClassVar[type] = TagaOptions
 
-    def __init__(self, **options):
-        super().__init__(**options)
+    def __init__(self, options=None, **given):
+        super().__init__(options, **given)
         o = self.options
         # kg, bg: one value, or one per simulation of the batch (P,)
         self.p = dict(APPENDIX_D, kg=np.asarray(o.kg, float), bg=np.asarray(o.bg, float))
@@ -134,7 +134,7 @@ class TagaBiped(Body):
 
     # ------------------------------------------------------------ state
     def _ground(self, sims: Sims) -> dict:
-        """This body's state in the batch (``sims.extra``, copied with it): ground contacts, forces, torques, pushes."""
+        """This body's state in the batch (``sims.extra``, copied with it): ground contacts, forces, torques."""
         st = sims.extra.get(self.name)
         if st is None:
             n = sims.n
@@ -143,14 +143,12 @@ class TagaBiped(Body):
                 contact=np.zeros((n, 2), bool),  # ankle below the terrain (right, left)
                 force=np.zeros((n, 4)),  # F_g1..F_g4 (N)
                 torque=np.zeros((n, 6)),  # commanded T_r (ACTUATORS order)
-                push_target=np.zeros(n, int),  # index into PUSH_TARGETS
-                push_force=np.zeros(n),  # N, forward positive
             )
         return st
 
     def reset(self, sims: Sims, ids: np.ndarray | None = None) -> None:
         """Appendix E: hip at (0, 1.09) m, straight legs at 0.45 pi (right) and 0.57 pi (left), at rest;
-        simulations ``ids`` (default all), their ground contacts and pushes cleared."""
+        simulations ``ids`` (default all), their ground contacts and applied forces cleared."""
         rows = slice(None) if ids is None else ids
         sims.reset(ids)
         q = sims.qpos
@@ -164,14 +162,6 @@ class TagaBiped(Body):
         sims.forward(ids)
         for a in self._ground(sims).values():
             a[rows] = 0
-
-    def set_push(self, sims: Sims, ids: np.ndarray, target: str, force: float) -> None:
-        """Apply a horizontal force (N, forward > 0) to ``target`` from now on (``"none"`` stops it)."""
-        if target not in PUSH_TARGETS:
-            raise UserError(f"push target must be one of {PUSH_TARGETS}, got {target!r}")
-        st = self._ground(sims)
-        st["push_target"][ids] = PUSH_TARGETS.index(target)
-        st["push_force"][ids] = float(force)
 
     # ------------------------------------------------------------ kinematics
     def links(self, sims: Sims) -> dict[str, np.ndarray]:
@@ -245,20 +235,8 @@ class TagaBiped(Body):
         qf[:, 1] = fy.sum(1)
         qf[:, [2, 4]] = q_hip
         qf[:, [3, 5]] = q_knee
-        self._add_push(st, ids, k, qf)
         out = sims.qfrc_applied
         out[np.ix_(ids, self._dadr)] = qf
-
-    def _add_push(self, st: dict, ids: np.ndarray, k: dict, qf: np.ndarray) -> None:
-        target, f = st["push_target"][ids], st["push_force"][ids]
-        if not target.any():
-            return
-        qf[:, 0] += np.where(target > 0, f, 0.0)  # any horizontal force moves the root
-        for leg, name in enumerate(("right_shank", "left_shank")):
-            sel = (target == PUSH_TARGETS.index(name)) * f
-            centre = 0.5 * (k["knee"][ids, leg] + k["ankle"][ids, leg])
-            qf[:, 2 + 2 * leg] += (centre - k["hip"][ids])[:, 1] * sel
-            qf[:, 3 + 2 * leg] += (centre - k["knee"][ids, leg])[:, 1] * sel
 
     # ------------------------------------------------------------ observations
     def com(self, sims: Sims) -> np.ndarray:

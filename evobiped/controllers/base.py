@@ -9,13 +9,32 @@ population, so one implementation serves a replay (P = 1) and a batch (P = 50+).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from ..contract import Needs
 from ..genome import GenomeLayout
-from ..options import NoOptions
+from ..options import option, taken
+
+#: the longest control latency, in control ticks
+MAX_LATENCY = 100
+
+
+@dataclass(frozen=True, kw_only=True)
+class ControllerOptions:
+    """What every controller takes, handled by the episode (each controller's ``Options`` subclasses this):
+    the sensors to feed, gene-block overrides and control latency."""
+
+    inputs: list | None = option(None, "sensor names to feed, replacing the controller's default choice")
+    genes: dict = option({}, "gene-block overrides (bounds, initialisation, mutation; see GenomeLayout.with_overrides)")
+    latency: int = option(0, "control ticks by which its actions reach the body late (the first action is held meanwhile)",
+                          unit="control ticks", low=0, high=MAX_LATENCY, integer=True)
+
+
+#: the options of :class:`ControllerOptions`, every controller's (the README's tables list each controller's own)
+GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes", "latency")
 
 
 class Controller(ABC):
@@ -37,15 +56,20 @@ class Controller(ABC):
     normalises_inputs: bool = False
     input_norm: tuple | None = None
 
-    #: the controller's options (a dataclass of :func:`evobiped.options.option` fields)
-    Options: ClassVar[type] = NoOptions
+    #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.options.option` fields)
+    Options: ClassVar[type] = ControllerOptions
 
     @classmethod
     def needs(cls, options) -> Needs:
-        """What this controller, with these options, needs of its body and task (see :mod:`evobiped.contract`);
-        the episode checks it once and constructs the controller with the wiring:
-        ``cls(n_outputs=..., inputs={sensor: width}, actuators=body.actuators, **options)``."""
+        """What this controller, with these options (its parsed ``Options``), needs of its body and task (see
+        :mod:`evobiped.contract`); the episode checks it once and constructs the controller with the wiring:
+        ``cls(options, n_outputs=..., inputs={sensor: width}, actuators=body.actuators)``."""
         return Needs()
+
+    @classmethod
+    def own_options(cls, options: Any, given: dict) -> Any:
+        """A constructor's options: the parsed ``options`` object, or the keyword settings ``given`` (Python use)."""
+        return taken(cls.Options, options, given, f"{cls.name} controller_options")
 
     def bound(self, dt: float) -> "Controller":
         """This controller stepping at control period ``dt`` (s; the physics step when ``dt`` is None):

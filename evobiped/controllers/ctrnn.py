@@ -57,8 +57,8 @@ import numpy as np
 from ..contract import Needs
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
-from ..options import option, parse
-from .base import Controller
+from ..options import option
+from .base import Controller, ControllerOptions
 
 #: Table III (init mean, init sigma, mutation sigma) and the ranges of Sect. II-C1
 WEIGHT = dict(low=-16.0, high=16.0, init_mean=0.0, init_sigma=8.0, mutation_sigma=8.0)
@@ -90,7 +90,7 @@ def _range(v, what: str) -> None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class CTRNNOptions:
+class CTRNNOptions(ControllerOptions):
     """Options of the ctrnn controller."""
 
     n_neurons: int = option(10, "neurons; the first drive the body's actuators", low=1, high=1000, integer=True)
@@ -127,8 +127,8 @@ class CTRNN(Controller):
         normalised if ``normalise_inputs``."""
         return Needs(task_sensors=True, max_actuators=options.n_neurons, normalised=options.normalise_inputs)
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **options):
-        o = self.options = parse(CTRNNOptions, options, "ctrnn controller_options")
+    def __init__(self, options: CTRNNOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
+        o = self.options = self.own_options(options, given)
         n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
         self.output_kind = MOTOR_MAPS[motor]

@@ -34,12 +34,10 @@ import numpy as np
 
 from ..contract import Needs
 from ..errors import ConfigError
-from .g3_network import PRESETS as G3_PRESETS
-from .g3_network import preset as g3_preset
-from .g3_network import rk4_step
+from .g3_network import CELLS, rk4_step
 from ..genome import GeneBlock, GenomeLayout
-from ..options import option, parse
-from .base import Controller
+from ..options import option
+from .base import Controller, ControllerOptions
 
 SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1)
 COUPLING = dict(low=0.0, high=1.5, init_mean=0.15, init_sigma=0.1, mutation_sigma=0.05)
@@ -67,7 +65,7 @@ def _schedule(go) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True, kw_only=True)
-class G3Options:
+class G3Options(ControllerOptions):
     """Options of the g3 controller."""
 
     dt: float = option(0.02, "control period", unit="s", above=0)
@@ -76,7 +74,7 @@ class G3Options:
     lag: float = option(0.05, "GO lag of each channel behind the previous one", unit="model time", low=0)
     time_scale: float = option(10.0, "model time units per second of simulated time", unit="1/s", above=0)
     max_step: float = option(0.05, "largest RK4 step", unit="model time", above=0)
-    preset: str = option("fig4", "cell constants A-G2 of this G3 preset", choices=tuple(G3_PRESETS))
+    preset: str = option("fig4", "cell constants A-G2 of this published parameter set", choices=tuple(CELLS))
 
 
 class G3Controller(Controller):
@@ -92,8 +90,8 @@ class G3Controller(Controller):
         """Any body; no sensors (the GO signal is an option)."""
         return Needs(deaf=True)
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **options):
-        o = self.options = parse(G3Options, options, "g3 controller_options")
+    def __init__(self, options: G3Options | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
+        o = self.options = self.own_options(options, given)
         dt, go, lag, time_scale, max_step, preset = o.dt, o.go, o.lag, o.time_scale, o.max_step, o.preset
         if inputs:
             raise ConfigError(f"g3: takes no sensor inputs (got {sorted(inputs)}); its GO signal is the 'go' option")
@@ -103,7 +101,7 @@ class G3Controller(Controller):
         self.input_names = ()
         self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)
         self.go_times, self.go_levels = _schedule(go)
-        self.cells = g3_preset(preset).network.cells
+        self.cells = CELLS[preset]
         span = self.dt * self.time_scale  # model units per control period
         self.substeps = int(np.ceil(span / max_step - 1e-9))
         self.h = span / self.substeps

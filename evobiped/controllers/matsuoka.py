@@ -23,7 +23,7 @@ state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
 second leg's extensors there, e.g. for the isolated generator, which from an
 exactly symmetric state settles to its fixed point instead of oscillating).
 
-Genome blocks (Taga's values: :meth:`Matsuoka.preset_genome`): per-oscillator
+Genome blocks (Taga's Appendix D values: :mod:`evobiped.experiments.taga.parameters`): per-oscillator
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
 ``w_hka``; with feedback, ``feedback`` = a_1..a_8.  The tonic input u_0 is a
 structure option (the experiments' control parameter), not a gene.
@@ -41,23 +41,13 @@ import numpy as np
 from ..contract import Actuator, Needs, Offer, index, legs, problem
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
-from ..options import option, parse
-from .base import Controller
+from ..options import option
+from .base import Controller, ControllerOptions
 
 #: sensors the Appendix C feedback needs (provided by the Taga body), with their widths
 FEEDBACK_SENSORS = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2}
 #: the joints of each of Taga's legs, the order of his oscillators within a leg
 TAGA_JOINTS = ("hip", "knee", "ankle")
-#: Appendix D, by joint role within a leg (hip, knee, ankle): tau, tau', p_e, p_f
-TAGA_ROLE = {
-    "tau": (0.05, 0.025, 0.025),
-    "tau_adapt": (0.60, 0.30, 0.30),
-    "p_e": (85.0, 15.0, 75.0),
-    "p_f": (15.0, 15.0, 100.0),
-}
-TAGA_SCALARS = {"beta": 2.5, "w_fe": -2.0, "w_rl": -1.0, "w_hka": -1.0}
-#: a_1..a_8 (Appendix D, feedback)
-TAGA_FEEDBACK = (1.5, 1.0, 1.5, 1.5, 3.0, 1.5, 3.0, 1.5)
 #: gene ranges and GA distributions
 BLOCKS = {
     "tau": dict(low=0.005, high=1.0, init_mean=0.05, init_sigma=0.02, mutation_sigma=0.02),
@@ -101,7 +91,7 @@ def taga_feedback(a: np.ndarray, angles: np.ndarray, rates: np.ndarray, contact:
 
 
 @dataclass(frozen=True, kw_only=True)
-class MatsuokaOptions:
+class MatsuokaOptions(ControllerOptions):
     """Options of the matsuoka controller."""
 
     u0: float = option(5.5, "tonic input u_0 (the experiments' speed control)", low=0)
@@ -126,9 +116,9 @@ class Matsuoka(Controller):
             return Needs(sensors=FEEDBACK_SENSORS, joints=TAGA_JOINTS, paired_legs=True)
         return Needs(paired_legs=True, optional=taga if options.feedback == "auto" else None)
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
-                 **options):
-        o = self.options = parse(MatsuokaOptions, options, "matsuoka controller_options")
+    def __init__(self, options: MatsuokaOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
+                 **given):
+        o = self.options = self.own_options(options, given)
         inputs = dict(inputs or {})
         # the episode checked needs(): two legs, and Taga's legs and sensors where the feedback is "taga"; "auto"
         # takes the feedback where the wiring gave its sensors
@@ -162,16 +152,6 @@ class Matsuoka(Controller):
     def roles(self) -> np.ndarray:
         """Joint role of each oscillator within its leg: 0 hip, 1 knee, 2 ankle, ..."""
         return np.arange(self.n_osc) % (self.n_osc // 2)
-
-    def preset_genome(self, name: str = "taga") -> np.ndarray:
-        """Taga's Appendix D values as a genome ``(G,)`` (roles beyond the ankle take the ankle's)."""
-        if name != "taga":
-            raise ConfigError(f"matsuoka: unknown preset {name!r} (choose from taga)")
-        r = np.minimum(self.roles(), 2)
-        parts = {b: np.array(v)[r] for b, v in TAGA_ROLE.items()}
-        parts.update({b: np.array([v]) for b, v in TAGA_SCALARS.items()})
-        parts["feedback"] = np.array(TAGA_FEEDBACK)
-        return np.concatenate([parts[b.name] for b in self.layout.blocks])
 
     def bound(self, dt: float) -> "Matsuoka":
         """A copy integrating with Euler steps of ``dt`` s (the physics step when ``dt`` is None)."""

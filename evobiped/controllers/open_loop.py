@@ -31,8 +31,8 @@ import numpy as np
 
 from ..contract import Actuator, Needs, index
 from ..genome import GeneBlock, GenomeLayout
-from ..options import option, parse
-from .base import Controller
+from ..options import option
+from .base import Controller, ControllerOptions
 
 #: the sine form's genes: name -> (low, high); units Hz, rad, rad, rad, rad, rad (phase), rad, rad, rad (phase)
 SINE_RANGES = {
@@ -62,7 +62,7 @@ def _block(name: str, size: int, low: float, high: float, init_mean: float, init
 
 
 @dataclass(frozen=True, kw_only=True)
-class OpenLoopOptions:
+class OpenLoopOptions(ControllerOptions):
     """Options of the open-loop controller."""
 
     form: str = option("sine", "`sine`: 9 genes, legs in antiphase (two legs of hip pitch, hip roll, knee); "
@@ -82,8 +82,8 @@ class OpenLoop(Controller):
         """No sensors; the sine form needs two legs of hip pitch, hip roll and knee."""
         return Needs(deaf=True, joints=JOINTS if options.form == "sine" else None)
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **options):
-        self.options = parse(OpenLoopOptions, options, "open-loop controller_options")
+    def __init__(self, options: OpenLoopOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **given):
+        self.options = self.own_options(options, given)
         self.form, self.dt, self.input_names = self.options.form, float(self.options.dt), ()
         self.n_outputs = n = int(n_outputs)
         self.output_kind = FORMS[self.form]

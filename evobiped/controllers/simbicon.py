@@ -47,8 +47,8 @@ import numpy as np
 from ..contract import Actuator, Needs, index
 from ..errors import ConfigError
 from ..genome import GeneBlock, GenomeLayout
-from ..options import option, parse
-from .base import Controller
+from ..options import option
+from .base import Controller, ControllerOptions
 
 #: body sensors read by name, with the widths their meaning fixes: joint angles in action order (one per
 #: actuator, however many the body has), foot contacts (left, right), pelvis pitch and roll and their rates,
@@ -96,7 +96,7 @@ JOINTS = ("hip_pitch", "hip_roll", "knee")
 
 
 @dataclass(frozen=True, kw_only=True)
-class SimbiconOptions:
+class SimbiconOptions(ControllerOptions):
     """Options of the simbicon controller."""
 
     dt: float = option(0.02, "control period", unit="s", above=0)
@@ -114,8 +114,8 @@ class Simbicon(Controller):
         """Two legs of hip pitch, hip roll and knee; the balance sensors; the task's (``sound``: hearing)."""
         return Needs(sensors=SENSORS, task_sensors=True, joints=JOINTS)
 
-    def __init__(self, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **options):
-        self.options = parse(SimbiconOptions, options, "simbicon controller_options")
+    def __init__(self, options: SimbiconOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **given):
+        self.options = self.own_options(options, given)
         inputs = dict(inputs or {})
         self.n_outputs = len(actuators)
         self.dt = float(self.options.dt)

@@ -1,17 +1,18 @@
 """The bipeds as Gymnasium environments: one walker (``gymnasium.Env``) or a batch (``VectorEnv``).
 
-Both are views of :class:`Walkers`, ``n`` simulations of one body in a
-:class:`~evobiped.sim.Sims` batch (``mujoco.batch``): an action sets the
-actuators, the body advances one control period in C (custom forces, such as
-the Taga ground, before every physics step), and the observation is the body's
-own sensors.  The vector environment steps its whole batch in one call, and row
-i of it follows exactly the trajectory of a single environment seeded with
-``seed + i``.
+Both are views of :class:`Walkers`: an :class:`~evobiped.episode.Episode` without a controller,
+``n`` simulations of one body and a task, stepped one control tick at a time by
+:meth:`Episode.step <evobiped.episode.Episode.step>` (the loop every evolution and experiment
+uses: the body's actions, custom forces such as the Taga ground before every physics step,
+the task's bookkeeping, the fall test).  The reward is the increment of the task's fitness
+over the step, and ``info`` carries the task's named terms.  The vector environment steps its
+whole batch in one call, and row i of it follows exactly the trajectory of a single
+environment seeded with ``seed + i``.
 """
 
 from __future__ import annotations
 
-import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium
@@ -23,81 +24,114 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..bodies import BODIES
+from ..episode import Episode, EpisodeState
 from ..errors import ConfigError
 from ..glbackend import no_backend_message
-from ..sim import Sims
+from ..options import markdown_table, option, parse
+from ..tasks import TASKS
 
 _HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
 
 
+@dataclass(frozen=True, kw_only=True)
+class EnvOptions:
+    """Options of the Gymnasium environments (keyword arguments; the body's own options beside them)."""
+
+    seconds: float = option(50.0, "episode length; truncated when reached", unit="s", above=0)
+    control_dt: float | None = option(None, "control period: one step is this much physics (none: the environment's, "
+                                      "0.02 s for Reil, 0.01 s for Taga); a multiple of the body's physics step",
+                                      unit="s", above=0)
+    reset_noise_scale: float = option(0.01, "each hinge angle starts U(-s, s) off the body's initial pose", unit="rad", low=0)
+    task: str = option("walk", "the task whose fitness increments are the reward (its terms are in `info`)",
+                       choices=tuple(TASKS))
+    task_options: dict | None = option(None, "the task's options (its table); none: its defaults, but the walk task's "
+                                       "`forward` fitness (forward progress per step; at a fall, the survival credit lost)")
+    render_mode: str | None = option(None, "none, or `rgb_array` (needs an OpenGL context)", choices=(None, "rgb_array"))
+    width: int = option(480, "rendered image width", unit="pixels", low=1, integer=True)
+    height: int = option(480, "rendered image height", unit="pixels", low=1, integer=True)
+
+
 class Walkers:
-    """``n`` walkers of body ``body`` stepped together: physics, observation, reward, episode ends.
+    """``n`` walkers of body ``body`` stepped together through one :class:`Episode` without controller:
+    observation, reward (the task's fitness increments), episode ends.
 
     Rows are independent: row i's trajectory depends only on its actions and its reset noise.
     """
 
-    def __init__(self, body: str, n: int, *, seconds: float, control_dt: float, alive_bonus: float,
-                 reset_noise_scale: float, body_options: dict[str, Any]):
-        self.body = BODIES[body](**body_options)  # ConfigError naming the option
-        for name, v, ok in (("seconds", seconds, seconds > 0), ("control_dt", control_dt, control_dt > 0),
-                            ("reset_noise_scale", reset_noise_scale, reset_noise_scale >= 0)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and ok):
-                raise ConfigError(f"{body} biped environment: bad {name} {v!r}")
-        if not (isinstance(alive_bonus, (int, float)) and math.isfinite(alive_bonus)):
-            raise ConfigError(f"{body} biped environment: bad alive_bonus {alive_bonus!r}")
-        ratio = control_dt / self.body.timestep
-        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-            raise ConfigError(f"control_dt {control_dt} s is not a multiple of the physics step {self.body.timestep} s")
-        self.n, self.substeps = int(n), int(round(ratio))
-        self.control_dt, self.seconds = float(control_dt), float(seconds)
-        self.max_steps = int(round(seconds / control_dt))
-        self.alive_bonus, self.noise = float(alive_bonus), float(reset_noise_scale)
-        self.model = self.body.build_model()
-        self.sims = Sims(self.model, self.n)
-        self.low, self.high = self.body.action_bounds()
+    def __init__(self, body: str, n: int, options: EnvOptions, body_options: dict[str, Any], default_control_dt: float):
+        body_ = BODIES[body](**body_options)  # ConfigError naming the option
+        task_options = options.task_options
+        if task_options is None:
+            task_options = {"fitness": "forward"} if options.task == "walk" else {}
+        task = TASKS[options.task](**task_options)
+        if task.reads_neurons():
+            raise ConfigError(f"{options.task} task: these task options read a controller's neurons, "
+                              "which an environment has not (its actions come from outside)")
+        dt = default_control_dt if options.control_dt is None else options.control_dt
+        self.episode = Episode(body_, None, task, seconds=options.seconds, control_dt=dt)
+        self.n, self.noise = int(n), float(options.reset_noise_scale)
+        self.body, self.model, self.substeps = body_, self.episode.model, self.episode.substeps
+        self.control_dt = self.episode.control_dt
+        self.low, self.high = self.episode.low, self.episode.high
         m = self.model
         self._hinges = m.jnt_qposadr[m.jnt_type == _HINGE]  # reset noise goes on these joint angles
-        self.body.reset(self.sims)
-        self.sensor_names = tuple(self.body.sensors(self.sims))
-        self.sensor_widths = tuple(a.shape[1] for a in self.body.sensors(self.sims).values())
-        self.steps = np.zeros(self.n, int)
-        self.position = np.zeros((self.n, 2))
-        self.facing = np.zeros((self.n, 2))
+        self.sensor_widths = {**body_.sensor_widths, **task.sensor_widths()}
+        self.state: EpisodeState | None = None
+        self.fitness = np.zeros(self.n)
+
+    @property
+    def sims(self):
+        return self.state.sims
+
+    @property
+    def steps(self) -> np.ndarray:
+        """Control ticks each row has taken since its reset ``(n,)``."""
+        return self.state.ticks - self.state.born
 
     @property
     def obs_size(self) -> int:
-        return sum(self.sensor_widths)
+        return sum(self.sensor_widths.values())
 
     def reset(self, ids: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Rows ``ids`` to the body's initial state, each hinge angle moved by U(-s, s) rad drawn from ``rngs[i]``."""
-        self.body.reset(self.sims, ids)
-        if self.noise > 0:
-            for i in ids:
-                self.sims.qpos[i, self._hinges] += rngs[i].uniform(-self.noise, self.noise, len(self._hinges))
-            self.sims.forward(ids)
-        self.steps[ids] = 0
-        self.position[ids] = self.body.planar_position(self.sims)[ids]
-        self.facing[ids] = self.body.heading(self.sims)[ids]
+
+        def pose(sims, rows):
+            if self.noise > 0:
+                for i in rows:
+                    sims.qpos[i, self._hinges] += rngs[i].uniform(-self.noise, self.noise, len(self._hinges))
+                sims.forward(rows)
+
+        if self.state is None:
+            self.state = self.episode.start(self.n, pose=pose)
+        else:
+            self.episode.restart(self.state, ids, pose=pose)
+        self.fitness[ids] = self.episode.task.fitness(self.state.task)[ids]
 
     def step(self, ids: np.ndarray, action: np.ndarray):
-        """Rows ``ids`` take ``action`` ``(len(ids), n_act)`` (clipped to the bounds) for one control period.
+        """Rows ``ids`` take ``action`` ``(n, n_act)`` (clipped to the bounds; other rows' ignored) for one
+        control period.  Returns ``(reward, terminated, truncated, unstable)``, each ``(len(ids),)``."""
+        st, task = self.state, self.episode.task
+        self.episode.step(st, np.clip(action, self.low, self.high), rows=ids)
+        fitness = task.fitness(st.task)
+        reward = fitness[ids] - self.fitness[ids]
+        self.fitness[ids] = fitness[ids]
+        terminated = st.fell[ids]
+        truncated = ~terminated & (self.steps[ids] >= st.n_ticks)
+        return reward, terminated, truncated, st.unstable[ids]
 
-        Returns ``(reward, terminated, truncated, unstable)``, each ``(len(ids),)``.
-        """
-        self.body.apply(self.sims, ids, np.clip(action, self.low, self.high))
-        unstable = self.body.advance(self.sims, ids, self.substeps)
-        self.steps[ids] += 1
-        now = self.body.planar_position(self.sims)[ids]
-        progress = np.einsum("pi,pi->p", now - self.position[ids], self.facing[ids])
-        self.position[ids] = now
-        terminated = unstable | self.body.fallen(self.sims, ids)
-        reward = np.where(unstable, 0.0, progress + self.alive_bonus * ~terminated)
-        truncated = ~terminated & (self.steps[ids] >= self.max_steps)
-        return reward, terminated, truncated, unstable
+    def info(self) -> dict[str, np.ndarray]:
+        """Per row: the task's fitness and terms (those these task options define: a term NaN on every row is
+        left out), where the walker is ``(n, 2)`` m, whether it blew up."""
+        st, ep = self.state, self.episode
+        terms = {k: v for k, v in ep.task.terms(st.task).items() if not np.isnan(v).all()}
+        return {"fitness": self.fitness.copy(), **terms, "position": ep.task.end_position(ep.body, st.sims, st.task).copy(),
+                "unstable": st.unstable.copy()}
 
     def observe(self) -> np.ndarray:
-        """``(n, obs_size)``: the body's sensors, concatenated in :attr:`sensor_names` order (blown-up rows: 0)."""
-        obs = np.concatenate(list(self.body.sensors(self.sims).values()), axis=1)
+        """``(n, obs_size)``: the body's sensors and the task's, in :attr:`sensor_widths` order (blown-up rows: 0)."""
+        st, ep = self.state, self.episode
+        found = {**ep.body.sensors(st.sims), **ep.task.sensors(ep.body, st.sims, st.task)}
+        obs = np.concatenate([found[k] for k in self.sensor_widths], axis=1)
         return obs if np.isfinite(obs).all() else np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
 
     def check_action(self, action, shape: tuple[int, ...]) -> np.ndarray:
@@ -116,6 +150,14 @@ class Walkers:
         obs = spaces.Box(-np.inf, np.inf, (self.obs_size,), np.float64)
         act = spaces.Box(self.low.astype(np.float32), self.high.astype(np.float32), dtype=np.float32)
         return obs, act
+
+
+def _walkers(cls, n: int, kwargs: dict) -> tuple[Walkers, EnvOptions]:
+    """The walkers of environment class ``cls`` from its keyword arguments (EnvOptions', then the body's)."""
+    names = EnvOptions.__dataclass_fields__
+    options = parse(EnvOptions, {k: v for k, v in kwargs.items() if k in names}, f"{cls.body_name} biped environment")
+    body_options = {k: v for k, v in kwargs.items() if k not in names}
+    return Walkers(cls.body_name, n, options, body_options, cls.default_control_dt), options
 
 
 class Camera:
@@ -145,19 +187,10 @@ class Camera:
         self.renderer.close()
 
 
-_OPTIONS_DOC = """
-    ===================== =============== =====================================================
-    option                default         meaning
-    ===================== =============== =====================================================
-    ``seconds``           50.0            episode length (s); truncated when reached
-    ``control_dt``        {control_dt:<15} control period (s): one ``step`` = this much physics
-    ``alive_bonus``       0.0             reward added per step while the walker is up
-    ``reset_noise_scale`` 0.01            each hinge angle starts U(-s, s) rad off the initial pose
-    ``render_mode``       None            None or ``"rgb_array"`` (needs an OpenGL context)
-    ``width``, ``height`` 480, 480        rendered image size (pixels)
-{body_rows}
-    ===================== =============== =====================================================
-"""
+def _doc(summary: str, body: str) -> str:
+    """An environment's docstring: ``summary``, then the generated tables of its options and its body's."""
+    return (summary + "\n\n    Options (keyword arguments; the body's own beside them):\n\n"
+            + markdown_table(EnvOptions) + "\n    The body's options:\n\n" + markdown_table(BODIES[body].Options))
 
 
 class BipedEnv(gymnasium.Env):
@@ -169,18 +202,12 @@ class BipedEnv(gymnasium.Env):
     camera_azimuth: ClassVar[float] = 90.0
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
 
-    def __init__(self, *, seconds: float = 50.0, control_dt: float | None = None, alive_bonus: float = 0.0,
-                 reset_noise_scale: float = 0.01, render_mode: str | None = None, width: int = 480,
-                 height: int = 480, **body_options):
-        if render_mode not in (None, "rgb_array"):
-            raise ConfigError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        dt = self.default_control_dt if control_dt is None else control_dt
-        self.walkers = Walkers(self.body_name, 1, seconds=seconds, control_dt=dt, alive_bonus=alive_bonus,
-                               reset_noise_scale=reset_noise_scale, body_options=body_options)
+    def __init__(self, **options):
+        self.walkers, o = _walkers(type(self), 1, options)
         self.observation_space, self.action_space = self.walkers.spaces()
         self.metadata = dict(self.metadata, render_fps=round(1 / self.walkers.control_dt))
-        self.render_mode = render_mode
-        self._camera = Camera(self.walkers, width, height, self.camera_azimuth) if render_mode == "rgb_array" else None
+        self.render_mode = o.render_mode
+        self._camera = Camera(self.walkers, o.width, o.height, self.camera_azimuth) if o.render_mode else None
         self._ids = np.zeros(1, int)
         self._done = True
 
@@ -196,9 +223,9 @@ class BipedEnv(gymnasium.Env):
         a = self.walkers.check_action(action, self.action_space.shape)
         if self._done:
             raise RuntimeError("step() after the episode ended: call reset() first")
-        reward, terminated, truncated, unstable = self.walkers.step(self._ids, a[None])
+        reward, terminated, truncated, _ = self.walkers.step(self._ids, a[None])
         self._done = bool(terminated[0] or truncated[0])
-        info = {"unstable": bool(unstable[0]), "position": self.walkers.position[0].copy()}
+        info = {k: (v[0].copy() if v.ndim > 1 else v[0].item()) for k, v in self.walkers.info().items()}
         return self.walkers.observe()[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), info
 
     def render(self):
@@ -224,23 +251,17 @@ class BipedVectorEnv(VectorEnv):
     camera_azimuth: ClassVar[float] = 90.0
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50, "autoreset_mode": AutoresetMode.NEXT_STEP}
 
-    def __init__(self, num_envs: int = 1, *, seconds: float = 50.0, control_dt: float | None = None,
-                 alive_bonus: float = 0.0, reset_noise_scale: float = 0.01, render_mode: str | None = None,
-                 width: int = 480, height: int = 480, **body_options):
+    def __init__(self, num_envs: int = 1, **options):
         if not (isinstance(num_envs, int) and num_envs >= 1):
             raise ConfigError(f"num_envs must be an integer >= 1, got {num_envs!r}")
-        if render_mode not in (None, "rgb_array"):
-            raise ConfigError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        dt = self.default_control_dt if control_dt is None else control_dt
-        self.walkers = Walkers(self.body_name, num_envs, seconds=seconds, control_dt=dt, alive_bonus=alive_bonus,
-                               reset_noise_scale=reset_noise_scale, body_options=body_options)
+        self.walkers, o = _walkers(type(self), num_envs, options)
         self.num_envs = num_envs
         self.single_observation_space, self.single_action_space = self.walkers.spaces()
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.metadata = dict(self.metadata, render_fps=round(1 / self.walkers.control_dt))
-        self.render_mode = render_mode
-        self._camera = Camera(self.walkers, width, height, self.camera_azimuth) if render_mode == "rgb_array" else None
+        self.render_mode = o.render_mode
+        self._camera = Camera(self.walkers, o.width, o.height, self.camera_azimuth) if o.render_mode else None
         self._rngs: list[np.random.Generator] | None = None
         self._all = np.arange(num_envs)
         self._needs_reset = np.zeros(num_envs, bool)
@@ -266,17 +287,18 @@ class BipedVectorEnv(VectorEnv):
             raise RuntimeError("step() before reset(): call reset() first")
         n = self.num_envs
         reward, terminated, truncated = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)
-        unstable = np.zeros(n, bool)
         resetting = np.flatnonzero(self._needs_reset)
         going = self._all if resetting.size == 0 else np.flatnonzero(~self._needs_reset)
         if going.size:
-            r, te, tr, un = self.walkers.step(going, a[going])
-            reward[going], terminated[going], truncated[going], unstable[going] = r, te, tr, un
+            r, te, tr, _ = self.walkers.step(going, a)
+            reward[going], terminated[going], truncated[going] = r, te, tr
         if resetting.size:
             self.walkers.reset(resetting, self._rngs)
         self._needs_reset = terminated | truncated
         every = np.ones(n, bool)  # Gymnasium's vector info convention: "_key" marks the rows that have "key"
-        info = {"unstable": unstable, "_unstable": every, "position": self.walkers.position.copy(), "_position": every}
+        info = {}
+        for k, v in self.walkers.info().items():
+            info[k], info[f"_{k}"] = v, every
         return self.walkers.observe(), reward, terminated, truncated, info
 
     def render(self):
@@ -288,40 +310,23 @@ class BipedVectorEnv(VectorEnv):
             self._camera = None
 
 
-_REIL_ROWS = """\
-    ``timestep``          0.005           physics step (s)
-    ``kp``, ``kv``        50.0, 2.0       PD gains (N m/rad, N m s/rad)
-    ``fall_height``       0.5             fallen when the centre of mass is below this (m)
-    ``fall_tilt``         pi/2            ... or the pelvis is tilted beyond this (rad)
-    ``inertia``           "geoms"         link inertias: "geoms" or "karma"
-    ``model_file``        None            another MJCF file with the same joints"""
-
-_TAGA_ROWS = """\
-    ``timestep``          0.0005          physics step (s)
-    ``kg``, ``bg``        1e4, 1e3        ground stiffness (N/m) and damping (N s/m)
-    ``slope``             0.0             terrain slope (rise / run) beyond ``slope_start``
-    ``slope_start``       0.0             where the slope begins (m along x)
-    ``max_torque``        2000.0          action bound: joint torques in +-this (N m)
-    ``fall_height``       0.7             fallen when the hip is below this above the terrain (m)
-    ``model_file``        None            another MJCF file with the same joints"""
-
-_REIL_DOC = """Reil & Husbands' 3D biped: PD target angles in, the body's sensors out.
+_REIL = """Reil & Husbands' 3D biped: PD target angles in, the body's sensors out.
 
     Observation ``(24,)`` float64: joint angles (6, rad) and velocities (6, rad/s) in
     action order, foot contacts (2: left, right; 0/1), pelvis tilt (2: pitch, roll; rad)
     and its rates (2, rad/s), centre of mass minus each foot (4: forward, left; m) and
-    the centre of mass's velocity (2: forward, left; m/s), in the heading frame.
+    the centre of mass's velocity (2: forward, left; m/s), in the heading frame (then the
+    task's sensors, if it has any).
     Action ``(6,)``: PD target angles (rad) of left hip pitch, left hip roll, left knee,
     right hip pitch, right hip roll, right knee, in Table II's ranges (hip pitch
     [-1.3, 1.6], hip roll [-0.8, 0.8], knee [-1.4, 0]); values outside are clipped.
-    Reward: forward progress of the pelvis (m) along the direction the walker faced at
-    reset, plus ``alive_bonus`` per step while it is up.  Terminated when it falls (or
-    the simulation blows up: ``info["unstable"]``); truncated at ``seconds``.
+    Reward: the increment of the task's fitness over the step (by default the walk task's
+    forward fitness: forward progress of the pelvis, m, along the direction the walker faced
+    at reset, and at a fall the survival credit it lost); ``info`` has the fitness and the
+    task's terms.  Terminated when it falls (or the simulation blows up:
+    ``info["unstable"]``); truncated at ``seconds``."""
 
-    Options (keyword arguments; the body's own after the first six):
-""" + _OPTIONS_DOC.format(control_dt=0.02, body_rows=_REIL_ROWS)
-
-_TAGA_DOC = """Taga, Yamaguchi & Shimizu's sagittal 5-link biped: joint torques in, its sensors out.
+_TAGA = """Taga, Yamaguchi & Shimizu's sagittal 5-link biped: joint torques in, its sensors out.
 
     Observation ``(14,)`` float64: inertial link angles of right thigh, right shank, left
     thigh, left shank (4, rad from the horizontal) and their rates (4, rad/s), ground
@@ -329,35 +334,35 @@ _TAGA_DOC = """Taga, Yamaguchi & Shimizu's sagittal 5-link biped: joint torques 
     Action ``(6,)``: torques (N m) of right hip, knee, ankle and left hip, knee, ankle,
     within +-``max_torque`` (clipped); the ankle torques act only while that foot is on the
     ground.  The Appendix A ground and joint forces are added before every physics step.
-    Reward: forward progress of the hip (m) along +x, plus ``alive_bonus`` per step while
-    it is up.  Terminated when the hip falls below ``fall_height`` (or the simulation blows
-    up); truncated at ``seconds``.
+    Reward: the increment of the task's fitness over the step (by default forward progress
+    of the hip, m, along +x, and at a fall the survival credit lost); ``info`` has the
+    fitness and the task's terms.  Terminated when the hip falls below ``fall_height`` (or
+    the simulation blows up); truncated at ``seconds``."""
 
-    Options (keyword arguments; the body's own after the first six):
-""" + _OPTIONS_DOC.format(control_dt=0.01, body_rows=_TAGA_ROWS)
+_VECTOR = ("\n\n    Vector form: ``num_envs`` walkers stepped in one ``mujoco.batch`` call (next-step autoreset).")
 
 
 class ReilBipedEnv(BipedEnv):
-    __doc__ = _REIL_DOC
+    __doc__ = _doc(_REIL, "reil")
     body_name = "reil"
     default_control_dt = 0.02
     camera_azimuth = 135.0
 
 
 class TagaBipedEnv(BipedEnv):
-    __doc__ = _TAGA_DOC
+    __doc__ = _doc(_TAGA, "taga")
     body_name = "taga"
     default_control_dt = 0.01
 
 
 class ReilBipedVectorEnv(BipedVectorEnv):
-    __doc__ = _REIL_DOC.replace("Options (keyword", "Vector form: ``num_envs`` walkers stepped in one ``mujoco.batch`` call\n    (next-step autoreset).  Options (keyword")
+    __doc__ = _doc(_REIL + _VECTOR, "reil")
     body_name = "reil"
     default_control_dt = 0.02
     camera_azimuth = 135.0
 
 
 class TagaBipedVectorEnv(BipedVectorEnv):
-    __doc__ = _TAGA_DOC.replace("Options (keyword", "Vector form: ``num_envs`` walkers stepped in one ``mujoco.batch`` call\n    (next-step autoreset).  Options (keyword")
+    __doc__ = _doc(_TAGA + _VECTOR, "taga")
     body_name = "taga"
     default_control_dt = 0.01

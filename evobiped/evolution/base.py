@@ -7,11 +7,59 @@ takes their :class:`~evobiped.episode.EpisodeResult` (or their fitness alone);
 returns, for each new row, the previous row it is (-1: a new individual), so that the
 run carries each individual's outcome (:mod:`evobiped.evolution.individuals`) and
 never reorders anything.  Fitness: higher is better.
+
+Between generations an optimizer is a value: :meth:`Optimizer.state` gives a frozen
+:class:`OptimizerState` (its subclass per optimizer), which the checkpoint stores as
+``state.to_dict()`` under the key ``optimizer``; :meth:`Optimizer.restore` puts an
+optimizer in that state, and a run resumed from it continues exactly as an
+uninterrupted one.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
 import numpy as np
+
+from ..errors import UserError
+
+
+def frozen_array(values: Any) -> np.ndarray:
+    """A read-only float copy of ``values`` (a state's arrays never change after it is made)."""
+    a = np.array(values, float)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class OptimizerState:
+    """An optimizer between generations: which one, its generation and the fitness of its population ``(P,)``
+    (NaN: not yet evaluated, -inf: unstable).  Subclasses add what their optimizer needs."""
+
+    #: the optimizer's registry name (``ga``, ``cma``)
+    name: ClassVar[str] = ""
+    generation: int
+    fitness: np.ndarray
+
+    def to_dict(self) -> dict:
+        """The checkpoint's JSON table (its ``optimizer`` key)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def written_by(table: Any) -> str:
+        """The optimizer that wrote a checkpoint's table (``name``; a checkpoint of before the state had a name: ``optimizer``,
+        and one older still none: the GA)."""
+        if not isinstance(table, dict):
+            raise UserError(f"checkpoint: the optimizer's state must be a table, got {type(table).__name__}")
+        return table.get("name", table.get("optimizer", "ga"))
+
+    @classmethod
+    def generation_of(cls, table: dict) -> int:
+        gen = table.get("generation")
+        if isinstance(gen, bool) or not isinstance(gen, int) or gen < 0:
+            raise UserError(f"checkpoint: {cls.name}.generation must be a whole number >= 0, got {gen!r}")
+        return gen
 
 
 class Optimizer:
@@ -35,6 +83,25 @@ class Optimizer:
             raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
         # an undefined fitness (should not happen: unstable runs score as falls) ranks last
         self.fitness[unknown] = np.where(np.isfinite(fitness), fitness, -np.inf)
+
+    def state(self) -> OptimizerState:
+        """This optimizer between generations, as a frozen value (what the checkpoint stores)."""
+        raise NotImplementedError
+
+    def restore(self, state: OptimizerState) -> None:
+        """Put the optimizer in ``state`` (UserError, one line, when it does not fit this run)."""
+        raise NotImplementedError
+
+    def state_from(self, table: Any) -> OptimizerState:
+        """The state a checkpoint's table holds (UserError naming the field when it is malformed, or when
+        another optimizer wrote it)."""
+        got = OptimizerState.written_by(table)
+        if got != self.name:
+            raise UserError(f"the checkpoint was written by the {got!r} optimizer; this run's config uses {self.name!r}")
+        return self._state_from(table)
+
+    def _state_from(self, table: dict) -> OptimizerState:
+        raise NotImplementedError
 
     def ranking(self) -> np.ndarray:
         """Indices best first; ties keep population order (stable)."""

@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 from ..options import check_fields, option
-from .base import Optimizer
+from .base import Optimizer, OptimizerState, frozen_array
 from .ga import MAX_POPULATION, generation_rng
 
 
@@ -64,6 +64,24 @@ class CMAOptions:
         return self.population or 4 + int(3 * math.log(n_genes))
 
 
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CMAState(OptimizerState):
+    """CMA-ES between generations: the fitness told at each generation so far (``told``, one read-only ``(lam,)``
+    array per generation: the strategy's whole history, replayed from the run seed) and the current
+    population's fitness ``(lam,)``."""
+
+    name = "cma"
+    told: tuple[np.ndarray, ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "told", tuple(frozen_array(f) for f in self.told))
+        object.__setattr__(self, "fitness", frozen_array(self.fitness))
+
+    def to_dict(self) -> dict:
+        plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
+        return {"name": self.name, "generation": self.generation, "told": [plain(f) for f in self.told], "fitness": plain(self.fitness)}
+
+
 class GenerationNormal:
     """pycma's ``randn``: standard normal samples from a generator that the optimiser re-seeds every generation."""
 
@@ -79,7 +97,7 @@ class CMAES(Optimizer):
 
     ``ask()`` -> ``(population (P, G), unknown (P,) bool)``; ``tell(result)`` of the unknown;
     ``ranking()`` best first; ``next_generation()`` (a fresh sample: no fitness or outcome is kept);
-    ``state_dict()`` / ``load_state_dict()`` for the checkpoint.
+    ``state()`` / ``restore()``: its state as a frozen value (:class:`CMAState`) for the checkpoint.
     """
 
     name = "cma"
@@ -170,29 +188,32 @@ class CMAES(Optimizer):
         """The names of pycma's stopping rules that fired (e.g. ``tolfun``) with no restart left; empty while it goes on."""
         return sorted(self.es.stop())
 
-    # ---- checkpointing
-    def state_dict(self) -> dict:
-        plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
-        return {"optimizer": self.name, "generation": self.generation, "told": [plain(f) for f in self.told], "fitness": plain(self.fitness)}
+    # ---- its state as a value
+    def state(self) -> CMAState:
+        return CMAState(generation=self.generation, told=tuple(self.told), fitness=self.fitness)
 
-    def load_state_dict(self, state: dict) -> None:
-        """Replay the told fitness from generation 0 (UserError on a checkpoint that does not fit this run)."""
-        if not isinstance(state, dict) or state.get("optimizer", "ga") != self.name:
-            got = state.get("optimizer", "ga") if isinstance(state, dict) else type(state).__name__
-            raise UserError(f"the checkpoint was written by the {got!r} optimizer; this run's config uses {self.name!r}")
-        told, fitness, generation = state.get("told"), state.get("fitness"), state.get("generation")
+    def restore(self, state: CMAState) -> None:
+        """Replay the told fitness from generation 0 (UserError when a generation's count does not fit this run)."""
+        self._rewind()
+        for g, f in enumerate(state.told):
+            if len(f) != len(self.population):
+                raise UserError(f"checkpoint: CMA-ES told[{g}] must be a list of {len(self.population)} finite numbers or nulls")
+            self._advance(np.array(f, float))
+        # a restart may have happened after the last generation told: the population matches the state
+        if len(state.fitness) != len(self.population):
+            raise UserError(f"checkpoint: CMA-ES fitness must be a list of {len(self.population)} finite numbers or nulls")
+        self.fitness = np.array(state.fitness, float)
+
+    def _state_from(self, table: dict) -> CMAState:
+        told, fitness, generation = table.get("told"), table.get("fitness"), table.get("generation")
         if not (isinstance(told, list) and isinstance(generation, int) and not isinstance(generation, bool) and generation == len(told) and isinstance(fitness, list)):
             raise UserError("checkpoint: the CMA-ES state needs 'told' (one list per generation), 'generation' and 'fitness'")
-        self._rewind()
-        for g, f in enumerate(told):
-            values = _numbers(f, len(self.population), f"told[{g}]")
-            self._advance(values)
-        # a restart may have happened after the last generation told: the population matches the state
-        current = _numbers(fitness, len(self.population), "fitness", allow_nan=True)
-        self.fitness = current
+        return CMAState(generation=generation, told=tuple(_numbers(f, f"told[{g}]") for g, f in enumerate(told)),
+                        fitness=_numbers(fitness, "fitness", allow_nan=True))
 
-def _numbers(values, n: int, what: str, *, allow_nan: bool = False) -> np.ndarray:
-    """A checkpoint list of ``n`` numbers (None: an unstable -inf, or unknown with ``allow_nan``)."""
-    if not isinstance(values, list) or len(values) != n or not all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)) for v in values):
-        raise UserError(f"checkpoint: CMA-ES {what} must be a list of {n} finite numbers or nulls")
+
+def _numbers(values, what: str, *, allow_nan: bool = False) -> np.ndarray:
+    """A checkpoint list of finite numbers (None: an unstable -inf, or unknown with ``allow_nan``)."""
+    if not isinstance(values, list) or not all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)) for v in values):
+        raise UserError(f"checkpoint: CMA-ES {what} must be a list of finite numbers or nulls")
     return np.array([(np.nan if allow_nan else -np.inf) if v is None else float(v) for v in values])

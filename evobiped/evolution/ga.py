@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 from ..options import check_fields, option
-from .base import Optimizer
+from .base import Optimizer, OptimizerState, frozen_array
 
 
 #: the largest population any optimizer accepts (memory is checked against the machine too: ``run.check_memory``)
@@ -48,6 +48,22 @@ class GAOptions:
     @property
     def n_survivors(self) -> int:
         return int(round(self.population * self.fittest_fraction))
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GAState(OptimizerState):
+    """The GA between generations: generation, population ``(P, G)`` and its fitness ``(P,)`` (read-only arrays)."""
+
+    name = "ga"
+    population: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "population", frozen_array(self.population))
+        object.__setattr__(self, "fitness", frozen_array(self.fitness))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "generation": self.generation, "population": self.population.tolist(),
+                "fitness": [None if np.isnan(f) else float(f) for f in self.fitness]}
 
 
 def generation_rng(seed: int, generation: int) -> np.random.Generator:
@@ -121,36 +137,29 @@ class GA(Optimizer):
         noise = rng.normal(0.0, 1.0, genomes.shape) * self.sigma
         return np.clip(np.where(hit, genomes + noise, genomes), self.low, self.high)
 
-    # ---- checkpointing
-    def state_dict(self) -> dict:
-        return {
-            "optimizer": self.name,
-            "generation": self.generation,
-            "population": self.population.tolist(),
-            "fitness": [None if np.isnan(f) else float(f) for f in self.fitness],
-        }
+    # ---- its state as a value
+    def state(self) -> GAState:
+        return GAState(generation=self.generation, population=self.population, fitness=self.fitness)
 
-    def load_state_dict(self, state: dict) -> None:
-        """Restore a :meth:`state_dict`; UserError (one line, naming the field) unless every field fits this run."""
-        if not isinstance(state, dict):
-            raise UserError(f"checkpoint: ga must be a table, got {type(state).__name__}")
-        if state.get("optimizer", self.name) != self.name:
-            raise UserError(f"the checkpoint was written by the {state['optimizer']!r} optimizer; this run's config uses {self.name!r}")
-        gen, pop, fit = state.get("generation"), state.get("population"), state.get("fitness")
-        if isinstance(gen, bool) or not isinstance(gen, int) or gen < 0:
-            raise UserError(f"checkpoint: ga.generation must be a whole number >= 0, got {gen!r}")
-        rows_ok = isinstance(pop, list) and all(isinstance(r, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in pop)
-        if not rows_ok or len({len(r) for r in pop}) > 1:
-            raise UserError("checkpoint: ga.population must be a list of genomes (lists of numbers of one length)")
-        pop = np.array(pop, float).reshape(len(pop), -1)
+    def restore(self, state: GAState) -> None:
+        """Put the GA in ``state``: ConfigError when its population has another shape than this run's, UserError
+        (naming the gene) when a gene lies outside its bounds."""
+        pop = np.asarray(state.population, float)
         if pop.shape != self.population.shape:
             raise ConfigError(f"checkpoint population has shape {pop.shape}, the config needs {self.population.shape}")
         if not np.isfinite(pop).all() or (pop < self.low).any() or (pop > self.high).any():
             i, j = np.argwhere(~(np.isfinite(pop) & (pop >= self.low) & (pop <= self.high)))[0]
             raise UserError(f"checkpoint: ga.population[{i}][{j}] = {pop[i, j]!r} is outside the gene's bounds [{self.low[j]:g}, {self.high[j]:g}]")
+        self.population, self.fitness, self.generation = pop.copy(), np.array(state.fitness, float), int(state.generation)
+
+    def _state_from(self, table: dict) -> GAState:
+        gen, pop, fit = GAState.generation_of(table), table.get("population"), table.get("fitness")
+        rows_ok = isinstance(pop, list) and all(isinstance(r, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in pop)
+        if not rows_ok or len({len(r) for r in pop}) > 1:
+            raise UserError("checkpoint: ga.population must be a list of genomes (lists of numbers of one length)")
+        pop = np.array(pop, float).reshape(len(pop), -1)
         P = len(pop)
         if not (isinstance(fit, list) and len(fit) == P and all(f is None or (isinstance(f, (int, float)) and not isinstance(f, bool) and not np.isnan(f) and f != np.inf) for f in fit)):
             raise UserError(f"checkpoint: ga.fitness must be a list of {P} numbers (or -Infinity, or null for unknown)")
-        self.population = pop
-        self.fitness = np.array([np.nan if f is None else f for f in fit], float)
-        self.generation = gen
+        values = np.array([np.nan if f is None else f for f in fit], float)
+        return GAState(generation=gen, population=pop, fitness=values)

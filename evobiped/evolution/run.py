@@ -29,11 +29,12 @@ from ..genome_file import genome_text, load_genome, save_genome
 from ..options import check_fields, option, parse, refuse_unknown
 from .cma import CMAES, CMAOptions
 from .evaluate import BACKENDS, Evaluator
+from .base import Optimizer
 from .ga import GA, GAOptions
 from .individuals import Individuals
 from ..rundir import HISTORY_COLUMNS
 
-#: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation/outcome) with state_dict/load_state_dict
+#: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation) with state/restore
 OPTIMIZERS = {"ga": GA, "cma": CMAES}
 
 
@@ -69,6 +70,7 @@ class RunConfig:
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
+        d["episode"] = self.episode.to_dict()
         d["frozen_blocks"] = list(self.frozen_blocks)
         return d
 
@@ -115,10 +117,10 @@ class GenerationStats:
 class Run:
     """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
-    def __init__(self, directory: Path, config: RunConfig, ga: GA, history: list[list], best: dict | None, wall: float,
+    def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
                  history_terms: list[dict] | None = None, best_walk: dict | None = None):
-        self.dir, self.config, self.ga = directory, config, ga
+        self.dir, self.config, self.optimizer = directory, config, optimizer
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
         self.best_genome = best_genome
@@ -142,7 +144,7 @@ class Run:
         directory = Path(directory)
         if directory.exists() and not directory.is_dir():
             raise UserError(f"run directory {directory} exists and is a file; give another --out")
-        ga = make_ga(config)
+        opt = make_optimizer(config)
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -157,7 +159,7 @@ class Run:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
             rundir.remove_stale_temporaries(directory)
             write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": provenance.current()})
-            run = cls(directory, config, ga, [], None, 0.0)
+            run = cls(directory, config, opt, [], None, 0.0)
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
             rundir.unlock(directory)
@@ -196,26 +198,26 @@ class Run:
         cfg.pop("evobiped", None)
         started_in = cfg.pop("environment", None)
         config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
-        ga = make_ga(config)
+        opt = make_optimizer(config)
         path = directory / rundir.CHECKPOINT
         if not path.exists():
             committed = cls._committed_files(directory)
             if committed:
                 raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
-            return cls(directory, config, ga, [], None, 0.0), started_in  # killed before its first commit: start over
+            return cls(directory, config, opt, [], None, 0.0), started_in  # killed before its first commit: start over
         ck = read_json(path, what="checkpoint")
         if ck is None:
             raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
         try:
-            rundir.validate_checkpoint(ck, generations=config.generations, low=ga.low, high=ga.high)
+            rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
         except UserError as exc:
             raise UserError(f"checkpoint {path} is malformed: {exc}") from None
-        ga.load_state_dict(ck["ga"])
+        opt.restore(opt.state_from(rundir.optimizer_table(ck)))
         history, best = ck["history"], ck["best"]
-        if len(history) != ga.generation:
-            raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {ga.generation})")
-        individuals = Individuals.from_dict(ck.get("outcome", {}), len(ga.population))
-        return cls(directory, config, ga, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
+        if len(history) != opt.generation:
+            raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {opt.generation})")
+        individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
+        return cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
                    ck.get("history_terms", []), ck.get("best_walk")), started_in
 
     @staticmethod
@@ -230,7 +232,7 @@ class Run:
 
     def _rebuild(self) -> None:
         """Make every derived file what the checkpoint says it is; note each repair in :attr:`repairs`."""
-        d, g = self.dir, self.ga.generation
+        d, g = self.dir, self.optimizer.generation
         for p in rundir.remove_stale_temporaries(d):
             self.repairs.append(f"{p.relative_to(d)} removed (a write cut short)")
         (d / rundir.GENERATIONS).mkdir(exist_ok=True)
@@ -289,7 +291,7 @@ class Run:
 
     @property
     def done(self) -> bool:
-        return self.ga.generation >= self.config.generations
+        return self.optimizer.generation >= self.config.generations
 
     # ---- the loop
     def evolve(self, evaluator: Evaluator, on_generation: Callable[[GenerationStats], None] | None = None) -> dict:
@@ -308,14 +310,14 @@ class Run:
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
         """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
-        ga = self.ga
-        pop, unknown = ga.ask()
-        result = evaluator.evaluate(pop[unknown], key=(self.config.seed, ga.generation))
-        ga.tell(result)
+        opt = self.optimizer
+        pop, unknown = opt.ask()
+        result = evaluator.evaluate(pop[unknown], key=(self.config.seed, opt.generation))
+        opt.tell(result)
         self.individuals.told(unknown, result)
-        f, outcome = ga.fitness, self.individuals.outcome
-        b = int(ga.ranking()[0])
-        g = ga.generation
+        f, outcome = opt.fitness, self.individuals.outcome
+        b = int(opt.ranking()[0])
+        g = opt.generation
         stats = GenerationStats(
             generation=g,
             best=float(f[b]),
@@ -340,7 +342,7 @@ class Run:
         self.history.append(stats.row())
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
-        self.individuals.carry(ga.next_generation())  # the individuals it keeps keep their outcome
+        self.individuals.carry(opt.next_generation())  # the individuals it keeps keep their outcome
         return stats
 
     # ---- files
@@ -350,7 +352,7 @@ class Run:
         with _signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
-                {"ga": self.ga.state_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
+                {"optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
                  "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
                  "best_walk": self.best_walk},
             )
@@ -363,7 +365,7 @@ class Run:
         written before walks were kept."""
         if self.best is None or not (self.dir / rundir.BEST).is_file():
             return None
-        if self.best_walk is not None and not self.config.episode.perturbations:
+        if self.best_walk is not None and not self.config.episode.perturbed:
             return self.best_walk
         genome, cfg, _ = load_genome(self.dir / rundir.BEST)
         return cfg.nominal().build().run(genome).walk()
@@ -371,7 +373,7 @@ class Run:
     def _summary(self, best_walk: dict | None) -> dict:
         return {
             "evobiped": __version__,
-            "generations": self.ga.generation,
+            "generations": self.optimizer.generation,
             "best": self.best,
             "wall_seconds": round(self.wall, 3),
             "evaluations": int(sum(rundir.column(self.history, "evaluations"))),
@@ -446,7 +448,7 @@ def check_memory(population: int, genes: int) -> None:
                           f"this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
 
 
-def make_ga(config: RunConfig):
+def make_optimizer(config: RunConfig) -> Optimizer:
     """Build the optimizer (GA or CMA-ES) for the episode's genome layout, known from the declarations
     (nothing compiled); fails before any file is written."""
     layout = config.episode.layout()
@@ -479,6 +481,7 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     genome, cfg, _ = load_genome(path)
     if cfg.body != episode.body or cfg.controller != episode.controller:
         raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
-    if len(genome) < layout.size and cfg.controller_options == {k: v for k, v in episode.controller_options.items() if k != "inputs"}:
+    same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
+    if len(genome) < layout.size and same:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
     return layout.validate(genome, what=f"genome in {path}")

@@ -189,7 +189,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     return ReplayReport(
         fitness=float(result.fitness[0]),
         stored_fitness=float(stored) if isinstance(stored, (int, float)) else None,
-        compared=cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options and not source.config.perturbations,
+        compared=cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options and not source.config.perturbed,
         fell=bool(result.fell[0]),
         end_time=float(result.end_time[0]),
         walk=result.walk(),

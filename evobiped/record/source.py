@@ -44,7 +44,7 @@ class Source:
         file says nothing of it."""
         if isinstance(self.meta.get("outcome"), dict):
             return self.meta["outcome"]
-        if self.config.perturbations:
+        if self.config.perturbed:
             return None  # its fell and end time are of the perturbed presentations, not of the nominal replay
         stored = {k: self.meta[k] for k in ("fell", "end_time") if isinstance(self.meta.get(k), (bool, int, float))}
         summary = self.run_dir / rundir.SUMMARY if self.run_dir is not None and self.label == "best" else None

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..bodies.base import Body
 from ..errors import ConfigError
-from ..options import NoOptions, parse
+from ..options import NoOptions, taken
 from ..sim import Sims
 
 
@@ -27,7 +27,7 @@ class Task:
     """Base class: no sensors, no bookkeeping; subclasses define fitness."""
 
     name = "task"
-    #: the task's options (a dataclass of :func:`evobiped.options.option` fields); constructed as ``cls(**options)``
+    #: the task's options (a dataclass of :func:`evobiped.options.option` fields); constructed as ``cls(options)``
     Options: ClassVar[type] = NoOptions
     #: full episodes per genome, each from the initial state (e.g. one per sound source)
     presentations: int = 1
@@ -36,8 +36,8 @@ class Task:
     #: named fitness criteria: name -> the task options that select it (the study's conditions, ``evolve --cyclic``)
     criteria: ClassVar[dict[str, dict]] = {}
 
-    def __init__(self, **options):
-        self.options = parse(self.Options, options, f"{self.name} task_options")
+    def __init__(self, options: Any = None, **given):
+        self.options = taken(self.Options, options, given, f"{self.name} task_options")
 
     @classmethod
     def criterion(cls, name: str, flag: str) -> dict:
@@ -67,6 +67,20 @@ class Task:
     def start(self, body: Body, sims: Sims) -> dict[str, Any]:
         """Task state at t = 0 (after the body's reset)."""
         return {}
+
+    def restart(self, body: Body, sims: Sims, state: dict[str, Any], ids: np.ndarray) -> None:
+        """Rows ``ids`` of ``state`` begin anew (after the body's reset of those rows), in place: by default
+        they take the rows of a fresh :meth:`start`; a task whose state is not kept per row overrides this."""
+        fresh = self.start(body, sims)
+        for key, value in fresh.items():
+            if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
+                state[key][ids] = value[ids]
+            elif not isinstance(value, (int, float, str)):
+                raise ConfigError(f"{self.name} task: its state {key!r} is not kept per row, so rows cannot begin anew")
+
+    #: the task reads the controller's neuron outputs (:meth:`on_tick`'s ``neurons``): it needs a controller
+    def reads_neurons(self) -> bool:
+        return False
 
     def sensors(self, body: Body, sims: Sims, state: dict[str, Any]) -> dict[str, np.ndarray]:
         """Named sensor arrays ``(P, k)`` for the controller."""

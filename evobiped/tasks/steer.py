@@ -34,7 +34,7 @@ import numpy as np
 from dataclasses import dataclass
 
 from ..errors import ConfigError
-from ..options import option
+from ..options import given, option
 from .base import Task
 
 #: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
@@ -77,7 +77,7 @@ def with_sources(config, sources):
         return config
     if config.task != "steer":
         raise UserError(f"--source applies to the steer task (--task steer); this episode's task is {config.task!r}")
-    return dataclasses.replace(config, task_options={**config.task_options, "sources": [list(map(float, s)) for s in sources]})
+    return dataclasses.replace(config, task_options={**given(config.task_options), "sources": [list(map(float, s)) for s in sources]})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -97,8 +97,8 @@ class SteerTask(Task):
     #: ``distance`` from the start (m), ``distance_to_source`` from the row's source at the end (m)
     term_names = ("distance", "distance_to_source")
 
-    def __init__(self, **options):
-        super().__init__(**options)
+    def __init__(self, options=None, **given):
+        super().__init__(options, **given)
         self.sources = parse_sources(self.options.sources)
         self.presentations = len(self.sources)
 

@@ -123,8 +123,8 @@ class WalkTask(Task):
         "forward": {"fitness": "forward", "cyclic_weight": 0.0},
     }
 
-    def __init__(self, **options):
-        super().__init__(**options)
+    def __init__(self, options=None, **given):
+        super().__init__(options, **given)
         o = self.options
         self.fitness_name = o.fitness
         self.survival_credit = float(o.survival_credit)
@@ -139,6 +139,9 @@ class WalkTask(Task):
             state["motor"] = []
             state["ticks"] = np.zeros(sims.n, int)
         return state
+
+    def reads_neurons(self):
+        return bool(self.cyclic_weight)  # the cyclic criterion counts the motor neurons' cycles
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]

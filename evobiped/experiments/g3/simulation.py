@@ -1,8 +1,8 @@
 """Runs of the G3 network on its own (Pribe, Grossberg & Cohen 1997): GO schedules, integration, GO-level sweeps.
 
-The equations, the network and the published presets are in
-:mod:`evobiped.controllers.g3_network` (the G3 controller drives bodies with
-them); this module integrates a network under a GO schedule, as the paper's
+The cell equations are the core's (:mod:`evobiped.controllers.g3_network`, which the G3
+controller drives bodies with), the quadruped network and the published presets are in
+:mod:`evobiped.experiments.g3.network`; this module integrates a network under a GO schedule, as the paper's
 figures do, and sweeps GO levels with the gait analysis of
 :mod:`evobiped.experiments.g3.gaits`.
 
@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...controllers.g3_network import G3Network, Preset, rk4_step
+from ...controllers.g3_network import rk4_step
 from ...errors import ConfigError
 from .gaits import analyse_gait
+from .network import G3Network, Preset
 
 
 @dataclass

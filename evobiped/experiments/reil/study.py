@@ -39,6 +39,7 @@ from typing import Callable
 
 from ... import __version__, rundir
 from ...errors import ConfigError, UserError
+from ...options import given
 from ...evolution.evaluate import SerialEvaluator, init_ray
 from ...evolution.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
@@ -108,7 +109,7 @@ class StudyConfig:
         ep = self.run.episode
         options = ep.controller_options if controller == ep.controller else {}
         episode = dataclasses.replace(ep, controller=controller, controller_options=options,
-                                      task_options={**ep.task_options, **TASKS[ep.task].criteria[criterion]})
+                                      task_options={**given(ep.task_options), **TASKS[ep.task].criteria[criterion]})
         return dataclasses.replace(self.run, episode=episode, optimizer=optimizer, seed=self.first_seed + k,
                                    backend="serial", workers=None, address=None)
 

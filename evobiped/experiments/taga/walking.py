@@ -23,10 +23,26 @@ from ...controllers.matsuoka import FEEDBACK_SENSORS, Matsuoka, MatsuokaOptions
 from ...errors import UserError
 from ...episode import Episode
 from ...options import check_value
+from ...sim import Sims
 from ...tasks.walk import WalkTask
+from .parameters import PRESETS, preset_genome
 from .stride import StrideMetrics, analyse_strides
 
-PRESETS = ("taga",)
+
+#: where Fig. 7's horizontal pushes act: the hip (its point mass) or a shank's centre
+PUSH_TARGETS = ("none", "hip", "right_shank", "left_shank")
+
+
+def set_push(sims: Sims, ids: np.ndarray, target: str, force: float) -> None:
+    """From now on a horizontal force ``force`` (N, forward > 0) on ``target`` of walkers ``ids`` (``"none"``
+    stops it): MuJoCo's applied force at the body's centre of mass, which is the hip's point mass and a
+    uniform shank's centre."""
+    if target not in PUSH_TARGETS:
+        raise UserError(f"push target must be one of {PUSH_TARGETS}, got {target!r}")
+    for name in PUSH_TARGETS[1:]:
+        sims.xfrc_applied[ids, sims.model.body(name).id, :3] = 0.0
+    if target != "none":
+        sims.xfrc_applied[ids, sims.model.body(target).id, 0] = float(force)
 
 
 def check_u0(u0: float) -> float:
@@ -77,7 +93,7 @@ class TagaWalker:
         # open-ended: the episode's planned length (one step) only fills end_time for walkers still up
         self.episode = Episode(body, ctrl, WalkTask(), seconds=timestep, stop_on_fall=True)
         self.body, self.ctrl, self.model, self.P = body, self.episode.controller, self.episode.model, len(u0)
-        self.state = self.episode.start(np.tile(ctrl.preset_genome(preset), (self.P, 1)))
+        self.state = self.episode.start(np.tile(preset_genome(ctrl, preset), (self.P, 1)))
         self.sims, self.params = self.state.sims, self.state.params
         self.params["u0"] = u0[:, None].copy()
         self.record_every = int(record_every)
@@ -197,7 +213,7 @@ def push(
         t = w.time
         want = (t >= starts - step / 2) & (t < starts + duration - step / 2)
         for i in np.flatnonzero(want != on):
-            w.body.set_push(w.sims, np.array([i]), target if want[i] else "none", force if want[i] else 0.0)
+            set_push(w.sims, np.array([i]), target if want[i] else "none", force if want[i] else 0.0)
         on = want
         given |= want & w.alive
         w.advance(step)
@@ -263,7 +279,7 @@ def u0_sweep(u0_values, *, settle: float = 8.0, window: float = 4.0, first: floa
 def isolated_activity(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
     """Fig. 6B: the rhythm generator alone (Feed = 0): times (T,) s and inner states u (T, 12)."""
     ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u).bound(timestep)
-    params = ctrl.decode(ctrl.preset_genome()[None])
+    params = ctrl.decode(preset_genome(ctrl)[None])
     state = ctrl.initial_state(params)
     n = int(round(seconds / timestep))
     u = np.empty((n, ctrl.n))

@@ -1,0 +1,79 @@
+"""The ``evobiped`` command: parse, build configs, call the package, print.
+
+One module per subcommand, ``<name>_cmd.py``, with ``add_<name>(subparsers)`` (its parser and flags),
+``run_<name>_cmd(args)`` (the handler) and ``SUBCOMMANDS`` (the ``add_`` functions it registers): the
+core's in this package (:data:`CORE`), and each experiment's own, which it registers by providing
+``evobiped/experiments/<experiment>/<name>_cmd.py`` (found by :func:`experiment_commands`).  What
+the commands share is :mod:`evobiped.flags`.  A :class:`~evobiped.errors.UserError` (or a bad
+argument) becomes one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import pkgutil
+import sys
+from types import ModuleType
+
+from .. import __version__
+from ..errors import UserError, exit_status, stop_on_signals
+
+#: the core's subcommand modules, in the order ``evobiped --help`` lists them (the experiments' follow)
+CORE = ("episode_cmd", "evolve_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2, no usage dump
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def experiment_commands() -> list[ModuleType]:
+    """The experiments' subcommand modules, ``evobiped.experiments.<experiment>.<name>_cmd``, by experiment and name."""
+    from .. import experiments
+
+    found = []
+    for package in sorted(m.name for m in pkgutil.iter_modules(experiments.__path__) if m.ispkg):
+        where = importlib.import_module(f"{experiments.__name__}.{package}")
+        for name in sorted(m.name for m in pkgutil.iter_modules(where.__path__) if m.name.endswith("_cmd")):
+            found.append(importlib.import_module(f"{where.__name__}.{name}"))
+    return found
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="evobiped", description="Evolve neural controllers for bipedal walkers in MuJoCo.")
+    parser.add_argument("--version", action="version", version=f"evobiped {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for module in [importlib.import_module(f"{__name__}.{name}") for name in CORE] + experiment_commands():
+        for add in module.SUBCOMMANDS:
+            add(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
+    try:
+        return int(args.func(args) or 0)
+    except UserError as exc:
+        print(f"evobiped: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # the reader went away (`evobiped presets | head -1`): stop quietly, as cat does
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
+        return 141
+    except OSError as exc:  # a file or directory that cannot be read or written: one line, not a traceback
+        if exc.filename is None:
+            raise
+        from pathlib import Path
+
+        where = Path(exc.filename)
+        if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
+            where = where.parent
+        print(f"evobiped: error: cannot access {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        print("evobiped: interrupted", file=sys.stderr)
+        return exit_status(exc)
+    finally:
+        restore()

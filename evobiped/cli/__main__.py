@@ -1,0 +1,7 @@
+"""``python -m evobiped.cli``: the ``evobiped`` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

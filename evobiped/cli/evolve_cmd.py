@@ -1,0 +1,162 @@
+"""``evobiped evolve``: a new run from a preset, a settings file and flags, or a resumed one; progress lines and the summary."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+
+from ..errors import UserError, exit_status
+from ..flags import RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config, walk_line
+from ..progress import Progress, hms
+
+
+def add_evolve(sub) -> None:
+    what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings) or CMA-ES (--optimizer cma)"
+    p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
+    p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
+                   "(`evobiped presets` describes them); --config and flags override it")
+    p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
+    p.add_argument("--optimizer", choices=("ga", "cma"), help="ga (Reil & Husbands' GA, default) or cma (CMA-ES)")
+    p.add_argument("--body", help=f"body: {choices_text('body')} (default reil)")
+    p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
+    p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")
+    add_source_flag(p)
+    p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
+    p.add_argument("--generations", type=positive_int, help="generations (default 120)")
+    p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A): the task's cyclic criterion")
+    p.add_argument("--seed", type=int, help="run seed (default 0)")
+    p.add_argument("--backend", help=f"backend: {choices_text('backend')} (default process)")
+    p.add_argument("--workers", type=positive_int, help="worker processes / threads / Ray actors (default: all cores; "
+                   "more than the cores earns a warning; not with the serial backend)")
+    p.add_argument("--address", help="Ray cluster address (only with --backend ray; default: start a local Ray)")
+    p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="start from this genome (the GA: a population of its clones; CMA-ES: the initial mean)")
+    p.add_argument("--freeze", metavar="BLOCKS", help="gene blocks the optimizer must not change, comma-separated "
+                   "(e.g. weights,time_constants,biases: evolve only a CTRNN's input weights)")
+    p.add_argument("--out", metavar="DIR", help="run directory (default runs/<body>_<controller>_seed<seed>)")
+    p.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its last checkpoint")
+    p.add_argument("--rerun", nargs="?", const="spawn", metavar="ADDR",
+                   help="also stream fitness per generation to a Rerun viewer: a new one, or the one at ADDR "
+                        "(the run directory's evolution.rrd is written either way)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_evolve_cmd)
+
+
+def default_run_dir(config) -> str:
+    from pathlib import Path
+
+    base = Path("runs") / f"{config.episode.body}_{config.episode.controller}_seed{config.seed}"
+    path, i = base, 1
+    while path.exists():
+        i += 1
+        path = base.with_name(f"{base.name}_{i}")
+    return str(path)
+
+
+def run_evolve_cmd(args) -> int:
+    from ..evolution.evaluate import make_evaluator
+    from ..evolution.run import Run
+
+    if args.rerun is not None:  # before anything is written
+        from ..record.viewer import connect_url, require_display, require_viewer
+
+        require_display() if args.rerun == "spawn" else require_viewer(connect_url(args.rerun))
+    on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
+                                      file=sys.stderr, flush=True)
+    if args.resume:
+        if any(getattr(args, f) is not None for f in (*RUN_FLAGS, "out") if f not in ("backend", "workers", "address")):
+            raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
+        run = Run.resume(args.resume)  # locks the directory and repairs its derived files
+        try:
+            for repair in run.repairs:
+                print(f"evobiped: repaired: {repair}", file=sys.stderr)
+            if run.environment_differences:
+                print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
+                      " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
+            if run.done:
+                print(f"run {args.resume} is already complete ({run.optimizer.generation} generations)")
+                run.close()
+                return 0
+            backend = args.backend or run.config.backend
+            workers = args.workers or run.config.workers
+            address = args.address or run.config.address
+            check_workers(backend, workers, address)
+            evaluator = make_evaluator(run.config.episode, backend, workers, address, on_retry=on_retry)
+        except BaseException:
+            run.close()
+            raise
+    else:
+        config = run_config(**{f: getattr(args, f) for f in RUN_FLAGS})
+        backend, workers, address = config.backend, config.workers, config.address
+        check_workers(backend, workers, address)
+        out = args.out or default_run_dir(config)
+        evaluator = make_evaluator(config.episode, backend, workers, address, on_retry=on_retry)  # fails before any file is written
+        try:
+            run = Run.create(out, config)
+        except BaseException:
+            evaluator.close()
+            raise
+    with run:
+        return _evolve(run, evaluator, backend, args)
+
+
+def _evolve(run, evaluator, backend: str, args) -> int:
+    """The generations left, with progress lines and an optional live viewer; the summary line."""
+    from ..progress import time_left
+    from ..rundir import HISTORY
+
+    say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
+    c = run.config
+    population = len(run.optimizer.ask()[0])
+    say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
+        f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+    with evaluator, contextlib.ExitStack() as stack:
+        log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
+
+        line = Progress("evolve", c.generations, "generations", quiet=args.quiet)
+        walls, clocks = [], []  # per generation of this session: wall s, longest episode s
+
+        def progress(s):
+            if log is not None:
+                log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
+                                   evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
+            walls.append(s.wall_seconds)
+            clocks.append(s.longest_seconds)
+            # episodes lengthen as walkers learn to stay up: the time left if every generation's longest episode runs
+            # its T (the run's aim), and if they stay as short as now
+            steps = s.generations_total - s.generation - 1
+            full, short = time_left(walls, clocks, steps, ahead=c.episode.seconds), time_left(walls, clocks, steps)
+            shorter = f"; {hms(short)} if episodes stay as short as now" if short < 0.75 * full else ""
+            best = run.best or {"fitness": s.best, "fell": s.best_fell}
+            line.report(s.generation + 1, f"best {best['fitness']:.3f} {'(fell)' if best['fell'] else '(up)'}, this generation's "
+                        f"{s.best:.3f} {'(fell)' if s.best_fell else '(up)'}, mean {s.mean:.3f}, worst {s.worst:.3f}; "
+                        f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated, longest episode "
+                        f"{s.longest_seconds:.1f} s{shorter}", left=full)
+
+        try:
+            summary = run.evolve(evaluator, progress)
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
+            print(f"evobiped: interrupted after generation {run.optimizer.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
+                  f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
+            return exit_status(exc)
+    best = summary["best"]
+    state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
+    walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
+    print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
+          f"{summary['evaluations']} evaluations in {hms(summary['wall_seconds'])}; results in {run.dir}")
+    return 0
+
+
+def _viewer_log(run, rerun: str):
+    """A live viewer of the run's fitness (a new one, or the one at ADDR), started with the history so far
+    (the run's own evolution.rrd is written either way, after every generation)."""
+    from ..record.evolution_log import EvolutionLog
+    from ..rundir import history_columns
+
+    log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))
+    if run.history:
+        log.log_history(history_columns(run.history))
+    return log
+
+
+SUBCOMMANDS = (add_evolve,)

@@ -1,0 +1,96 @@
+"""``evobiped replay``: a stored genome re-simulated into a Rerun recording, figures and a video; the stored outcome checked."""
+
+from __future__ import annotations
+
+from ..flags import add_source_flag, positive_float, positive_int, refuse, walk_line
+from ..progress import Progress
+
+
+def add_replay(sub) -> None:
+    p = sub.add_parser("replay", help="re-simulate a stored genome into a Rerun recording (and figures)")
+    p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
+    p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
+    p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, or runs/<stem>/replay_<stem>.rrd for a genome file)")
+    where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
+    where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
+    p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    p.add_argument("--video", metavar="FILE", help="also render a video, MP4 or GIF by the suffix, without a display "
+                   "(MuJoCo's offscreen renderer; MUJOCO_GL unset: a display's GLFW, else EGL, else OSMesa); "
+                   "the frames go into the recording too")
+    p.add_argument("--video-size", nargs=2, type=positive_int, metavar=("W", "H"), default=[480, 360],
+                   help="size of each panel in pixels, even numbers (default 480 360; a steering walker gets one panel per source)")
+    p.add_argument("--video-fps", type=positive_float, default=25.0, metavar="FPS", help="frames per simulated second (default 25: real time)")
+    p.add_argument("--video-window", nargs=2, type=float, metavar=("T0", "T1"), help="only simulated times T0..T1 s (default: all)")
+    add_source_flag(p)
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_replay_cmd)
+
+
+def run_replay_cmd(args) -> int:
+    from pathlib import Path
+
+    from ..record.replay import default_out, replay
+    from ..record.source import resolve
+    from ..rundir import figures_dir
+
+    video_flags = args.video_window is not None or args.video_size != [480, 360] or args.video_fps != 25.0
+    if args.video is None and video_flags:
+        refuse("--video-size/--video-fps/--video-window", "they shape the video: give --video FILE too")
+    if any(v % 2 for v in args.video_size):
+        refuse("--video-size", f"width and height must be even (H.264), got {args.video_size[0]} {args.video_size[1]}")
+    if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
+        refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
+    source = resolve(args.source, args.generation)
+    figures = args.figures
+    if figures == "":
+        base = Path(args.out).parent if args.out else default_out(source).parent
+        figures = figures_dir(base, source.label)
+    seconds = args.seconds or source.config.seconds
+    progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
+    frames = Progress("replay video", 1.0, "frames rendered", quiet=args.quiet)
+    r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
+               listener=progress.listener(), sources=args.sources, video=args.video,
+               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window, progress=frames))
+    progress.finish()
+    if args.video:
+        frames.finish()
+    state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
+    print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
+    if not r.compared:
+        why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
+               if source.config.perturbed else "--source changed the sources" if args.sources and not args.seconds
+               else "--seconds changed the episode length")
+        print(f"stored fitness not compared: {why}")
+    elif r.stored_fitness is None:
+        print("stored fitness: none in the genome file")
+    elif not r.environment_differences:
+        verdict = "equals it bit for bit" if r.matches else f"DIFFERS by {r.fitness - r.stored_fitness:.3g}"
+        print(f"stored fitness   = {r.stored_fitness!r}: the replay {verdict} (same numerical environment)")
+    else:
+        print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
+        print(f"stored fitness   = {r.stored_fitness!r}: "
+              + ("the replay equals it bit for bit all the same" if r.matches else f"drift {drift_text(r.fitness, r.stored_fitness)}"))
+    if r.outcome_checked:
+        if r.environment_differences and not r.compared:
+            print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
+        print("outcome drift: " + "; ".join(r.drift))
+        print("outcome holds within the declared tolerance" if not r.outcome_failures
+              else "outcome DIFFERS: " + "; ".join(r.outcome_failures))
+    print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
+    for f in r.figures:
+        print(f"figure: {f}")
+    if r.video is not None:
+        print(f"video: {r.video}")
+    return 0 if r.reproduced else 1
+
+
+def drift_text(value: float, stored: float) -> str:
+    """``+3.4e-06 (8.2e-05 relative)``: how far a replayed fitness drifted from the stored one."""
+    d = value - stored
+    rel = f" ({abs(d) / abs(stored):.2g} relative)" if stored else ""
+    return f"{d:+.3g}{rel}"
+
+
+SUBCOMMANDS = (add_replay,)

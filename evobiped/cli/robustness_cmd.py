@@ -1,0 +1,66 @@
+"""``evobiped robustness``: the robustness battery of a stored walker; its table, JSON report and figure."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+from ..errors import UserError
+from ..flags import positive_float
+from ..progress import Progress
+from ..tasks.steer import with_sources
+
+
+def add_robustness(sub) -> None:
+    p = sub.add_parser("robustness", help="the robustness battery (pushes, target offsets, friction, slopes) for any Reil walker")
+    p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
+    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
+    p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
+                   help="pushes fall in the first stride after S s (default 10)")
+    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or runs/<stem>/ for a genome file)")
+    p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
+                   help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_robustness_cmd)
+
+
+def run_robustness_cmd(args) -> int:
+    from pathlib import Path
+
+    from ..fileio import write_json
+    from ..record.robustness_figure import robustness_figure
+    from ..record.source import resolve
+    from ..robustness import battery, summarise, table
+    from ..rundir import genome_outputs, robustness_stem
+
+    if args.push_after >= args.seconds:
+        raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
+    source = resolve(args.source, args.generation)
+    out = Path(args.out) if args.out else (source.run_dir or genome_outputs(source.genome_path))
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {out} exists and is not a directory")
+    stem = robustness_stem(source.label) if source.run_dir is not None else f"{source.genome_path.stem}_robustness"
+    progress = Progress("robustness", 1.0, quiet=args.quiet or args.json)
+    config = with_sources(source.config.nominal(), [args.sound_source] if args.sound_source else None)
+    trials = battery(config.build(), source.genome, seconds=args.seconds, push_after=args.push_after, progress=progress)
+    progress.finish()
+    rows = summarise(trials)
+    out.mkdir(parents=True, exist_ok=True)
+    report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after,
+              "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
+    write_json(out / f"{stem}.json", report)
+    seed = source.meta.get("seed")
+    who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
+    png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
+                            title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s)\n{who}")
+    if args.json:
+        print(json.dumps(rows))
+    else:
+        print(table(rows))
+        print(f"results: {out / (stem + '.json')}\nfigure: {png}")
+    return 0
+
+
+SUBCOMMANDS = (add_robustness,)

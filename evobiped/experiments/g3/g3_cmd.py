@@ -1,0 +1,85 @@
+"""``evobiped g3``: the G3 gait generator (Pribe et al. 1997) at GO levels; the gait table and diagrams."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from ...flags import positive_float, refuse
+
+
+def add_g3(sub) -> None:
+    p = sub.add_parser("g3", help="run the G3 gait generator (Pribe et al. 1997) at GO levels; gait table and PNGs")
+    from .network import PRESETS
+
+    p.add_argument("preset", help=f"parameter set: {', '.join(PRESETS)}")
+    lv = p.add_mutually_exclusive_group()
+    lv.add_argument("--go", type=float, nargs="+", metavar="I", help="GO level(s) (default: the preset's)")
+    lv.add_argument("--sweep", type=float, nargs=3, metavar=("START", "STOP", "STEP"), help="GO levels START..STOP (inclusive)")
+    p.add_argument("--continue", dest="mode", action="store_const", const="continue", default="reset",
+                   help="one run through the levels keeping the state (default: reset to zero per level)")
+    p.add_argument("--from-go", type=float, metavar="I0", help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
+    p.add_argument("--switch-at", type=positive_float, help="time of the switch from --from-go (default 30; only with --from-go)")
+    p.add_argument("--t-run", type=positive_float, help="time units per level (default: the preset's, 120)")
+    p.add_argument("--dt", type=positive_float, default=0.005, help="RK4 step in model time units (default 0.005)")
+    p.add_argument("--channels", help="channels drawn in the diagrams, names or 0-3 (default all: LF,RF,LH,RH; only with --out)")
+    p.add_argument("--out", metavar="DIR", help="write PNG gait diagrams and the frequency plot here")
+    p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.set_defaults(func=run_g3_cmd)
+
+
+def run_g3_cmd(args) -> int:
+    from . import network as g3
+    from .simulation import go_sweep
+    from ...errors import ConfigError
+
+    pre = g3.preset(args.preset)
+    if args.switch_at is not None and args.from_go is None:
+        refuse("--switch-at", "it times the switch from --from-go; give --from-go too")
+    switch_at = 30.0 if args.switch_at is None else args.switch_at
+    channels = [c.strip() for c in (args.channels or "LF,RF,LH,RH").split(",") if c.strip()]
+    if not channels:
+        raise ConfigError("--channels: the channel list is empty")
+    idx = []
+    for c in channels:
+        if c.upper() in g3.LIMBS:
+            idx.append(g3.LIMBS.index(c.upper()))
+        elif c.isdigit() and int(c) < len(g3.LIMBS):
+            idx.append(int(c))
+        else:
+            raise ConfigError(f"--channels: unknown channel {c!r} (use {', '.join(g3.LIMBS)} or 0-3)")
+    if args.channels is not None and not args.out:
+        refuse("--channels", "it picks the channels of the diagrams; give --out DIR to draw them")
+    if args.sweep:
+        a, b, step = args.sweep
+        if not step > 0 or b < a:
+            raise ConfigError("--sweep needs START <= STOP and STEP > 0")
+        levels = np.round(np.arange(a, b + step / 2, step), 10)
+    else:
+        levels = np.array(args.go if args.go else pre.go, float)
+    if (levels < 0).any() or (args.from_go is not None and args.from_go < 0):
+        raise ConfigError(f"GO levels must be >= 0, got {min(levels.min(), args.from_go or 0):g}")
+    s = go_sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
+    rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
+    files = []
+    if args.out:
+        from .g3_figures import sweep_figures
+
+        files = [str(f) for f in sweep_figures(args.out, f"g3_{pre.name}", s, idx, g3.LIMBS, title=f"G3 {pre.name} ({args.mode})")]
+    if args.json:
+        print(json.dumps({"preset": pre.name, "source": pre.source, "mode": args.mode, "levels": rows, "files": files}))
+        return 0
+    print(f"G3 {pre.name}: {pre.source}; {args.mode}" + (f" from I = {args.from_go:g} at t = {switch_at:g}" if args.from_go is not None else ""))
+    print(f"{'I':>6} {'gait':<7} {'seq':<8} {'freq':>7} {'period':>7}  {'phases LF RF LH RH':<23} {'up':>5} {'first':<7} {'settle':>6}")
+    for r in rows:
+        ph = " ".join(f"{p:.2f}" if np.isfinite(p) else "  - " for p in r["phases"])
+        print(f"{r['go']:6.3f} {r['label']:<7} {r['sequence']:<8} {r['frequency']:7.4f} {r['period']:7.3f}  {ph:<23} "
+              f"{np.mean(r['duty']):5.3f} {r['transient_label']:<7} {r['settle_time']:6.1f}")
+    print("up: mean fraction of the cycle a channel is above threshold (its limb off the ground; 1 - the duty factor)")
+    for f in files:
+        print(f"wrote {f}")
+    return 0
+
+
+SUBCOMMANDS = (add_g3,)

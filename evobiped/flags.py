@@ -1,0 +1,132 @@
+"""What the commands share: argument types, one-line refusals, the worker check, the run settings that a
+preset, a settings file and flags give, and the one-line summary of a walk.
+
+The ``evobiped`` command (:mod:`evobiped.cli`) and the experiments' own subcommands
+(``evobiped/experiments/<name>/command.py``) build their parsers and configs with these.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+
+import numpy as np
+
+from .errors import UserError
+from .tasks.steer import with_sources
+
+
+def positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v > 0 and np.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return v
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return v
+
+
+def choices_text(kind: str) -> str:
+    """The valid names of a name-valued option, for its help text: ``choices_text("body")`` -> ``"reil, taga"``."""
+    if kind == "body":
+        from .bodies import BODIES as reg
+    elif kind == "controller":
+        from .controllers import CONTROLLERS as reg
+    elif kind == "task":
+        from .tasks import TASKS as reg
+    elif kind == "backend":
+        from .evolution.evaluate import BACKENDS as reg
+    elif kind == "preset":
+        from .presets import names as preset_names
+
+        reg = preset_names()
+    else:
+        raise ValueError(kind)
+    return ", ".join(reg)
+
+
+def add_source_flag(p) -> None:
+    p.add_argument("--source", dest="sources", nargs=2, type=float, action="append", metavar=("X", "Y"),
+                   help="a sound source at (X, Y) m for the steer task, one presentation each; repeat it for several "
+                        "(default: the config's, or the paper's (10, 3) and (10, -3))")
+
+
+def refuse(flags: str, why: str) -> None:
+    """A flag that does not apply here: one line, exit 2."""
+    raise UserError(f"{flags}: {why}")
+
+
+def check_workers(backend: str, workers: int | None, address: str | None) -> None:
+    """--workers and --address must apply to the backend; more local workers than cores earns a warning line."""
+    import os
+
+    if address is not None and backend != "ray":
+        refuse("--address", f"only a Ray backend connects to a cluster (use --backend ray; the backend here is {backend})")
+    if workers is not None and backend == "serial":
+        refuse("--workers", "the serial backend runs in this process (use --backend process, thread or ray for workers)")
+    cores = os.cpu_count() or 1
+    if workers is not None and workers > cores and address is None:
+        print(f"evobiped: warning: --workers {workers} on {cores} cores: the extra workers share cores and do not run faster",
+              file=sys.stderr)
+
+
+def walk_line(walk: dict) -> str:
+    """'walked 38.7 m, -165 deg from the initial facing: backwards' from ``EpisodeResult.walk()``."""
+    from .tasks.walk import direction_words
+
+    heading = walk["heading_deg"] if walk["heading_deg"] is not None else float("nan")
+    return f"walked {walk['distance']:.2f} m, {direction_words(heading)}"
+
+
+#: the run-settings flags :func:`run_config` takes (evolve's; not --out, --resume, --rerun, --quiet)
+RUN_FLAGS = ("preset", "config", "optimizer", "body", "controller", "task", "sources", "population", "generations",
+             "episode_seconds", "cyclic", "seed", "backend", "workers", "address", "initial", "freeze")
+
+
+def run_config(*, preset: str | None = None, config: str | None = None, optimizer: str | None = None, body: str | None = None,
+               controller: str | None = None, task: str | None = None, sources=None, population: int | None = None,
+               generations: int | None = None, episode_seconds: float | None = None, cyclic: bool | None = None,
+               seed: int | None = None, backend: str | None = None, workers: int | None = None, address: str | None = None,
+               initial: str | None = None, freeze: str | None = None):
+    """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
+    from .episode import EpisodeConfig
+    from .evolution.run import RunConfig
+    from .fileio import read_toml
+    from .tasks import TASKS
+
+    from .presets import merge, path
+
+    d = read_toml(path(preset)) if preset else {}
+    if config:
+        d = merge(d, read_toml(config))
+    ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
+    ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
+    for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
+        if value is not None:
+            ep[key] = value
+    task_name = ep.get("task", EpisodeConfig.task) if isinstance(ep, dict) else None
+    if cyclic and task_name in TASKS:  # the task's cyclic criterion (an unknown task is refused below)
+        ep["task_options"] = {**ep.get("task_options", {}), **TASKS[task_name].criterion("cyclic", "--cyclic")}
+    if population is not None:  # the population of either optimizer
+        ga["population"] = population
+        d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": population}
+    for key, value in (("optimizer", optimizer), ("generations", generations), ("seed", seed), ("backend", backend),
+                       ("workers", workers), ("address", address), ("initial", initial)):
+        if value is not None:
+            d[key] = value
+    if freeze:
+        d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
+    where = config or (f"preset {preset}" if preset else "")
+    built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    return dataclasses.replace(built, episode=with_sources(built.episode, sources))
