@@ -87,7 +87,6 @@ class Blend(Controller):
         names = list(teacher.input_names) + [n for n in student.input_names if n not in teacher.input_names]
         self.input_names = tuple(names)
         self.input_norm = None
-        self._widths = {}
         self.low, self.high, self.action_kind = low, high, action_kind
         self.latency, self.beta = int(latency), float(beta)
         #: per tick: (student inputs (n, k), labels (n, n_act))

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .episode import EpisodeResult
+from .episode_result import EpisodeResult
 from .tasks.walk import displacement_heading
 
 

@@ -15,6 +15,7 @@ LAYERS: list[set[str]] = [
     {"contract", "options"},
     {"perturb"},
     {"bodies", "controllers", "tasks"},
+    {"episode_result"},
     {"episode"},
     {"envs", "genome_file", "rundir", "outcome"},
     {"robustness", "distill"},

@@ -350,32 +350,6 @@ def rerun_series(path, entity) -> dict[int, float]:
     return out
 
 
-def test_ctrl_c_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch):
-    """SIGINT between writing checkpoint.json and history.csv is raised only after both are written."""
-    import evobiped.evolution.run as runmod
-
-    run = Run.create(tmp_path / "r", SMALL)
-    write = runmod.write_json
-
-    def write_then_interrupt(path, obj):
-        write(path, obj)
-        if Path(path).name == "checkpoint.json":
-            # to this (the main) thread: a process-directed kill may land in another thread (Rerun's, say)
-            # and reach the interpreter only after the deferral ended, which makes the test flaky
-            signal.raise_signal(signal.SIGINT)
-
-    monkeypatch.setattr(runmod, "write_json", write_then_interrupt)
-    # Ctrl-C as a terminal delivers it, even in a background job (which ignores SIGINT) or after a test that changed it
-    old = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        with make_evaluator(SMALL.episode, "serial") as ev, pytest.raises(KeyboardInterrupt):
-            run.evolve(ev)
-    finally:
-        signal.signal(signal.SIGINT, old)
-    ck = json.loads((run.dir / "checkpoint.json").read_text())
-    assert len(ck["history"]) == len(fitness_history(run.dir)) == 1
-
-
 def test_a_resume_in_another_numerical_environment_says_so(tmp_path, capsys):
     """config.json records where the run started; a resume elsewhere notes that bit-identity ends there."""
     from evobiped.cli import main

@@ -7,7 +7,7 @@ import pytest
 
 from evobiped.controllers import CTRNN
 from evobiped.errors import ConfigError
-from evobiped.episode import EpisodeResult
+from evobiped.episode_result import EpisodeResult
 from evobiped.evolution.ga import GA, GAOptions
 from evobiped.evolution.individuals import Individuals
 from evobiped.genome import GeneBlock, GenomeLayout

@@ -19,7 +19,8 @@ import dataclasses
 
 import numpy as np
 
-from ..episode import Episode, EpisodeConfig, EpisodeResult
+from ..episode import Episode, EpisodeConfig
+from ..episode_result import EpisodeResult
 from ..errors import STOP_SIGNALS, ConfigError, UserError
 from ..net import connect_error
 from .pool import silenced_stderr, spawn_pool, stop_pool

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..episode import walk_summary
+from ..episode_result import walk_summary
 from ..errors import UserError
 
 #: the outcome of an individual beside its fitness: name -> value before it is known
@@ -33,7 +33,7 @@ class Individuals:
     walk: dict[str, np.ndarray] = field(default_factory=dict)
 
     def told(self, unknown: np.ndarray, result) -> None:
-        """The :class:`~evobiped.episode.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in order."""
+        """The :class:`~evobiped.episode_result.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in order."""
         n = len(unknown)
         rows = np.flatnonzero(unknown)
         displacement, heading = result.displacements()

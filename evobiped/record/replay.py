@@ -125,7 +125,8 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
 
     from .evolution_log import log_history
     from ..episode import Listeners
-    from .figures import fitness_label, replay_figures, steering_figures
+    from .figures import fitness_label, replay_figures
+    from .steering_figures import steering_figures
     from .rerun_recorder import RerunRecorder, blueprint, log_presentations
     from .viewer import connect_url, flush, require_viewer
 
