@@ -28,7 +28,8 @@ from .genome import GenomeLayout
 from .options import given, parse, refuse_unknown
 from .validate import number
 from .mapping import MAPS, to_action
-from .perturb import PerturbationOptions, Trials
+from . import gait
+from .perturb import PerturbationOptions, Trials, assist_torque
 from .sim import Sims
 from .tasks import TASKS
 from .tasks.base import Task
@@ -247,6 +248,8 @@ class EpisodeState:
     pending: list = field(default_factory=list)
     #: the tick at which each row began ``(n,)`` (0; later for a row :meth:`Episode.restart` began anew)
     born: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    #: N m/rad: each row's pelvis assistance ``(n,)`` (None: none; see :mod:`evobiped.perturb`)
+    assist: np.ndarray | None = None
 
     @property
     def time(self) -> float:
@@ -372,6 +375,7 @@ class Episode:
             control_dt=self.control_dt, n_ticks=n_ticks, trials=trials, trial=trial, born=np.zeros(P, int),
             noise=trials.noise() if trials is not None else None,
             offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
+            assist=trials.assist[trial] if trials is not None and trials.assist is not None else None,
         )
 
     def restart(self, state: EpisodeState, ids: np.ndarray, *, pose: Pose | None = None) -> EpisodeState:
@@ -383,6 +387,8 @@ class Episode:
         if pose is not None:
             pose(sims, ids)
         self.task.restart(body, sims, state.task, ids)
+        if "gait" in sims.extra:
+            gait.restart(body.contacts(sims)[ids], sims, ids)
         state.alive[ids], state.fell[ids], state.unstable[ids] = True, False, False
         state.end_time[ids] = state.n_ticks * self.control_dt
         state.start_position[ids] = body.planar_position(sims)[ids]
@@ -442,9 +448,11 @@ class Episode:
             st.pending.append(action)
             action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
         body.apply(sims, ids, action[ids])
-        bad = self._advance(sims, ids)
+        bad = self._advance(sims, ids) if st.assist is None else self._assisted(sims, ids, st.assist[ids], trials.assist_damping)
         st.ticks = k + 1
         t = (k + 1) * self.control_dt
+        if "gait" in sims.extra:  # a controller reads the gait senses
+            gait.update(body.contacts(sims)[ids], sims, ids)
         task.on_tick(body, sims, tstate, ids, ~bad, neurons)
         if listener is not None:
             listener.tick(t, sims, ids, neurons, action, tstate)
@@ -492,6 +500,16 @@ class Episode:
     def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         """One control period of physics for ``ids``; bool mask of blow-ups."""
         return self.body.advance(sims, ids, self.substeps)
+
+    def _assisted(self, sims: Sims, ids: np.ndarray, stiffness: np.ndarray, damping: float) -> np.ndarray:
+        """:meth:`_advance` with the pelvis assistance (``stiffness`` ``(len(ids),)`` N m/rad) set on the trunk before
+        every physics step."""
+        bad = np.zeros(len(ids), bool)
+        b = self._trunk
+        for _ in range(self.substeps):
+            sims.xfrc_applied[ids, b, 3:] = assist_torque(stiffness, damping, sims.xmat[ids, b], sims.cvel[ids, b, :3])
+            bad |= self.body.advance(sims, ids, 1)
+        return bad
 
 
 def build_episode(**config: Any) -> Episode:

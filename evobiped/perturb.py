@@ -9,7 +9,23 @@ with its own disturbances (:class:`Trials`, one row per presentation):
 * **target noise**: Gaussian noise (rad) on each PD target, new every control tick;
 * **initial-pose noise**: Gaussian noise (rad) on each actuated joint's angle at t = 0;
 * **ground**: the floor's sliding friction and a slope (grade, rise over run,
-  uphill along +x, the walker's initial facing), the same for every row of a batch.
+  uphill along +x, the walker's initial facing), the same for every row of a batch;
+* **pelvis assistance** (a curriculum, not a disturbance): a roll/pitch stiffness
+  k (N m/rad) and damping c = ``assist_damping`` k (N m s/rad) that hold the
+  trunk upright, applied before every physics step (applied once per control
+  tick it destabilises the light pelvis): the torque on the trunk is
+
+      tau = k (z_b x e_z) - c (omega - (omega . e_z) e_z)
+
+  with z_b the trunk's up axis and omega its angular velocity (world frame):
+  about |tau| = k sin(tilt) towards upright, blind to the heading (no yaw torque).
+  It fades to zero over ``assist_generations`` steps of a clock, k(c) =
+  ``assist`` max(0, 1 - c / ``assist_generations``); the clock is the
+  generation, or, with ``assist_gate`` > 0 m, the number of earlier generations
+  whose best genome's fitness reached the gate (each reduction is earned by
+  walking under the current assistance).  ``assist_levels`` scores each genome
+  at several fractions of the current assistance, presentation r at
+  ``assist_levels[r mod L]`` (e.g. [1, 0.5]: what the next reductions will ask).
 
 :class:`PerturbationOptions` (``[episode.perturbations]`` in a config) says how
 the trials of an evolutionary run are drawn: from (run seed, generation) only,
@@ -51,6 +67,12 @@ def _friction(v) -> None:
         raise ConfigError(f"must be [] or [low, high] with 0 < low <= high, got {v!r}")
 
 
+def _levels(v) -> None:
+    lv = tuple(v) if isinstance(v, (list, tuple)) else None
+    if not lv or any(not isinstance(x, (int, float)) or isinstance(x, bool) or not 0 <= x <= 1 for x in lv):
+        raise ConfigError(f"must be a non-empty list of fractions 0 <= f <= 1, got {v!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class PerturbationOptions:
     """How an evolutionary run draws each generation's perturbed presentations."""
@@ -68,10 +90,25 @@ class PerturbationOptions:
     friction: tuple[float, ...] = option((), "floor friction [low, high], one uniform draw per generation; [] keeps the model's",
                                          check=_friction, span="[], or 0 < low <= high")
     aggregate: str = option("mean", "how presentations combine into a genome's fitness", choices=tuple(AGGREGATES))
+    assist: float = option(0.0, "pelvis assistance at the start: roll/pitch stiffness holding the trunk upright, faded to 0",
+                           unit="N m/rad", low=0)
+    assist_generations: int = option(0, "steps of the assistance clock over which it fades linearly to zero (>= 1 with assist)",
+                                     low=0, integer=True)
+    assist_gate: float = option(0.0, "fitness a generation's best must reach for the clock to advance (0: the clock is the generation)",
+                                low=0)
+    assist_levels: tuple[float, ...] = option((1.0,), "fractions of the current assistance, presentation r at levels[r mod L]",
+                                              check=_levels, span="[f, ...], 0 <= f <= 1")
+    assist_damping: float = option(0.05, "assistance damping per unit stiffness (c = assist_damping k)", unit="s", low=0, high=1)
 
     def __post_init__(self):
         check_fields(self, "episode.perturbations")
         object.__setattr__(self, "friction", tuple(float(v) for v in self.friction))
+        object.__setattr__(self, "assist_levels", tuple(float(v) for v in self.assist_levels))
+        if self.assist > 0 and self.assist_generations < 1:
+            raise ConfigError(f"assist_generations: the assistance must fade to zero over >= 1 generations, got {self.assist_generations}")
+        if self.assist > 0 and len(self.assist_levels) > self.presentations:
+            raise ConfigError(f"assist_levels: {len(self.assist_levels)} levels need as many presentations "
+                              f"(presentations = {self.presentations})")
 
     @classmethod
     def from_dict(cls, d: dict) -> "PerturbationOptions":
@@ -81,11 +118,25 @@ class PerturbationOptions:
     def active(self) -> bool:
         """Anything to perturb (or several presentations to aggregate)."""
         return self.presentations > 1 or self.pushes > 0 or bool(self.friction) or any(
-            getattr(self, n) > 0 for n in ("target_offset", "target_noise", "pose_noise")
+            getattr(self, n) > 0 for n in ("target_offset", "target_noise", "pose_noise", "assist")
         )
 
-    def draw(self, key: tuple[int, int], *, seconds: float, n_actuators: int) -> "Trials":
-        """The trials of one generation, from ``key`` = (run seed, generation) only."""
+    def assist_clock(self, generation: int, best: list[float]) -> int:
+        """The assistance clock at ``generation``: the generation itself, or (gated) how many of the earlier
+        generations' best fitness ``best`` (one per generation, in order) reached ``assist_gate``."""
+        if self.assist_gate <= 0:
+            return int(generation)
+        return int(sum(b >= self.assist_gate for b in best[:generation]))
+
+    def assist_at(self, clock: int) -> float:
+        """The assistance stiffness (N m/rad) at this clock: ``assist`` faded linearly to 0 over ``assist_generations``."""
+        if self.assist <= 0:
+            return 0.0
+        return self.assist * max(0.0, 1.0 - clock / self.assist_generations)
+
+    def draw(self, key: tuple[int, ...], *, seconds: float, n_actuators: int) -> "Trials":
+        """The trials of one generation, from ``key`` = (run seed, generation) only; a third element, when given,
+        is the assistance clock (:meth:`assist_clock`; default the generation)."""
         rng = np.random.default_rng([int(key[0]), int(key[1]), 0x7E57])
         R, k = self.presentations, self.pushes
         last = max(self.push_after, seconds - self.push_duration)
@@ -102,7 +153,17 @@ class PerturbationOptions:
             pose_offset=rng.normal(0.0, self.pose_noise, (R, n_actuators)) if self.pose_noise else np.zeros((R, n_actuators)),
             friction=float(rng.uniform(*self.friction)) if self.friction else None,
             aggregate=self.aggregate,
+            assist=self._assist_rows(int(key[2]) if len(key) > 2 else int(key[1])),
+            assist_damping=self.assist_damping,
         )
+
+    def _assist_rows(self, clock: int) -> np.ndarray | None:
+        """``(R,)`` N m/rad per presentation at this clock; None without assistance."""
+        k = self.assist_at(clock)
+        if k <= 0:
+            return None
+        levels = self.assist_levels
+        return k * np.array([levels[r % len(levels)] for r in range(self.presentations)])
 
 
 @dataclass
@@ -127,6 +188,10 @@ class Trials:
     #: grade (rise over run), uphill along +x
     slope: float = 0.0
     aggregate: str = "mean"
+    #: N m/rad, ``(R,)``: the trunk's upright stiffness per presentation (None: no assistance)
+    assist: np.ndarray | None = None
+    #: s: damping (N m s/rad) per unit of that stiffness
+    assist_damping: float = 0.05
 
     @property
     def R(self) -> int:
@@ -149,6 +214,21 @@ class Trials:
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         """``(P, R)`` presentation fitness -> ``(P,)`` by the aggregate."""
         return AGGREGATES[self.aggregate](fitness)
+
+
+def assist_torque(stiffness: np.ndarray, damping: float, xmat: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """The assistance torque on the trunk, world frame: ``(n, 3)`` N m.
+
+    ``stiffness`` ``(n,)`` N m/rad, ``damping`` s (c = damping * stiffness), ``xmat`` ``(n, 9)`` the trunk's
+    orientation (row-major), ``omega`` ``(n, 3)`` its angular velocity (rad/s, world frame).  Restoring:
+    k (z_b x e_z) = k (z_y, -z_x, 0); damping: -c on the horizontal components of omega.
+    """
+    k = stiffness[:, None]
+    tau = np.zeros((len(stiffness), 3))
+    # z_b = column 2 of the rotation: (m02, m12, m22) = xmat[:, 2], [:, 5], [:, 8]
+    tau[:, 0], tau[:, 1] = xmat[:, 5], -xmat[:, 2]
+    tau[:, :2] = k * tau[:, :2] - damping * k * omega[:, :2]
+    return tau
 
 
 class TargetNoise:

@@ -93,6 +93,10 @@ class Body(ABC):
     def apply(self, sims: Sims, ids: np.ndarray, action: np.ndarray) -> None:
         """Set the actuators of simulations ``ids`` to ``action`` ``(len(ids), n_act)``."""
 
+    def contacts(self, sims: Sims) -> np.ndarray:
+        """Which feet touch the ground, ``(n, legs)`` bool in the order of :attr:`contact_sensor`."""
+        return self.sensors(sims)[self.contact_sensor[0]] > 0
+
     def substep(self, sims: Sims, ids: np.ndarray) -> None:
         """Custom forces before each physics step (only if ``has_custom_forces``)."""
 

@@ -38,6 +38,7 @@ from ..contract import Actuator
 from ..errors import UserError
 from ..sim import Sims
 from ..options import option
+from .. import gait
 from .base import Body, model_file_option
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
@@ -96,6 +97,7 @@ class ReilBiped(Body):
         "pelvis_tilt_rate": 2,
         "com_from_feet": 4,
         "com_velocity": 2,
+        **gait.WIDTHS,
     }
     #: standing values (the reset pose: straight legs, feet under the hips 0.25 m either side of the centre of
     #: mass) and scales of about one standard deviation of each reading in a 50 s walk of a balance walker
@@ -107,6 +109,7 @@ class ReilBiped(Body):
         "pelvis_tilt_rate": ((0.0, 0.0), (1.5, 1.5)),
         "com_from_feet": ((0.0, -0.25, 0.0, 0.25), (0.1, 0.1, 0.1, 0.1)),
         "com_velocity": ((0.0, 0.0), (0.5, 0.5)),
+        **gait.NORMS,
     }
 
     Options: ClassVar[type] = ReilOptions
@@ -175,7 +178,8 @@ class ReilBiped(Body):
         * ``pelvis_tilt`` ``(P, 2)``: pitch (rad, + nose down), roll (rad, + left side up);
         * ``pelvis_tilt_rate`` ``(P, 2)``: their rates (rad/s);
         * ``com_from_feet`` ``(P, 4)``: centre of mass minus left foot (forward, left), minus right foot (m);
-        * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s).
+        * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s);
+        * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.gait`; left = +1).
         """
         R = sims.xmat[:, self._pelvis].reshape(-1, 3, 3)
         fwd = self.heading(sims)
@@ -184,16 +188,21 @@ class ReilBiped(Body):
         tilt = np.stack([-np.arcsin(np.clip(R[:, 2, 0], -1, 1)), np.arcsin(np.clip(R[:, 2, 1], -1, 1))], axis=1)
         omega = sims.cvel[:, self._pelvis, :2]  # world angular velocity, x and y
         com = sims.subtree_com[:, self._pelvis, None, :2] - sims.site_xpos[:, self._feet, :2]  # (P, 2 feet, 2)
+        contact = self.contacts(sims)
         return {
             "joint_angles": sims.qpos[:, self._qadr],
             "joint_velocities": sims.qvel[:, self._dadr],
-            "foot_contact": (sims.sensordata[:, self._touch] > 0).astype(float),
+            "foot_contact": contact.astype(float),
             "pelvis_tilt": tilt,
             # pitch is a rotation about the left axis, roll about the forward axis
             "pelvis_tilt_rate": np.einsum("pij,pj->pi", frame, omega)[:, ::-1],
             "com_from_feet": np.einsum("pij,pfj->pfi", frame, com).reshape(-1, 4),
             "com_velocity": np.einsum("pij,pj->pi", frame, self._com_velocity(sims)[:, :2]),
+            **gait.read(contact, sims),
         }
+
+    def contacts(self, sims: Sims) -> np.ndarray:
+        return sims.sensordata[:, self._touch] > 0
 
     def _com_velocity(self, sims: Sims) -> np.ndarray:
         """``(P, 3)`` m/s: the mass-weighted velocity of the links' centres of mass.
