@@ -16,6 +16,11 @@ would do there, add those to a growing data set, refit, repeat.  Here:
   scored unless the window starts with its episode (where the network too starts from rest); the loss is the mean squared error of the student's PD targets (after its motor map), in rad^2.
   Genes are kept inside their bounds after every step.  JAX is an optional dependency
   (``pip install 'evobiped[distill]'``): it differentiates the network's recurrence exactly, fast on a CPU.
+- **Selection.**  Each iteration's student is a candidate (later ones imitate better, but an imitation can
+  settle into a gait that drifts or falls late).  Each runs alone for its episode (``seconds`` of the
+  student's config) and, if up, for ``select_seconds``; the one returned is the best by, in order: up through
+  ``select_seconds``, walking within ``heading_limit`` of its initial facing in its episode, then the
+  distance along that facing.  ``select_seconds = 0`` keeps the last iteration's.
 
 The student is the ``ctrnn`` controller with the options of a network fit for senses (:data:`STUDENT`; any of
 them may be changed).  The result is a genome file like any other: ``evolve --from``, ``replay``, ``robustness``
@@ -63,6 +68,11 @@ class DistillOptions:
     batch: int = option(32, "windows per Adam step", low=1, high=10**5, integer=True)
     learning_rate: float = option(1e-2, "Adam's initial learning rate (gene units), decaying tenfold over all the steps",
                                   above=0, high=1)
+
+    select_seconds: float = option(200.0, "each iteration's student runs this long alone; the best is kept (0: the last one)",
+                                   unit="s", low=0, high=10000)
+    heading_limit: float = option(30.0, "selection prefers students walking within this angle of their initial facing",
+                                  unit="deg", above=0, high=180)
 
     def __post_init__(self):
         if self.burn_in >= self.window:
@@ -316,6 +326,8 @@ class DistillReport:
     genome: np.ndarray
     config: EpisodeConfig
     iterations: list[dict]
+    #: the iteration (1-based) whose student :attr:`genome` is
+    chosen: int = 0
 
 
 def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None = None, *,
@@ -338,7 +350,7 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
     say = progress or (lambda line: None)
     fitter = Fitter(student, options, seed)
     data: list[Rollouts] = []
-    rows = []
+    rows, students = [], []
     for i in range(options.iterations):
         beta = 1.0 if i == 0 else options.beta0 * 0.5 ** (i - 1)
         data.append(collect(teacher_cfg, teacher_genome, student, fitter.student_genome, beta=beta, options=options,
@@ -346,7 +358,8 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
         ticks = int(sum(d.alive.sum() for d in data))
         rmse = fitter.fit(data, progress=lambda s, e: say(f"iteration {i + 1}/{options.iterations}: step {s}/{options.steps}, "
                                                         f"window RMS error {e:.4f} rad"))
-        alone = student.build().run(fitter.student_genome)
+        students.append(fitter.student_genome.copy())
+        alone = student.build().run(students[-1])
         walk = alone.walk()
         row = dict(iteration=i + 1, teacher_share=beta, ticks=ticks, rms_error=round(rmse, 5), fell=bool(alone.fell[0]),
                    end_time=float(alone.end_time[0]), distance=round(walk["distance"], 3), heading_deg=walk["heading_deg"])
@@ -354,7 +367,32 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
         say(f"iteration {i + 1}/{options.iterations}: teacher share {beta:g}, {ticks} ticks, RMS error {rmse:.4f} rad; "
             f"student alone: {'fell at %.1f s' % row['end_time'] if row['fell'] else 'up %g s' % row['end_time']}, "
             f"{row['distance']:.2f} m")
-    return DistillReport(genome=fitter.student_genome, config=student, iterations=rows)
+    chosen = select(student, students, rows, options, say)
+    return DistillReport(genome=students[chosen], config=student, iterations=rows, chosen=chosen + 1)
+
+
+def select(student: EpisodeConfig, genomes: list[np.ndarray], rows: list[dict], options: DistillOptions,
+           say: Callable[[str], None]) -> int:
+    """The index of the best student (see the module docstring); adds ``up_long`` (bool: up through
+    ``select_seconds``) to the row of every student that was up through its episode."""
+    if options.select_seconds <= 0:
+        return len(genomes) - 1
+    up = [i for i, r in enumerate(rows) if not r["fell"]]
+    if up:
+        long = student.build().run(np.array([genomes[i] for i in up]), seconds=options.select_seconds)
+        for j, i in enumerate(up):
+            rows[i]["up_long"] = not bool(long.fell[j])
+
+    def key(i: int) -> tuple:
+        r = rows[i]
+        heading = r["heading_deg"] if r["heading_deg"] is not None and np.isfinite(r["heading_deg"]) else 180.0
+        straight = abs(heading) <= options.heading_limit
+        return (r.get("up_long", False), not r["fell"], straight, r["distance"] * np.cos(np.radians(heading)), r["end_time"])
+
+    best = max(range(len(genomes)), key=key)
+    say(f"selected iteration {best + 1}'s student (each up {options.select_seconds:g} s: "
+        + ", ".join(f"{i + 1}: {'yes' if r.get('up_long') else 'no'}" for i, r in enumerate(rows)) + ")")
+    return best
 
 
 def parse_options(values: dict) -> DistillOptions:

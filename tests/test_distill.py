@@ -65,3 +65,18 @@ def test_a_bad_student_is_one_line():
         student_config(cfg, {"n_neurons": 0})
     with pytest.raises(ConfigError, match="normalises its inputs, but no standing value"):
         student_config(EpisodeConfig(body="taga", controller="matsuoka"), {"inputs": ["link_angles"]}).build()
+
+
+def test_selection_trusts_the_long_run_over_the_episode():
+    """A candidate that looks best in its episode but falls in the long run loses to one that stays up; with
+    select_seconds = 0 the last iteration's student is kept."""
+    from evobiped.distill import select
+
+    walker, cfg, _ = load_genome(WALKERS / "ctrnn_distilled_seed5.json")
+    limp = np.array(cfg.build().controller.layout.low)  # every gene at its lower bound: falls at once
+    rows = [dict(fell=False, end_time=50.0, distance=31.0, heading_deg=28.0),
+            dict(fell=False, end_time=50.0, distance=40.0, heading_deg=0.0)]  # claims a better episode
+    assert select(cfg, [walker, limp], [dict(r) for r in rows], DistillOptions(select_seconds=0), print) == 1
+    checked = [dict(r) for r in rows]
+    assert select(cfg, [walker, limp], checked, DistillOptions(select_seconds=60.0), print) == 0
+    assert checked[0]["up_long"] and not checked[1]["up_long"]

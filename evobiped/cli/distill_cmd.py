@@ -69,11 +69,11 @@ def run_distill_cmd(args) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     save_genome(out, report.genome, student, fitness=float(done.fitness[0]), fell=bool(done.fell[0]),
                 end_time=float(done.end_time[0]), seed=args.seed, teacher=str(source.genome_path),
-                distill=dataclasses.asdict(options), iterations=report.iterations, outcome=outcome(done, episode.task.targets()))
+                distill=dataclasses.asdict(options), iterations=report.iterations, chosen_iteration=report.chosen, outcome=outcome(done, episode.task.targets()))
     write_json(out.with_name(out.stem + "_distill.json"), {"teacher": str(source.genome_path), "options": dataclasses.asdict(options),
-                                                          "iterations": report.iterations})
+                                                          "iterations": report.iterations, "chosen_iteration": report.chosen})
     state = f"fell at t = {done.end_time[0]:.2f} s" if done.fell[0] else f"stayed up for {done.end_time[0]:.1f} s"
-    print(f"student ({student.controller_options.n_neurons} neurons): {state}; {walk_line(done.walk())}")
+    print(f"student ({student.controller_options.n_neurons} neurons, iteration {report.chosen}): {state}; {walk_line(done.walk())}")
     print(f"genome file: {out}")
     return 0
 
