@@ -17,10 +17,9 @@ would do there, add those to a growing data set, refit, repeat.  Here:
   Genes are kept inside their bounds after every step.  JAX is an optional dependency
   (``pip install 'evobiped[distill]'``): it differentiates the network's recurrence exactly, fast on a CPU.
 - **Selection.**  Each iteration's student is a candidate (later ones imitate better, but an imitation can
-  settle into a gait that drifts or falls late).  Each runs alone for its episode (``seconds`` of the
-  student's config) and, if up, for ``select_seconds``; the one returned is the best by, in order: up through
-  ``select_seconds``, walking within ``heading_limit`` of its initial facing in its episode, then the
-  distance along that facing.  ``select_seconds = 0`` keeps the last iteration's.
+  settle into a gait that drifts or falls late); :func:`evobiped.selection.best_candidate` keeps the one that is up
+  through ``select_seconds`` alone, then walks within ``heading_limit`` of its initial facing, then farthest
+  along it.  ``select_seconds = 0`` keeps the last iteration's.
 
 The student is the ``ctrnn`` controller with the options of a network fit for senses (:data:`STUDENT`; any of
 them may be changed).  The result is a genome file like any other: ``evolve --from``, ``replay``, ``robustness``
@@ -35,12 +34,14 @@ from typing import Any, Callable
 
 import numpy as np
 
+from . import gait
 from .controllers.base import Controller
 from .episode import EpisodeConfig
 from .errors import ConfigError, UserError
 from .mapping import to_action
 from .options import option, parse
 from .perturb import PerturbationOptions
+from .selection import best_candidate, try_candidates
 
 #: the student's controller options: every sense of the Reil body normalised, 40 neurons whose outputs follow
 #: the update, ln-tau genes down to the control period, centre-crossing biases, the full-range motor map
@@ -333,11 +334,13 @@ class DistillReport:
 def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None = None, *,
                    seconds: float | None = None) -> EpisodeConfig:
     """The student's episode: the teacher's body and task, ``seconds`` long (default the teacher's), the ``ctrnn``
-    controller with :data:`STUDENT` (and ``overrides``) reading every sensor the body declares a standing value for;
-    no latency, no perturbations."""
+    controller with :data:`STUDENT` (and ``overrides``) reading every sensor the body declares a standing value for
+    but the gait senses (:mod:`evobiped.gait`: the teacher's phase is learnt from the instantaneous senses;
+    ``inputs`` in ``overrides`` adds them); no latency, no perturbations."""
     from .bodies import BODIES
 
-    opts = {**STUDENT, "inputs": [n for n in BODIES[teacher_cfg.body].sensor_norms], **(overrides or {})}
+    senses = [n for n in BODIES[teacher_cfg.body].sensor_norms if n not in gait.NAMES]
+    opts = {**STUDENT, "inputs": senses, **(overrides or {})}
     if isinstance(opts.get("n_neurons"), (int, float)) and not isinstance(opts["n_neurons"], bool) and opts["n_neurons"] <= 0:
         raise ConfigError(f"student n_neurons must be > 0, got {opts['n_neurons']}")
     return dataclasses.replace(teacher_cfg, controller="ctrnn", controller_options=opts, perturbations={},
@@ -373,25 +376,16 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
 
 def select(student: EpisodeConfig, genomes: list[np.ndarray], rows: list[dict], options: DistillOptions,
            say: Callable[[str], None]) -> int:
-    """The index of the best student (see the module docstring); adds ``up_long`` (bool: up through
-    ``select_seconds``) to the row of every student that was up through its episode."""
+    """The index of the best student (:func:`evobiped.selection.best_candidate` over their runs alone); adds ``up_long``
+    (bool: up through ``select_seconds``) to the row of every student."""
     if options.select_seconds <= 0:
         return len(genomes) - 1
-    up = [i for i, r in enumerate(rows) if not r["fell"]]
-    if up:
-        long = student.build().run(np.array([genomes[i] for i in up]), seconds=options.select_seconds)
-        for j, i in enumerate(up):
-            rows[i]["up_long"] = not bool(long.fell[j])
-
-    def key(i: int) -> tuple:
-        r = rows[i]
-        heading = r["heading_deg"] if r["heading_deg"] is not None and np.isfinite(r["heading_deg"]) else 180.0
-        straight = abs(heading) <= options.heading_limit
-        return (r.get("up_long", False), not r["fell"], straight, r["distance"] * np.cos(np.radians(heading)), r["end_time"])
-
-    best = max(range(len(genomes)), key=key)
-    say(f"selected iteration {best + 1}'s student (each up {options.select_seconds:g} s: "
-        + ", ".join(f"{i + 1}: {'yes' if r.get('up_long') else 'no'}" for i, r in enumerate(rows)) + ")")
+    trials = try_candidates(student, np.array(genomes), options.select_seconds)
+    for row, t in zip(rows, trials):
+        row["up_long"] = bool(t.get("up_long", False))
+    best = best_candidate(trials, options.heading_limit)
+    say(f"selected iteration {best + 1}'s student (up {options.select_seconds:g} s: "
+        + ", ".join(f"{i + 1}: {'yes' if r['up_long'] else 'no'}" for i, r in enumerate(rows)) + ")")
     return best
 
 

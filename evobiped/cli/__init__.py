@@ -21,7 +21,7 @@ from .. import __version__
 from ..errors import UserError, exit_status, stop_on_signals
 
 #: the core's subcommand modules, in the order ``evobiped --help`` lists them (the experiments' follow)
-CORE = ("episode_cmd", "evolve_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd")
+CORE = ("episode_cmd", "evolve_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd", "select_cmd")
 
 
 class _Parser(argparse.ArgumentParser):

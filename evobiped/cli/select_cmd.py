@@ -1,0 +1,72 @@
+"""``evobiped select``: the walker of a run chosen by simulating its best candidates for longer (selected.json)."""
+
+from __future__ import annotations
+
+from ..errors import UserError
+from ..flags import positive_float, positive_int
+
+
+def add_select(sub) -> None:
+    p = sub.add_parser("select", help="re-simulate a run's fittest generation bests (and its --from genome) for longer; "
+                                      "writes the best as selected.json")
+    p.add_argument("run", metavar="RUN", help="a run directory")
+    p.add_argument("--top", type=positive_int, default=8, metavar="K", help="the generation bests of the K fittest generations (default 8)")
+    p.add_argument("--seconds", type=positive_float, default=200.0, metavar="S",
+                   help="each candidate up through its episode runs S s alone (default 200)")
+    p.add_argument("--heading-limit", type=positive_float, default=30.0, metavar="DEG",
+                   help="prefer walkers within DEG of their initial facing (default 30)")
+    p.set_defaults(func=run_select_cmd)
+
+
+def run_select_cmd(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from .. import rundir
+    from ..fileio import read_json, write_json
+    from ..genome_file import load_genome, save_genome
+    from ..outcome import outcome
+    from ..selection import best_candidate, try_candidates
+
+    d = Path(args.run)
+    if not (d / rundir.CONFIG).is_file() or not (d / rundir.HISTORY).is_file():
+        raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
+    best = rundir.read_history(d / rundir.HISTORY)["best"]
+    top = [int(g) for g in np.argsort(-best, kind="stable")[:args.top]]
+    paths = [rundir.generation_file(d, g) for g in top]
+    missing = [p for p in paths if not p.is_file()]
+    if missing:
+        raise UserError(f"{missing[0]} is missing: the run directory is incomplete (resume it first)")
+    candidates = [load_genome(p) for p in paths]
+    labels = [f"generation {g}" for g in top]
+    cfg = read_json(d / rundir.CONFIG, what="run config")
+    initial = cfg.get("initial") if isinstance(cfg, dict) else None
+    if initial:  # first: kept unless a tuned genome beats it
+        src = Path(initial) / rundir.BEST if Path(initial).is_dir() else Path(initial)
+        if not src.is_file():
+            raise UserError(f"the run started from {initial}, which is no longer there")
+        candidates.insert(0, load_genome(src))
+        labels.insert(0, f"start ({src})")
+    config = candidates[-1][1]
+    genomes = np.array([c[0] for c in candidates])
+    rows = try_candidates(config, genomes, args.seconds)
+    k = best_candidate(rows, args.heading_limit)
+    print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}")
+    for i, (label, r) in enumerate(zip(labels, rows)):
+        ep = "fell %.1f s" % r["end_time"] if r["fell"] else "up"
+        h = "-" if r["heading_deg"] is None else f"{r['heading_deg']:+.0f} deg"
+        mark = "  <- selected" if i == k else ""
+        print(f"{label:<40}{ep:>14}{r['distance']:>14.2f}{h:>9}{'yes' if r.get('up_long') else 'no':>10}{mark}")
+    out = d / "selected.json"
+    genome, cfg, meta = candidates[k]
+    done = cfg.nominal().build().run(genome)
+    save_genome(out, genome, cfg, **{**meta, "selected_from": labels[k], "up_long_seconds": args.seconds if rows[k].get("up_long") else None,
+                                     "outcome": outcome(done, cfg.nominal().build().task.targets())})
+    write_json(d / "selected_candidates.json", {"seconds": args.seconds, "heading_limit": args.heading_limit,
+                                               "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
+    print(f"selected: {labels[k]} -> {out}")
+    return 0
+
+
+SUBCOMMANDS = (add_select,)
