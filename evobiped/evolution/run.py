@@ -309,7 +309,10 @@ class Run:
         return self.finish()
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
+        """Evaluate the unknown individuals of this generation and write its generation file (not yet committed).
+        The run's best is the fittest individual so far; while the perturbations' schedules still change (before
+        :attr:`~evobiped.perturb.PerturbationOptions.settled_from`) generations are not comparable, so the run's best
+        is the latest generation's, then the fittest since the schedules ended."""
         opt = self.optimizer
         pop, unknown = opt.ask()
         result = evaluator.evaluate(pop[unknown], key=(self.config.seed, opt.generation))
@@ -337,7 +340,8 @@ class Run:
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
                     generation=g, terms=terms)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
-        if self.best is None or meta["fitness"] > self.best["fitness"]:
+        settled = self.config.episode.perturbations.settled_from
+        if self.best is None or meta["fitness"] > self.best["fitness"] or self.best["generation"] < settled:
             self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
         self.history.append(stats.row())
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
