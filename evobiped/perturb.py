@@ -103,7 +103,7 @@ class PerturbationOptions:
     @property
     def active(self) -> bool:
         """Anything to perturb (or several presentations to aggregate) in some generation."""
-        strong = any(max(np.max(s.start), np.max(s.end)) > 0 for s in map(lambda n: scheduled(self, n), STRENGTHS[1:]))
+        strong = any(s.start > 0 or s.end > 0 for s in (scheduled(self, n) for n in STRENGTHS if n != "push_force"))
         fr = scheduled(self, "friction")
         return self.presentations > 1 or self.pushes > 0 or bool(fr.start) or bool(fr.end) or strong
 
