@@ -291,9 +291,11 @@ class Episode:
     def n_ticks(self) -> int:
         return int(round(self.seconds / self.control_dt))
 
-    def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0) -> Sims:
-        """A new batch of ``n`` simulations (each :meth:`start` owns one), on the model with this ground."""
-        key = (friction, slope)
+    def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0, slope_direction: float = 0.0) -> Sims:
+        """A new batch of ``n`` simulations (each :meth:`start` owns one), on the model with this ground: floor
+        ``friction``, and a ``slope`` (grade, rise over run) rising towards ``slope_direction`` (rad from +x, the
+        walker's initial facing, towards +y, its left)."""
+        key = (friction, slope, slope_direction if slope else 0.0)
         if key not in self._models:
             model = self.model
             if friction is not None or slope:
@@ -302,10 +304,11 @@ class Episode:
                     if self.body.floor_geom is None:
                         raise ConfigError(f"body {self.body.name!r} has no MuJoCo ground whose friction a trial could change")
                     model.geom_friction[model.geom(self.body.floor_geom).id, 0] = friction
-                if slope:  # an inclined plane: gravity tilted backwards along +x
+                if slope:  # an inclined plane: gravity tilted down the slope, away from where the floor rises
                     g = float(np.linalg.norm(self.model.opt.gravity))
                     a = np.arctan(slope)
-                    model.opt.gravity[:] = (-g * np.sin(a), 0.0, -g * np.cos(a))
+                    c, s = (0.0 if abs(v) < 1e-12 else float(v) for v in (np.cos(slope_direction), np.sin(slope_direction)))  # exact on the axes
+                    model.opt.gravity[:] = (-g * np.sin(a) * c, -g * np.sin(a) * s if s else 0.0, -g * np.cos(a))
             self._models[key] = model
         return Sims(self._models[key], n)
 
@@ -313,7 +316,8 @@ class Episode:
         """The perturbed presentations of generation key = (run seed, generation); None: nominal."""
         if key is None or self.perturbations is None:
             return None
-        return self.perturbations.draw(key, seconds=self.seconds, n_actuators=len(self.body.actuator_names))
+        return self.perturbations.draw(key, seconds=self.seconds, n_actuators=len(self.body.actuator_names),
+                                       n_genes=None if self.controller is None else self.controller.layout.size)
 
     def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
             trials: Trials | None = None) -> EpisodeResult:
@@ -347,6 +351,10 @@ class Episode:
         if self.controller is None:
             params: dict[str, np.ndarray] = {}
             P = int(genomes)
+        elif trials is not None and trials.gene_noise is not None:  # every row its own genome: its trial's gene noise
+            rows = np.repeat(np.atleast_2d(self.controller.layout.validate(genomes)), S * R, axis=0)
+            params = self.controller.decode(self.controller.layout.jitter(rows, trials.gene_noise[np.arange(len(rows)) // S % R]))
+            P = len(rows)
         else:
             params = self.controller.decode(genomes)
             if S * R > 1:
@@ -354,7 +362,8 @@ class Episode:
             P = next(iter(params.values())).shape[0]
         n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
         body = self.body
-        sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope)
+        sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope,
+                                                              slope_direction=trials.slope_direction)
         body.reset(sims)
         trial = np.arange(P) // S % R  # each row's trial
         if trials is not None and trials.pose_offset is not None and trials.pose_offset.any():

@@ -19,20 +19,24 @@ from dataclasses import MISSING, field, fields
 from typing import Any, Callable
 
 from .errors import ConfigError
+from .schedule import Schedule
 from .validate import number
 
 
 def option(default: Any, doc: str, *, unit: str = "", low: float | None = None, high: float | None = None,
            above: float | None = None, below: float | None = None, integer: bool = False, choices: tuple | None = None,
-           check: Callable[[Any], None] | None = None, span: str = "") -> Any:
+           check: Callable[[Any], None] | None = None, span: str = "", schedule: bool = False) -> Any:
     """A dataclass field: ``default``, its meaning ``doc`` and ``unit``, and what values it takes.
 
     ``low``/``high``/``above``/``below``/``integer``: a number in that range; ``choices``: one of these;
     a bool default: true or false; ``check(value)``: anything else (ConfigError without the
     path); ``span``: the range as the README shows it when ``check`` decides it.  A None
-    default also takes None.
+    default also takes None.  ``schedule``: the value may also be a schedule over the generations
+    (:class:`~evobiped.schedule.Schedule`: a table whose ``start`` and ``end`` are each checked as a plain value);
+    read it with :func:`scheduled`.
     """
-    meta = dict(doc=doc, unit=unit, low=low, high=high, above=above, below=below, integer=integer, choices=choices, check=check, span=span)
+    meta = dict(doc=doc, unit=unit, low=low, high=high, above=above, below=below, integer=integer, choices=choices, check=check, span=span,
+                schedule=schedule)
     if isinstance(default, (list, dict)):
         return field(default_factory=lambda: type(default)(default), metadata=meta)
     return field(default=default, metadata=meta)
@@ -44,6 +48,18 @@ class NoOptions:
 
 
 def _check(f: dataclasses.Field, value: Any, path: str) -> None:
+    if f.metadata.get("schedule"):
+        Schedule.of(value, path, lambda v, p: _check_value(f, v, p))
+    else:
+        _check_value(f, value, path)
+
+
+def scheduled(options: Any, name: str) -> Schedule:
+    """The schedule of option ``name`` of the parsed ``options`` (a constant one for a plain value)."""
+    return Schedule.of(getattr(options, name))
+
+
+def _check_value(f: dataclasses.Field, value: Any, path: str) -> None:
     m = f.metadata
     default = f.default if f.default is not MISSING else f.default_factory()
     if value is None and default is None:
@@ -143,6 +159,8 @@ def option_bounds(cls: type, name: str) -> tuple[float | None, float | None]:
 
 
 def _span(m: dict, default: Any) -> str:
+    if m.get("schedule"):
+        return _span({**m, "schedule": False}, default) + " (or a schedule)"
     if m.get("span"):
         return m["span"]
     if m.get("choices") is not None:

@@ -8,8 +8,10 @@ with its own disturbances (:class:`Trials`, one row per presentation):
 * **target offsets**: a constant angle (rad) added to each PD target;
 * **target noise**: Gaussian noise (rad) on each PD target, new every control tick;
 * **initial-pose noise**: Gaussian noise (rad) on each actuated joint's angle at t = 0;
-* **ground**: the floor's sliding friction and a slope (grade, rise over run,
-  uphill along +x, the walker's initial facing), the same for every row of a batch;
+* **gene noise**: Gaussian noise on every gene of the genome, in units of that gene's range
+  (the genome's neighbours: a walker on a flat optimum survives it);
+* **ground**: the floor's sliding friction and a slope (grade, rise over run, rising
+  towards a direction in the walker's initial-facing frame), the same for every row of a batch.
 * **pelvis assistance** (a curriculum, not a disturbance): a roll/pitch stiffness
   k (N m/rad) and damping c = ``assist_damping`` k (N m s/rad) that hold the
   trunk upright, applied before every physics step (applied once per control
@@ -31,12 +33,17 @@ with its own disturbances (:class:`Trials`, one row per presentation):
 the trials of an evolutionary run are drawn: from (run seed, generation) only,
 so every genome of a generation meets the same disturbances (common random
 numbers: selection compares like with like), and neither a resume nor the
-number of workers changes anything.  A genome's fitness is the ``aggregate``
-of its presentations' fitness:
+number of workers changes anything.  Every strength may be a schedule over the
+generations (:mod:`evobiped.schedule`: a curriculum from mild to hard).  A
+genome's fitness is the ``aggregate`` of its presentations' fitness:
 
 * ``mean``: the mean over the R presentations;
 * ``worst``: the minimum (a walker is as good as its worst trial);
-* ``q25``: the lower quartile (linear interpolation), between the two.
+* ``q25``: the lower quartile (linear interpolation), between the two;
+* ``quantile``: the ``quantile`` (0 < q < 1, linear interpolation; itself schedulable).
+
+``aggregate_later`` replaces ``aggregate`` from generation ``aggregate_from`` on
+(e.g. the mean while walkers learn to walk, a low quantile once they do).
 
 Replays, episodes and the robustness battery run the nominal (unperturbed)
 episode unless trials are given explicitly.
@@ -50,14 +57,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ConfigError
-from .options import check_fields, option, parse
+from .options import check_fields, option, parse, scheduled
 
-#: aggregate name -> ``(P, R) -> (P,)``
+#: aggregate name -> ``((P, R) fitness, q) -> (P,)``
 AGGREGATES = {
-    "mean": lambda f: f.mean(axis=1),
-    "worst": lambda f: f.min(axis=1),
-    "q25": lambda f: np.quantile(f, 0.25, axis=1),
+    "mean": lambda f, q: f.mean(axis=1),
+    "worst": lambda f, q: f.min(axis=1),
+    "q25": lambda f, q: np.quantile(f, 0.25, axis=1),
+    "quantile": lambda f, q: np.quantile(f, q, axis=1),
 }
+#: the strengths that may be schedules over the generations (each >= 0; 0: that disturbance is off)
+STRENGTHS = ("push_force", "target_offset", "target_noise", "pose_noise", "slope", "gene_noise")
 
 
 def _friction(v) -> None:
@@ -80,16 +90,28 @@ class PerturbationOptions:
     presentations: int = option(1, "R, presentations per genome (each with its own draws)", low=1, high=64, integer=True)
     pushes: int = option(0, "pushes per presentation, each at a uniform random time in [push_after, T - push_duration]",
                          low=0, integer=True)
-    push_force: float = option(10.0, "magnitude of each push (horizontal, uniform random direction)", unit="N", above=0)
+    push_force: float = option(10.0, "magnitude of each push (horizontal, uniform random direction)", unit="N", low=0, schedule=True)
     push_duration: float = option(0.1, "duration of each push", unit="s", above=0)
     push_after: float = option(2.0, "no push before this time", unit="s", low=0)
     target_offset: float = option(0.0, "standard deviation of a constant offset on each PD target, one per presentation",
-                                  unit="rad", low=0)
-    target_noise: float = option(0.0, "standard deviation of the noise on each PD target at every control tick", unit="rad", low=0)
-    pose_noise: float = option(0.0, "standard deviation of the noise on each actuated joint's initial angle", unit="rad", low=0)
+                                  unit="rad", low=0, schedule=True)
+    target_noise: float = option(0.0, "standard deviation of the noise on each PD target at every control tick", unit="rad", low=0,
+                                 schedule=True)
+    pose_noise: float = option(0.0, "standard deviation of the noise on each actuated joint's initial angle", unit="rad", low=0,
+                               schedule=True)
     friction: tuple[float, ...] = option((), "floor friction [low, high], one uniform draw per generation; [] keeps the model's",
-                                         check=_friction, span="[], or 0 < low <= high")
+                                         check=_friction, span="[], or 0 < low <= high", schedule=True)
+    slope: float = option(0.0, "largest grade of the floor (rise over run), one draw per generation: a grade uniform in "
+                               "[0, slope] rising towards a uniform random direction of the initial facing's frame",
+                          low=0, high=0.5, schedule=True)
+    gene_noise: float = option(0.0, "standard deviation of the noise on every gene, in units of that gene's range, one draw per "
+                                    "presentation, the same for every genome of a generation", low=0, below=1, schedule=True)
     aggregate: str = option("mean", "how presentations combine into a genome's fitness", choices=tuple(AGGREGATES))
+    quantile: float = option(0.25, "q of aggregate `quantile`: the fitness below which a fraction q of the presentations fall",
+                             above=0, below=1, schedule=True)
+    aggregate_later: str | None = option(None, "the aggregate from generation `aggregate_from` on (none: `aggregate` throughout)",
+                                         choices=tuple(AGGREGATES))
+    aggregate_from: int = option(0, "the first generation of `aggregate_later`", low=0, integer=True)
     assist: float = option(0.0, "pelvis assistance at the start: roll/pitch stiffness holding the trunk upright, faded to 0",
                            unit="N m/rad", low=0)
     assist_generations: int = option(0, "steps of the assistance clock over which it fades linearly to zero (>= 1 with assist)",
@@ -102,7 +124,8 @@ class PerturbationOptions:
 
     def __post_init__(self):
         check_fields(self, "episode.perturbations")
-        object.__setattr__(self, "friction", tuple(float(v) for v in self.friction))
+        if not isinstance(self.friction, dict):
+            object.__setattr__(self, "friction", tuple(float(v) for v in self.friction))
         object.__setattr__(self, "assist_levels", tuple(float(v) for v in self.assist_levels))
         if self.assist > 0 and self.assist_generations < 1:
             raise ConfigError(f"assist_generations: the assistance must fade to zero over >= 1 generations, got {self.assist_generations}")
@@ -116,10 +139,26 @@ class PerturbationOptions:
 
     @property
     def active(self) -> bool:
-        """Anything to perturb (or several presentations to aggregate)."""
-        return self.presentations > 1 or self.pushes > 0 or bool(self.friction) or any(
-            getattr(self, n) > 0 for n in ("target_offset", "target_noise", "pose_noise", "assist")
-        )
+        """Anything to perturb (or several presentations to aggregate) in some generation."""
+        strong = any(s.start > 0 or s.end > 0 for s in (scheduled(self, n) for n in STRENGTHS if n != "push_force"))
+        fr = scheduled(self, "friction")
+        return self.presentations > 1 or self.pushes > 0 or bool(fr.start) or bool(fr.end) or strong or self.assist > 0
+
+    @property
+    def settled_from(self) -> int:
+        """The first generation from which every schedule has reached its end and ``aggregate_later`` (if any) applies:
+        from there on, generations meet disturbances of one distribution and their fitness compares (0: no schedule)."""
+        ends = [s.after + s.generations for s in (scheduled(self, n) for n in (*STRENGTHS, "friction", "quantile"))
+                if s.start != s.end]
+        return max([*ends, self.aggregate_from if self.aggregate_later is not None else 0, 0])
+
+    def at(self, generation: int) -> dict:
+        """Every scheduled option's value at ``generation`` (name -> number, friction a tuple)."""
+        return {n: scheduled(self, n).at(generation) for n in (*STRENGTHS, "friction", "quantile")}
+
+    def aggregate_at(self, generation: int) -> str:
+        """The aggregate of ``generation``."""
+        return self.aggregate_later if self.aggregate_later is not None and generation >= self.aggregate_from else self.aggregate
 
     def assist_clock(self, generation: int, best: list[float]) -> int:
         """The assistance clock at ``generation``: the generation itself, or (gated) how many of the earlier
@@ -134,28 +173,39 @@ class PerturbationOptions:
             return 0.0
         return self.assist * max(0.0, 1.0 - clock / self.assist_generations)
 
-    def draw(self, key: tuple[int, ...], *, seconds: float, n_actuators: int) -> "Trials":
-        """The trials of one generation, from ``key`` = (run seed, generation) only; a third element, when given,
-        is the assistance clock (:meth:`assist_clock`; default the generation)."""
+    def draw(self, key: tuple[int, ...], *, seconds: float, n_actuators: int, n_genes: int | None = None) -> "Trials":
+        """The trials of one generation, from ``key`` = (run seed, generation) only; ``n_genes``: the genome's
+        length (needed for gene noise); a third element of ``key``, when given, is the assistance clock
+        (:meth:`assist_clock`; default the generation)."""
         rng = np.random.default_rng([int(key[0]), int(key[1]), 0x7E57])
+        v = self.at(int(key[1]))
         R, k = self.presentations, self.pushes
         last = max(self.push_after, seconds - self.push_duration)
         angle = rng.uniform(0.0, 2 * np.pi, (R, k))
         force = np.zeros((R, k, 3))
-        force[..., 0], force[..., 1] = self.push_force * np.cos(angle), self.push_force * np.sin(angle)
-        return Trials(
+        force[..., 0], force[..., 1] = v["push_force"] * np.cos(angle), v["push_force"] * np.sin(angle)
+        trials = Trials(
             push_start=rng.uniform(self.push_after, last, (R, k)),
             push_force=force,
             push_duration=self.push_duration,
-            target_offset=rng.normal(0.0, self.target_offset, (R, n_actuators)) if self.target_offset else np.zeros((R, n_actuators)),
-            target_noise=self.target_noise,
+            target_offset=rng.normal(0.0, v["target_offset"], (R, n_actuators)) if v["target_offset"] else np.zeros((R, n_actuators)),
+            target_noise=v["target_noise"],
             noise_seed=int(rng.integers(2**63)),
-            pose_offset=rng.normal(0.0, self.pose_noise, (R, n_actuators)) if self.pose_noise else np.zeros((R, n_actuators)),
-            friction=float(rng.uniform(*self.friction)) if self.friction else None,
-            aggregate=self.aggregate,
-            assist=self._assist_rows(int(key[2]) if len(key) > 2 else int(key[1])),
-            assist_damping=self.assist_damping,
+            pose_offset=rng.normal(0.0, v["pose_noise"], (R, n_actuators)) if v["pose_noise"] else np.zeros((R, n_actuators)),
+            friction=float(rng.uniform(*v["friction"])) if v["friction"] else None,
+            aggregate=self.aggregate_at(int(key[1])),
+            quantile=float(v["quantile"]),
         )
+        # draws added after the ones above, only when used: a run without them draws exactly as before
+        if v["slope"]:
+            trials.slope, trials.slope_direction = float(v["slope"] * rng.uniform()), float(rng.uniform(-np.pi, np.pi))
+        if v["gene_noise"]:
+            if n_genes is None:
+                raise ConfigError("episode.perturbations.gene_noise: these trials are drawn without a genome (no controller)")
+            trials.gene_noise = rng.normal(0.0, v["gene_noise"], (R, n_genes))
+        trials.assist = self._assist_rows(int(key[2]) if len(key) > 2 else int(key[1]))
+        trials.assist_damping = self.assist_damping
+        return trials
 
     def _assist_rows(self, clock: int) -> np.ndarray | None:
         """``(R,)`` N m/rad per presentation at this clock; None without assistance."""
@@ -185,13 +235,19 @@ class Trials:
     pose_offset: np.ndarray | None = None
     #: floor sliding friction (None: the model's)
     friction: float | None = None
-    #: grade (rise over run), uphill along +x
+    #: grade (rise over run) of the floor, rising towards ``slope_direction``
     slope: float = 0.0
+    #: rad: where the floor rises, in the initial-facing frame (0: ahead, pi/2: to the left, pi: behind)
+    slope_direction: float = 0.0
+    #: ``(R, G)``: noise added to every gene, in units of that gene's range (None: none)
+    gene_noise: np.ndarray | None = None
     aggregate: str = "mean"
     #: N m/rad, ``(R,)``: the trunk's upright stiffness per presentation (None: no assistance)
     assist: np.ndarray | None = None
     #: s: damping (N m s/rad) per unit of that stiffness
     assist_damping: float = 0.05
+    #: q of the ``quantile`` aggregate
+    quantile: float = 0.25
 
     @property
     def R(self) -> int:
@@ -213,7 +269,7 @@ class Trials:
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         """``(P, R)`` presentation fitness -> ``(P,)`` by the aggregate."""
-        return AGGREGATES[self.aggregate](fitness)
+        return AGGREGATES[self.aggregate](fitness, self.quantile)
 
 
 def assist_torque(stiffness: np.ndarray, damping: float, xmat: np.ndarray, omega: np.ndarray) -> np.ndarray:

@@ -7,20 +7,25 @@ Joints and contacts are found by role (``Actuator.leg``/``joint``,
 applies: offsets on bodies of PD targets with hip pitch (and roll) roles,
 friction and slope on bodies with a MuJoCo ground, sideways pushes on bodies
 that are not sagittal.  On the sagittal Taga body (torques, its own ground) the
-battery is the forward and backward pushes (48 trials).
+battery is the forward and backward pushes and the gene noise (40 trials).
 
-============  ======  ==============================================================
-family        trials  disturbance
-============  ======  ==============================================================
-push 5 N      32      a horizontal push on the pelvis for 0.1 s, forward, backward,
-push 10 N     32      left or right (of the initial facing), at 8 phases of the stride
-push 15 N     32      (phase i/8 after the first left touchdown after ``push_after``)
-offset 0.05   8       a constant offset on the hip targets for the whole trial: pitch
-offset 0.1    8       or roll, +-m on both legs (same sign) or +m / -m (opposite signs)
-friction      3       floor sliding friction 0.5, 0.75, 1.5 (the model's is 1.0)
-slope         2       a 3 % grade uphill and downhill along the initial facing
-============  ======  ==============================================================
+==============  ======  ============================================================
+family          trials  disturbance
+==============  ======  ============================================================
+push 5 N        32      a horizontal push on the pelvis for 0.1 s in one of 8
+push 10 N       32      directions (every 45 deg from the initial facing: forward,
+push 15 N       32      forward-left, left, ...), at 4 phases of the stride (phase
+push 20 N       32      i/4 after the first left touchdown after ``push_after``)
+offset 0.05     8       a constant offset on the hip targets for the whole trial: pitch
+offset 0.1      8       or roll, +-m on both legs (same sign) or +m / -m (opposite signs)
+friction        4       floor sliding friction 0.5, 0.75, 1.25, 1.5 (the model's is 1.0)
+slope 3 %       4       a 3 % grade rising ahead (uphill), behind (downhill), to the left
+slope 5 %       4       or to the right of the initial facing; the same at 5 %
+gene noise 1 %  8       every gene moved by Gaussian noise of 1 % of its range (8 fixed
+                        draws, seed 1): the walker's neighbours in genome space
+==============  ======  ============================================================
 
+:func:`score` is the fraction of all trials survived, one number to rank walkers by.
 The stride is measured on a nominal run of the same walker (left-foot
 touchdowns between ``push_after`` and the end; 1 s when the walker does not
 step).  Nothing here is random: the battery is the same for every walker.
@@ -38,14 +43,26 @@ from .errors import UserError
 from .perturb import Trials
 from .progress import Progress
 
-PUSH_FORCES = (5.0, 10.0, 15.0)  # N
+PUSH_FORCES = (5.0, 10.0, 15.0, 20.0)  # N
 PUSH_DURATION = 0.1  # s
-#: direction name -> unit vector in the initial-facing frame (forward = +x, left = +y)
-DIRECTIONS = {"forward": (1.0, 0.0), "backward": (-1.0, 0.0), "left": (0.0, 1.0), "right": (0.0, -1.0)}
-PHASES = 8
+#: direction name -> angle (rad) from the initial facing towards the left; a push or a slope's rise goes that way
+DIRECTIONS = {"forward": 0.0, "forward-left": np.pi / 4, "left": np.pi / 2, "backward-left": 3 * np.pi / 4, "backward": np.pi,
+              "backward-right": -3 * np.pi / 4, "right": -np.pi / 2, "forward-right": -np.pi / 4}
+PHASES = 4
 OFFSETS = (0.05, 0.1)  # rad
-FRICTIONS = (0.5, 0.75, 1.5)
-SLOPES = (0.03, -0.03)  # grade
+FRICTIONS = (0.5, 0.75, 1.25, 1.5)
+SLOPES = (0.03, 0.05)  # grade
+#: where a battery slope rises -> its label
+SLOPE_DIRECTIONS = {"forward": "uphill", "backward": "downhill", "left": "rising to the left", "right": "rising to the right"}
+GENE_NOISE = 0.01  # of each gene's range
+GENE_NOISE_DRAWS = 8
+GENE_NOISE_SEED = 1
+
+
+def unit(direction: str) -> tuple[float, float]:
+    """The unit vector of a named direction in the initial-facing frame (forward = +x, left = +y), exact on the axes."""
+    a = DIRECTIONS[direction]
+    return tuple(float(round(v)) if abs(v - round(v)) < 1e-12 else float(v) for v in (np.cos(a), np.sin(a)))
 
 
 @dataclass
@@ -117,10 +134,11 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
         raise UserError(f"the battery pushes after {push_after:g} s: trials must be longer (got {seconds:g} s)")
     hips = _hip_columns(episode)
     n_act = len(episode.body.actuator_names)
+    layout = episode.controller.layout
     t0, period = stride(episode, genome, seconds, push_after)
     labels: list[tuple[str, str]] = []
     starts, forces, offsets = [], [], []
-    directions = {d: u for d, u in DIRECTIONS.items() if not (body.sagittal and u[1])}
+    directions = {d: unit(d) for d in DIRECTIONS if not (body.sagittal and unit(d)[1])}
     for f in PUSH_FORCES:
         for d, (ux, uy) in directions.items():
             for i in range(PHASES):
@@ -139,13 +157,22 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
                     starts.append([0.0])
                     forces.append([[0.0, 0.0, 0.0]])
                     offsets.append(off)
+    n_plain = len(labels)
+    for i in range(GENE_NOISE_DRAWS):
+        labels.append((f"gene noise {100 * GENE_NOISE:g} %", f"draw {i}"))
+        starts.append([0.0])
+        forces.append([[0.0, 0.0, 0.0]])
+        offsets.append(np.zeros(n_act))
+    genes = np.zeros((len(labels), layout.size))
+    genes[n_plain:] = np.random.default_rng(GENE_NOISE_SEED).normal(0.0, GENE_NOISE, (GENE_NOISE_DRAWS, layout.size))
     main = Trials.nominal(len(labels), n_act, push_start=np.array(starts), push_force=np.array(forces),
-                          push_duration=PUSH_DURATION, target_offset=np.array(offsets))
+                          push_duration=PUSH_DURATION, target_offset=np.array(offsets), gene_noise=genes)
     runs = [(labels, main)]
     if body.floor_geom is not None:
         runs += [([("friction", f"mu = {mu:g}")], Trials.nominal(1, n_act, friction=mu)) for mu in FRICTIONS]
-        runs += [([("slope", f"{100 * s:+g} % ({'uphill' if s > 0 else 'downhill'})")], Trials.nominal(1, n_act, slope=s))
-                 for s in SLOPES]
+        runs += [([(f"slope {100 * s:g} %", f"{100 * s:g} % {name}")],
+                  Trials.nominal(1, n_act, slope=s, slope_direction=DIRECTIONS[d]))
+                 for s in SLOPES for d, name in SLOPE_DIRECTIONS.items()]
     out = []
     n_trials = sum(len(names) for names, _ in runs)
     if progress is not None:  # trial-seconds: each trial's own simulated time, a fallen trial's rest counted at its batch's end
@@ -161,6 +188,11 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
         for j, (family, label) in enumerate(names):
             out.append(Trial(family, label, bool(not r.fell[j]), float(r.end_time[j]), float(fwd[j]), float(np.hypot(*disp[j]))))
     return out
+
+
+def score(trials: list[Trial]) -> float:
+    """The robustness score: the fraction of all trials survived (0 to 1)."""
+    return sum(t.survived for t in trials) / len(trials)
 
 
 def summarise(trials: list[Trial]) -> list[dict]:

@@ -12,6 +12,7 @@ LAYERS: list[set[str]] = [
     {"glbackend"},
     {"errors", "__version__"},
     {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping", "provenance"},
+    {"schedule"},
     {"contract", "options", "gait"},
     {"perturb"},
     {"bodies", "controllers", "tasks"},

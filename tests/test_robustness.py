@@ -11,7 +11,7 @@ from evobiped.errors import UserError
 from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.genome_file import load_genome, save_genome
 from evobiped.perturb import Trials
-from evobiped.robustness import battery, summarise
+from evobiped.robustness import battery, score, summarise
 
 from .conftest import WALKERS
 
@@ -26,9 +26,29 @@ def trials():
 
 def test_the_battery_has_the_documented_trials(trials):
     rows = {r["family"]: r["trials"] for r in summarise(trials)}
-    assert rows == {"push 5 N": 32, "push 10 N": 32, "push 15 N": 32, "offset 0.05 rad": 8, "offset 0.1 rad": 8, "friction": 3, "slope": 2}
+    assert rows == {"push 5 N": 32, "push 10 N": 32, "push 15 N": 32, "push 20 N": 32, "offset 0.05 rad": 8, "offset 0.1 rad": 8,
+                    "gene noise 1 %": 8, "friction": 4, "slope 3 %": 4, "slope 5 %": 4}
     labels = [t.label for t in trials if t.family == "offset 0.05 rad"]
     assert len(set(labels)) == 8 and "roll opposite -" in labels
+    pushes = {t.label for t in trials if t.family == "push 20 N"}
+    assert len(pushes) == 32 and {"forward-left, phase 3/4", "backward-right, phase 0/4"} <= pushes
+    assert [t.label for t in trials if t.family == "slope 5 %"] == ["5 % uphill", "5 % downhill", "5 % rising to the left", "5 % rising to the right"]
+    assert score(trials) == sum(t.survived for t in trials) / 164
+
+
+def test_a_gene_noise_and_a_slope_trial_equal_their_disturbance_run_on_their_own(trials):
+    """'gene noise 1 %, draw 2' is the walker with the battery's third noise draw (seed 1, 1 % of each gene's range) alone;
+    '3 % rising to the left' is the episode on that floor."""
+    g, cfg, _ = load_genome(WALKER)
+    ep = cfg.nominal().build()
+    lay = ep.controller.layout
+    noise = np.random.default_rng(1).normal(0.0, 0.01, (8, lay.size))[2]
+    r = ep.run(np.clip(g + noise * (lay.high - lay.low), lay.low, lay.high), seconds=12.0)
+    t = next(t for t in trials if t.label == "draw 2")
+    assert t.end_time == r.end_time[0] and t.forward == r.end_position[0, 0] - r.start_position[0, 0]
+    r = ep.run(g, seconds=12.0, trials=Trials.nominal(1, 6, slope=0.03, slope_direction=np.pi / 2)).rows
+    t = next(t for t in trials if t.label == "3 % rising to the left")
+    assert t.end_time == r.end_time[0] and t.forward == r.end_position[0, 0] - r.start_position[0, 0]
 
 
 def test_a_trial_equals_the_same_disturbance_run_on_its_own(trials):
@@ -54,7 +74,9 @@ def test_cli_writes_table_json_and_png(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "push 10 N" in out and "offset 0.05 rad" in out
     report = json.loads((Path.cwd() / "runs" / "w" / "w_robustness.json").read_text())  # never beside the genome file
-    assert len(report["trials"]) == 117 and report["seconds"] == 8.0
+    assert len(report["trials"]) == 164 and report["seconds"] == 8.0
+    survived = sum(t["survived"] for t in report["trials"])
+    assert report["score"] == survived / 164 and f"robustness score: {survived / 164:.3f} ({survived} of 164 trials survived)" in out
     assert (Path.cwd() / "runs" / "w" / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]
 
@@ -70,17 +92,17 @@ def test_bad_arguments_one_line(tmp_path, capsys, args, msg):
     assert not (tmp_path / "o").exists()
 
 
-def test_on_the_sagittal_taga_body_the_battery_is_the_forward_and_backward_pushes():
+def test_on_the_sagittal_taga_body_the_battery_is_the_forward_and_backward_pushes_and_the_gene_noise():
     """Found by role: Taga's left-foot contacts time the pushes; no hip-roll or PD-target offsets, no MuJoCo
-    ground to change, no sideways pushes.  Taga's walker pushed forward goes further than pushed back."""
+    ground to change, no sideways pushes or slopes.  Taga's walker pushed forward goes further than pushed back."""
     from evobiped.episode import EpisodeConfig
 
     ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=3.0).build()
     trials = battery(ep, preset_genome(ep.controller), seconds=3.0, push_after=1.0)
-    assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15) for _ in range(16)]
-    assert {t.label.split(",")[0] for t in trials} == {"forward", "backward"}
+    assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15, 20) for _ in range(8)] + ["gene noise 1 %"] * 8
+    assert {t.label.split(",")[0] for t in trials if t.family.startswith("push")} == {"forward", "backward"}
     fwd = {t.label: t.forward for t in trials if t.family == "push 15 N"}
-    assert all(fwd[f"forward, phase {i}/8"] > fwd[f"backward, phase {i}/8"] + 0.01 for i in range(8))
+    assert all(fwd[f"forward, phase {i}/4"] > fwd[f"backward, phase {i}/4"] + 0.01 for i in range(4))
 
 
 def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):

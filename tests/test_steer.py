@@ -194,7 +194,7 @@ def test_a_source_for_a_walking_task_and_a_two_source_battery_are_refused(hearin
     assert "runs one presentation" in capsys.readouterr().err
     assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet", "--source", "8", "2",
                  "--out", str(tmp_path / "b")]) == 0
-    assert len(json.loads((tmp_path / "b" / "robustness.json").read_text())["trials"]) == 117
+    assert len(json.loads((tmp_path / "b" / "robustness.json").read_text())["trials"]) == 164
 
 
 def test_terms_per_presentation_are_the_distances_to_each_source():

@@ -166,8 +166,8 @@ def test_robustness_shows_progress_unless_quiet(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(progress, "INTERVAL", 0.0)
     assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5"]) == 0
     lines = [l for l in capsys.readouterr().err.splitlines() if l.startswith("robustness: ")]
-    # what it really simulates: 117 trials of 1 s, each counted for its own simulated time
-    assert lines and lines[-1].startswith("robustness: 100% (117 of 117 trial-s of 117 trials of 1 s)")
+    # what it really simulates: 164 trials of 1 s, each counted for its own simulated time
+    assert lines and lines[-1].startswith("robustness: 100% (164 of 164 trial-s of 164 trials of 1 s)")
     assert main(["robustness", str(tmp_path / "s.json"), "--seconds", "1.0", "--push-after", "0.5", "--quiet"]) == 0
     assert "robustness: " not in capsys.readouterr().err
 

@@ -12,7 +12,7 @@ from ..tasks.steer import with_sources
 
 
 def add_robustness(sub) -> None:
-    p = sub.add_parser("robustness", help="the robustness battery (pushes, target offsets, friction, slopes) for any Reil walker")
+    p = sub.add_parser("robustness", help="the robustness battery (pushes, target offsets, friction, slopes, gene noise) and its score for any Reil walker")
     p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
     p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
     p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
@@ -21,7 +21,7 @@ def add_robustness(sub) -> None:
     p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or runs/<stem>/ for a genome file)")
     p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
                    help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--json", action="store_true", help="print the score and the summary per family as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_robustness_cmd)
 
@@ -32,7 +32,7 @@ def run_robustness_cmd(args) -> int:
     from ..fileio import write_json
     from ..record.robustness_figure import robustness_figure
     from ..record.source import resolve
-    from ..robustness import battery, summarise, table
+    from ..robustness import battery, score, summarise, table
     from ..rundir import genome_outputs, robustness_stem
 
     if args.push_after >= args.seconds:
@@ -47,18 +47,21 @@ def run_robustness_cmd(args) -> int:
     trials = battery(config.build(), source.genome, seconds=args.seconds, push_after=args.push_after, progress=progress)
     progress.finish()
     rows = summarise(trials)
+    total = score(trials)
     out.mkdir(parents=True, exist_ok=True)
     report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after,
-              "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
+              "score": total, "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
     write_json(out / f"{stem}.json", report)
     seed = source.meta.get("seed")
     who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
     png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
-                            title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s)\n{who}")
+                            title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s): "
+                                  f"score {total:.3f} ({sum(t.survived for t in trials)} of {len(trials)} survived)\n{who}")
     if args.json:
-        print(json.dumps(rows))
+        print(json.dumps({"score": total, "families": rows}))
     else:
         print(table(rows))
+        print(f"robustness score: {total:.3f} ({sum(t.survived for t in trials)} of {len(trials)} trials survived)")
         print(f"results: {out / (stem + '.json')}\nfigure: {png}")
     return 0
 

@@ -309,7 +309,10 @@ class Run:
         return self.finish()
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate the unknown individuals of this generation and write its generation file (not yet committed)."""
+        """Evaluate the unknown individuals of this generation and write its generation file (not yet committed).
+        The run's best is the fittest individual so far; while the perturbations' schedules still change (before
+        :attr:`~evobiped.perturb.PerturbationOptions.settled_from`) or the pelvis assistance is on, generations are not
+        comparable, so the run's best is the latest generation's, then the fittest since."""
         opt = self.optimizer
         pop, unknown = opt.ask()
         result = evaluator.evaluate(pop[unknown], key=self._key(opt.generation))
@@ -337,9 +340,9 @@ class Run:
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
                     generation=g, terms=terms)
         save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
-        # under assistance a generation's fitness is not the unassisted walker's: the run's best is the latest
-        # assisted best until the assistance is gone, then the best of the generations without it
-        if self.best is None or self._assisted(g) or self._assisted(self.best["generation"]) or meta["fitness"] > self.best["fitness"]:
+        # while schedules still change or the assistance holds the walker up, generations are not comparable (nor
+        # the unassisted walker's): the run's best is the latest generation's until then, then the fittest since
+        if self.best is None or self._unsettled(g) or self._unsettled(self.best["generation"]) or meta["fitness"] > self.best["fitness"]:
             self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
         self.history.append(stats.row())
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
@@ -355,11 +358,11 @@ class Run:
             return self.config.seed, generation, p.assist_clock(generation, rundir.column(self.history, "best"))
         return self.config.seed, generation
 
-    def _assisted(self, generation: int) -> bool:
-        """Generation ``generation`` was evaluated with the pelvis assistance on."""
+    def _unsettled(self, generation: int) -> bool:
+        """Generation ``generation`` was evaluated while a schedule still changed or with the pelvis assistance on."""
         p = self.config.episode.perturbations
         key = self._key(generation)
-        return p.assist_at(key[-1] if len(key) > 2 else generation) > 0
+        return generation < p.settled_from or p.assist_at(key[-1] if len(key) > 2 else generation) > 0
 
     # ---- files
     def checkpoint(self) -> None:
