@@ -1,5 +1,6 @@
 """Sound-source steering: the ear model, presentations, clamped CPG weights, bad input."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -63,6 +64,61 @@ def test_fitness_is_the_mean_over_presentations_of_minus_the_distance():
 
 
 
+# ---- the arrive fitness: every fall costs more than any distance
+def arrive_state(position, end_time, seconds=50.0):
+    """A steer task (arrive fitness, sources (10, 3) and (10, -3) m) and its state at the end: rows = presentations."""
+    from evobiped.tasks.steer import SteerTask
+
+    task = SteerTask(sources=[[10, 3], [10, -3]], fitness="arrive")
+    src = task.sources[task.presentation_of(len(position))]
+    state = {"start": np.zeros((len(position), 2)), "position": np.array(position, float), "source": src,
+             "end_time": np.array(end_time, float), "seconds": seconds}
+    return task, state
+
+
+def test_arrive_fitness_by_hand():
+    """Genome 0 up at (10, 0): 3 m from each source.  Genome 1 ends 3 m from (10, 3), up; at (7, -7) 5 m from
+    (10, -3), fallen at 20 s of 50: f = -5 - S (R + c (T - t)) = -5 - 2 (100 + 30) = -265.  Genome 2 ran 150 m
+    away, up: its distance counts as R = 100 m."""
+    task, state = arrive_state([[10, 0], [10, 0], [10, 0], [7, -7], [160, 3], [10, -3]], [50, 50, 50, 20, 50, 50])
+    f = task.fitness(state)
+    np.testing.assert_allclose(f, [-3, -3, -3, -265, -100, 0], rtol=0, atol=1e-12)
+    F = task.combine(f.reshape(3, 2))
+    np.testing.assert_allclose(F, [-3, -(3 + 5) / 2 - (100 + 30), -50], rtol=0, atol=1e-12)
+    # the paper's fitness of the same ends: the distance alone, fall or not
+    from evobiped.tasks.steer import SteerTask
+
+    paper = SteerTask(sources=[[10, 3], [10, -3]])
+    np.testing.assert_allclose(paper.fitness(state), [-3, -3, -3, -5, -150, 0], rtol=0, atol=1e-12)
+
+
+def test_a_fall_anywhere_scores_below_any_walker_that_stays_up():
+    """The worst genome that stays up (both ends capped at R) against the best that falls (on both sources, at
+    the last tick before the end): -R > -R - (R + c dt)."""
+    task, state = arrive_state([[500, 0], [500, 0], [10, 3], [10, -3]], [50, 50, 50, 49.98])
+    F = task.combine(task.fitness(state).reshape(2, 2))
+    assert F[0] == -100.0 and F[1] == pytest.approx(-(100 + 0.02)) and F[1] < F[0]
+    later = task.combine(task.fitness(arrive_state([[10, 3], [10, -3]], [50, 30])[1]).reshape(1, 2))
+    assert later[0] == pytest.approx(-(100 + 20)) and F[1] > later[0]  # a later fall costs less
+
+
+def test_arrive_fitness_of_real_episodes_follows_the_formula():
+    """Random balance controllers for 3 s (some fall): each genome's fitness is the formula of its rows'
+    ends, and the distances are the paper fitness's."""
+    cfg = EpisodeConfig(controller="simbicon", task="steer", seconds=3.0,
+                        task_options={"sources": [[6, 2], [5, -4], [9, 0]], "fitness": "arrive", "fall_time_cost": 2.0})
+    ep = cfg.build()
+    g = ep.controller.layout.sample(np.random.default_rng(7), 8)
+    r = ep.run(g)
+    rows = r.rows
+    d = np.linalg.norm(rows.end_position - np.tile([[6, 2], [5, -4], [9, 0]], (8, 1)), axis=1)
+    assert 0 < rows.fell.sum() < len(rows.fell)
+    want = (-d.reshape(8, 3).mean(1) - ((100 + 2.0 * (3.0 - rows.end_time)) * rows.fell).reshape(8, 3).sum(1))
+    np.testing.assert_allclose(r.fitness, want, rtol=1e-12)
+    paper = dataclasses.replace(cfg, task_options={"sources": [[6, 2], [5, -4], [9, 0]]}).build().run(g).rows
+    np.testing.assert_array_equal(paper.fitness, -d)
+
+
 CPG = "weights,time_constants,biases"
 SMALL = ["--population", 6, "--generations", 3, "--episode-seconds", 1.5, "--backend", "serial", "--quiet"]
 
@@ -102,6 +158,9 @@ def test_unclamped_cpg_weights_do_change(walker, tmp_path):
         ("one-number-source", "sources must be a list of [x, y] positions"),
         ("taga", "the body has no ears"),
         ("bad-freeze", "frozen_blocks ['wings'] are not gene blocks"),
+        ("no-sources", "sources must be a list of [x, y] positions"),
+        ("bad-fitness", "episode.task_options.fitness: must be one of distance, arrive"),
+        ("no-penalty", "episode.task_options.fall_penalty: must be > 0"),
     ],
 )
 def test_bad_input(tmp_path, capsys, setup, words):
@@ -114,6 +173,11 @@ def test_bad_input(tmp_path, capsys, setup, words):
     elif setup == "one-number-source":
         cfg = tmp_path / "c.toml"
         cfg.write_text("[episode.task_options]\nsources = 3\n")
+        args += ["--config", cfg]
+    elif setup in ("no-sources", "bad-fitness", "no-penalty"):
+        cfg = tmp_path / "c.toml"
+        cfg.write_text("[episode.task_options]\n" + {"no-sources": "sources = []", "bad-fitness": 'fitness = "near"',
+                                                     "no-penalty": 'fitness = "arrive"\nfall_penalty = 0'}[setup] + "\n")
         args += ["--config", cfg]
     elif setup == "taga":
         args += ["--body", "taga"]
@@ -169,6 +233,9 @@ def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys
     for q, row in zip(sources, out["sources"]):  # each presentation alone, on a one-source episode
         alone = with_sources(cfg, [q]).build().run(genome)
         assert row["source"] == q and row["final_distance"] == pytest.approx(np.linalg.norm(alone.end_position[0] - q), abs=1e-12)
+    final = [row["final_distance"] for row in out["sources"]]
+    assert out["median_final_distance"] == final[int(np.argsort(final)[1])] and out["worst_final_distance"] == max(final)
+    assert out["falls"] == sum(row["fell"] for row in out["sources"])
 
 
 @pytest.mark.parametrize("argv, words", [
