@@ -103,12 +103,15 @@ def test_a_fall_anywhere_scores_below_any_walker_that_stays_up():
 
 
 def test_arrive_fitness_of_real_episodes_follows_the_formula():
-    """Random balance controllers for 3 s (some fall): each genome's fitness is the formula of its rows'
-    ends, and the distances are the paper fitness's."""
+    """The six-source walker (up) and random balance controllers (they fall) for 3 s: each genome's fitness is
+    the formula of its rows' ends, and the distances are the paper fitness's."""
+    from evobiped.genome_file import load_genome
+
     cfg = EpisodeConfig(controller="simbicon", task="steer", seconds=3.0,
                         task_options={"sources": [[6, 2], [5, -4], [9, 0]], "fitness": "arrive", "fall_time_cost": 2.0})
     ep = cfg.build()
     g = ep.controller.layout.sample(np.random.default_rng(7), 8)
+    g[0] = load_genome(WALKERS / "steer_simbicon_six_sources.json")[0]
     r = ep.run(g)
     rows = r.rows
     d = np.linalg.norm(rows.end_position - np.tile([[6, 2], [5, -4], [9, 0]], (8, 1)), axis=1)
@@ -285,3 +288,18 @@ def test_cyclic_flag_is_refused_for_a_task_without_that_criterion(tmp_path, caps
     assert cli("evolve", "--task", "steer", "--cyclic", "--generations", "1", "--out", out) == 2
     err = capsys.readouterr().err
     assert "--cyclic: the steer task has no cyclic criterion" in err and err.count("\n") == 1 and not out.exists()
+
+
+def test_the_steer_generalist_preset_is_listed_and_runs(tmp_path, capsys):
+    """`evobiped presets` lists it; a one-generation run of it from the six-source walker evolves the arrive
+    fitness on its sources with the hearing clipped."""
+    assert main(["presets"]) == 0
+    listed = {line.split()[0]: line.split(None, 1)[1] for line in capsys.readouterr().out.splitlines()}
+    assert listed["steer-generalist"].startswith("Steering to any sound source and arriving standing")
+    out = tmp_path / "run"
+    assert cli("evolve", "--preset", "steer-generalist", "--from", WALKERS / "steer_simbicon_six_sources.json", "--population", 4,
+               "--generations", 1, "--episode-seconds", 1.0, "--backend", "serial", "--quiet", "--out", out) == 0
+    episode = json.loads((out / "config.json").read_text())["episode"]
+    assert episode["task"] == "steer" and episode["task_options"]["fitness"] == "arrive"
+    assert len(episode["task_options"]["sources"]) == 8 and episode["controller_options"]["sound_limit"] == 0.1
+
