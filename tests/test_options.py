@@ -51,7 +51,7 @@ BAD = [
     (dict(controller="matsuoka", controller_options={"feedback": "yes"}),
      "episode.controller_options.feedback: must be one of auto, taga, none, got 'yes'"),
     (dict(controller="g3", controller_options={"go": [[1.0, 0.1], [0.5, 0.2]]}), "episode.controller_options.go: go schedule times must increase"),
-    (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option (choose from dt, inputs, genes, latency)"),
+    (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option (choose from dt, sound_limit, inputs, genes, latency)"),
     (dict(task_options={"fitness": "forward", "cyclic_weight": 1.0}), "episode.task_options: the cyclic criterion multiplies eq. 4"),
     (dict(task="steer", task_options={"sources": [[0.1, 0.0]]}), "episode.task_options.sources: the source (0.1, 0) is at the walker's start"),
 ]

@@ -287,6 +287,26 @@ def test_hearing_biases_the_swing_targets_by_the_sound_signal():
         np.testing.assert_allclose(out[0], want, atol=1e-12)
 
 
+@pytest.mark.parametrize("s, heard", [(0.5, 0.1), (-0.8, -0.1), (0.06, 0.06), (-0.1, -0.1)])
+def test_the_sound_limit_clips_what_the_hearing_genes_act_on(s, heard):
+    """sound_limit = 0.1: the targets of a walker hearing s are those it sets for s clipped to +-0.1, i.e.
+    the forward target shifted by sound_forward * heard (right leg swinging), the outward one by -sound_lateral * heard."""
+    heard_inputs = {"sound": 1, **WIRED}
+    ctrl = Simbicon(n_outputs=6, inputs=heard_inputs, actuators=ReilBiped.actuators)
+    clipped = Simbicon(n_outputs=6, inputs=heard_inputs, actuators=ReilBiped.actuators, sound_limit=0.1)
+    params = ctrl.decode(_genome(ctrl, step_time=0.3, hip_early=0.5, knee_early=-1.0, cd=0.4, sound_forward=0.3, sound_lateral=0.2))
+    x = np.zeros((1, 1 + sum(WIRED.values())))
+    x[0, ctrl._at["foot_contact"]] = [1, 1]
+    x[0, 0] = 0.0
+    _, quiet = ctrl.step(params, ctrl.initial_state(params), x)
+    x[0, 0] = s
+    _, out = clipped.step(params, clipped.initial_state(params), x)
+    want = quiet[0].copy()
+    want[3] += 0.3 * heard
+    want[4] -= 0.2 * heard
+    np.testing.assert_allclose(out[0], want, atol=1e-12)
+
+
 def test_a_deaf_walker_steers_exactly_as_it_walks():
     """The balance controller on the steering task with deaf genes: every presentation walks the walk task's path."""
     import dataclasses

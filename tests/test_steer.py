@@ -1,5 +1,6 @@
 """Sound-source steering: the ear model, presentations, clamped CPG weights, bad input."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -63,6 +64,64 @@ def test_fitness_is_the_mean_over_presentations_of_minus_the_distance():
 
 
 
+# ---- the arrive fitness: every fall costs more than any distance
+def arrive_state(position, end_time, seconds=50.0):
+    """A steer task (arrive fitness, sources (10, 3) and (10, -3) m) and its state at the end: rows = presentations."""
+    from evobiped.tasks.steer import SteerTask
+
+    task = SteerTask(sources=[[10, 3], [10, -3]], fitness="arrive")
+    src = task.sources[task.presentation_of(len(position))]
+    state = {"start": np.zeros((len(position), 2)), "position": np.array(position, float), "source": src,
+             "end_time": np.array(end_time, float), "seconds": seconds}
+    return task, state
+
+
+def test_arrive_fitness_by_hand():
+    """Genome 0 up at (10, 0): 3 m from each source.  Genome 1 ends 3 m from (10, 3), up; at (7, -7) 5 m from
+    (10, -3), fallen at 20 s of 50: f = -5 - S (R + c (T - t)) = -5 - 2 (100 + 30) = -265.  Genome 2 ran 150 m
+    away, up: its distance counts as R = 100 m."""
+    task, state = arrive_state([[10, 0], [10, 0], [10, 0], [7, -7], [160, 3], [10, -3]], [50, 50, 50, 20, 50, 50])
+    f = task.fitness(state)
+    np.testing.assert_allclose(f, [-3, -3, -3, -265, -100, 0], rtol=0, atol=1e-12)
+    F = task.combine(f.reshape(3, 2))
+    np.testing.assert_allclose(F, [-3, -(3 + 5) / 2 - (100 + 30), -50], rtol=0, atol=1e-12)
+    # the paper's fitness of the same ends: the distance alone, fall or not
+    from evobiped.tasks.steer import SteerTask
+
+    paper = SteerTask(sources=[[10, 3], [10, -3]])
+    np.testing.assert_allclose(paper.fitness(state), [-3, -3, -3, -5, -150, 0], rtol=0, atol=1e-12)
+
+
+def test_a_fall_anywhere_scores_below_any_walker_that_stays_up():
+    """The worst genome that stays up (both ends capped at R) against the best that falls (on both sources, at
+    the last tick before the end): -R > -R - (R + c dt)."""
+    task, state = arrive_state([[500, 0], [500, 0], [10, 3], [10, -3]], [50, 50, 50, 49.98])
+    F = task.combine(task.fitness(state).reshape(2, 2))
+    assert F[0] == -100.0 and F[1] == pytest.approx(-(100 + 0.02)) and F[1] < F[0]
+    later = task.combine(task.fitness(arrive_state([[10, 3], [10, -3]], [50, 30])[1]).reshape(1, 2))
+    assert later[0] == pytest.approx(-(100 + 20)) and F[1] > later[0]  # a later fall costs less
+
+
+def test_arrive_fitness_of_real_episodes_follows_the_formula():
+    """The six-source walker (up) and random balance controllers (they fall) for 3 s: each genome's fitness is
+    the formula of its rows' ends, and the distances are the paper fitness's."""
+    from evobiped.genome_file import load_genome
+
+    cfg = EpisodeConfig(controller="simbicon", task="steer", seconds=3.0,
+                        task_options={"sources": [[6, 2], [5, -4], [9, 0]], "fitness": "arrive", "fall_time_cost": 2.0})
+    ep = cfg.build()
+    g = ep.controller.layout.sample(np.random.default_rng(7), 8)
+    g[0] = load_genome(WALKERS / "steer_simbicon_six_sources.json")[0]
+    r = ep.run(g)
+    rows = r.rows
+    d = np.linalg.norm(rows.end_position - np.tile([[6, 2], [5, -4], [9, 0]], (8, 1)), axis=1)
+    assert 0 < rows.fell.sum() < len(rows.fell)
+    want = (-d.reshape(8, 3).mean(1) - ((100 + 2.0 * (3.0 - rows.end_time)) * rows.fell).reshape(8, 3).sum(1))
+    np.testing.assert_allclose(r.fitness, want, rtol=1e-12)
+    paper = dataclasses.replace(cfg, task_options={"sources": [[6, 2], [5, -4], [9, 0]]}).build().run(g).rows
+    np.testing.assert_array_equal(paper.fitness, -d)
+
+
 CPG = "weights,time_constants,biases"
 SMALL = ["--population", 6, "--generations", 3, "--episode-seconds", 1.5, "--backend", "serial", "--quiet"]
 
@@ -102,6 +161,9 @@ def test_unclamped_cpg_weights_do_change(walker, tmp_path):
         ("one-number-source", "sources must be a list of [x, y] positions"),
         ("taga", "the body has no ears"),
         ("bad-freeze", "frozen_blocks ['wings'] are not gene blocks"),
+        ("no-sources", "sources must be a list of [x, y] positions"),
+        ("bad-fitness", "episode.task_options.fitness: must be one of distance, arrive"),
+        ("no-penalty", "episode.task_options.fall_penalty: must be > 0"),
     ],
 )
 def test_bad_input(tmp_path, capsys, setup, words):
@@ -114,6 +176,11 @@ def test_bad_input(tmp_path, capsys, setup, words):
     elif setup == "one-number-source":
         cfg = tmp_path / "c.toml"
         cfg.write_text("[episode.task_options]\nsources = 3\n")
+        args += ["--config", cfg]
+    elif setup in ("no-sources", "bad-fitness", "no-penalty"):
+        cfg = tmp_path / "c.toml"
+        cfg.write_text("[episode.task_options]\n" + {"no-sources": "sources = []", "bad-fitness": 'fitness = "near"',
+                                                     "no-penalty": 'fitness = "arrive"\nfall_penalty = 0'}[setup] + "\n")
         args += ["--config", cfg]
     elif setup == "taga":
         args += ["--body", "taga"]
@@ -169,6 +236,9 @@ def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys
     for q, row in zip(sources, out["sources"]):  # each presentation alone, on a one-source episode
         alone = with_sources(cfg, [q]).build().run(genome)
         assert row["source"] == q and row["final_distance"] == pytest.approx(np.linalg.norm(alone.end_position[0] - q), abs=1e-12)
+    final = [row["final_distance"] for row in out["sources"]]
+    assert out["median_final_distance"] == final[int(np.argsort(final)[1])] and out["worst_final_distance"] == max(final)
+    assert out["falls"] == sum(row["fell"] for row in out["sources"])
 
 
 @pytest.mark.parametrize("argv, words", [
@@ -218,3 +288,18 @@ def test_cyclic_flag_is_refused_for_a_task_without_that_criterion(tmp_path, caps
     assert cli("evolve", "--task", "steer", "--cyclic", "--generations", "1", "--out", out) == 2
     err = capsys.readouterr().err
     assert "--cyclic: the steer task has no cyclic criterion" in err and err.count("\n") == 1 and not out.exists()
+
+
+def test_the_steer_generalist_preset_is_listed_and_runs(tmp_path, capsys):
+    """`evobiped presets` lists it; a one-generation run of it from the six-source walker evolves the arrive
+    fitness on its sources with the hearing clipped."""
+    assert main(["presets"]) == 0
+    listed = {line.split()[0]: line.split(None, 1)[1] for line in capsys.readouterr().out.splitlines()}
+    assert listed["steer-generalist"].startswith("Steering to any sound source and arriving standing")
+    out = tmp_path / "run"
+    assert cli("evolve", "--preset", "steer-generalist", "--from", WALKERS / "steer_simbicon_six_sources.json", "--population", 4,
+               "--generations", 1, "--episode-seconds", 1.0, "--backend", "serial", "--quiet", "--out", out) == 0
+    episode = json.loads((out / "config.json").read_text())["episode"]
+    assert episode["task"] == "steer" and episode["task_options"]["fitness"] == "arrive"
+    assert len(episode["task_options"]["sources"]) == 8 and episode["controller_options"]["sound_limit"] == 0.1
+

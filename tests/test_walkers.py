@@ -83,6 +83,22 @@ def test_the_six_source_steering_walker_reaches_sources_it_never_heard():
     assert np.median(distances) <= 1.5
 
 
+def test_the_generalist_steering_walker_reaches_a_source_it_never_heard_and_stays_up():
+    """docs/walkers/steer_generalist_seed0.json towards (5.196, -3) m (6 m at -30 deg, not a training source):
+    within 1.0 m of it at 20 s and still up at 50 s (documented: 0.43 m at 20 s, up 50 s)."""
+    import numpy as np
+
+    from evobiped.tasks.steer import with_sources
+
+    genome, cfg, _ = load_genome(WALKERS / "steer_generalist_seed0.json")
+    assert cfg.task_options.fitness == "arrive" and cfg.controller_options.sound_limit == 0.1
+    episode = with_sources(cfg, [[5.196, -3.0]]).build()
+    early = episode.run(genome, seconds=20.0)
+    assert not early.fell[0] and np.linalg.norm(early.end_position[0] - [5.196, -3.0]) < 1.0
+    whole = episode.run(genome)
+    assert not whole.fell[0] and whole.end_time[0] == 50.0
+
+
 @pytest.mark.parametrize("disable", ["", "X86_V4 AVX512_ICL"])
 def test_a_shipped_walker_replays_under_either_family_of_numpy_kernels(disable, tmp_path):
     """`evobiped replay` in a subprocess with numpy's AVX-512 kernels allowed and disabled: bit for bit where the

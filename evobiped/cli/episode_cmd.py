@@ -57,6 +57,9 @@ def run_episode_cmd(args) -> int:
         out["sources"] = [{"source": list(map(float, q)), "final_distance": float(np.linalg.norm(rows.end_position[j] - q)),
                            "fell": bool(rows.fell[j]), "end_time": float(rows.end_time[j])}
                           for j, q in enumerate(targets)]
+        final = [s["final_distance"] for s in out["sources"]]
+        out["median_final_distance"], out["worst_final_distance"] = float(np.median(final)), float(np.max(final))
+        out["falls"] = sum(s["fell"] for s in out["sources"])
     if args.json:
         print(json.dumps(out))
     else:
@@ -66,7 +69,8 @@ def run_episode_cmd(args) -> int:
             how = f"fell at t = {s['end_time']:.2f} s" if s["fell"] else f"up for {s['end_time']:.1f} s"
             print(f"source ({s['source'][0]:g}, {s['source'][1]:g}) m: final distance {s['final_distance']:.2f} m ({how})")
         if out.get("sources"):
-            print(f"median final distance over {len(out['sources'])} source(s): {np.median([s['final_distance'] for s in out['sources']]):.2f} m")
+            print(f"over {len(out['sources'])} source(s): median final distance {out['median_final_distance']:.2f} m, "
+                  f"worst {out['worst_final_distance']:.2f} m; fell in {out['falls']} of {len(out['sources'])}")
     return 0
 
 

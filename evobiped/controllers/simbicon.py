@@ -29,7 +29,11 @@ sound signal s (``sound``, + for a source on the left; see
 left leg), which turns a walker without hip yaw towards the left for s > 0
 when the gene is positive; ``sound_lateral`` moves every swing foot sideways
 (``+ sound_lateral s`` to the left).  Both start at 0 (deaf) and evolve
-like the rest; evolution picks their signs.
+like the rest; evolution picks their signs.  s grows towards +-1 as the
+walker nears the source (at 10 m |s| <= 0.05, at 0.5 m up to 0.8), and so do
+these biases: the option ``sound_limit`` clips the s they act on to
++-sound_limit (default 1: unclipped), which keeps the direction heard and cuts
+off the growth that fells a walker on arrival (docs/steering.md).
 
 Outputs are joint target angles (rad) in the body's actuator order, clipped to
 the body's ranges.  Genome: the 13 numbers above (15 with hearing), each its
@@ -100,6 +104,8 @@ class SimbiconOptions(ControllerOptions):
     """Options of the simbicon controller."""
 
     dt: float = option(0.02, "control period", unit="s", above=0)
+    sound_limit: float = option(1.0, "the hearing genes act on the ear signal s clipped to +-sound_limit (1: as "
+                                "heard, s is in [-1, 1]); near a source |s| grows towards 1", above=0, high=1)
 
 
 class Simbicon(Controller):
@@ -119,6 +125,7 @@ class Simbicon(Controller):
         inputs = dict(inputs or {})
         self.n_outputs = len(actuators)
         self.dt = float(self.options.dt)
+        self.sound_limit = float(self.options.sound_limit)
         # actuator columns per leg (left = 0, right = 1)
         self._pitch, self._roll, self._knee = (np.array([index(actuators, leg, j) for leg in ("left", "right")]) for j in JOINTS)
         self.input_names = tuple(inputs)
@@ -167,6 +174,8 @@ class Simbicon(Controller):
         out = g["roll_offset"] + out_sw * (g["cd_lateral"] * d[:, 1] + g["cv_lateral"] * v[:, 1])
         if self.hears:  # longer right steps and shorter left ones for a source on the left, feet set towards it
             sound = x["sound"][:, 0]
+            if self.sound_limit < 1.0:  # the direction heard, its growth near the source cut off
+                sound = np.clip(sound, -self.sound_limit, self.sound_limit)
             fwd = fwd - out_sw * g["sound_forward"] * sound
             out = out + out_sw * g["sound_lateral"] * sound
         target = np.empty((P, self.n_outputs))

@@ -24,7 +24,28 @@ Presentations.  Each genome is evaluated once per source, every time from the
 default start; the episode runs them
 side by side in one batch.  Fitness of a presentation = -(planar distance of
 the pelvis centre to that source) when it ends (time limit or fall);
-a genome's fitness is the mean over its presentations.
+a genome's fitness is the mean over its presentations (``fitness =
+"distance"``, the paper's, the default).
+
+Arriving standing (``fitness = "arrive"``, beyond the paper).  The paper's
+fitness reads the distance when the episode ends, fall or not, so it pays
+collapsing on the source as much as standing on it.  The arrive fitness
+charges every fall more than any distance can cost.  With S presentations,
+d_j the distance (m) to source j when presentation j ends, t_j the time (s)
+it stayed up, T the episode length (s), fell_j = 1 when it fell (t_j < T)
+and 0 otherwise, R = ``fall_penalty`` (m) and c = ``fall_time_cost`` (m/s):
+
+    F = -(1/S) sum_j min(d_j, R)  -  sum_j fell_j (R + c (T - t_j))
+
+A genome that falls in any presentation scores below -R, one that never
+falls at least -R (its distances are capped at R), so a fall anywhere is worse
+than any distance; among falls a later one costs less (c per second lost),
+which leads evolution from walkers that fall towards walkers that stay up.
+Up to the end, only the final distance counts: arriving early and stepping
+in place, or circling close to the source, score alike.  Per presentation
+(what :meth:`SteerTask.fitness` returns, one value per simulation row) the
+fall term is multiplied by S, f_j = -min(d_j, R) - S fell_j (R + c (T - t_j)),
+so that the mean over the presentations is F.
 """
 
 from __future__ import annotations
@@ -80,12 +101,24 @@ def with_sources(config, sources):
     return dataclasses.replace(config, task_options={**given(config.task_options), "sources": [list(map(float, s)) for s in sources]})
 
 
+#: fitness name -> what it pays (see the module docstring)
+FITNESS = {"distance": "the paper's: minus the distance to the source when the episode ends, fall or not (m)",
+           "arrive": "minus the distance to the source at the end, minus fall_penalty + fall_time_cost (T - t) per fall (m)"}
+
+
 @dataclass(frozen=True, kw_only=True)
 class SteerOptions:
     """Options of the steer task."""
 
     sources: tuple = option(DEFAULT_SOURCES, "sound sources on the ground plane, one presentation each", unit="m",
                             check=parse_sources, span="[[x, y], ...], none at the start")
+    fitness: str = option("distance", "`distance`: the paper's, minus the distance to the source when the episode ends, "
+                          "fall or not; `arrive`: the same, minus fall_penalty + fall_time_cost (T - t_fall) for every "
+                          "presentation that falls", choices=tuple(FITNESS))
+    fall_penalty: float = option(100.0, "under the arrive fitness: what a fall costs, and the cap on each final "
+                                 "distance (so any fall scores below any walker that stays up)", unit="m", above=0)
+    fall_time_cost: float = option(1.0, "under the arrive fitness: what a fall costs per second of the episode it "
+                                   "loses", unit="m/s", low=0)
 
 
 class SteerTask(Task):
@@ -101,6 +134,7 @@ class SteerTask(Task):
         super().__init__(options, **given)
         self.sources = parse_sources(self.options.sources)
         self.presentations = len(self.sources)
+        self.fitness_name = self.options.fitness
 
     def bind_model(self, model) -> None:
         try:
@@ -127,7 +161,13 @@ class SteerTask(Task):
         state["position"][ok] = body.planar_position(sims)[ok]
 
     def fitness(self, state):
-        return -np.linalg.norm(state["position"] - state["source"], axis=1)
+        distance = np.linalg.norm(state["position"] - state["source"], axis=1)
+        if self.fitness_name == "distance":
+            return -distance
+        R, c = float(self.options.fall_penalty), float(self.options.fall_time_cost)
+        lost = state["seconds"] - state["end_time"]  # s of the episode lost to a fall, 0 for a walker up to the end
+        fall = np.where(lost > 0, R + c * lost, 0.0)
+        return -np.minimum(distance, R) - self.presentations * fall
 
     def terms(self, state):
         return {"distance": np.linalg.norm(state["position"] - state["start"], axis=1),
@@ -140,6 +180,8 @@ class SteerTask(Task):
         return self.sources
 
     def fitness_label(self):
+        if self.fitness_name == "arrive":
+            return f"fitness (m): -distance to the source - ({self.options.fall_penalty:g} m + {self.options.fall_time_cost:g} m/s × time lost) per fall"
         return "fitness: -distance to the source (m)"
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:
