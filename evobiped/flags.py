@@ -101,7 +101,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
-    from .evolution.run import RunConfig
+    from .evolution.run_config import RunConfig
     from .fileio import read_toml
     from .tasks import TASKS
 

@@ -167,6 +167,18 @@ class PerturbationOptions:
             return int(generation)
         return int(sum(b >= self.assist_gate for b in best[:generation]))
 
+    def key(self, seed: int, generation: int, best: list[float]) -> tuple[int, ...]:
+        """What a generation's trials are drawn from (:meth:`draw`): (run seed, generation), and the assistance clock
+        when a gate on the earlier generations' best fitness ``best`` (one per generation, in order) sets it."""
+        if self.assist > 0 and self.assist_gate > 0:
+            return seed, generation, self.assist_clock(generation, best)
+        return seed, generation
+
+    def unsettled(self, generation: int, best: list[float]) -> bool:
+        """Generation ``generation`` meets disturbances unlike the final ones: a schedule still changes, or the pelvis
+        assistance is on (``best`` as in :meth:`key`); its fitness does not compare with a settled generation's."""
+        return generation < self.settled_from or self.assist_at(self.assist_clock(generation, best)) > 0
+
     def assist_at(self, clock: int) -> float:
         """The assistance stiffness (N m/rad) at this clock: ``assist`` faded linearly to 0 over ``assist_generations``."""
         if self.assist <= 0:

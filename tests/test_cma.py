@@ -108,21 +108,14 @@ SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task
 
 def test_cma_run_resumes_bit_identically(tmp_path):
     """An interrupted CMA-ES run resumed (on 2 workers) gives the uninterrupted history and best genome."""
-    whole = Run.create(tmp_path / "whole", SMALL)
-    with make_evaluator(SMALL.episode, "serial") as ev:
-        whole.evolve(ev)
-    cut = Run.create(tmp_path / "cut", SMALL)
-    with make_evaluator(SMALL.episode, "serial") as ev:
-        cut.step(ev)
-        cut.checkpoint()
-    resumed = Run.resume(tmp_path / "cut")
-    with make_evaluator(SMALL.episode, "process", 2) as ev:
-        resumed.evolve(ev)
-    assert fitness_history(tmp_path / "cut") == fitness_history(tmp_path / "whole")
-    a, b = (json.loads((tmp_path / d / "best.json").read_text()) for d in ("whole", "cut"))
+    from .test_evolve import whole_and_resumed
+
+    whole, cut = whole_and_resumed(tmp_path, SMALL, stop_after=0)
+    assert fitness_history(cut) == fitness_history(whole.dir)
+    a, b = (json.loads((d / "best.json").read_text()) for d in (whole.dir, cut))
     assert a["genome"] == b["genome"] and a["fitness"] == b["fitness"]
     # CMA-ES improves on its first generation in this small run (the forward fitness is positive)
-    hist = fitness_history(tmp_path / "whole")
+    hist = fitness_history(whole.dir)
     assert float(hist[-1][1]) > 0
 
 

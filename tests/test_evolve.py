@@ -92,6 +92,27 @@ class Stop(Exception):
     pass
 
 
+def whole_and_resumed(tmp_path, config, stop_after: int = 1) -> tuple[Run, Path]:
+    """``config`` run uninterrupted (serially), and again stopped after generation ``stop_after`` and resumed on two
+    worker processes: (the whole run, the resumed run's directory)."""
+    whole = Run.create(tmp_path / "whole", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        whole.evolve(ev)
+    cut = Run.create(tmp_path / "cut", config)
+
+    def stop(stats):
+        if stats.generation == stop_after:
+            raise Stop
+
+    with make_evaluator(config.episode, "serial") as ev, pytest.raises(Stop):
+        cut.evolve(ev, stop)
+    assert len(fitness_history(cut.dir)) == stop_after + 1
+    resumed = Run.resume(cut.dir)
+    with make_evaluator(config.episode, "process", 2) as ev:
+        resumed.evolve(ev)
+    return whole, cut.dir
+
+
 def test_resume_equals_uninterrupted(tmp_path):
     config = RunConfig(**{**SMALL.__dict__, "generations": 5})
     ref, ref_best = evolve_with(tmp_path, "whole", "serial", config=config)
@@ -118,7 +139,7 @@ def test_resume_equals_uninterrupted(tmp_path):
 def test_the_optimizer_state_is_a_frozen_value(tmp_path):
     """The GA's state is a value: read-only arrays that later generations leave alone; restored into a fresh
     GA, it asks the same and both continue alike."""
-    from evobiped.evolution.run import make_optimizer
+    from evobiped.evolution.run_config import make_optimizer
 
     run = Run.create(tmp_path / "r", SMALL)
     with make_evaluator(SMALL.episode, "serial") as ev:

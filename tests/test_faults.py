@@ -454,7 +454,8 @@ def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkey
     import evobiped.evolution.run as runmod
     from evobiped.errors import stop_on_signals
     from evobiped.evolution.evaluate import make_evaluator
-    from evobiped.evolution.run import Run, RunConfig
+    from evobiped.evolution.run import Run
+    from evobiped.evolution.run_config import RunConfig
 
     config = RunConfig.from_dict({"episode": {"seconds": 0.5}, "ga": {"population": 4}, "generations": 2, "backend": "serial"})
     run = Run.create(tmp_path / "r", config)

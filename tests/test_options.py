@@ -8,7 +8,7 @@ from evobiped.bodies import BODIES
 from evobiped.controllers import CONTROLLERS
 from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError
-from evobiped.evolution.run import RunConfig
+from evobiped.evolution.run_config import RunConfig
 from evobiped.options import markdown_table, option, parse
 from evobiped.readme import USAGE, render, sections, tables
 from evobiped.tasks import TASKS

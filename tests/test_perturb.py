@@ -215,31 +215,18 @@ def test_bad_perturbation_config_file_one_line_nothing_written(tmp_path, capsys,
 def test_a_scheduled_run_resumes_and_parallelises_identically(tmp_path):
     """Schedules are functions of the generation: a run cut after two generations and resumed on two worker processes
     writes the history of an uninterrupted serial run, and its best is the best since the schedules ended."""
-    from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
+    from evobiped.evolution import GAOptions, RunConfig
 
-    from .test_evolve import Stop, fitness_history
+    from .test_evolve import fitness_history, whole_and_resumed
 
     ramp = {"presentations": 2, "pushes": 1, "push_after": 0.2, "push_force": {"start": 0.0, "end": 20.0, "generations": 3},
             "gene_noise": {"start": 0.0, "end": 0.05, "generations": 2, "after": 1}, "slope": {"start": 0.0, "end": 0.1, "generations": 3},
             "aggregate": "mean", "aggregate_later": "worst", "aggregate_from": 2}
     config = RunConfig(episode=EpisodeConfig(seconds=1.5, perturbations=ramp), ga=GAOptions(population=8), generations=5, seed=7,
                        backend="serial")
-    whole = Run.create(tmp_path / "whole", config)
-    with make_evaluator(config.episode, "serial") as ev:
-        whole.evolve(ev)
-    cut = Run.create(tmp_path / "cut", config)
-
-    def stop(stats):
-        if stats.generation == 1:
-            raise Stop
-
-    with make_evaluator(config.episode, "serial") as ev, pytest.raises(Stop):
-        cut.evolve(ev, stop)
-    resumed = Run.resume(cut.dir)
-    with make_evaluator(config.episode, "process", 2) as ev:
-        resumed.evolve(ev)
-    assert fitness_history(cut.dir) == fitness_history(whole.dir)
-    assert (cut.dir / "best.json").read_text() == (whole.dir / "best.json").read_text()
+    whole, cut = whole_and_resumed(tmp_path, config)
+    assert fitness_history(cut) == fitness_history(whole.dir)
+    assert (cut / "best.json").read_text() == (whole.dir / "best.json").read_text()
     assert config.episode.perturbations.settled_from == 3 and whole.best["generation"] >= 3
     history = fitness_history(whole.dir)
     assert whole.best["fitness"] == max(float(r[1]) for r in history[3:])

@@ -60,9 +60,10 @@ def run_select_cmd(args) -> int:
         print(f"{label:<40}{ep:>14}{r['distance']:>14.2f}{h:>9}{'yes' if r.get('up_long') else 'no':>10}{mark}")
     out = d / "selected.json"
     genome, cfg, meta = candidates[k]
-    done = cfg.nominal().build().run(genome)
+    episode = cfg.nominal().build()
+    done = episode.run(genome)
     save_genome(out, genome, cfg, **{**meta, "selected_from": labels[k], "up_long_seconds": args.seconds if rows[k].get("up_long") else None,
-                                     "outcome": outcome(done, cfg.nominal().build().task.targets())})
+                                     "outcome": outcome(done, episode.task.targets())})
     write_json(d / "selected_candidates.json", {"seconds": args.seconds, "heading_limit": args.heading_limit,
                                                "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
     print(f"selected: {labels[k]} -> {out}")

@@ -44,7 +44,8 @@ from ...evolution.evaluate import SerialEvaluator, init_ray
 from ...evolution.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
 from ...tasks import TASKS
-from ...evolution.run import OPTIMIZERS, Run, RunConfig
+from ...evolution.run import Run
+from ...evolution.run_config import OPTIMIZERS, RunConfig
 from ...fileio import atomic_write, read_json, write_json
 from ...genome_file import load_genome
 from ...progress import Progress

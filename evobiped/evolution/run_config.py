@@ -1,0 +1,128 @@
+"""What defines an evolutionary run (:class:`RunConfig`, saved as config.json) and what it builds before any
+file is written: the optimizer, seeded from a genome file when asked, within this machine's memory."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import rundir
+from ..episode import EpisodeConfig
+from ..errors import ConfigError, UserError
+from ..genome_file import load_genome
+from ..options import check_fields, option, parse, refuse_unknown
+from .base import Optimizer
+from .cma import CMAES, CMAOptions
+from .evaluate import BACKENDS
+from .ga import GA, GAOptions
+
+#: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation) with state/restore
+OPTIMIZERS = {"ga": GA, "cma": CMAES}
+
+
+def _text(v) -> None:
+    if not isinstance(v, str) or not v:
+        raise ConfigError(f"must be a non-empty string, got {v!r}")
+
+
+def _names(v) -> None:
+    if not isinstance(v, (list, tuple)) or not all(isinstance(x, str) for x in v):
+        raise ConfigError(f"must be a list of names, got {v!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunConfig:
+    """Everything that defines a run; saved as config.json."""
+
+    episode: EpisodeConfig = field(default_factory=EpisodeConfig)
+    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA) or `cma` (CMA-ES)", choices=tuple(OPTIMIZERS))
+    ga: GAOptions = field(default_factory=GAOptions)
+    cma: CMAOptions = field(default_factory=CMAOptions)
+    generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
+    seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
+    backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
+    workers: int | None = option(None, "parallel workers (none: one per core)", low=1, integer=True)
+    address: str | None = option(None, "an existing Ray cluster, HOST:PORT (backend ray)", check=_text)
+    initial: str | None = option(None, "genome file or run directory whose best genome seeds the population (clones)", check=_text)
+    frozen_blocks: tuple[str, ...] = option((), "gene blocks kept fixed (e.g. CPG weights when evolving only sensor weights)",
+                                            check=_names)
+
+    def __post_init__(self):
+        check_fields(self, "")
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["episode"] = self.episode.to_dict()
+        d["frozen_blocks"] = list(self.frozen_blocks)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict, *, where: str = "config") -> "RunConfig":
+        """The config a table of settings (a TOML file, config.json) gives; a bad setting is one ConfigError
+        line, ``where: path.of.setting: what is wrong`` (``where``: the file or preset, if any)."""
+        try:
+            d = dict(refuse_unknown(cls, d, ""))
+            episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
+            ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
+            if isinstance(d.get("frozen_blocks"), list):
+                d["frozen_blocks"] = tuple(d["frozen_blocks"])
+            return cls(episode=episode, ga=ga, cma=cma, **d)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}" if where else str(exc)) from None
+
+
+#: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
+WALKER_BYTES = 256 * 1024
+
+
+def check_memory(population: int, genes: int) -> None:
+    """ConfigError unless a population of ``genes``-gene genomes and their simulations fit in half this machine's memory."""
+    need = population * (genes * 8 * 8 + WALKER_BYTES)
+    have = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    if need > have / 2:
+        fits = int(have / 2 // (genes * 8 * 8 + WALKER_BYTES))
+        raise ConfigError(f"population {population} needs about {need / 2**30:.3g} GiB for its genomes and simulations; "
+                          f"this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
+
+
+def make_optimizer(config: RunConfig) -> Optimizer:
+    """Build the optimizer (GA or CMA-ES) for the episode's genome layout, known from the declarations
+    (nothing compiled); fails before any file is written."""
+    layout = config.episode.layout()
+    check_memory(config.cma.lam(layout.size) if config.optimizer == "cma" else config.ga.population, layout.size)
+    initial = None
+    if config.initial:
+        initial = initial_genome(config.initial, config.episode, layout)
+    mutable = None
+    if config.frozen_blocks:
+        slices = layout.slices()
+        unknown = [b for b in config.frozen_blocks if b not in slices]
+        if unknown:
+            raise ConfigError(f"frozen_blocks {unknown} are not gene blocks of {config.episode.controller} (have {list(slices)})")
+        mutable = np.ones(layout.size, bool)
+        for b in config.frozen_blocks:
+            mutable[slices[b]] = False
+    if config.optimizer == "cma":
+        return CMAES(layout, config.cma, seed=config.seed, initial=initial, mutable=mutable)
+    return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
+
+
+def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
+    """The genome that seeds a run: a genome file or a run directory's best.json.
+
+    A genome of a walking run seeds a run with extra input weights (steering):
+    the missing trailing genes are filled with zeros (no influence).
+    """
+    path = Path(source)
+    path = path / rundir.BEST if path.is_dir() else path
+    genome, cfg, _ = load_genome(path)
+    if cfg.body != episode.body or cfg.controller != episode.controller:
+        raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
+    same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
+    if len(genome) < layout.size and same:
+        genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
+    return layout.validate(genome, what=f"genome in {path}")
