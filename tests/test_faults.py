@@ -342,9 +342,9 @@ HOSTILE = {
 
 @pytest.mark.parametrize("text", HOSTILE, ids=[t.replace("\n", " ") for t in HOSTILE])
 def test_hostile_config_is_one_line_and_writes_nothing(tmp_path, capsys, text, monkeypatch):
-    from evobiped.evolution import run
+    from evobiped.evolution import run_config
 
-    monkeypatch.setattr(run, "WALKER_BYTES", 2**30)  # any machine: 5e6 walkers of 1 GiB do not fit
+    monkeypatch.setattr(run_config, "WALKER_BYTES", 2**30)  # any machine: 5e6 walkers of 1 GiB do not fit
     cfg = tmp_path / "c.toml"
     cfg.write_text(text)
     assert cli("evolve", "--config", cfg, "--out", tmp_path / "run", "--backend", "serial", "--quiet") == 2
