@@ -61,6 +61,8 @@ class Needs:
     optional: "Needs | None" = None
     #: reads its inputs normalised: each sensor it reads must have a declared standing value and scale
     normalised: bool = False
+    #: reads every sensor offered by default (the task's first), not only the needed ones
+    all_sensors: bool = False
 
 
 @dataclass(frozen=True)
@@ -114,7 +116,9 @@ def wire(needs: Needs, offer: Offer, *, chosen: list[str] | None = None, what: s
     if why is not None:
         raise ConfigError(f"{what} {why}")
     if chosen is None:
-        names = list(offer.task_sensors) if needs.task_sensors else []
+        names = list(offer.task_sensors) if needs.task_sensors or needs.all_sensors else []
+        if needs.all_sensors:
+            names += [n for n in offer.sensors if n not in names]
         names += [n for n in needs.sensors if n not in names]
         if needs.optional is not None and problem(needs.optional, offer) is None:
             names += [n for n in needs.optional.sensors if n not in names]

@@ -22,6 +22,8 @@ from .bodies.base import Body
 from .controllers import CONTROLLERS
 from .episode_result import EpisodeResult
 from .contract import Offer, normaliser, wire
+from .frame import StanceFrame, flips
+from .normaliser import SenseSums
 from .controllers.base import Controller
 from .errors import ConfigError
 from .genome import GenomeLayout
@@ -149,8 +151,23 @@ class EpisodeConfig:
         inputs = wire(cls.needs(opts), offer, chosen=opts.inputs,
                       what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
         controller = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
+        where = f"episode.controller_options"
         if controller.normalises_inputs:
             controller.input_norm = normaliser(inputs, offer.norms)
+        if opts.input_norm is not None:
+            width = sum(inputs.values())
+            if not controller.normalises_inputs:
+                raise ConfigError(f"{where}.input_norm: controller {self.controller!r} reads raw senses here (it does not normalise its inputs)")
+            if len(opts.input_norm["mean"]) != width:
+                raise ConfigError(f"{where}.input_norm: normalises {len(opts.input_norm['mean'])} inputs; the controller reads "
+                                  f"{width} ({', '.join(f'{n} {w}' for n, w in inputs.items())})")
+            controller.input_norm = (np.array(opts.input_norm["mean"], float), np.array(opts.input_norm["std"], float))
+        if opts.frame == "stance":
+            if body.actuator_mirror is None or body.contact_sensor is None:
+                raise ConfigError(f"{where}.frame: 'stance' needs a bilateral body with foot contacts; body {self.body!r} "
+                                  "declares no left/right mirror")
+            controller.frame = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror,
+                                           what=f"{where}.frame")
         if "genes" in given(opts):
             try:
                 controller.override_genes(opts.genes)
@@ -250,6 +267,11 @@ class EpisodeState:
     born: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     #: N m/rad: each row's pelvis assistance ``(n,)`` (None: none; see :mod:`evobiped.perturb`)
     assist: np.ndarray | None = None
+    #: ``(centre (k,), scale (k,))`` the controller's inputs are normalised with in this episode (None: the controller's)
+    norm: tuple | None = None
+    #: per row: control ticks, sums and sums of squares of the inputs it sensed ``(n,)``, ``(n, k)``, ``(n, k)``
+    #: (None: not collected; :mod:`evobiped.normaliser`)
+    senses: tuple | None = None
 
     @property
     def time(self) -> float:
@@ -320,7 +342,7 @@ class Episode:
                                        n_genes=None if self.controller is None else self.controller.layout.size)
 
     def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
-            trials: Trials | None = None) -> EpisodeResult:
+            trials: Trials | None = None, context: "Context | None" = None) -> EpisodeResult:
         """Simulate every genome ``(P, G)`` (or one ``(G,)``); returns fitness and outcome.
 
         A task with S presentations runs each genome S times side by side, and
@@ -328,9 +350,10 @@ class Episode:
         (p * R + r) * S + j is genome p under trial r and task presentation j.
         The listener sees all rows; the result has one entry per genome, its
         fitness combined over j by the task, then over r by the trials' aggregate.
-        ``run`` is :meth:`start`, :meth:`advance` over the whole length, :meth:`result`.
+        ``run`` is :meth:`start`, :meth:`advance` over the whole length, :meth:`result`; ``context``: what a run
+        sets per generation (:class:`Context`).
         """
-        state = self.start(genomes, seconds=seconds, trials=trials)
+        state = self.start(genomes, seconds=seconds, trials=trials, context=context)
         if listener is not None:
             listener.start(self, state.sims)
         self.advance(state, ticks=state.n_ticks, listener=listener)
@@ -340,7 +363,7 @@ class Episode:
         return result
 
     def start(self, genomes: np.ndarray | int, *, seconds: float | None = None, trials: Trials | None = None,
-              pose: Pose | None = None) -> EpisodeState:
+              pose: Pose | None = None, context: "Context | None" = None) -> EpisodeState:
         """Every genome ``(P, G)`` (or one ``(G,)``) at t = 0, rows as in :meth:`run`; ``seconds`` (default the
         episode's) is the planned length: each row's end time until it falls, and the task's ``seconds``.
         An episode without a controller takes the number of simulation rows instead of genomes (row i has
@@ -376,6 +399,10 @@ class Episode:
         # the task sees when each walker's episode ends: the full length until it falls (so a
         # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
         tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
+        ctx = context or Context()
+        if ctx.weights is not None:
+            tstate["weights"] = dict(ctx.weights)
+        k = self.controller.n_inputs if self.controller is not None and hasattr(self.controller, "n_inputs") else None
         return EpisodeState(
             sims=sims, params=params, task=tstate,
             controller=None if self.controller is None else self.controller.initial_state(params),
@@ -385,6 +412,8 @@ class Episode:
             noise=trials.noise() if trials is not None else None,
             offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
             assist=trials.assist[trial] if trials is not None and trials.assist is not None else None,
+            norm=ctx.norm,
+            senses=(np.zeros(P), np.zeros((P, k)), np.zeros((P, k))) if ctx.observe and k is not None else None,
         )
 
     def restart(self, state: EpisodeState, ids: np.ndarray, *, pose: Pose | None = None) -> EpisodeState:
@@ -421,10 +450,12 @@ class Episode:
             if not alive.any():
                 break
             neurons = ctrl.neuron_outputs(params, st.controller)
-            inputs = self._inputs(st.sims, st.task, P)
+            inputs, flip = self._inputs(st, P)
             st.controller, out = ctrl.step(params, st.controller, inputs)
-            self.step(st, to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out),
-                      neurons=neurons, listener=listener)
+            action = to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out)
+            if flip is not None:
+                action = ctrl.frame.actions(action, flip)
+            self.step(st, action, neurons=neurons, listener=listener)
         return state
 
     def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,
@@ -486,6 +517,7 @@ class Episode:
             end_position=task.end_position(self.body, state.sims, tstate).copy(),
             start_facing=state.start_facing,
             terms=task.terms(tstate),
+            senses=None if state.senses is None else dict(zip(("count", "total", "squares"), (a.copy() for a in state.senses))),
         )
         trials = state.trials
         if trials is not None:
@@ -495,16 +527,28 @@ class Episode:
             result = result.per_genome(S, task.combine)
         return result
 
-    def _inputs(self, sims: Sims, tstate: dict[str, Any], P: int) -> np.ndarray:
-        names = self.controller.input_names
+    def _inputs(self, st: EpisodeState, P: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """The controller's inputs ``(P, k)`` now (in its frame, normalised if it normalises) and the rows whose
+        senses and actions its stance frame mirrors (None: no frame).  Collects the senses of rows that are up."""
+        ctrl, sims = self.controller, st.sims
+        frame = getattr(ctrl, "frame", None)
+        flip = None if frame is None else flips(gait.read(self.body.contacts(sims), sims)["stance_leg"])
+        names = ctrl.input_names
         if not names:
-            return np.zeros((P, 0))
-        available = self.task.sensors(self.body, sims, tstate)
+            return np.zeros((P, 0)), flip
+        available = self.task.sensors(self.body, sims, st.task)
         if any(n not in available for n in names):  # body sensors only when the controller reads one
             available = {**self.body.sensors(sims), **available}
         x = np.concatenate([available[n] for n in names], axis=1)
-        norm = self.controller.input_norm
-        return x if norm is None else (x - norm[0]) / norm[1]
+        if flip is not None:
+            x = frame.inputs(x, flip)
+        if st.senses is not None:
+            up = st.alive
+            st.senses[0][up] += 1
+            st.senses[1][up] += x[up]
+            st.senses[2][up] += x[up] * x[up]
+        norm = st.norm if st.norm is not None else ctrl.input_norm
+        return (x if norm is None else (x - norm[0]) / norm[1]), flip
 
     def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         """One control period of physics for ``ids``; bool mask of blow-ups."""
@@ -519,6 +563,26 @@ class Episode:
             sims.xfrc_applied[ids, b, 3:] = assist_torque(stiffness, damping, sims.xmat[ids, b], sims.cvel[ids, b, :3])
             bad |= self.body.advance(sims, ids, 1)
         return bad
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a run sets for one generation's episodes, beyond the config: the inputs' normaliser
+    ``(centre (k,), scale (k,))`` (None: the controller's own), whether to collect the senses visited
+    (``EpisodeResult.senses``), and fitness weights by term for a task whose fitness weighs its terms (None:
+    the task's own)."""
+
+    norm: tuple | None = None
+    observe: bool = False
+    weights: dict | None = None
+    #: control ticks of senses behind ``norm`` (recorded with it in genome files)
+    norm_count: float = 0.0
+
+
+def sense_sums(result: EpisodeResult, rows: np.ndarray) -> SenseSums:
+    """What genomes ``rows`` sensed in an episode run with ``Context(observe=True)``, all presentations together."""
+    count, total, squares = (result.senses[k] for k in ("count", "total", "squares"))
+    return SenseSums(float(count[rows].sum()), total[rows].sum(axis=0), squares[rows].sum(axis=0))
 
 
 def build_episode(**config: Any) -> Episode:

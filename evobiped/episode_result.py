@@ -28,7 +28,9 @@ class EpisodeResult:
     #: the task's fitness terms by name (``Task.term_names``): ``(P,)`` per simulation row, ``(P, S)`` per genome
     #: of S rows (presentations x trials, as the positions)
     terms: dict[str, np.ndarray] = field(default_factory=dict)
-
+    #: what each individual sensed over its presentations, when collected (``Context.observe``): ``count`` ``(P,)``
+    #: control ticks up, ``total`` and ``squares`` ``(P, k)`` sums of its inputs and their squares (None: not collected)
+    senses: dict[str, np.ndarray] | None = None
 
     def displacements(self) -> tuple[np.ndarray, np.ndarray]:
         """Where each walker went in its first presentation: displacement ``(P, 2)`` m and direction ``(P,)``
@@ -59,6 +61,7 @@ class EpisodeResult:
             start_facing=by(self.start_facing),
             rows=self,
             terms={k: by(v) for k, v in self.terms.items()},
+            senses=None if self.senses is None else {k: by(v).sum(axis=1) for k, v in self.senses.items()},
         )
 
 

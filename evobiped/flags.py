@@ -121,6 +121,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     if population is not None:  # the population of either optimizer
         ga["population"] = population
         d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": population}
+        d["es"] = {**(d.get("es") if isinstance(d.get("es"), dict) else {}), "pairs": max(1, population // 2)}
     for key, value in (("optimizer", optimizer), ("generations", generations), ("seed", seed), ("backend", backend),
                        ("workers", workers), ("address", address), ("initial", initial)):
         if value is not None:

@@ -110,13 +110,15 @@ def _term_names(terms: list[dict] | None) -> list[str]:
     return list(dict.fromkeys(k for t in terms or () for k in t))
 
 
-def history_columns(rows: list[list], terms: list[dict] | None = None) -> dict[str, np.ndarray]:
-    """History rows (HISTORY_COLUMNS each) and the best's terms per generation (name -> value) ->
-    ``{column: (n_generations,) array}``, as :func:`read_history` gives (a missing term: NaN)."""
+def history_columns(rows: list[list], terms: list[dict] | None = None, extra: list[dict] | None = None) -> dict[str, np.ndarray]:
+    """History rows (HISTORY_COLUMNS each), the best's terms per generation (name -> value) and further columns per
+    generation (``extra``: name -> value, e.g. a curriculum's phase) -> ``{column: (n_generations,) array}``, as
+    :func:`read_history` gives (a missing value: NaN)."""
     out = {c: np.array([float(r[i]) for r in rows]) for i, c in enumerate(HISTORY_COLUMNS)}
-    padded = [*(terms or ()), *[{}] * (len(rows) - len(terms or ()))]
-    for name in _term_names(terms):
-        out[TERM_PREFIX + name] = np.array([np.nan if t.get(name) is None else float(t[name]) for t in padded])
+    for prefix, table in ((TERM_PREFIX, terms), ("", extra)):
+        padded = [*(table or ()), *[{}] * (len(rows) - len(table or ()))]
+        for name in _term_names(table):
+            out[prefix + name] = np.array([np.nan if t.get(name) is None else float(t[name]) for t in padded])
     return out
 
 
@@ -144,15 +146,17 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
         raise UserError(f"{path}: not a number in the history ({exc})") from None
 
 
-def history_text(rows: list[list], terms: list[dict] | None = None) -> str:
-    """history.csv's exact content for ``rows`` (one per generation, HISTORY_COLUMNS) and the best's terms
-    per generation (name -> value; the TERM_PREFIX columns)."""
-    names = _term_names(terms)
+def history_text(rows: list[list], terms: list[dict] | None = None, extra: list[dict] | None = None) -> str:
+    """history.csv's exact content for ``rows`` (one per generation, HISTORY_COLUMNS), the best's terms
+    per generation (name -> value; the TERM_PREFIX columns) and further columns (``extra``, unprefixed)."""
+    names, more = _term_names(terms), _term_names(extra)
     padded = [*(terms or ()), *[{}] * (len(rows) - len(terms or ()))]
+    padded_more = [*(extra or ()), *[{}] * (len(rows) - len(extra or ()))]
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow([*HISTORY_COLUMNS, *(TERM_PREFIX + n for n in names)])
-    w.writerows([*r, *("nan" if t.get(n) is None else t[n] for n in names)] for r, t in zip(rows, padded))
+    w.writerow([*HISTORY_COLUMNS, *(TERM_PREFIX + n for n in names), *more])
+    w.writerows([*r, *("nan" if t.get(n) is None else t[n] for n in names), *("nan" if x.get(n) is None else x[n] for n in more)]
+                for r, t, x in zip(rows, padded, padded_more))
     return buf.getvalue()
 
 

@@ -56,6 +56,10 @@ class Body(ABC):
     #: how a controller that normalises its inputs reads each sensor: name -> (standing values, scales), one per
     #: component, in the sensor's units; the controller sees (reading - standing value) / scale
     sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}
+    #: a bilateral body's left/right mirror (:mod:`evobiped.frame`): sensor name -> (column permutation, sign
+    #: per column) giving the mirrored body's reading, and the same over the action vector (None: not bilateral)
+    mirror: ClassVar[dict[str, tuple[tuple[int, ...], tuple[float, ...]]]] = {}
+    actuator_mirror: ClassVar[tuple[tuple[int, ...], tuple[float, ...]] | None] = None
 
     #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
     #: ``timestep`` and a ``model_file``); constructed as ``cls(options)`` (or ``cls(**settings)``)

@@ -112,6 +112,21 @@ class ReilBiped(Body):
         **gait.NORMS,
     }
 
+    #: left/right mirror: the legs' columns swap; the roll axes are mirrored in the model (+ = abduction on both
+    #: sides), so joint readings keep their signs; sideways quantities (pelvis roll, lateral offsets and
+    #: velocities) and the stance-leg flag change sign
+    mirror: ClassVar[dict] = {
+        "joint_angles": ((3, 4, 5, 0, 1, 2), (1,) * 6),
+        "joint_velocities": ((3, 4, 5, 0, 1, 2), (1,) * 6),
+        "foot_contact": ((1, 0), (1, 1)),
+        "pelvis_tilt": ((0, 1), (1, -1)),
+        "pelvis_tilt_rate": ((0, 1), (1, -1)),
+        "com_from_feet": ((2, 3, 0, 1), (1, -1, 1, -1)),
+        "com_velocity": ((0, 1), (1, -1)),
+        **gait.MIRROR,
+    }
+    actuator_mirror: ClassVar[tuple] = ((3, 4, 5, 0, 1, 2), (1,) * 6)
+
     Options: ClassVar[type] = ReilOptions
 
     def __init__(self, options=None, **given):

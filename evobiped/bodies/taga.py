@@ -100,6 +100,10 @@ class TagaBiped(Body):
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}
+    #: left/right mirror: a sagittal body's legs swap and nothing changes sign
+    mirror: ClassVar[dict] = {"link_angles": ((2, 3, 0, 1), (1,) * 4), "link_velocities": ((2, 3, 0, 1), (1,) * 4),
+                              "ground_contact": ((1, 0), (1, 1)), "ground_force": ((2, 3, 0, 1), (1,) * 4)}
+    actuator_mirror: ClassVar[tuple] = ((3, 4, 5, 0, 1, 2), (1,) * 6)
 
     Options: ClassVar[type] = TagaOptions
 

@@ -16,12 +16,14 @@ def add_evolve(sub) -> None:
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
-    p.add_argument("--optimizer", choices=("ga", "cma"), help="ga (Reil & Husbands' GA, default) or cma (CMA-ES)")
+    p.add_argument("--optimizer", choices=("ga", "cma", "es"), help="ga (Reil & Husbands' GA, default), cma (CMA-ES) or es "
+                   "(evolution strategies)")
     p.add_argument("--body", help=f"body: {choices_text('body')} (default reil)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")
     add_source_flag(p)
-    p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes)")
+    p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes; ES: "
+                   "twice its mirrored pairs)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
     p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A): the task's cyclic criterion")

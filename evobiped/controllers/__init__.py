@@ -3,6 +3,7 @@
 from .base import Controller
 from .ctrnn import CTRNN
 from .g3 import G3Controller
+from .linear import Linear
 from .matsuoka import Matsuoka
 from .open_loop import OpenLoop
 from .simbicon import Simbicon
@@ -12,9 +13,10 @@ from .simbicon import Simbicon
 CONTROLLERS: dict[str, type[Controller]] = {
     CTRNN.name: CTRNN,
     G3Controller.name: G3Controller,
+    Linear.name: Linear,
     Matsuoka.name: Matsuoka,
     OpenLoop.name: OpenLoop,
     Simbicon.name: Simbicon,
 }
 
-__all__ = ["CONTROLLERS", "CTRNN", "Controller", "G3Controller", "Matsuoka", "OpenLoop", "Simbicon"]
+__all__ = ["CONTROLLERS", "CTRNN", "Controller", "G3Controller", "Linear", "Matsuoka", "OpenLoop", "Simbicon"]

@@ -15,11 +15,25 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from ..contract import Needs
+from ..errors import ConfigError
+from ..frame import FRAMES
 from ..genome import GenomeLayout
 from ..options import option, taken
 
 #: the longest control latency, in control ticks
 MAX_LATENCY = 100
+
+
+def _norm_table(v) -> None:
+    """A normaliser table: ``mean`` and ``std`` lists of one length (std > 0), a ``count`` >= 0."""
+    ok = isinstance(v, dict) and set(v) <= {"mean", "std", "count"} and {"mean", "std"} <= set(v)
+    if ok:
+        m, s = v["mean"], v["std"]
+        ok = isinstance(m, list) and isinstance(s, list) and len(m) == len(s) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in m + s) and all(x > 0 for x in s)
+        ok = ok and (isinstance(v.get("count", 0), (int, float)) and not isinstance(v.get("count", 0), bool) and v.get("count", 0) >= 0)
+    if not ok:
+        raise ConfigError("must be a table {mean = [...], std = [...], count = n} with one finite mean and one std > 0 per input")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -31,10 +45,16 @@ class ControllerOptions:
     genes: dict = option({}, "gene-block overrides (bounds, initialisation, mutation; see GenomeLayout.with_overrides)")
     latency: int = option(0, "control ticks by which its actions reach the body late (the first action is held meanwhile)",
                           unit="control ticks", low=0, high=MAX_LATENCY, integer=True)
+    frame: str = option("body", "`body`: senses and actions as the body gives them; `stance`: mirrored so the stance leg "
+                        "is always the first (one set of weights serves both legs; the body must declare its mirror)",
+                        choices=FRAMES)
+    input_norm: dict | None = option(None, "the observation normaliser the genome was evolved with, {mean = [...], std = [...], "
+                                     "count = n} over its inputs (written by a run that normalises; replaces the declared "
+                                     "standing values and scales)", check=_norm_table)
 
 
 #: the options of :class:`ControllerOptions`, every controller's (the README's tables list each controller's own)
-GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes", "latency")
+GENERIC_CONTROLLER_OPTIONS = ("inputs", "genes", "latency", "frame", "input_norm")
 
 
 class Controller(ABC):
@@ -55,6 +75,8 @@ class Controller(ABC):
     #: ``(centre (k,), scale (k,))`` set by the episode; None: raw readings
     normalises_inputs: bool = False
     input_norm: tuple | None = None
+    #: the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.frame`; None: the body's)
+    frame: Any = None
 
     #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.options.option` fields)
     Options: ClassVar[type] = ControllerOptions

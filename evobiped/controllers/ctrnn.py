@@ -44,7 +44,12 @@ order stay the default):
   of its sigmoids instead of saturating;
 - ``motor = "full"``: target = clip((o - 1/2) * 2 max(|low|, |high|), low, high):
   o = 0.5 stands straight, as with ``centred``, and the whole Table II range is
-  reachable (``centred`` reaches only -0.7 rad at the knee).
+  reachable (``centred`` reaches only -0.7 rad at the knee);
+- ``direct``: a linear path from the inputs to the motor outputs beside the
+  network, o_j = O_j + c_j + sum_k D_kj s_k (genes ``direct_biases`` c, n_outputs,
+  and ``direct_weights`` D, k * n_outputs, after the input weights; range and
+  sigma those of the input weights), so the network contains the linear policy
+  (with its neurons at rest, O = 1/2) and can grow past it.
 """
 
 from __future__ import annotations
@@ -108,6 +113,7 @@ class CTRNNOptions(ControllerOptions):
                                          check=lambda v: _range(v, "input weights"), span="low < high")
     input_sigma: float | None = option(None, "initial and mutation sigma of the input weights (default: the weights' 8)", above=0)
     centre_crossing: bool = option(False, "biases alpha_j = gene + sum_i w_ij / 2: a network of zero bias genes sits mid-sigmoid")
+    direct: bool = option(False, "a linear path from the inputs to the motor outputs beside the network (o = O + c + D s)")
 
     def __post_init__(self):
         _tau_block(self.time_constants, self.dt, self.tau_scale)
@@ -153,6 +159,12 @@ class CTRNN(Controller):
             sigma = o.input_sigma if o.input_sigma is not None else WEIGHT["init_sigma"]
             blocks.append(GeneBlock(name="input_weights", size=k * n, low=float(lo), high=float(hi),
                                     init_mean=0.5 * (lo + hi), init_sigma=float(sigma), mutation_sigma=float(sigma)))
+        self.direct = bool(o.direct)
+        if self.direct:
+            lo, hi = o.input_weights if o.input_weights is not None else (WEIGHT["low"], WEIGHT["high"])
+            sigma = o.input_sigma if o.input_sigma is not None else WEIGHT["init_sigma"]
+            same = dict(low=float(lo), high=float(hi), init_mean=0.5 * (lo + hi), init_sigma=float(sigma), mutation_sigma=float(sigma))
+            blocks += [GeneBlock(name="direct_biases", size=n_outputs, **same), GeneBlock(name="direct_weights", size=k * n_outputs, **same)]
         self._layout = GenomeLayout(tuple(blocks))
 
     @property
@@ -167,6 +179,8 @@ class CTRNN(Controller):
         alpha = p["biases"] + 0.5 * W.sum(axis=1) if self.centre_crossing else p["biases"]
         out = {"W": W, "tau": tau, "alpha": alpha}
         out["V"] = p["input_weights"].reshape(P, self.n_inputs, n) if self.n_inputs else np.zeros((P, 0, n))
+        if self.direct:
+            out["c"], out["D"] = p["direct_biases"], p["direct_weights"].reshape(P, self.n_inputs, self.n_outputs)
         return out
 
     def initial_state(self, params: dict[str, np.ndarray]) -> np.ndarray:
@@ -185,6 +199,8 @@ class CTRNN(Controller):
         A = state + (self.dt / params["tau"]) * (net - state)
         if self.outputs_after:
             O = self.outputs_of(params, A)
+        if self.direct:
+            return A, O[:, : self.n_outputs] + params["c"] + (inputs[:, :, None] * params["D"]).sum(axis=1)
         return A, O[:, : self.n_outputs]
 
     def neuron_outputs(self, params, state):

@@ -19,7 +19,7 @@ import dataclasses
 
 import numpy as np
 
-from ..episode import Episode, EpisodeConfig
+from ..episode import Context, Episode, EpisodeConfig
 from ..episode_result import EpisodeResult
 from ..errors import STOP_SIGNALS, ConfigError, UserError
 from ..net import connect_error
@@ -28,9 +28,11 @@ from .pool import silenced_stderr, spawn_pool, stop_pool
 BACKENDS = ("serial", "process", "thread", "ray")
 
 
-def _evaluate(episode: Episode, genomes: np.ndarray, key: tuple[int, int] | None = None) -> EpisodeResult:
-    """Run ``genomes`` under the perturbed presentations of ``key`` = (run seed, generation), or nominally (None)."""
-    return episode.run(genomes, trials=episode.trials_for(key))
+def _evaluate(episode: Episode, genomes: np.ndarray, key: tuple[int, int] | None = None,
+              context: Context | None = None) -> EpisodeResult:
+    """Run ``genomes`` under the perturbed presentations of ``key`` = (run seed, generation), or nominally (None),
+    in the run's ``context`` for this generation (normaliser, collected senses, fitness weights)."""
+    return episode.run(genomes, trials=episode.trials_for(key), context=context)
 
 
 def concat(parts: list[EpisodeResult]) -> EpisodeResult:
@@ -68,9 +70,9 @@ class Evaluator(ABC):
         self.config = episode
 
     @abstractmethod
-    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None) -> EpisodeResult:
+    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None, context: Context | None = None) -> EpisodeResult:
         """The episode results of ``genomes`` (fitness and outcome, ``(N,)`` each); ``key`` = (run seed, generation)
-        draws the episode's perturbations."""
+        draws the episode's perturbations; ``context``: what the run sets for this generation."""
 
     def close(self) -> None:
         pass
@@ -89,8 +91,8 @@ class SerialEvaluator(Evaluator):
         super().__init__(episode)
         self.episode = episode.build()
 
-    def evaluate(self, genomes, key=None):
-        return _evaluate(self.episode, genomes, key)
+    def evaluate(self, genomes, key=None, context=None):
+        return _evaluate(self.episode, genomes, key, context)
 
 
 # ---- process pool: one Episode per worker process, built by the initializer
@@ -118,7 +120,7 @@ def _fault_point() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
 
-def _work(job: tuple[np.ndarray, tuple[int, int] | None]) -> EpisodeResult:
+def _work(job: tuple) -> EpisodeResult:
     _fault_point()
     return _evaluate(_worker_episode, *job)
 
@@ -143,9 +145,9 @@ class ProcessPoolEvaluator(Evaluator):
     def _new_pool(self):
         return spawn_pool(self.workers, _init_worker, (self.config,))
 
-    def evaluate(self, genomes, key=None):
+    def evaluate(self, genomes, key=None, context=None):
         genomes = np.asarray(genomes, float)
-        jobs = [(genomes[s], key) for s in chunks(len(genomes), self.chunk, self.workers)]
+        jobs = [(genomes[s], key, context) for s in chunks(len(genomes), self.chunk, self.workers)]
         parts: list[EpisodeResult | None] = [None] * len(jobs)
         for attempt in range(MAX_RETRIES + 1):
             todo = [i for i, p in enumerate(parts) if p is None]
@@ -187,17 +189,17 @@ class ThreadEvaluator(Evaluator):
             self._episodes.put(episode.build())
         self.pool = ThreadPoolExecutor(self.workers, thread_name_prefix="evobiped-eval")
 
-    def _work(self, genomes: np.ndarray, key) -> EpisodeResult:
+    def _work(self, genomes: np.ndarray, key, context) -> EpisodeResult:
         episode = self._episodes.get()  # a free one: no two threads share an Episode
         try:
-            return _evaluate(episode, genomes, key)
+            return _evaluate(episode, genomes, key, context)
         finally:
             self._episodes.put(episode)
 
-    def evaluate(self, genomes, key=None):
+    def evaluate(self, genomes, key=None, context=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, self.workers)]
-        return concat(list(self.pool.map(lambda g: self._work(g, key), pieces)))
+        return concat(list(self.pool.map(lambda g: self._work(g, key, context), pieces)))
 
     def close(self):
         self.pool.shutdown(wait=True)
@@ -274,9 +276,9 @@ class RayEvaluator(Evaluator):
             def __init__(self, config):
                 self.episode = config.build()
 
-            def evaluate(self, genomes, key):
+            def evaluate(self, genomes, key, context):
                 _fault_point()
-                return _evaluate(self.episode, genomes, key)
+                return _evaluate(self.episode, genomes, key, context)
 
             def node(self):
                 return ray.get_runtime_context().get_node_id()
@@ -291,12 +293,12 @@ class RayEvaluator(Evaluator):
             raise UserError(f"a Ray node running this run's workers died ({len(self.nodes - alive)} of {len(self.nodes)} nodes lost); "
                             "the last checkpoint is kept: resume the run with evobiped evolve --resume")
 
-    def evaluate(self, genomes, key=None):
+    def evaluate(self, genomes, key=None, context=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, len(self.actors))]
         pool = self.ray.util.ActorPool(self.actors)
         for g in pieces:
-            pool.submit(lambda a, g: a.evaluate.remote(g, key), g)
+            pool.submit(lambda a, g: a.evaluate.remote(g, key, context), g)
         parts = []
         try:
             while pool.has_next():

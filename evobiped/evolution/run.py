@@ -27,6 +27,7 @@ from .evaluate import Evaluator
 from .base import Optimizer
 from .individuals import Individuals
 from .run_config import RunConfig, make_optimizer
+from .run_context import RunContext
 from ..rundir import HISTORY_COLUMNS
 
 @dataclass
@@ -59,7 +60,7 @@ class Run:
 
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
-                 history_terms: list[dict] | None = None, best_walk: dict | None = None):
+                 history_terms: list[dict] | None = None, best_walk: dict | None = None, context: RunContext | None = None):
         self.dir, self.config, self.optimizer = directory, config, optimizer
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
@@ -76,6 +77,8 @@ class Run:
         #: the resumed run is bit-identical to an uninterrupted one)
         self.environment_differences: list[str] = []
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
+        #: what the run sets per generation beyond its config: the running normaliser, the curriculum's phase
+        self.context = context if context is not None else RunContext(config)
 
     # ---- creating and resuming
     @classmethod
@@ -157,8 +160,10 @@ class Run:
         if len(history) != opt.generation:
             raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {opt.generation})")
         individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
+        context = RunContext(config)
+        context.restore(ck)
         return cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
-                   ck.get("history_terms", []), ck.get("best_walk")), started_in
+                   ck.get("history_terms", []), ck.get("best_walk"), context), started_in
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -207,13 +212,13 @@ class Run:
         """history.csv, best.json and evolution.rrd from the committed state."""
         from ..record.evolution_log import recording_matches, write_recording
 
-        self._sync(rundir.HISTORY, rundir.history_text(self.history, self.history_terms), repair=repair)
+        self._sync(rundir.HISTORY, rundir.history_text(self.history, self.history_terms, self.context.history), repair=repair)
         self._sync(rundir.BEST, self._best_text(), repair=repair)
         rec = self.dir / rundir.RECORDING
         if not self.history:
             self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None
             return
-        columns = rundir.history_columns(self.history, self.history_terms)
+        columns = rundir.history_columns(self.history, self.history_terms, self.context.history)
         if repair:
             if recording_matches(rec, columns):
                 return
@@ -227,7 +232,7 @@ class Run:
         if genome is None:  # a checkpoint written before the best genome was part of it: its generation file
             src = rundir.generation_file(self.dir, self.best["generation"])
             return src.read_text() if src.is_file() else None
-        return genome_text(np.array(genome), self.config.episode, **self.best)
+        return genome_text(np.array(genome), self.context.best_episode(), **self.best)
 
     @property
     def done(self) -> bool:
@@ -255,7 +260,8 @@ class Run:
         comparable, so the run's best is the latest generation's, then the fittest since."""
         opt = self.optimizer
         pop, unknown = opt.ask()
-        result = evaluator.evaluate(pop[unknown], key=self._key(opt.generation))
+        context = self.context.now()
+        result = evaluator.evaluate(pop[unknown], key=self._key(opt.generation), context=context)
         opt.tell(result)
         self.individuals.told(unknown, result)
         f, outcome = opt.fitness, self.individuals.outcome
@@ -279,14 +285,17 @@ class Run:
         terms = self.individuals.terms_of(b)
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
                     generation=g, terms=terms)
-        save_genome(rundir.generation_file(self.dir, g), pop[b], self.config.episode, **meta)
+        episode = self.context.episode(context)
+        save_genome(rundir.generation_file(self.dir, g), pop[b], episode, **meta)
         # while schedules still change or the assistance holds the walker up, generations are not comparable (nor
         # the unassisted walker's): the run's best is the latest generation's until then, then the fittest since
         if self.best is None or self._unsettled(g) or self._unsettled(self.best["generation"]) or meta["fitness"] > self.best["fitness"]:
             self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
+            self.context.best = context
         self.history.append(stats.row())
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
+        self.context.after(result, unknown, getattr(opt, "evaluation_rows", lambda: None)(), f)
         self.individuals.carry(opt.next_generation())  # the individuals it keeps keep their outcome
         return stats
 
@@ -295,7 +304,10 @@ class Run:
         return self.config.episode.perturbations.key(self.config.seed, generation, rundir.column(self.history, "best"))
 
     def _unsettled(self, generation: int) -> bool:
-        return self.config.episode.perturbations.unsettled(generation, rundir.column(self.history, "best"))
+        """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,
+        or it was scored in an earlier phase of the curriculum than the last."""
+        return (self.config.episode.perturbations.unsettled(generation, rundir.column(self.history, "best"))
+                or self.context.early_phase(generation))
 
     # ---- files
     def checkpoint(self) -> None:
@@ -306,7 +318,7 @@ class Run:
                 self.dir / rundir.CHECKPOINT,
                 {"optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
                  "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
-                 "best_walk": self.best_walk},
+                 "best_walk": self.best_walk, **self.context.to_dict()},
             )
             self._derive()
 

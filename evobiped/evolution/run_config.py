@@ -17,11 +17,13 @@ from ..genome_file import load_genome
 from ..options import check_fields, option, parse, refuse_unknown
 from .base import Optimizer
 from .cma import CMAES, CMAOptions
+from .curriculum import Curriculum, CurriculumOptions
+from .es import ESOptions, EvolutionStrategy
 from .evaluate import BACKENDS
 from .ga import GA, GAOptions
 
 #: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation) with state/restore
-OPTIMIZERS = {"ga": GA, "cma": CMAES}
+OPTIMIZERS = {"ga": GA, "cma": CMAES, "es": EvolutionStrategy}
 
 
 def _text(v) -> None:
@@ -39,9 +41,12 @@ class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
-    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA) or `cma` (CMA-ES)", choices=tuple(OPTIMIZERS))
+    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA), `cma` (CMA-ES) or `es` (evolution strategies)", choices=tuple(OPTIMIZERS))
     ga: GAOptions = field(default_factory=GAOptions)
     cma: CMAOptions = field(default_factory=CMAOptions)
+    es: ESOptions = field(default_factory=ESOptions)
+    normalise: NormaliseOptions = field(default_factory=lambda: NormaliseOptions())
+    curriculum: CurriculumOptions = field(default_factory=CurriculumOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
     seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
     backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
@@ -53,10 +58,17 @@ class RunConfig:
 
     def __post_init__(self):
         check_fields(self, "")
+        if self.normalise.running and not self.episode.parts()[1].normalises_inputs:
+            raise ConfigError(f"normalise.running: controller {self.episode.controller!r} reads raw senses here "
+                              "(it does not normalise its inputs)")
+        Curriculum(self.curriculum).check(self.episode.parts()[2])
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
         d["episode"] = self.episode.to_dict()
+        for name, cls in (("es", ESOptions), ("normalise", NormaliseOptions), ("curriculum", CurriculumOptions)):
+            if d[name] == dataclasses.asdict(cls()):  # written only when set: older runs' config.json unchanged
+                del d[name]
         d["frozen_blocks"] = list(self.frozen_blocks)
         return d
 
@@ -68,11 +80,32 @@ class RunConfig:
             d = dict(refuse_unknown(cls, d, ""))
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
             ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
+            extra = {name: parse(cls, d.pop(name, {}), name)
+                     for name, cls in (("es", ESOptions), ("normalise", NormaliseOptions), ("curriculum", CurriculumOptions))}
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
-            return cls(episode=episode, ga=ga, cma=cma, **d)
+            return cls(episode=episode, ga=ga, cma=cma, **extra, **d)
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}" if where else str(exc)) from None
+
+
+def _floors(v) -> None:
+    if not (isinstance(v, dict) and all(isinstance(k, str) and isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
+                                        for k, x in v.items())):
+        raise ConfigError(f"must be a table of positive floors by sensor name, got {v!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class NormaliseOptions:
+    """The running observation normaliser (``[normalise]``; :mod:`evobiped.normaliser`)."""
+
+    running: bool = option(False, "normalise the controller's inputs by the running mean and std of the senses the evaluation "
+                           "walkers visited (frozen into every genome file)")
+    floor: float = option(0.2, "each input's std at least this fraction of its declared scale", above=0)
+    floors: dict = option({"foot_contact": 0.5}, "absolute std floors by sensor name, in the sensor's units", check=_floors)
+
+    def __post_init__(self):
+        check_fields(self, "normalise")
 
 
 #: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
@@ -93,7 +126,8 @@ def make_optimizer(config: RunConfig) -> Optimizer:
     """Build the optimizer (GA or CMA-ES) for the episode's genome layout, known from the declarations
     (nothing compiled); fails before any file is written."""
     layout = config.episode.layout()
-    check_memory(config.cma.lam(layout.size) if config.optimizer == "cma" else config.ga.population, layout.size)
+    rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows}
+    check_memory(rows.get(config.optimizer, config.ga.population), layout.size)
     initial = None
     if config.initial:
         initial = initial_genome(config.initial, config.episode, layout)
@@ -108,6 +142,8 @@ def make_optimizer(config: RunConfig) -> Optimizer:
             mutable[slices[b]] = False
     if config.optimizer == "cma":
         return CMAES(layout, config.cma, seed=config.seed, initial=initial, mutable=mutable)
+    if config.optimizer == "es":
+        return EvolutionStrategy(layout, config.es, seed=config.seed, initial=initial, mutable=mutable)
     return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
 
 

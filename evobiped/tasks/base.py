@@ -5,9 +5,11 @@ fitness terms (:attr:`Task.term_names`, :meth:`Task.terms`), one value per
 simulation row, which the episode hands back in ``EpisodeResult.terms``.
 
 The task state is the dict :meth:`Task.start` returns, private to the task
-except for two keys the episode writes into it: ``end_time`` ``(n,)`` s (when
-each row's episode ends: the planned length until it falls) and ``seconds``
-(the planned length, s).  Everything else about the task is read through its
+except for the keys the episode writes into it: ``end_time`` ``(n,)`` s (when
+each row's episode ends: the planned length until it falls), ``seconds``
+(the planned length, s) and, when a run sets them for a generation
+(``episode.Context``), ``weights``: the fitness weights by term of a task
+whose fitness weighs its terms.  Everything else about the task is read through its
 methods (``end_position``, ``targets``, ``terms``), never through state keys.
 """
 
@@ -62,6 +64,11 @@ class Task:
 
     def sensor_norms(self) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
         """Standing value and scale of each sensor the task adds (as ``Body.sensor_norms``); default none."""
+        return {}
+
+    def sensor_mirror(self) -> dict[str, tuple[tuple[int, ...], tuple[float, ...]]]:
+        """How each sensor the task adds reads on the left/right mirrored body (:mod:`evobiped.frame`): name ->
+        (column permutation, sign per column); default none."""
         return {}
 
     def start(self, body: Body, sims: Sims) -> dict[str, Any]:

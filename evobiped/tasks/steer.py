@@ -148,6 +148,9 @@ class SteerTask(Task):
     def sensor_norms(self):
         return {"sound": ((0.0,), (1.0,))}  # already in [-1, 1], 0 when the source is straight ahead or behind
 
+    def sensor_mirror(self):
+        return {"sound": ((0,), (-1,))}  # a source on the left is on the right of the mirrored body
+
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
         return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)]}

@@ -30,6 +30,18 @@ with d_fwd the displacement (m) along the direction the walker faced at the
 start (negative when it walks backwards), t_up the time it stayed up and T
 the episode length (s).  Staying up is paid first (F grows with t_up even
 before the walker moves), then distance forward.
+
+Weighted terms (``fitness = "weighted"``, beyond the paper): F = sum_k w_k term_k
+over the terms named in ``weights`` (e.g. forward m, time up s, steps), the
+weights a run's curriculum may change from one phase to the next
+(:mod:`evobiped.evolution.curriculum`).  ``steps`` counts the walker's stance
+switches (a touchdown of the swing foot, :mod:`evobiped.gait`): paying for
+steps teaches a policy on point feet to step, the only way it stays up.
+
+Heading sense (``heading_sense = true``): the task adds the sensor
+``heading_error`` (rad, in (-pi, pi]): the angle from the direction the walker
+faced at the start to the direction it faces now, + turned to its left; fed to a
+controller it keeps long walks straight.
 """
 
 from __future__ import annotations
@@ -38,6 +50,7 @@ import numpy as np
 
 from dataclasses import dataclass
 
+from .. import gait
 from ..errors import ConfigError
 from ..options import option
 from .base import Task
@@ -89,7 +102,26 @@ def direction_words(heading_deg: float) -> str:
 
 
 #: fitness name -> what it pays (see the module docstring)
-FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T"}
+FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T",
+           "weighted": "sum of weights[term] * term"}
+TERMS = ("distance", "forward", "cyclicity", "time_up", "steps")
+
+
+def _weights(v) -> None:
+    if not (isinstance(v, dict) and v and all(isinstance(k, str) for k in v)
+            and all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in v.values())):
+        raise ConfigError(f"must be a table of finite weights by term name, got {v!r}")
+    unknown = [k for k in v if k not in TERMS or k == "cyclicity"]
+    if unknown:
+        raise ConfigError(f"names no term of the walk task: {', '.join(unknown)} (terms: distance, forward, time_up, steps)")
+
+
+def weighted(terms: dict[str, np.ndarray], weights: dict[str, float]) -> np.ndarray:
+    """``sum_k weights[k] * terms[k]``, ``(n,)``; terms in the order the weights name them."""
+    out = np.zeros(len(next(iter(terms.values()))))
+    for k, w in weights.items():
+        out = out + float(w) * terms[k]
+    return out
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -102,6 +134,9 @@ class WalkOptions:
     cyclic_weight: float = option(0.0, "weight of the cyclic-activity criterion (0: the paper's plain eq. 4)", low=0)
     cyclic_cycles: int = option(25, "cycles per motor neuron that earn the full criterion", low=1, integer=True)
     cyclic_band: float = option(0.05, "hysteresis band of a cycle, in unit motor output", above=0)
+    weights: dict = option({"forward": 10.0, "time_up": 5.0, "steps": 0.1}, "the weighted fitness's weight of each term "
+                           "(forward m, time_up s, steps, distance m)", check=_weights)
+    heading_sense: bool = option(False, "add the sensor heading_error: the facing's angle from the initial facing (rad, + left)")
 
     def __post_init__(self):
         if self.fitness != "distance" and self.cyclic_weight:
@@ -116,7 +151,9 @@ class WalkTask(Task):
     Options = WalkOptions
     #: ``distance`` eq. 4 (m), ``forward`` displacement along the initial facing (m), ``cyclicity`` c in [0, 1]
     #: (NaN without the cyclic criterion)
-    term_names = ("distance", "forward", "cyclicity")
+    #: ``time_up`` s until the walker fell (the episode's length if it did not), ``steps`` stance switches (both only
+    #: under the weighted fitness)
+    term_names = TERMS
     criteria = {
         "plain": {"fitness": "distance", "cyclic_weight": 0.0},
         "cyclic": {"fitness": "distance", "cyclic_weight": 1.0},
@@ -131,6 +168,26 @@ class WalkTask(Task):
         self.cyclic_weight = float(o.cyclic_weight)
         self.cyclic_cycles = int(o.cyclic_cycles)
         self.cyclic_band = float(o.cyclic_band)
+        self.weights = dict(o.weights)
+        self.heading_sense = bool(o.heading_sense)
+        self.counts_steps = self.weighs_terms = self.fitness_name == "weighted"
+        # time_up and steps only under the weighted fitness: the other fitnesses' files keep their columns
+        self.term_names = TERMS if self.counts_steps else TERMS[:3]
+
+    def sensor_widths(self):
+        return {"heading_error": 1} if self.heading_sense else {}
+
+    def sensor_norms(self):
+        return {"heading_error": ((0.0,), (0.3,))} if self.heading_sense else {}
+
+    def sensor_mirror(self):
+        return {"heading_error": ((0,), (-1,))} if self.heading_sense else {}
+
+    def sensors(self, body, sims, state):
+        if not self.heading_sense:
+            return {}
+        f0, f = state["facing"], body.heading(sims)
+        return {"heading_error": np.arctan2(f0[:, 0] * f[:, 1] - f0[:, 1] * f[:, 0], np.einsum("pi,pi->p", f0, f))[:, None]}
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
@@ -138,6 +195,12 @@ class WalkTask(Task):
         if self.cyclic_weight:
             state["motor"] = []
             state["ticks"] = np.zeros(sims.n, int)
+        if self.counts_steps:
+            if body.contact_sensor is None:
+                raise ConfigError(f"the walk task counts steps by foot contact; body {body.name!r} declares no contact sensor")
+            gait.read(body.contacts(sims), sims)  # the episode keeps the gait tracker from now on
+            state["stance"] = sims.extra["gait"]["stance"].copy()
+            state["steps"] = np.zeros(sims.n)
         return state
 
     def reads_neurons(self):
@@ -146,6 +209,10 @@ class WalkTask(Task):
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         state["position"][ok] = body.planar_position(sims)[ok]
+        if self.counts_steps:
+            stance = sims.extra["gait"]["stance"][ok]
+            state["steps"][ok] += stance != state["stance"][ok]
+            state["stance"][ok] = stance
         if self.cyclic_weight:
             state["motor"].append(neurons[:, : state["n_motor"]].copy())
             state["ticks"][ok] += 1
@@ -166,12 +233,17 @@ class WalkTask(Task):
 
     def terms(self, state):
         c = self.cyclicity(state) if self.cyclic_weight else np.full(len(state["start"]), np.nan)
-        return {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
+        out = {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
+        if self.counts_steps:
+            out["time_up"], out["steps"] = np.array(state["end_time"], float), state["steps"].copy()
+        return out
 
     def end_position(self, body, sims, state):
         return state["position"]
 
     def fitness_label(self):
+        if self.fitness_name == "weighted":
+            return "fitness: " + " + ".join(f"{w:g} × {k}" for k, w in self.weights.items())
         if self.fitness_name == "forward":
             return f"fitness (m): (forward displacement + {self.survival_credit:g} m for staying up) × time up / T"
         if self.cyclic_weight:
@@ -183,6 +255,8 @@ class WalkTask(Task):
         return np.einsum("pi,pi->p", state["position"] - state["start"], state["facing"])
 
     def fitness(self, state):
+        if self.fitness_name == "weighted":
+            return weighted(self.terms(state), state.get("weights", self.weights))
         if self.fitness_name == "forward":
             up = state["end_time"] / state["seconds"]
             return (self.forward(state) + self.survival_credit) * up

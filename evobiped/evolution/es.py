@@ -1,0 +1,184 @@
+"""Evolution strategies: OpenAI-ES (Salimans et al. 2017) and ARS V2-t (Mania, Guy & Recht 2018).
+
+One search point theta (the policy), estimated gradients from mirrored samples:
+each generation asks N pairs theta +- sigma eps_i (eps_i ~ N(0, I), from (run
+seed, generation) only) and the evaluation rows, theta itself (the policy the
+run reports: its walkers are the "evaluation walkers"); all rows meet the same
+perturbed presentations (common random numbers).
+
+* ``method = "openai"``: the 2N fitness values become centred ranks in
+  [-0.5, 0.5]; g = sum_i (r+_i - r-_i) eps_i / (2N) - weight_decay theta, and
+  Adam (beta 0.9, 0.999) climbs g at ``learning_rate`` (as in Salimans et al.'s
+  evolution-strategies-starter).
+* ``method = "ars"``: the ``top`` directions by max(f+, f-) are kept and
+  theta += learning_rate / (top sigma_f) sum (f+ - f-) eps, sigma_f the std of
+  those 2 top fitness values (ARS V2-t, with the normaliser the run keeps).
+
+Everything is in gene units (``sigma``, ``learning_rate``); samples are
+clipped to the genes' bounds.  ``sigma`` may shrink each generation by
+``sigma_decay`` down to ``sigma_min``.  Why our own ~150 lines rather than a
+library: evosax (JAX) and evotorch (PyTorch) would bring a whole array
+framework into the core install for an update of a few NumPy lines, and a state
+that is a plain value of floats is what the checkpoint stores and a resume
+restores bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError, UserError
+from ..genome import GenomeLayout
+from ..options import check_fields, option
+from .base import Optimizer, OptimizerState, frozen_array
+from .ga import generation_rng
+
+BETA1, BETA2, EPS = 0.9, 0.999, 1e-8
+
+
+@dataclass(frozen=True, kw_only=True)
+class ESOptions:
+    """Evolution-strategies settings (gene units)."""
+
+    method: str = option("openai", "`openai`: OpenAI-ES (centred ranks, Adam); `ars`: ARS V2-t (top directions, SGD)",
+                         choices=("openai", "ars"))
+    pairs: int = option(16, "N, mirrored pairs theta +- sigma eps per generation", low=1, high=100000, integer=True)
+    evaluation_rows: int = option(1, "rows of theta itself per generation (its walkers report the run; each meets every presentation)",
+                                  low=1, high=64, integer=True)
+    sigma: float = option(0.05, "sampling step", unit="gene units", above=0)
+    sigma_decay: float = option(1.0, "sigma times this each generation", above=0, high=1)
+    sigma_min: float = option(0.0, "sigma never decays below this", unit="gene units", low=0)
+    learning_rate: float = option(0.02, "Adam's (openai) or the step's (ars) learning rate", unit="gene units", above=0)
+    weight_decay: float = option(0.005, "L2 pull of theta towards 0 (openai)", low=0)
+    top: int = option(0, "ARS: directions kept (0: all)", low=0, integer=True)
+
+    def __post_init__(self):
+        check_fields(self, "es")
+        if self.top > self.pairs:
+            raise ConfigError(f"es.top: keeps at most the {self.pairs} pairs, got {self.top}")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ESState(OptimizerState):
+    """ES between generations: theta ``(G,)``, Adam's moments ``m``, ``v`` ``(G,)`` and the current population's fitness."""
+
+    name = "es"
+    theta: np.ndarray
+    m: np.ndarray
+    v: np.ndarray
+
+    def __post_init__(self):
+        for k in ("theta", "m", "v", "fitness"):
+            object.__setattr__(self, k, frozen_array(getattr(self, k)))
+
+    def to_dict(self) -> dict:
+        plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
+        return {"name": self.name, "generation": self.generation, "theta": plain(self.theta), "m": plain(self.m),
+                "v": plain(self.v), "fitness": plain(self.fitness)}
+
+
+def centred_ranks(f: np.ndarray) -> np.ndarray:
+    """Ranks of ``f`` scaled to [-0.5, 0.5] (ties in order of appearance)."""
+    r = np.empty(len(f))
+    r[np.argsort(f, kind="stable")] = np.arange(len(f))
+    return r / max(len(f) - 1, 1) - 0.5
+
+
+class EvolutionStrategy(Optimizer):
+    """Ask/tell ES over a :class:`GenomeLayout` (:class:`~.base.Optimizer`): rows ``[theta + sigma eps (N), theta - sigma eps
+    (N), theta (evaluation_rows)]``."""
+
+    name = "es"
+
+    def __init__(self, layout: GenomeLayout, config: ESOptions, *, seed: int, initial: np.ndarray | None = None,
+                 mutable: np.ndarray | None = None):
+        self.layout, self.config, self.seed = layout, config, int(seed)
+        self.low, self.high = layout.low, layout.high
+        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
+        if initial is not None:
+            initial = layout.validate(initial, what="initial genome")[0]
+        self.theta = np.clip(layout.init_mean if initial is None else initial, self.low, self.high).astype(float)
+        self.m, self.v = np.zeros(layout.size), np.zeros(layout.size)
+        self.generation = 0
+        self._sample()
+
+    @property
+    def sigma(self) -> float:
+        """The sampling step of this generation (gene units)."""
+        c = self.config
+        return max(c.sigma * c.sigma_decay ** self.generation, c.sigma_min) if c.sigma_decay < 1 else c.sigma
+
+    def _noise(self) -> np.ndarray:
+        eps = generation_rng(self.seed, self.generation).standard_normal((self.config.pairs, self.layout.size))
+        return eps * self.mutable
+
+    def _sample(self) -> None:
+        eps, s = self._noise(), self.sigma
+        rows = np.concatenate([self.theta + s * eps, self.theta - s * eps, np.tile(self.theta, (self.config.evaluation_rows, 1))])
+        self.population = np.clip(rows, self.low, self.high)
+        self.fitness = np.full(len(self.population), np.nan)
+
+    def evaluation_rows(self) -> np.ndarray:
+        """The rows of theta itself (the evaluation walkers)."""
+        return np.arange(2 * self.config.pairs, len(self.population))
+
+    def next_generation(self) -> np.ndarray:
+        """Climb the estimated gradient; every row of the next generation is new (all -1)."""
+        if np.isnan(self.fitness).any():
+            raise RuntimeError("next_generation before every individual was evaluated")
+        c, N = self.config, self.config.pairs
+        f = self.fitness[: 2 * N]
+        finite = np.isfinite(f)
+        f = np.where(finite, f, (f[finite].min() if finite.any() else 0.0) - 1e6)  # unstable: below every finite one
+        plus, minus = f[:N], f[N:]
+        eps = self._noise()
+        if c.method == "ars":
+            keep = np.argsort(-np.maximum(plus, minus), kind="stable")[: c.top or N]
+            spread = float(np.std(np.concatenate([plus[keep], minus[keep]])))
+            step = (plus[keep] - minus[keep]) @ eps[keep] * (c.learning_rate / (len(keep) * spread)) if spread > 0 else 0.0
+            self.theta = self.theta + step * self.mutable
+        else:
+            r = centred_ranks(f)
+            g = (r[:N] - r[N:]) @ eps / (2 * N) - c.weight_decay * self.theta
+            g = g * self.mutable
+            t = self.generation + 1
+            self.m = BETA1 * self.m + (1 - BETA1) * g
+            self.v = BETA2 * self.v + (1 - BETA2) * g * g
+            a = c.learning_rate * math.sqrt(1 - BETA2**t) / (1 - BETA1**t)
+            self.theta = self.theta + a * self.m / (np.sqrt(self.v) + EPS)
+        self.theta = np.clip(self.theta, self.low, self.high)
+        self.generation += 1
+        self._sample()
+        return np.full(len(self.population), -1)
+
+    # ---- its state as a value
+    def state(self) -> ESState:
+        return ESState(generation=self.generation, theta=self.theta, m=self.m, v=self.v, fitness=self.fitness)
+
+    def restore(self, state: ESState) -> None:
+        G = self.layout.size
+        if any(len(a) != G for a in (state.theta, state.m, state.v)):
+            raise UserError(f"checkpoint: the ES state's theta, m and v must have {G} genes each")
+        self.generation = state.generation
+        self.theta, self.m, self.v = (np.array(a, float) for a in (state.theta, state.m, state.v))
+        self._sample()
+        if len(state.fitness) != len(self.population):
+            raise UserError(f"checkpoint: the ES state's fitness must have {len(self.population)} values (finite or null)")
+        self.fitness = np.array(state.fitness, float)
+
+    def _state_from(self, table: dict) -> ESState:
+        gen = ESState.generation_of(table)
+        out = {}
+        for k in ("theta", "m", "v", "fitness"):
+            vals = table.get(k)
+            ok = isinstance(vals, list) and all(
+                (x is None and k == "fitness") or (isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)) for x in vals)
+            if not ok:
+                raise UserError(f"checkpoint: es.{k} must be a list of finite numbers" + (" or nulls" if k == "fitness" else ""))
+            out[k] = np.array([np.nan if x is None else float(x) for x in vals])
+        if (out["v"] < 0).any():
+            raise UserError("checkpoint: es.v must be >= 0")
+        return ESState(generation=gen, **out)

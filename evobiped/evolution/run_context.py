@@ -1,0 +1,163 @@
+"""What a run sets for each generation beyond its config: the running observation normaliser and the curriculum's phase.
+
+Generation g's episodes are normalised by the statistics of the senses the
+evaluation walkers visited in generations 0 .. g-1 (:mod:`evobiped.normaliser`)
+and scored with the current phase's weights (:mod:`.curriculum`); both are
+frozen into the genome file of each generation's best (its controller's
+``input_norm``, its task's ``weights``), so a walker replays, is tested and is
+distilled exactly as it was scored.  The statistics, the phase and the
+evaluation walkers' record per generation (history.csv's ``phase``,
+``evaluation_up`` and ``evaluation_forward``) are part of the checkpoint.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..episode import Context, EpisodeConfig, sense_sums
+from ..episode_result import EpisodeResult
+from ..errors import UserError
+from ..normaliser import Normaliser, frozen_table
+from ..options import given
+from .curriculum import Curriculum
+
+
+class RunContext:
+    """The per-generation settings of a run with config ``config`` (a no-op for a run that has neither)."""
+
+    def __init__(self, config):
+        self.config = config
+        self.curriculum = Curriculum(config.curriculum)
+        self.running = bool(config.normalise.running)
+        controller = config.episode.parts()[1]
+        self.declared = controller.input_norm
+        self.stats = Normaliser.empty(len(self.declared[0])) if self.running else None
+        self.floor = self._floors(controller) if self.running else None
+        #: per generation: the phase it was scored in and how its evaluation walkers did (history.csv's extra columns)
+        self.history: list[dict] = []
+        #: the context the run's best genome was scored in (best.json freezes it)
+        self.best: Context | None = None
+
+    @property
+    def active(self) -> bool:
+        return self.running or self.curriculum.active or self.config.optimizer == "es"
+
+    def _floors(self, controller) -> np.ndarray:
+        o = self.config.normalise
+        widths = [(n, w) for n, w in zip(controller.input_names, _widths(self.config.episode))]
+        absolute = np.concatenate([np.full(w, float(o.floors.get(n, 0.0))) for n, w in widths]) if widths else np.zeros(0)
+        return np.maximum(o.floor * self.declared[1], absolute)
+
+    def now(self) -> Context:
+        """The context of the next generation's episodes."""
+        norm = self.stats.centre_scale(self.declared, self.floor) if self.running else None
+        return Context(norm=norm, observe=self.running, weights=self.curriculum.weights(),
+                       norm_count=self.stats.count if self.running else 0.0)
+
+    def episode(self, context: Context | None) -> EpisodeConfig:
+        """The run's episode config with ``context`` frozen in (what a genome file of that generation records)."""
+        cfg = self.config.episode
+        if context is None or (context.norm is None and context.weights is None):
+            return cfg
+        changes = {}
+        if context.norm is not None:
+            changes["controller_options"] = {**given(cfg.controller_options),
+                                             "input_norm": frozen_table(*context.norm, context.norm_count)}
+        if context.weights is not None:
+            changes["task_options"] = {**given(cfg.task_options), "weights": dict(context.weights)}
+        return dataclasses.replace(cfg, **changes)
+
+    def best_episode(self) -> EpisodeConfig:
+        return self.episode(self.best)
+
+    def after(self, result: EpisodeResult, unknown: np.ndarray, evaluation_rows: np.ndarray | None, fitness: np.ndarray) -> None:
+        """Learn from a generation: ``result`` over the evaluated rows (``unknown`` of the population), the optimizer's
+        evaluation rows (None: the fittest evaluated row) and the population's ``fitness``."""
+        if not self.active:
+            return
+        position = np.cumsum(unknown) - 1
+        evaluated = np.flatnonzero(unknown)
+        rows = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.asarray(evaluation_rows)
+        rows = position[rows[unknown[rows]]]
+        phase = self.curriculum.phase
+        if self.running and len(rows):
+            self.stats = self.stats.add(sense_sums(result, rows if evaluation_rows is not None else np.arange(len(evaluated))))
+        up = float(np.mean(~_row_fell(result, rows))) if len(rows) else float("nan")
+        forward = float(np.mean(np.asarray(result.terms["forward"])[rows])) if "forward" in result.terms and len(rows) else float("nan")
+        if len(rows):
+            self.curriculum.after(result, rows)
+        self.history.append({"phase": phase, "evaluation_up": up, "evaluation_forward": None if not np.isfinite(forward) else forward})
+
+    def early_phase(self, generation: int) -> bool:
+        """Generation ``generation`` was (or, the next one, is) scored in a phase before the curriculum's last."""
+        if not self.curriculum.active:
+            return False
+        phase = self.history[generation]["phase"] if generation < len(self.history) else self.curriculum.phase
+        return phase < len(self.curriculum.options.phases) - 1
+
+    # ---- the checkpoint's part
+    def to_dict(self) -> dict:
+        if not self.active:
+            return {}
+        out = {"history_extra": self.history, "curriculum": self.curriculum.to_dict()}
+        if self.running:
+            out["normaliser"] = self.stats.to_dict()
+        out["best_context"] = None if self.best is None else _context_table(self.best)
+        return out
+
+    def restore(self, ck: dict) -> None:
+        """Read :meth:`to_dict`'s keys back from a checkpoint (UserError, one line, when malformed)."""
+        if not self.active:
+            return
+        extra = ck.get("history_extra", [])
+        if not isinstance(extra, list) or not all(isinstance(t, dict) for t in extra):
+            raise UserError("checkpoint: history_extra must be a list of tables")
+        self.history = extra
+        if "curriculum" in ck:
+            self.curriculum.restore(ck["curriculum"])
+        if self.running and "normaliser" in ck:
+            self.stats = Normaliser.from_dict(ck["normaliser"], len(self.declared[0]))
+        table = ck.get("best_context")
+        self.best = None if table is None else _context_from(table, len(self.declared[0]) if self.declared else 0)
+
+
+def _widths(episode: EpisodeConfig) -> list[int]:
+    """The widths of the controller's inputs, in input order."""
+    body, controller, task = episode.parts()
+    offered = {**body.sensor_widths, **task.sensor_widths()}
+    return [offered[n] for n in controller.input_names]
+
+
+def _row_fell(result: EpisodeResult, genomes: np.ndarray) -> np.ndarray:
+    """Whether each presentation of ``genomes`` fell, one entry per presentation."""
+    if result.rows is None:
+        return result.fell[genomes]
+    per = len(result.rows.fell) // len(result.fell)
+    return result.rows.fell.reshape(-1, per)[genomes].ravel()
+
+
+def _context_table(context: Context) -> dict:
+    return {"input_norm": None if context.norm is None else frozen_table(*context.norm, context.norm_count),
+            "weights": context.weights}
+
+
+def _context_from(table, k: int) -> Context:
+    if not isinstance(table, dict):
+        raise UserError("checkpoint: best_context must be a table")
+    norm, weights = table.get("input_norm"), table.get("weights")
+    if norm is not None:
+        try:
+            centre, scale = np.array(norm["mean"], float), np.array(norm["std"], float)
+        except (TypeError, KeyError, ValueError):
+            raise UserError("checkpoint: best_context.input_norm must hold mean and std") from None
+        if centre.shape != (k,) or scale.shape != (k,) or not (scale > 0).all():
+            raise UserError(f"checkpoint: best_context.input_norm must hold {k} means and stds > 0")
+        norm = (centre, scale)
+    if weights is not None and not isinstance(weights, dict):
+        raise UserError("checkpoint: best_context.weights must be a table")
+    count = table["input_norm"].get("count", 0) if norm is not None else 0
+    if not isinstance(count, (int, float)) or isinstance(count, bool) or not count >= 0:
+        raise UserError("checkpoint: best_context.input_norm.count must be a number >= 0")
+    return Context(norm=norm, weights=weights, norm_count=float(count))

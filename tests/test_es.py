@@ -1,0 +1,210 @@
+"""The route from scratch: the mirrored stance frame, the linear controller, the running normaliser, the ES and the
+curriculum.  Physics checked against the simulation itself (a mirrored body reads mirrored senses), numbers against
+independent calculations (numpy's mean and variance, a quadratic's optimum)."""
+
+import csv
+import json
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from evobiped.episode import Context, EpisodeConfig
+from evobiped.errors import ConfigError
+from evobiped.evolution import Run, RunConfig, make_evaluator
+from evobiped.evolution.es import ESOptions, EvolutionStrategy, centred_ranks
+from evobiped.genome import GeneBlock, GenomeLayout
+from evobiped.normaliser import Normaliser, SenseSums
+from evobiped.sim import Sims
+
+from .conftest import cli
+
+STANCE_LINEAR = dict(body="reil", controller="linear", task="walk", seconds=1.0,
+                     controller_options={"frame": "stance"}, task_options={"fitness": "weighted", "heading_sense": True})
+
+
+def mirror_reil_state(model, sims: Sims, i: int) -> None:
+    """Row ``i`` becomes its left/right mirror image about the walker's x-z plane (the Reil model's roll axes are mirrored,
+    so the legs' joint angles swap without a sign)."""
+    q, v = sims.qpos[i].copy(), sims.qvel[i].copy()
+    q[1], v[1] = -q[1], -v[1]  # y
+    w, x, y, z = q[3:7]
+    q[3:7] = (w, -x, y, -z)  # a reflection y -> -y turns rotations about x and z the other way
+    v[3], v[5] = -v[3], -v[5]
+    for a, b in (("left_hip_pitch", "right_hip_pitch"), ("left_hip_roll", "right_hip_roll"), ("left_knee", "right_knee")):
+        qa, qb = model.joint(a).qposadr[0], model.joint(b).qposadr[0]
+        da, db = model.joint(a).dofadr[0], model.joint(b).dofadr[0]
+        q[qa], q[qb] = q[qb], q[qa]
+        v[da], v[db] = v[db], v[da]
+    sims.qpos[i], sims.qvel[i] = q, v
+
+
+def test_the_reil_body_declares_its_mirror_truly():
+    """A mirrored body reads the mirror of every sense it declares (a walked, asymmetric state, not the symmetric reset)."""
+    ep = EpisodeConfig(body="reil", controller="simbicon", seconds=2.0).build()
+    state = ep.start(np.zeros(ep.controller.layout.size) + ep.controller.layout.init_mean)
+    rng = np.random.default_rng(3)
+    state.sims.qpos[:, 7:] += rng.normal(0, 0.2, state.sims.qpos[:, 7:].shape)
+    state.sims.qvel[:] = rng.normal(0, 0.5, state.sims.qvel.shape)
+    state.sims.qpos[0, 2] -= 0.1  # the left foot on the ground, the right in the air
+    pair = Sims(ep.model, 2)
+    pair.qpos[:], pair.qvel[:] = state.sims.qpos[0], state.sims.qvel[0]
+    mirror_reil_state(ep.model, pair, 1)
+    pair.forward()
+    body = ep.body
+    got = body.sensors(pair)
+    for name, (perm, sign) in body.mirror.items():
+        if name in ("stance_leg", "since_touchdown"):
+            continue  # the gait senses' tracker mirrors by its own declaration (checked below)
+        expect = got[name][0][list(perm)] * np.array(sign)
+        assert np.allclose(got[name][1], expect, atol=1e-9), name
+    assert body.mirror["stance_leg"] == ((0,), (-1,))
+
+
+def test_a_mirrored_pose_gives_mirrored_targets():
+    """The stance frame: the same policy on a pose standing on its left leg and on that pose's mirror (standing on its
+    right) gives targets that are each other's mirror, so one set of weights serves both legs."""
+    ep = EpisodeConfig(**{**STANCE_LINEAR, "task_options": {"fitness": "weighted"}}).build()
+    ctrl = ep.controller
+    genome = np.random.default_rng(0).normal(0, 0.3, ctrl.layout.size)
+    state = ep.start(np.tile(genome, (2, 1)))
+    sims = state.sims
+    sims.qpos[:, 2] -= 0.05
+    sims.qpos[:, 7:] += np.random.default_rng(1).normal(0, 0.15, sims.qpos[:, 7:].shape)
+    sims.qpos[1] = sims.qpos[0]
+    mirror_reil_state(ep.model, sims, 1)
+    sims.forward()
+    sims.extra.pop("gait", None)
+    sims.extra["gait"] = {"stance": np.array([0, 1]), "touchdown": np.zeros(2), "lifted": np.full((2, 2), np.inf)}
+    inputs, flip = ep._inputs(state, 2)
+    assert flip.tolist() == [False, True]
+    assert np.allclose(inputs[0], inputs[1], atol=1e-9)  # both read "stance side, then swing side"
+    _, out = ctrl.step(state.params, state.controller, inputs)
+    action = ctrl.frame.actions(np.clip(out, ep.low, ep.high), flip)
+    perm = list(ep.body.actuator_mirror[0])
+    assert np.allclose(action[1], action[0][perm], atol=1e-9)
+    assert not np.allclose(action[0], action[0][perm])  # a real test: the targets are not symmetric themselves
+
+
+@pytest.mark.parametrize("setting, msg", [
+    ("[es]\nsigma = 0", "es.sigma: must be > 0"),
+    ("[es]\nlearning_rate = -1.0", "es.learning_rate: must be > 0"),
+    ("[curriculum]\nadvance = 'speed'", "curriculum.advance: 'speed' is neither 'up' nor a term"),
+    ("[curriculum]\nphases = [{speed = 1.0}]", "names no term of the walk task: speed"),
+])
+def test_es_and_curriculum_settings_refused_with_one_line(tmp_path, capsys, setting, msg):
+    (tmp_path / "c.toml").write_text(setting + "\n")
+    code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "c.toml", "--out", tmp_path / "r", "--generations", 1)
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and msg in err, err
+    assert not (tmp_path / "r").exists()
+
+
+def test_a_stance_frame_on_a_body_without_a_mirror_is_refused():
+    from evobiped.bodies import BODIES
+    from evobiped.bodies.reil import ReilBiped
+
+    class Lopsided(ReilBiped):
+        name = "lopsided"
+        actuator_mirror = None
+
+    BODIES["lopsided"] = Lopsided
+    try:
+        with pytest.raises(ConfigError, match="frame: 'stance' needs a bilateral body with foot contacts; body 'lopsided' declares no"):
+            EpisodeConfig(body="lopsided", controller="linear", controller_options={"frame": "stance"}).parts()
+    finally:
+        del BODIES["lopsided"]
+
+
+def test_the_running_normaliser_merges_exactly():
+    """Batches merged one by one give numpy's mean and (population) variance of all the rows together."""
+    x = np.random.default_rng(2).normal([1.0, -3.0, 0.0], [0.1, 2.0, 5.0], (900, 3))
+    n = Normaliser.empty(3)
+    for part in np.array_split(x, [10, 11, 400]):
+        n = n.add(SenseSums(len(part), part.sum(0), (part * part).sum(0)))
+    assert n.count == 900
+    assert np.allclose(n.mean, x.mean(0), rtol=1e-12) and np.allclose(n.m2 / n.count, x.var(0), rtol=1e-9)
+    centre, scale = n.centre_scale((np.zeros(3), np.ones(3)), np.array([0.5, 0.5, 0.5]))
+    assert np.allclose(scale, np.maximum(x.std(0), 0.5))
+
+
+def test_es_climbs_a_quadratic_and_ranks_are_centred():
+    assert centred_ranks(np.array([3.0, -1.0, 10.0])).tolist() == [0.0, -0.5, 0.5]
+    layout = GenomeLayout((GeneBlock(name="x", size=5, low=-10, high=10, init_mean=0, init_sigma=1, mutation_sigma=1),))
+    target = np.array([1.0, -2.0, 0.5, 3.0, 0.0])
+    for method in ("openai", "ars"):
+        es = EvolutionStrategy(layout, ESOptions(method=method, pairs=8, sigma=0.1, learning_rate=0.1, weight_decay=0.0), seed=1)
+        start = np.linalg.norm(es.theta - target)
+        for _ in range(300):
+            pop, unknown = es.ask()
+            es.tell(-((pop[unknown] - target) ** 2).sum(axis=1))
+            es.next_generation()
+        assert np.linalg.norm(es.theta - target) < 0.1 * start, method
+
+
+def _history(path: Path) -> list[list[str]]:
+    rows = list(csv.reader(open(path / "history.csv")))
+    wall = rows[0].index("wall_seconds")
+    return [r[:wall] + r[wall + 1:] for r in rows]
+
+
+def test_an_es_run_resumes_bit_identically_with_its_normaliser_and_curriculum(tmp_path):
+    """Stopped after generation 1 and resumed on two workers: the same history (with the phase column), checkpoint
+    state and best genome; the curriculum advanced (its condition: the evaluation walker up its whole 0.4 s episode)."""
+    from .test_evolve import Stop
+
+    config = RunConfig.from_dict({
+        "optimizer": "es", "generations": 4, "seed": 3, "backend": "serial",
+        "episode": {**STANCE_LINEAR, "seconds": 0.4, "perturbations": {"presentations": 2, "pose_noise": 0.01}},
+        "es": {"pairs": 3}, "normalise": {"running": True},
+        "curriculum": {"phases": [{"time_up": 2.0, "steps": 0.5}, {"forward": 10.0, "time_up": 5.0}], "advance_for": 1}})
+    whole = Run.create(tmp_path / "whole", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        whole.evolve(ev)
+    cut = Run.create(tmp_path / "cut", config)
+
+    def stop(stats):
+        if stats.generation == 1:
+            raise Stop
+
+    with make_evaluator(config.episode, "serial") as ev, pytest.raises(Stop):
+        cut.evolve(ev, stop)
+    resumed = Run.resume(cut.dir)
+    with make_evaluator(config.episode, "process", 2) as ev:
+        resumed.evolve(ev)
+    assert _history(whole.dir) == _history(cut.dir)
+    a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut.dir))
+    for k in ("optimizer", "normaliser", "curriculum", "history_extra", "best_genome", "best_context"):
+        assert a[k] == b[k], k
+    phases = [int(r[_history(whole.dir)[0].index("phase")]) for r in _history(whole.dir)[1:]]
+    assert phases[0] == 0 and phases[-1] == 1  # the short episode is survived: the run moved to walking
+    assert a["normaliser"]["count"] > 0
+
+
+def test_a_genome_file_freezes_its_normaliser_and_replays_its_fitness(tmp_path, capsys):
+    """best.json records the normaliser and the phase weights its walker was scored with; replaying it gives that
+    fitness again; a normaliser of the wrong width is refused with one line."""
+    config = RunConfig.from_dict({
+        "optimizer": "es", "generations": 3, "seed": 1, "backend": "serial",
+        "episode": {**STANCE_LINEAR, "seconds": 0.6, "perturbations": {"pose_noise": 0.01}},
+        "es": {"pairs": 2}, "normalise": {"running": True},
+        "curriculum": {"phases": [{"time_up": 2.0, "steps": 0.5}, {"forward": 10.0}], "advance_for": 1}})
+    run = Run.create(tmp_path / "run", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.evolve(ev)
+    best = json.loads((run.dir / "best.json").read_text())
+    norm = best["episode"]["controller_options"]["input_norm"]
+    assert len(norm["mean"]) == config.episode.parts()[1].n_inputs and norm["count"] > 0
+    assert best["episode"]["task_options"]["weights"] in config.curriculum.phases
+    from evobiped.genome_file import load_genome
+    genome, cfg, meta = load_genome(run.dir / "best.json")
+    trials = cfg.perturbations.draw((1, best["generation"]), seconds=0.6, n_actuators=6)
+    fit = cfg.build().run(genome, trials=trials).fitness[0]
+    assert fit == pytest.approx(best["fitness"], abs=1e-9)
+    best["episode"]["controller_options"]["input_norm"]["mean"].pop()
+    best["episode"]["controller_options"]["input_norm"]["std"].pop()
+    (tmp_path / "bad.json").write_text(json.dumps(best))
+    code = cli("replay", tmp_path / "bad.json", "--out", tmp_path / "x.rrd")
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "input_norm: normalises 26 inputs" in err, err
