@@ -151,7 +151,7 @@ class EpisodeConfig:
         inputs = wire(cls.needs(opts), offer, chosen=opts.inputs,
                       what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
         controller = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
-        where = f"episode.controller_options"
+        where = "episode.controller_options"
         if controller.normalises_inputs:
             controller.input_norm = normaliser(inputs, offer.norms)
         if opts.input_norm is not None:

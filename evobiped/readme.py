@@ -16,6 +16,9 @@ from .controllers import CONTROLLERS
 from .controllers.base import GENERIC_CONTROLLER_OPTIONS
 from .envs.walkers import EnvOptions
 from .evolution.cma import CMAOptions
+from .evolution.curriculum import CurriculumOptions
+from .evolution.es import ESOptions
+from .evolution.run_config import NormaliseOptions
 from .evolution.ga import GAOptions
 from .options import markdown_table
 from .perturb import PerturbationOptions
@@ -37,6 +40,9 @@ def tables() -> dict[str, str]:
     out["episode perturbations"] = markdown_table(PerturbationOptions)
     out["optimizer ga"] = markdown_table(GAOptions)
     out["optimizer cma"] = markdown_table(CMAOptions)
+    out["optimizer es"] = markdown_table(ESOptions)
+    out["run normalise"] = markdown_table(NormaliseOptions)
+    out["run curriculum"] = markdown_table(CurriculumOptions)
     out["environment"] = markdown_table(EnvOptions)
     return out
 

@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
 LAYERS: list[set[str]] = [
     {"glbackend"},
     {"errors", "__version__"},
-    {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping", "provenance"},
+    {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping", "provenance", "frame", "normaliser"},
     {"schedule"},
     {"contract", "options", "gait"},
     {"perturb"},

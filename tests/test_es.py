@@ -6,11 +6,10 @@ import csv
 import json
 from pathlib import Path
 
-import mujoco
 import numpy as np
 import pytest
 
-from evobiped.episode import Context, EpisodeConfig
+from evobiped.episode import EpisodeConfig
 from evobiped.errors import ConfigError
 from evobiped.evolution import Run, RunConfig, make_evaluator
 from evobiped.evolution.es import ESOptions, EvolutionStrategy, centred_ranks

@@ -51,7 +51,7 @@ BAD = [
     (dict(controller="matsuoka", controller_options={"feedback": "yes"}),
      "episode.controller_options.feedback: must be one of auto, taga, none, got 'yes'"),
     (dict(controller="g3", controller_options={"go": [[1.0, 0.1], [0.5, 0.2]]}), "episode.controller_options.go: go schedule times must increase"),
-    (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option (choose from dt, sound_limit, inputs, genes, latency)"),
+    (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option (choose from dt, sound_limit, inputs, genes, latency, frame, input_norm)"),
     (dict(task_options={"fitness": "forward", "cyclic_weight": 1.0}), "episode.task_options: the cyclic criterion multiplies eq. 4"),
     (dict(task="steer", task_options={"sources": [[0.1, 0.0]]}), "episode.task_options.sources: the source (0.1, 0) is at the walker's start"),
 ]
@@ -71,7 +71,7 @@ def test_a_bad_option_is_refused_when_the_config_is_loaded_naming_its_path(episo
                                           ({"cma": {"population": 1}}, "cma.population: must be a whole number in [2, 1e+07]"),
                                           ({"generations": 0}, "generations: must be in [1, 1e+06], got 0"),
                                           ({"workers": 0}, "workers: must be >= 1, got 0"),
-                                          ({"optimizer": "de"}, "optimizer: must be one of ga, cma, got 'de'")])
+                                          ({"optimizer": "de"}, "optimizer: must be one of ga, cma, es, got 'de'")])
 def test_bad_run_settings_name_their_path(table, words):
     with pytest.raises(ConfigError, match="^c.toml: " + words.replace("[", r"\[").replace("+", r"\+")):
         RunConfig.from_dict(table, where="c.toml")
