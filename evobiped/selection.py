@@ -13,6 +13,10 @@ episode (``seconds``) and, when it is still up then, for ``long_seconds``;
 5. how long it stayed up (s).
 
 The first candidate wins a tie (give the one to keep when nothing beats it first).
+
+:func:`forward_walker` is the test every "forward walker" in the docs passed: no
+fall in ``seconds`` (200 s), at least ``min_distance`` (20 m) walked in its
+first ``window`` (50 s), within ``heading_limit`` (30 degrees) of its initial facing.
 """
 
 from __future__ import annotations
@@ -22,9 +26,12 @@ import numpy as np
 from .episode import EpisodeConfig
 
 
-def try_candidates(config: EpisodeConfig, genomes: np.ndarray, long_seconds: float) -> list[dict]:
-    """Each genome ``(P, G)`` alone in ``config``'s nominal episode and, if up, for ``long_seconds``: one dict per
+def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndarray, long_seconds: float) -> list[dict]:
+    """Each genome ``(P, G)`` alone in ``config``'s nominal episode (or each in its own: a list of one config per
+    genome, e.g. generation files that each froze their normaliser) and, if up, for ``long_seconds``: one dict per
     genome with ``fell``, ``end_time`` (s), ``distance`` (m), ``heading_deg`` (None: did not move), ``up_long``."""
+    if isinstance(config, list):
+        return [try_candidates(c, np.asarray(g)[None], long_seconds)[0] for c, g in zip(config, genomes)]
     episode = config.nominal().build()
     short = episode.run(genomes)
     rows = []
@@ -51,3 +58,26 @@ def rank_key(row: dict, heading_limit: float) -> tuple:
 def best_candidate(rows: list[dict], heading_limit: float = 30.0) -> int:
     """The index of the best candidate's row (rows as :func:`try_candidates` gives them)."""
     return max(range(len(rows)), key=lambda i: (rank_key(rows[i], heading_limit), -i))
+
+
+def forward_walker(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 200.0, window: float = 50.0,
+                   min_distance: float = 20.0, heading_limit: float = 30.0) -> dict:
+    """One genome alone in ``config``'s nominal episode for ``seconds`` s: ``up`` (no fall), ``end_time`` (s),
+    ``distance`` (m) and ``heading_deg`` of its displacement at ``window`` s (or its fall, if sooner), and ``walker``:
+    up, at least ``min_distance`` m, within ``heading_limit`` degrees of its initial facing."""
+    from .tasks.walk import displacement_heading
+
+    episode = config.nominal().build()
+    state = episode.start(np.asarray(genome, float)[None], seconds=seconds)
+    episode.advance(state, min(window, seconds))
+    start, facing = state.start_position.copy(), state.start_facing.copy()
+    end = episode.body.planar_position(state.sims)[:1].copy()
+    distance = float(np.linalg.norm(end - start))
+    heading = float(displacement_heading(start, end, facing)[0])
+    if seconds > window:
+        episode.advance(state, seconds - window)
+    up = not bool(state.fell[0])
+    ok = np.isfinite(heading) and abs(heading) <= heading_limit
+    return {"up": up, "end_time": float(state.end_time[0]), "distance": distance,
+            "heading_deg": round(heading, 2) if np.isfinite(heading) else None,
+            "walker": bool(up and distance >= min_distance and ok)}

@@ -48,9 +48,10 @@ def run_select_cmd(args) -> int:
             raise UserError(f"the run started from {initial}, which is no longer there")
         candidates.insert(0, load_genome(src))
         labels.insert(0, f"start ({src})")
-    config = candidates[-1][1]
+    configs = [c[1] for c in candidates]  # each its own: generation files may freeze their own normaliser
+    same = all(c.to_dict() == configs[-1].to_dict() for c in configs)
     genomes = np.array([c[0] for c in candidates])
-    rows = try_candidates(config, genomes, args.seconds)
+    rows = try_candidates(configs[-1] if same else configs, genomes, args.seconds)
     k = best_candidate(rows, args.heading_limit)
     print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}")
     for i, (label, r) in enumerate(zip(labels, rows)):

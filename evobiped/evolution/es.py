@@ -125,6 +125,13 @@ class EvolutionStrategy(Optimizer):
         """The rows of theta itself (the evaluation walkers)."""
         return np.arange(2 * self.config.pairs, len(self.population))
 
+    def ranking(self) -> np.ndarray:
+        """The evaluation rows first (theta: the policy a generation stands for, what its generation file and the run's
+        best keep), fittest first; then the samples by fitness."""
+        order = np.argsort(-self.fitness, kind="stable")
+        mean = order >= 2 * self.config.pairs
+        return np.concatenate([order[mean], order[~mean]])
+
     def next_generation(self) -> np.ndarray:
         """Climb the estimated gradient; every row of the next generation is new (all -1)."""
         if np.isnan(self.fitness).any():
