@@ -40,7 +40,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from .episode import EpisodeConfig
+from .episode import Context, EpisodeConfig
 from .errors import ConfigError
 from .evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
 from .evolution.ga import GA, GAOptions
@@ -103,9 +103,11 @@ def bench(
     seed: int = 0,
     presentations: int = 1,
     progress: Progress | None = None,
+    context: Context | None = None,
 ) -> dict:
     """Measure (a)-(e) for ``population`` random genomes (Table III initialisation); ``progress``
-    (optional) hears each finished measurement."""
+    (optional) hears each finished measurement; ``context``: what a run sets for its evaluations (e.g. senses
+    collected for a running normaliser), in (b)-(d)."""
     say = progress.say if progress is not None else (lambda msg: None)
     episode = episode or EpisodeConfig()
     workers = workers or os.cpu_count() or 1
@@ -168,14 +170,14 @@ def bench(
     thread_ev = ThreadEvaluator(config, workers)
     try:
         for pool in (*pools.values(), thread_ev):
-            pool.evaluate(genomes[: min(population, workers)])  # start the workers, build their models
-        fns = {"raw 1": raw(1), "eval": lambda: ep.run(genomes)}
+            pool.evaluate(genomes[: min(population, workers)], context=context)  # start the workers, build their models
+        fns = {"raw 1": raw(1), "eval": lambda: ep.run(genomes, context=context)}
         if workers > 1:
             fns[f"raw {workers}"] = raw(workers)
-        fns[f"pool {workers}"] = lambda: pools[workers].evaluate(genomes)
-        fns[f"threads {workers}"] = lambda: thread_ev.evaluate(genomes)
+        fns[f"pool {workers}"] = lambda: pools[workers].evaluate(genomes, context=context)
+        fns[f"threads {workers}"] = lambda: thread_ev.evaluate(genomes, context=context)
         if workers > 1:
-            fns["pool 1"] = lambda: pools[1].evaluate(genomes)
+            fns["pool 1"] = lambda: pools[1].evaluate(genomes, context=context)
         if presentations > 1:
             perturbed = replace(config, perturbations=dict(PERTURBED, presentations=presentations)).build()
             trials = perturbed.trials_for((seed, 0))

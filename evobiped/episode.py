@@ -353,6 +353,8 @@ class Episode:
         ``run`` is :meth:`start`, :meth:`advance` over the whole length, :meth:`result`; ``context``: what a run
         sets per generation (:class:`Context`).
         """
+        if seconds is None and context is not None:
+            seconds = context.seconds
         state = self.start(genomes, seconds=seconds, trials=trials, context=context)
         if listener is not None:
             listener.start(self, state.sims)
@@ -569,14 +571,16 @@ class Episode:
 class Context:
     """What a run sets for one generation's episodes, beyond the config: the inputs' normaliser
     ``(centre (k,), scale (k,))`` (None: the controller's own), whether to collect the senses visited
-    (``EpisodeResult.senses``), and fitness weights by term for a task whose fitness weighs its terms (None:
-    the task's own)."""
+    (``EpisodeResult.senses``), fitness weights by term for a task whose fitness weighs its terms (None:
+    the task's own) and the episodes' length."""
 
     norm: tuple | None = None
     observe: bool = False
     weights: dict | None = None
     #: control ticks of senses behind ``norm`` (recorded with it in genome files)
     norm_count: float = 0.0
+    #: s: the episodes' length (None: the episode's own)
+    seconds: float | None = None
 
 
 def sense_sums(result: EpisodeResult, rows: np.ndarray) -> SenseSums:

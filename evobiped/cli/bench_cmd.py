@@ -10,6 +10,8 @@ from ..progress import Progress
 
 def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
+    p.add_argument("--preset", metavar="NAME", help="time the episode of this preset (its body, controller, task and options, "
+                   "nominal; with its running normaliser's sense collection) instead of --body/--controller")
     p.add_argument("--body", default="reil", help=f"body: {choices_text('body')} (default reil)")
     p.add_argument("--controller", default="ctrnn", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--population", type=positive_int, help="walkers (default 50; --quick 16)")
@@ -30,11 +32,22 @@ def run_bench_cmd(args) -> int:
 
     size = dict(QUICK) if args.quick else dict(population=50, seconds=50.0, repeats=5)
     size.update({k: getattr(args, k) for k in size if getattr(args, k) is not None})
-    cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=size["seconds"])
+    context = None
+    if args.preset:
+        import dataclasses
+
+        from ..episode import Context
+        from ..flags import run_config
+
+        run = run_config(preset=args.preset)
+        cfg = dataclasses.replace(run.episode.nominal(), seconds=size["seconds"])
+        context = Context(observe=True) if run.normalise.running else None
+    else:
+        cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=size["seconds"])
     check_workers("process", args.workers, None)
     progress = Progress("bench", size["repeats"], "repeats", quiet=args.quiet or args.json)
     r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"], presentations=args.presentations,
-              progress=progress)
+              progress=progress, context=context)
     progress.finish()
     print(json.dumps(r, indent=2) if args.json else format_bench(r))
     return 0

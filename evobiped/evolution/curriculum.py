@@ -37,6 +37,11 @@ def _phases(v) -> None:
         raise ConfigError(f"must be a list of tables of finite weights by term name, got {v!r}")
 
 
+def _lengths(v) -> None:
+    if not (isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) and 0 < x <= 1e5 for x in v)):
+        raise ConfigError(f"must be a list of episode lengths in s, each > 0, got {v!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class CurriculumOptions:
     """Fitness phases (``[curriculum]`` in a config; none by default)."""
@@ -46,9 +51,12 @@ class CurriculumOptions:
     advance: str = option("up", "when to move on: `up` (every evaluation walker up its whole episode) or a term's name")
     advance_above: float = option(0.0, "with a term: the evaluation walkers' mean it must reach")
     advance_for: int = option(2, "generations running the condition must hold", low=1, integer=True)
+    seconds: list = option([], "the episode length of each phase (empty: the episode's)", unit="s", check=_lengths)
 
     def __post_init__(self):
         check_fields(self, "curriculum")
+        if self.seconds and len(self.seconds) != len(self.phases):
+            raise ConfigError(f"curriculum.seconds: one length per phase ({len(self.phases)}), got {len(self.seconds)}")
 
 
 @dataclass
@@ -84,6 +92,10 @@ class Curriculum:
     def weights(self) -> dict | None:
         """The current phase's weights (None: no curriculum)."""
         return dict(self.options.phases[self.phase]) if self.active else None
+
+    def seconds(self) -> float | None:
+        """The current phase's episode length (None: the episode's)."""
+        return float(self.options.seconds[self.phase]) if self.active and self.options.seconds else None
 
     def met(self, result: EpisodeResult, rows: np.ndarray) -> bool:
         """Whether the evaluation walkers (genomes ``rows`` of ``result``) meet the condition."""

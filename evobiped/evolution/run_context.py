@@ -54,14 +54,14 @@ class RunContext:
         """The context of the next generation's episodes."""
         norm = self.stats.centre_scale(self.declared, self.floor) if self.running else None
         return Context(norm=norm, observe=self.running, weights=self.curriculum.weights(),
-                       norm_count=self.stats.count if self.running else 0.0)
+                       norm_count=self.stats.count if self.running else 0.0, seconds=self.curriculum.seconds())
 
     def episode(self, context: Context | None) -> EpisodeConfig:
         """The run's episode config with ``context`` frozen in (what a genome file of that generation records)."""
         cfg = self.config.episode
-        if context is None or (context.norm is None and context.weights is None):
+        if context is None or (context.norm is None and context.weights is None and context.seconds is None):
             return cfg
-        changes = {}
+        changes = {} if context.seconds is None else {"seconds": context.seconds}
         if context.norm is not None:
             changes["controller_options"] = {**given(cfg.controller_options),
                                              "input_norm": frozen_table(*context.norm, context.norm_count)}
@@ -140,7 +140,7 @@ def _row_fell(result: EpisodeResult, genomes: np.ndarray) -> np.ndarray:
 
 def _context_table(context: Context) -> dict:
     return {"input_norm": None if context.norm is None else frozen_table(*context.norm, context.norm_count),
-            "weights": context.weights}
+            "weights": context.weights, "seconds": context.seconds}
 
 
 def _context_from(table, k: int) -> Context:
@@ -160,4 +160,7 @@ def _context_from(table, k: int) -> Context:
     count = table["input_norm"].get("count", 0) if norm is not None else 0
     if not isinstance(count, (int, float)) or isinstance(count, bool) or not count >= 0:
         raise UserError("checkpoint: best_context.input_norm.count must be a number >= 0")
-    return Context(norm=norm, weights=weights, norm_count=float(count))
+    seconds = table.get("seconds")
+    if seconds is not None and (not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not seconds > 0):
+        raise UserError("checkpoint: best_context.seconds must be a length in s > 0, or null")
+    return Context(norm=norm, weights=weights, norm_count=float(count), seconds=seconds)
