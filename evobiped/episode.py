@@ -545,10 +545,16 @@ class Episode:
         if flip is not None:
             x = frame.inputs(x, flip)
         if st.senses is not None:
-            up = st.alive
-            st.senses[0][up] += 1
-            st.senses[1][up] += x[up]
-            st.senses[2][up] += x[up] * x[up]
+            count, total, squares = st.senses
+            if st.alive.all():
+                count += 1
+                total += x
+                squares += x * x
+            else:
+                up = st.alive
+                count[up] += 1
+                total[up] += x[up]
+                squares[up] += x[up] * x[up]
         norm = st.norm if st.norm is not None else ctrl.input_norm
         return (x if norm is None else (x - norm[0]) / norm[1]), flip
 

@@ -22,6 +22,7 @@ _VEL = mujoco.mjtStage.mjSTAGE_VEL
 _FIRST_BAD = int(mujoco.mjtWarning.mjWARN_BADQPOS)
 #: m/s or rad/s; no part of a walker moves this fast (a 0.5 m link at 100 rad/s: 50 m/s at its tip)
 MAX_SPEED = 100.0
+_DATA_FIELDS = frozenset(mujoco.batch.DATA_FIELDS)
 
 
 class Sims:
@@ -37,7 +38,6 @@ class Sims:
         self.model = model
         self.n = n
         self.batch = Batch(model, nsim=n, nthread=nthread, persistent=True)
-        self._fields: dict[str, np.ndarray] = {}
         self.extra: dict[str, dict[str, np.ndarray]] = {}
 
     def copy(self) -> "Sims":
@@ -52,12 +52,11 @@ class Sims:
         return self.copy()
 
     def __getattr__(self, name: str) -> np.ndarray:
-        # qpos, qvel, ctrl, xpos, xquat, subtree_com, sensordata, ...: live views
-        if name.startswith("_") or name not in mujoco.batch.DATA_FIELDS:
+        # qpos, qvel, ctrl, xpos, xquat, subtree_com, sensordata, ...: live views, bound on first use and kept as
+        # attributes, so later reads (dozens per control tick) never come here again
+        if name.startswith("_") or name not in _DATA_FIELDS:
             raise AttributeError(name)
-        arr = self._fields.get(name)
-        if arr is None:
-            arr = self._fields[name] = self.batch.bind(name)
+        arr = self.__dict__[name] = self.batch.bind(name)
         return arr
 
     def reset(self, ids: np.ndarray | None = None) -> None:

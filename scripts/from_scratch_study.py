@@ -36,14 +36,16 @@ def seeds(text: str) -> list[int]:
     return out
 
 
-def evolve_all(preset: str, seed_list: list[int], out: Path, jobs: int, generations: int | None, deadline: float) -> dict:
+def evolve_all(preset: str, seed_list: list[int], out: Path, jobs: int, generations: int | None, deadline: float,
+               config: str | None = None) -> dict:
     """Run every seed, ``jobs`` at a time, each stopped at ``deadline`` s after the study began; returns wall times."""
     t0, waiting, running, wall = time.time(), list(seed_list), {}, {}
     while waiting or running:
         while waiting and len(running) < jobs:
             s = waiting.pop(0)
             cmd = [sys.executable, "-m", "evobiped", "evolve", "--preset", preset, "--seed", str(s), "--backend", "serial",
-                   "--out", str(out / f"seed{s}"), "--quiet"] + (["--generations", str(generations)] if generations else [])
+                   "--out", str(out / f"seed{s}"), "--quiet"] + (["--generations", str(generations)] if generations else []) \
+                + (["--config", config] if config else [])
             running[s] = (subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=open(out / f"seed{s}.log", "w")), time.time())
         for s, (p, started) in list(running.items()):
             if p.poll() is not None:
@@ -96,13 +98,13 @@ def study(a) -> None:
     out.mkdir(parents=True, exist_ok=True)
     seed_list = seeds(a.seeds)
     t0 = time.time()
-    wall = evolve_all(a.preset, seed_list, out, a.jobs, a.generations, a.deadline)
+    wall = evolve_all(a.preset, seed_list, out, a.jobs, a.generations, a.deadline, a.config)
     evolve_s = time.time() - t0
     with ProcessPoolExecutor(a.jobs) as pool:
         results = list(pool.map(check_run, [(out / f"seed{s}", a.every) for s in seed_list]))
     for s, r in zip(seed_list, results):
         r["seed"], r["wall_seconds"] = s, round(wall.get(s, float("nan")), 1)
-    doc = {"preset": a.preset, "seeds": seed_list, "jobs": a.jobs, "cores": os.cpu_count(), "evolve_seconds": round(evolve_s, 1),
+    doc = {"preset": a.preset, "config": a.config, "seeds": seed_list, "jobs": a.jobs, "cores": os.cpu_count(), "evolve_seconds": round(evolve_s, 1),
            "load_average": os.getloadavg(), "every": a.every, "results": results}
     (out / "study.json").write_text(json.dumps(doc, indent=1))
     walkers = sum(r["first_walker"] is not None for r in results)
@@ -126,7 +128,7 @@ def figure(a) -> None:
         top = max(r["generations"] for r in res)
         g = np.arange(top + 1)
         frac = [np.mean([r["first_walker"] is not None and r["first_walker"] <= x for r in res]) for x in g]
-        ax.step(g, frac, where="post", label=f"{doc['preset']} ({len(res)} seeds)")
+        ax.step(g, frac, where="post", label=f"{doc['preset']}{' + ' + Path(doc['config']).stem if doc.get('config') else ''} ({len(res)} seeds)")
     ax.set_xlabel("generation")
     ax.set_ylabel("fraction of seeds with a forward walker")
     ax.set_ylim(-0.02, 1.02)
@@ -141,6 +143,7 @@ def figure(a) -> None:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--preset")
+    p.add_argument("--config", help="a settings file over the preset (a variant)")
     p.add_argument("--seeds", default="0-9")
     p.add_argument("--out")
     p.add_argument("--jobs", type=int, default=os.cpu_count())

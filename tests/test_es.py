@@ -207,3 +207,28 @@ def test_a_genome_file_freezes_its_normaliser_and_replays_its_fitness(tmp_path, 
     code = cli("replay", tmp_path / "bad.json", "--out", tmp_path / "x.rrd")
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and "input_norm: normalises 26 inputs" in err, err
+
+
+@pytest.mark.parametrize("optimizer", ["ga", "cma"])
+def test_the_ga_and_cma_es_run_in_the_stance_frame_with_a_running_normaliser(tmp_path, optimizer):
+    """The route's pieces are the search's choice, not a fork: the GA and CMA-ES evolve the linear policy in the stance
+    frame under the running normaliser and the curriculum; without evaluation rows of their own, the normaliser learns
+    from every walker they evaluated (one tick of senses per control tick each was up: the sum of their end times)."""
+    from evobiped.evolution.run_config import make_optimizer
+
+    config = RunConfig.from_dict({
+        "optimizer": optimizer, "generations": 1, "seed": 2, "backend": "serial",
+        "episode": {**STANCE_LINEAR, "seconds": 0.5, "controller_options": {"frame": "stance", "init_sigma": 0.3}},
+        "ga": {"population": 4}, "cma": {"population": 4}, "normalise": {"running": True},
+        "curriculum": {"phases": [{"time_up": 2.0, "steps": 0.5}, {"forward": 10.0}], "advance_for": 1}})
+    run = Run.create(tmp_path / "run", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.evolve(ev)
+    ck = json.loads((run.dir / "checkpoint.json").read_text())
+    population = make_optimizer(config).ask()[0]
+    from evobiped.episode import Context
+
+    again = config.episode.build().run(population, context=Context(weights={"time_up": 2.0, "steps": 0.5}))
+    assert ck["normaliser"]["count"] == pytest.approx(np.round(again.end_time / 0.02).sum()) and ck["normaliser"]["count"] > 0
+    fittest_up = not again.fell[np.argmax(again.fitness)]  # the curriculum's walker: the fittest; up: on to phase 1
+    assert ck["history_extra"][0]["phase"] == 0 and ck["curriculum"]["phase"] == int(fittest_up)
