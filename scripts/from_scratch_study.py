@@ -5,11 +5,11 @@
     python scripts/from_scratch_study.py --figure /tmp/study/study.json --png docs/from_scratch_seeds.png
 
 Each seed is one ``evobiped evolve --preset P --seed S --backend serial`` run (``--jobs`` at a time); a run still
-going at ``--deadline`` s is stopped with Ctrl-C (it checkpoints: resume it later with ``evobiped evolve --resume``).
+going at ``--deadline`` s is stopped with SIGTERM (it checkpoints: resume it later with ``evobiped evolve --resume``).
 Then every ``--every``-th generation file (and the last) whose walker stayed up in training is tested alone,
 nominally, by :func:`evobiped.selection.forward_walker`: no fall in 200 s, >= 20 m in its first 50 s within +-30
 degrees of its initial facing.  ``study.json`` records per seed the wall time, the generations run, the first
-generation with a forward walker and what it cost (genomes evaluated, episodes), and the fittest forward
+generation with a forward walker and what it cost (genomes evaluated, episodes, wall seconds of evolution), and the fittest forward
 walker found (its file).  ``--figure`` draws the fraction of seeds with a walker against generations.
 """
 
@@ -53,7 +53,7 @@ def evolve_all(preset: str, seed_list: list[int], out: Path, jobs: int, generati
                 del running[s]
         if time.time() - t0 > deadline:
             for s, (p, started) in running.items():
-                p.send_signal(signal.SIGINT)
+                p.send_signal(signal.SIGTERM)  # (a background job ignores SIGINT)
             for s, (p, started) in running.items():
                 p.wait()
                 wall[s] = time.time() - started
@@ -89,7 +89,8 @@ def check_run(args: tuple[Path, int]) -> dict:
     evals = np.cumsum(hist.get("evaluations", np.zeros(n)))
     cost = None
     if found is not None:  # genomes evaluated up to and with that generation, and episodes (one per presentation)
-        cost = {"evaluations": int(evals[found]), "episodes": int(evals[found]) * R}
+        cost = {"evaluations": int(evals[found]), "episodes": int(evals[found]) * R,
+                "wall_seconds": round(float(np.sum(hist["wall_seconds"][: found + 1])), 1)}
     return {"run": str(run), "generations": n, "first_walker": found, "cost": cost, "best_walker": best, "checked": checked}
 
 

@@ -232,3 +232,37 @@ def test_the_ga_and_cma_es_run_in_the_stance_frame_with_a_running_normaliser(tmp
     assert ck["normaliser"]["count"] == pytest.approx(np.round(again.end_time / 0.02).sum()) and ck["normaliser"]["count"] > 0
     fittest_up = not again.fell[np.argmax(again.fitness)]  # the curriculum's walker: the fittest; up: on to phase 1
     assert ck["history_extra"][0]["phase"] == 0 and ck["curriculum"]["phase"] == int(fittest_up)
+
+
+def test_a_ctrnn_with_a_direct_path_contains_the_linear_policy():
+    """With its network at rest (zero weights, centre-crossing biases: every O = 1/2) a CTRNN's direct path gives the
+    linear policy's targets: direct genes = linear genes / (2 g max|range|) per joint, under motor = "full"."""
+    from evobiped.mapping import to_action
+
+    common = dict(body="reil", task="walk", seconds=1.0, task_options={"heading_sense": True})
+    lin = EpisodeConfig(controller="linear", **common).build()
+    net = EpisodeConfig(controller="ctrnn", controller_options={
+        "n_neurons": 8, "motor": "full", "normalise_inputs": True, "centre_crossing": True, "tau_scale": "log",
+        "time_constants": [0.02, 2.0], "outputs": "after", "direct": True, "direct_scale": 0.3, "input_weights": [-5.0, 5.0],
+        "inputs": list(lin.controller.input_names)}, **common).build()
+    rng = np.random.default_rng(5)
+    b = rng.normal(0, 0.2, 6)
+    W = rng.normal(0, 0.1, (lin.controller.n_inputs, 6))
+    span = 2 * 0.3 * np.maximum(np.abs(lin.low), np.abs(lin.high))
+    layout = net.controller.layout
+    genes = layout.init_mean.copy()
+    sl = layout.slices()
+    genes[sl["weights"]] = 0.0
+    genes[sl["biases"]] = 0.0
+    genes[sl["input_weights"]] = 0.0
+    genes[sl["direct_biases"]] = b / span
+    genes[sl["direct_weights"]] = (W / span).ravel()
+    x = rng.normal(0, 1, (3, lin.controller.n_inputs))
+    p_lin = lin.controller.decode(np.concatenate([b, W.ravel()])[None].repeat(3, 0))
+    p_net = net.controller.decode(genes[None].repeat(3, 0))
+    _, y_lin = lin.controller.step(p_lin, None, x)
+    _, o_net = net.controller.step(p_net, net.controller.initial_state(p_net), x)
+    a_lin = to_action("angle", lin.low, lin.high, "position", y_lin)
+    a_net = to_action(net.controller.output_kind, net.low, net.high, "position", o_net)
+    assert np.allclose(a_lin, a_net, atol=1e-12)
+    assert not np.allclose(a_lin, 0)

@@ -46,10 +46,13 @@ order stay the default):
   o = 0.5 stands straight, as with ``centred``, and the whole Table II range is
   reachable (``centred`` reaches only -0.7 rad at the knee);
 - ``direct``: a linear path from the inputs to the motor outputs beside the
-  network, o_j = O_j + c_j + sum_k D_kj s_k (genes ``direct_biases`` c, n_outputs,
-  and ``direct_weights`` D, k * n_outputs, after the input weights; range and
-  sigma those of the input weights), so the network contains the linear policy
-  (with its neurons at rest, O = 1/2) and can grow past it.
+  network, o_j = O_j + g (c_j + sum_k D_kj s_k) (genes ``direct_biases`` c,
+  n_outputs, and ``direct_weights`` D, k * n_outputs, after the input weights;
+  range and sigma those of the input weights; g = ``direct_scale``), so the
+  network contains the linear policy (with its neurons at rest, O = 1/2) and can
+  grow past it.  With ``motor = "full"`` a unit of o is 2 max(|low|, |high|) rad
+  (3.2 rad at the Reil hip): g = 0.3 makes a direct gene about a radian of
+  target, as a linear policy's genes are, so a search step means the same in both.
 """
 
 from __future__ import annotations
@@ -113,7 +116,8 @@ class CTRNNOptions(ControllerOptions):
                                          check=lambda v: _range(v, "input weights"), span="low < high")
     input_sigma: float | None = option(None, "initial and mutation sigma of the input weights (default: the weights' 8)", above=0)
     centre_crossing: bool = option(False, "biases alpha_j = gene + sum_i w_ij / 2: a network of zero bias genes sits mid-sigmoid")
-    direct: bool = option(False, "a linear path from the inputs to the motor outputs beside the network (o = O + c + D s)")
+    direct: bool = option(False, "a linear path from the inputs to the motor outputs beside the network (o = O + g (c + D s))")
+    direct_scale: float = option(1.0, "g: the direct path's gain, in motor output per unit of its genes", above=0)
 
     def __post_init__(self):
         _tau_block(self.time_constants, self.dt, self.tau_scale)
@@ -159,7 +163,7 @@ class CTRNN(Controller):
             sigma = o.input_sigma if o.input_sigma is not None else WEIGHT["init_sigma"]
             blocks.append(GeneBlock(name="input_weights", size=k * n, low=float(lo), high=float(hi),
                                     init_mean=0.5 * (lo + hi), init_sigma=float(sigma), mutation_sigma=float(sigma)))
-        self.direct = bool(o.direct)
+        self.direct, self.direct_scale = bool(o.direct), float(o.direct_scale)
         if self.direct:
             lo, hi = o.input_weights if o.input_weights is not None else (WEIGHT["low"], WEIGHT["high"])
             sigma = o.input_sigma if o.input_sigma is not None else WEIGHT["init_sigma"]
@@ -180,7 +184,8 @@ class CTRNN(Controller):
         out = {"W": W, "tau": tau, "alpha": alpha}
         out["V"] = p["input_weights"].reshape(P, self.n_inputs, n) if self.n_inputs else np.zeros((P, 0, n))
         if self.direct:
-            out["c"], out["D"] = p["direct_biases"], p["direct_weights"].reshape(P, self.n_inputs, self.n_outputs)
+            g = self.direct_scale
+            out["c"], out["D"] = g * p["direct_biases"], g * p["direct_weights"].reshape(P, self.n_inputs, self.n_outputs)
         return out
 
     def initial_state(self, params: dict[str, np.ndarray]) -> np.ndarray:
