@@ -6,7 +6,8 @@
 
 Each seed is one ``evobiped evolve --preset P --seed S --backend serial`` run (``--jobs`` at a time); a run still
 going at ``--deadline`` s is stopped with SIGTERM (it checkpoints: resume it later with ``evobiped evolve --resume``).
-Then every ``--every``-th generation file (and the last) whose walker stayed up in training is tested alone,
+Then every ``--every``-th generation file up to the first forward walker, and the last, whose walker stayed up in
+training is tested alone,
 nominally, by :func:`evobiped.selection.forward_walker`: no fall in 200 s, >= 20 m in its first 50 s within +-30
 degrees of its initial facing.  ``study.json`` records per seed the wall time, the generations run, the first
 generation with a forward walker and what it cost (genomes evaluated, episodes, wall seconds of evolution), and the fittest forward
@@ -76,6 +77,8 @@ def check_run(args: tuple[Path, int]) -> dict:
     R = int(config["episode"].get("perturbations", {}).get("presentations", 1))
     found, best, checked = None, None, []
     for g in sorted(set(range(0, n, every)) | ({n - 1} if n else set())):
+        if found is not None and g != n - 1:
+            continue  # after the first walker, only the last generation
         genome, cfg, meta = load_genome(rundir.generation_file(run, g))
         if meta.get("fell", True):
             continue
