@@ -56,10 +56,10 @@ class GenerationClock:
     (every walker and presentation until it fell or reached T: the physics), ``L`` its longest episode (the
     batches wait for their longest row: the per-tick work shared by a batch); ``a`` and ``b`` are fitted (least
     squares, not negative) to the last :attr:`window` generations, so they follow the machine's current speed.
-    The remaining generations are forecast walker by walker: each episode lasts on average the fraction ``u`` of
-    T that this window's walkers lasted, moved towards the whole episode (walkers learn to stay up) by half the
-    gap at the start of the run and by nothing at its end (``u + (1 - u) (1 - done/total) / 2``), and the
-    longest lasts T.  Measured against the quick start: see docs/usage.md."""
+    The remaining generations are forecast walker by walker: each episode lasts on average halfway between the
+    fraction ``u`` of T that this window's walkers lasted (episodes as short as now: the least the rest can take)
+    and the whole episode (every walker up: the most), ``(1 + u) / 2`` of T, and the longest lasts T.  Measured
+    on two quick starts and a 30-generation run (tests/quickstart_clock.json; docs/usage.md)."""
 
     def __init__(self, generations: int, seconds: float, window: int = 10):
         self.generations, self.seconds, self.window = int(generations), float(seconds), int(window)
@@ -107,7 +107,7 @@ class GenerationClock:
         if sum(self.simulated[-k:]) <= 0:  # nothing simulated (every individual kept): what the last ones cost
             return float(np.mean(self.wall[-k:])) * remaining
         u = float(np.mean(self.simulated[-k:])) / (rows * self.seconds) if rows else 1.0
-        u = u + (1.0 - u) * 0.5 * (1.0 - done / self.generations)
+        u = (1.0 + u) / 2  # halfway between episodes as short as now and every walker up
         a, b = self.cost()
         return (a * rows * self.seconds * u + b * self.seconds) * remaining
 
