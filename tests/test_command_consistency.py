@@ -99,3 +99,14 @@ def test_replaying_a_run_with_and_without_video_keeps_both_recordings(tmp_path, 
     assert any("video" in e for e in entities(run / "replay_selected_video.rrd"))
     assert not any("video" in e for e in entities(run / "replay_selected.rrd"))
     assert (run / "figures_selected" / "ground_trajectory.png").is_file()
+
+
+def test_a_replay_that_checks_nothing_says_so(tmp_path, monkeypatch, capsys):
+    """A perturbed run's genome file without an outcome: neither its fitness nor its outcome can be compared."""
+    monkeypatch.chdir(tmp_path)
+    cfg = EpisodeConfig(seconds=0.2, perturbations={"presentations": 2})
+    assert cfg.perturbed
+    g = cfg.build().controller.layout.sample(np.random.default_rng(1))
+    save_genome(tmp_path / "w.json", g, cfg, fitness=1.0)
+    assert cli("replay", tmp_path / "w.json", "--quiet") == 0
+    assert "outcome not checked: the file records none" in capsys.readouterr().out

@@ -79,6 +79,8 @@ def run_replay_cmd(args) -> int:
         print("outcome drift: " + "; ".join(r.drift))
         print("outcome holds within the declared tolerance" if not r.outcome_failures
               else "outcome DIFFERS: " + "; ".join(r.outcome_failures))
+    elif source.stored_outcome() is None and (not r.compared or r.environment_differences):  # nothing at all checked
+        print("outcome not checked: the file records none (nothing of this replay is compared with the stored walker)")
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")
