@@ -143,6 +143,9 @@ class Progress:
         self.t0 = time.perf_counter()
         self.last = self.t0
         self.done = 0.0
+        #: episode listeners' work: when the first batch began (None: not yet) and the row-seconds since, ticks included
+        self.work_start: float | None = None
+        self.work = 0.0
 
     def restart(self, total: float, unit: str | None = None) -> None:
         """The work is ``total`` (in ``unit``, default unchanged) and begins now (its clock restarts)."""
@@ -219,17 +222,17 @@ class _EpisodeProgress:
     def start(self, episode, sims):
         self.dt = episode.control_dt
         self.seconds = self.bound / max(sims.n, 1)  # the batch's episode length
-        work = self.progress.__dict__.setdefault("_work", [time.perf_counter(), 0.0])  # since the first batch began
-        self.work = work
+        if self.progress.work_start is None:  # the first batch begins: the rate is reckoned from here
+            self.progress.work_start = time.perf_counter()
 
     def tick(self, t, sims, ids, neurons, action, task_state):
         self.done = self.done + self.dt * len(ids) if self.rows else self.offset + t
-        self.work[1] += self.dt * (len(ids) + TICK_ROWS)
+        self.progress.work += self.dt * (len(ids) + TICK_ROWS)
         self.progress.update(round(self.done, 3), left=self._left(t, len(ids)) if self.rows else None)
 
     def _left(self, t: float, running: int):
         def left() -> float:
-            wall, work = time.perf_counter() - self.work[0], self.work[1]
+            wall, work = time.perf_counter() - self.progress.work_start, self.progress.work
             to_go = (running + TICK_ROWS) * max(self.seconds - t, 0.0) + self.later
             return wall / work * to_go if work > 0 else math.nan
 
