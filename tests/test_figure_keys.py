@@ -17,10 +17,10 @@ WALKER = Path(__file__).resolve().parent.parent / "docs" / "walkers" / "simbicon
 
 @pytest.fixture
 def captured(monkeypatch):
+    import evobiped.record.robustness_figure as rf  # imported first: it binds figures.save_figure when imported
+
     figs = []
     monkeypatch.setattr(figures, "save_figure", lambda fig, path, **kw: figs.append(fig) or Path(path))
-    import evobiped.record.robustness_figure as rf
-
     monkeypatch.setattr(rf, "save_figure", lambda fig, path, **kw: figs.append(fig) or Path(path))
     yield figs
     figures.pyplot().close("all")

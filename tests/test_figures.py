@@ -55,6 +55,8 @@ def test_side_views_look_along_the_initial_facing_not_the_travel(long_walk):
 @pytest.fixture
 def captured(monkeypatch):
     """The matplotlib figures the figure functions save, kept open for inspection (nothing written)."""
+    import evobiped.record.robustness_figure as rf  # imported unpatched: it binds figures.save_figure when imported
+
     figs = []
 
     def keep(fig, path, **kw):
@@ -62,8 +64,6 @@ def captured(monkeypatch):
         return path
 
     monkeypatch.setattr(figures, "save_figure", keep)
-    import evobiped.record.robustness_figure as rf
-
     monkeypatch.setattr(rf, "save_figure", keep)
     yield figs
     figures.pyplot().close("all")
