@@ -291,6 +291,9 @@ def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, spac
     ax.set_aspect("equal")
     top = float(_side_points(traj, parts, rows, axis)[1].max())
     ax.set_ylim(-0.16, max(top + 0.05, 0.5))  # room below the ground for the times
+    lo, hi = ax.get_xlim()
+    if hi - lo < 1.0:  # a walker that hardly moved: a metre of ground, so the ticks stay apart
+        ax.set_xlim((lo + hi) / 2 - 0.5, (lo + hi) / 2 + 0.5)
     ax.set_xlabel("position along the initial facing (m; negative = backwards)")
     ax.set_ylabel("height (m)")
     shown = f"first {traj.state_time[last]:.1f} s of {traj.end_time:g} s" if last < len(h) - 1 else f"{traj.end_time:g} s"
