@@ -348,9 +348,13 @@ def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None 
 
 
 def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: EpisodeConfig, options: DistillOptions,
-            seed: int = 0, progress: Callable[[str], None] | None = None) -> DistillReport:
-    """DAgger from ``teacher_genome`` into the ``student`` episode's ctrnn; see the module docstring."""
+            seed: int = 0, progress: Callable[[str], None] | None = None,
+            steps_done: Callable[[int], None] | None = None) -> DistillReport:
+    """DAgger from ``teacher_genome`` into the ``student`` episode's ctrnn; see the module docstring.  ``progress``
+    hears a line at each stage; ``steps_done`` (optional) the fitting steps done so far, of iterations x steps,
+    before each line (what a time left is reckoned from)."""
     say = progress or (lambda line: None)
+    done = steps_done or (lambda n: None)
     fitter = Fitter(student, options, seed)
     data: list[Rollouts] = []
     rows, students = [], []
@@ -359,8 +363,9 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
         data.append(collect(teacher_cfg, teacher_genome, student, fitter.student_genome, beta=beta, options=options,
                             key=(seed, i)))
         ticks = int(sum(d.alive.sum() for d in data))
-        rmse = fitter.fit(data, progress=lambda s, e: say(f"iteration {i + 1}/{options.iterations}: step {s}/{options.steps}, "
-                                                        f"window RMS error {e:.4f} rad"))
+        rmse = fitter.fit(data, progress=lambda s, e: (done(i * options.steps + s),
+                                                       say(f"iteration {i + 1}/{options.iterations}: step {s}/{options.steps}, "
+                                                           f"window RMS error {e:.4f} rad")))
         students.append(fitter.student_genome.copy())
         alone = student.build().run(students[-1])
         walk = alone.walk()

@@ -22,7 +22,9 @@ def positive_float(text: str) -> float:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (v > 0 and np.isfinite(v)):
+    if not np.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    if v <= 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
     return v
 

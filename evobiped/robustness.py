@@ -178,9 +178,10 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     if progress is not None:  # trial-seconds: each trial's own simulated time, a fallen trial's rest counted at its batch's end
         progress.total, progress.unit = float(seconds * n_trials), f"trial-s of {n_trials} trials of {seconds:g} s"
     offset = 0.0
-    for names, trials in runs:
+    for k, (names, trials) in enumerate(runs):
         bound = seconds * len(names)
-        watch = progress.listener(offset=offset, rows=True, bound=bound) if progress is not None else None
+        later = [(len(n), seconds) for n, _ in runs[k + 1:]]  # the time left counts the batches still to come
+        watch = progress.listener(offset=offset, rows=True, bound=bound, later=later) if progress is not None else None
         offset += bound
         r = episode.run(genome, seconds=seconds, trials=trials, listener=watch).rows
         disp = r.end_position - r.start_position

@@ -90,7 +90,7 @@ def test_a_mirrored_pose_gives_mirrored_targets():
     ("[es]\nsigma = 0", "es.sigma: must be > 0"),
     ("[es]\nlearning_rate = -1.0", "es.learning_rate: must be > 0"),
     ("[curriculum]\nadvance = 'speed'", "curriculum.advance: 'speed' is neither 'up' nor a term"),
-    ("[curriculum]\nphases = [{speed = 1.0}]", "names no term of the walk task: speed"),
+    ("[curriculum]\nphases = [{speed = 1.0}, {forward = 1.0}]", "names no term of the walk task: speed"),
 ])
 def test_es_and_curriculum_settings_refused_with_one_line(tmp_path, capsys, setting, msg):
     (tmp_path / "c.toml").write_text(setting + "\n")

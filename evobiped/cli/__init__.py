@@ -20,13 +20,15 @@ from types import ModuleType
 from .. import __version__
 from ..errors import UserError, exit_status, stop_on_signals
 
+#: how every refusal begins, a bad argument's and a UserError's alike
+ERROR = "evobiped: error: "
 #: the core's subcommand modules, in the order ``evobiped --help`` lists them (the experiments' follow)
 CORE = ("episode_cmd", "evolve_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd", "select_cmd")
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, exit 2, no usage dump
-        self.exit(2, f"{self.prog}: error: {message}\n")
+    def error(self, message):  # one line, exit 2, no usage dump; one prefix for every refusal (UserError's too)
+        self.exit(2, f"{ERROR}{message}\n")
 
 
 def experiment_commands() -> list[ModuleType]:
@@ -57,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except UserError as exc:
-        print(f"evobiped: error: {exc}", file=sys.stderr)
+        print(f"{ERROR}{exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader went away (`evobiped presets | head -1`): stop quietly, as cat does
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
@@ -70,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
         where = Path(exc.filename)
         if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
             where = where.parent
-        print(f"evobiped: error: cannot access {where}: {exc.strerror or exc}", file=sys.stderr)
+        print(f"{ERROR}cannot access {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
         print("evobiped: interrupted", file=sys.stderr)

@@ -60,9 +60,11 @@ def run_distill_cmd(args) -> int:
         raise UserError(f"the teacher {source.genome_path} falls at {check.end_time[0]:.1f} s of its own episode "
                         f"(latency {teacher_cfg.latency} ticks): it cannot teach walking")
     walk = check.walk()
-    progress = Progress("distill", 1.0, quiet=args.quiet)
+    progress = Progress("distill", options.iterations * options.steps, "fitting steps", quiet=args.quiet)
     progress.say(f"teacher {source.genome_path}: up {check.end_time[0]:g} s, {walk_line(walk)}")
-    report = distill(teacher_cfg, source.genome, student=student, options=options, seed=args.seed, progress=progress.say)
+    steps = [0]  # every stage's line is a progress line with the time left, reckoned from the fitting steps done
+    report = distill(teacher_cfg, source.genome, student=student, options=options, seed=args.seed,
+                     progress=lambda line: progress.report(steps[0], line), steps_done=lambda n: steps.__setitem__(0, n))
     progress.finish()
     episode = student.build()
     done = episode.run(report.genome)

@@ -25,7 +25,8 @@ def add_evolve(sub) -> None:
     p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes; ES: "
                    "twice its mirrored pairs)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
-    p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--seconds", "--episode-seconds", dest="episode_seconds", type=positive_float,
+                   help="episode length in s (default 50; --episode-seconds: the same, its older name)")
     p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A): the task's cyclic criterion")
     p.add_argument("--seed", type=int, help="run seed (default 0)")
     p.add_argument("--backend", help=f"backend: {choices_text('backend')} (default process)")
@@ -104,7 +105,7 @@ def run_evolve_cmd(args) -> int:
 
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
-    from ..progress import time_left
+    from ..progress import GenerationClock, generation_note
     from ..rundir import HISTORY
 
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
@@ -116,27 +117,21 @@ def _evolve(run, evaluator, backend: str, args) -> int:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
         line = Progress("evolve", c.generations, "generations", quiet=args.quiet)
-        walls, clocks = [], []  # per generation of this session: wall s, longest episode s
+        clock = GenerationClock(c.generations, c.episode.seconds)  # every walker's episode, generation by generation
 
         def progress(s):
             if log is not None:
                 log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
-            walls.append(s.wall_seconds)
-            clocks.append(s.longest_seconds)
-            # episodes lengthen as walkers learn to stay up: the time left if every generation's longest episode runs
-            # its T (the run's aim), and if they stay as short as now
-            steps = s.generations_total - s.generation - 1
-            full, short = time_left(walls, clocks, steps, ahead=c.episode.seconds), time_left(walls, clocks, steps)
-            shorter = f"; {hms(short)} if episodes stay as short as now" if short < 0.75 * full else ""
+            clock.generation(s.wall_seconds)
             best = run.best or {"fitness": s.best, "fell": s.best_fell}
-            line.report(s.generation + 1, f"best {best['fitness']:.3f} {'(fell)' if best['fell'] else '(up)'}, this generation's "
-                        f"{s.best:.3f} {'(fell)' if s.best_fell else '(up)'}, mean {s.mean:.3f}, worst {s.worst:.3f}; "
-                        f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated, longest episode "
-                        f"{s.longest_seconds:.1f} s{shorter}", left=full)
+            line.report(s.generation + 1, generation_note(
+                best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean, worst=s.worst,
+                evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds),
+                left=clock.left(s.generation + 1))
 
         try:
-            summary = run.evolve(evaluator, progress)
+            summary = run.evolve(_Watched(evaluator, clock), progress)
         except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
             print(f"evobiped: interrupted after generation {run.optimizer.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
                   f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
@@ -144,9 +139,26 @@ def _evolve(run, evaluator, backend: str, args) -> int:
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
+    # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
+    earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if args.resume else ""
     print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
-          f"{summary['evaluations']} evaluations in {hms(summary['wall_seconds'])}; results in {run.dir}")
+          f"{summary['evaluations']} evaluations, elapsed {hms(line.elapsed)}{earlier}; results in {run.dir}")
     return 0
+
+
+class _Watched:
+    """An evaluator that tells the clock every walker's episode length (end time of every row) as it evaluates."""
+
+    def __init__(self, evaluator, clock):
+        self.evaluator, self.clock = evaluator, clock
+
+    def evaluate(self, genomes, key=None):
+        result = self.evaluator.evaluate(genomes, key=key)
+        self.clock.episodes((result.rows if result.rows is not None else result).end_time)
+        return result
+
+    def __getattr__(self, name):
+        return getattr(self.evaluator, name)
 
 
 def _viewer_log(run, rerun: str):

@@ -12,7 +12,8 @@ def add_replay(sub) -> None:
     p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, or runs/<stem>/replay_<stem>.rrd for a genome file)")
+    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, RUN/replay_best_video.rrd with --video; for a genome file in a "
+                       "run directory or under runs/ its folder's replay_<stem>.rrd, else runs/<stem>/replay_<stem>.rrd)")
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
     where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
     p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
@@ -31,7 +32,7 @@ def add_replay(sub) -> None:
 def run_replay_cmd(args) -> int:
     from pathlib import Path
 
-    from ..record.replay import default_out, replay
+    from ..record.replay import replay
     from ..record.source import resolve
     from ..rundir import figures_dir
 
@@ -45,7 +46,7 @@ def run_replay_cmd(args) -> int:
     source = resolve(args.source, args.generation)
     figures = args.figures
     if figures == "":
-        base = Path(args.out).parent if args.out else default_out(source).parent
+        base = Path(args.out).parent if args.out else source.outputs
         figures = figures_dir(base, source.label)
     seconds = args.seconds or source.config.seconds
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
@@ -78,6 +79,8 @@ def run_replay_cmd(args) -> int:
         print("outcome drift: " + "; ".join(r.drift))
         print("outcome holds within the declared tolerance" if not r.outcome_failures
               else "outcome DIFFERS: " + "; ".join(r.outcome_failures))
+    elif source.stored_outcome() is None and (not r.compared or r.environment_differences):  # nothing at all checked
+        print("outcome not checked: the file records none (nothing of this replay is compared with the stored walker)")
     print(f"recording: {r.recording}" if r.recording else "recording streamed to the viewer")
     for f in r.figures:
         print(f"figure: {f}")

@@ -18,7 +18,7 @@ def add_robustness(sub) -> None:
     p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
     p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
                    help="pushes fall in the first stride after S s (default 10)")
-    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory, or runs/<stem>/ for a genome file)")
+    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (default: the run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
     p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
                    help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
     p.add_argument("--json", action="store_true", help="print the score and the summary per family as JSON")
@@ -33,12 +33,12 @@ def run_robustness_cmd(args) -> int:
     from ..record.robustness_figure import robustness_figure
     from ..record.source import resolve
     from ..robustness import battery, score, summarise, table
-    from ..rundir import genome_outputs, robustness_stem
+    from ..rundir import robustness_stem
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
     source = resolve(args.source, args.generation)
-    out = Path(args.out) if args.out else (source.run_dir or genome_outputs(source.genome_path))
+    out = Path(args.out) if args.out else source.outputs
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
     stem = robustness_stem(source.label) if source.run_dir is not None else f"{source.genome_path.stem}_robustness"

@@ -79,7 +79,8 @@ MOTOR_MAPS = {"range": "unit", "centred": "centred", "full": "centred_full"}
 
 
 def sigmoid(x: np.ndarray) -> np.ndarray:
-    return 1.0 / (1.0 + np.exp(-x))
+    with np.errstate(over="ignore"):  # exp(-x) = inf for x < -709 gives exactly 0, as it should: not a warning
+        return 1.0 / (1.0 + np.exp(-x))
 
 
 def _pair(v) -> None:

@@ -312,11 +312,14 @@ class BipedVectorEnv(VectorEnv):
 
 _REIL = """Reil & Husbands' 3D biped: PD target angles in, the body's sensors out.
 
-    Observation ``(24,)`` float64: joint angles (6, rad) and velocities (6, rad/s) in
-    action order, foot contacts (2: left, right; 0/1), pelvis tilt (2: pitch, roll; rad)
-    and its rates (2, rad/s), centre of mass minus each foot (4: forward, left; m) and
-    the centre of mass's velocity (2: forward, left; m/s), in the heading frame (then the
-    task's sensors, if it has any).
+    Observation ``(26,)`` float64, in this order: ``joint_angles`` (6, rad) and
+    ``joint_velocities`` (6, rad/s) in action order, ``foot_contact`` (2: left, right;
+    0/1), ``pelvis_tilt`` (2: pitch, roll; rad) and ``pelvis_tilt_rate`` (2, rad/s),
+    ``com_from_feet`` (4: centre of mass minus the left foot, forward and left, then minus
+    the right foot; m) and ``com_velocity`` (2: forward, left; m/s), in the heading frame;
+    the gait senses ``stance_leg`` (1: +1 while the left leg stands, -1 the right) and
+    ``since_touchdown`` (1: s since the stance leg's touchdown, capped at 2 s); then the
+    task's sensors, if it has any (docs/gym.md has the indices).
     Action ``(6,)``: PD target angles (rad) of left hip pitch, left hip roll, left knee,
     right hip pitch, right hip roll, right knee, in Table II's ranges (hip pitch
     [-1.3, 1.6], hip roll [-0.8, 0.8], knee [-1.4, 0]); values outside are clipped.
@@ -328,9 +331,10 @@ _REIL = """Reil & Husbands' 3D biped: PD target angles in, the body's sensors ou
 
 _TAGA = """Taga, Yamaguchi & Shimizu's sagittal 5-link biped: joint torques in, its sensors out.
 
-    Observation ``(14,)`` float64: inertial link angles of right thigh, right shank, left
-    thigh, left shank (4, rad from the horizontal) and their rates (4, rad/s), ground
-    contacts (2: right, left; 0/1) and ground forces F_g1..F_g4 (4, N).
+    Observation ``(14,)`` float64, in this order: ``link_angles`` (4: inertial angles of
+    right thigh, right shank, left thigh, left shank; rad from the horizontal),
+    ``link_velocities`` (4: their rates, rad/s), ``ground_contact`` (2: right, left; 0/1)
+    and ``ground_force`` (4: F_g1..F_g4, N).
     Action ``(6,)``: torques (N m) of right hip, knee, ankle and left hip, knee, ankle,
     within +-``max_torque`` (clipped); the ankle torques act only while that foot is on the
     ground.  The Appendix A ground and joint forces are added before every physics step.

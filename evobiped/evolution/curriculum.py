@@ -56,7 +56,7 @@ class CurriculumOptions:
     def __post_init__(self):
         check_fields(self, "curriculum")
         if self.seconds and len(self.seconds) != len(self.phases):
-            raise ConfigError(f"curriculum.seconds: one length per phase ({len(self.phases)}), got {len(self.seconds)}")
+            raise ConfigError(f"seconds: one length per phase ({len(self.phases)}), got {len(self.seconds)}")
 
 
 @dataclass

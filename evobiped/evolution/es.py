@@ -58,7 +58,7 @@ class ESOptions:
     def __post_init__(self):
         check_fields(self, "es")
         if self.top > self.pairs:
-            raise ConfigError(f"es.top: keeps at most the {self.pairs} pairs, got {self.top}")
+            raise ConfigError(f"top: keeps at most the {self.pairs} pairs, got {self.top}")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -1,7 +1,7 @@
 """The papers' figures as PNG (matplotlib, Agg backend, imported lazily).
 
-* :func:`fitness_graph` - top and mean fitness per generation (Reil & Husbands Fig. 6);
-* :func:`motor_activations` - motor neuron outputs over time (Fig. 7);
+* :func:`fitness_graph` - best and mean fitness per generation (Reil & Husbands Fig. 6);
+* :func:`motor_activations` - motor neuron outputs (or the controller's joint targets) over time (Fig. 7);
 * :func:`motion_sequence` - the walker in side view through one stride of steady walking (Fig. 8);
 * :func:`stick_figure` - strobed stick figures along the ground, spaced apart (Taga Figs. 5, 9);
 * :func:`ground_trajectory` - the path on the ground plane, sources if any (Fig. 12).
@@ -82,13 +82,13 @@ def fitness_label(config) -> str:
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",
                   ylabel: str = "fitness: distance from the start (m)", who: str = "") -> Path:
-    """Top (black) and mean (grey) fitness per generation, as in Fig. 6; ``history`` from :func:`evobiped.rundir.read_history`;
+    """Each generation's best (black; "this generation's" in the progress lines) and mean (grey) fitness, as in Fig. 6; ``history`` from :func:`evobiped.rundir.read_history`;
     ``ylabel`` from :func:`fitness_label`.  The last tick is the last generation."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     g = history["generation"]
-    ax.plot(g, history["best"], color="black", lw=1.8, label="top")
-    ax.plot(g, history["mean"], color="0.6", lw=1.5, label="mean")
+    ax.plot(g, history["best"], color="black", lw=1.8, label="best of the generation")
+    ax.plot(g, history["mean"], color="0.6", lw=1.5, label="mean of the generation")
     from matplotlib.ticker import MaxNLocator
 
     ax.set_xlabel("generation (from 0)")
@@ -112,6 +112,13 @@ def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:
     target = traj.action_kind == "position"  # PD target angles
     quantity = "output (0-1)" if unit else "target angle (rad)" if target else "torque (N m)" if traj.action_kind == "torque" else "command"
     return unit, target, quantity
+
+
+def motor_file(traj: Trajectory) -> str:
+    """The motor figure's file name, for what it shows: ``motor_neurons.png`` (a network's motor neurons),
+    ``joint_targets.png`` (a controller without neurons setting PD targets), else ``motor_outputs.png``."""
+    unit, target, _ = _motor_quantity(traj)
+    return "motor_neurons.png" if unit else "joint_targets.png" if target else "motor_outputs.png"
 
 
 def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | None = 10.0, who: str = "") -> Path:
@@ -148,12 +155,19 @@ def _side_axis(traj: Trajectory) -> np.ndarray:
     return f / max(float(np.linalg.norm(f)), 1e-12)
 
 
-def _side_key(ax, *, com: bool = False) -> None:
-    """The key of a side view: left and right limbs (and the centre-of-mass line)."""
+def _middle(traj: Trajectory, parts: list[Shape]) -> str:
+    """The bodies drawn in neither leg's colour, by their model names (``pelvis`` for Reil's, ``trunk`` for Taga's)."""
+    names = body_names(traj.model)
+    found = dict.fromkeys(names[s.body] for s in parts if s.body != 0 and _color(names[s.body] + s.name) == OTHER)
+    return ", ".join(found) or "other"
+
+
+def _side_key(ax, traj: Trajectory, parts: list[Shape], *, com: bool = False) -> None:
+    """The key of a side view: left and right limbs, the bodies between them by name (and the centre-of-mass line)."""
     from matplotlib.lines import Line2D
 
     handles = [Line2D([], [], color=LEFT, lw=3, label="left leg"), Line2D([], [], color=RIGHT, lw=3, label="right leg"),
-               Line2D([], [], color=OTHER, lw=3, label="trunk")]
+               Line2D([], [], color=OTHER, lw=3, label=_middle(traj, parts))]
     if com:
         handles.append(Line2D([], [], color="black", lw=0.8, label="centre of mass"))
     ax.legend(handles=handles, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
@@ -215,12 +229,17 @@ def steady_stride(traj: Trajectory, after: float = 10.0) -> tuple[float, float, 
 
 def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, columns: int = 4, after: float = 10.0,
                     who: str = "") -> Path:
-    """The walker in side view at ``frames`` evenly spaced times through one stride of steady walking
-    (:func:`steady_stride` after ``after`` s), left to right, top to bottom (Fig. 8).  Every panel shows the
-    same window of the position along the initial facing (m), so the walker moves across the panels."""
+    """The walker in side view at up to ``frames`` recorded states through one stride of steady walking
+    (:func:`steady_stride` after ``after`` s), every k-th state from the stride's start so that the frames are
+    exactly evenly spaced (the spacing is in the title), left to right, top to bottom (Fig. 8).  Every panel shows
+    the same window of the position along the initial facing (m), so the walker moves across the panels."""
     plt = pyplot()
     t0, t1, what = steady_stride(traj, after)
-    idx = np.unique(np.searchsorted(traj.state_time, np.linspace(t0, t1, frames) - 1e-9).clip(0, len(traj.state_time) - 1))
+    first = int(np.searchsorted(traj.state_time, t0 - 1e-9).clip(0, len(traj.state_time) - 1))
+    last = int(np.searchsorted(traj.state_time, t1 - 1e-9).clip(first, len(traj.state_time) - 1))
+    every = max(1, int(np.ceil((last - first) / max(frames - 1, 1))))  # at most ``frames``, all within the stride
+    idx = np.arange(first, last + 1, every)[:frames]
+    spacing = float(traj.state_time[idx[1]] - traj.state_time[idx[0]]) if len(idx) > 1 else 0.0
     rows_n = int(np.ceil(len(idx) / columns))
     axis, parts = _side_axis(traj), shapes(traj.model)
     fig, axes = plt.subplots(rows_n, columns, figsize=(2.4 * columns, 2.2 * rows_n + 0.8), squeeze=False, sharex=True, sharey=True)
@@ -239,8 +258,9 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
         ax.set_title(f"t = {traj.state_time[k]:.2f} s", fontsize=8)
     fig.supxlabel("position along the initial facing (m)", fontsize=9)
     fig.supylabel("height (m)", fontsize=9)
-    _side_key(axes[0, -1])
-    fig.suptitle(_title(f"Side view through {what}, t = {t0:.2f}-{t1:.2f} s of {traj.end_time:g} s",
+    _side_key(axes[0, -1], traj, parts)
+    fig.suptitle(_title(f"Side view through {what}, t = {t0:.2f}-{t1:.2f} s of {traj.end_time:g} s; "
+                        f"one frame every {spacing:.2f} s",
                         f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=10)
     return save_figure(fig, path)
 
@@ -267,14 +287,19 @@ def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, spac
     _draw_walker(ax, traj, parts, rows, axis, alpha=0.6)
     ax.plot(h[: last + 1], traj.com[: last + 1, 2], color="black", lw=0.8)
     for k in rows[:: max(1, len(rows) // 6)]:
-        ax.text(h[k], -0.02, f"{traj.state_time[k]:.1f} s", ha="center", va="top", fontsize=6, color="0.3")
+        ax.text(h[k], -0.03, f"{traj.state_time[k]:.1f} s", ha="center", va="top", fontsize=8, color="0.1", zorder=6)
     ax.set_aspect("equal")
+    top = float(_side_points(traj, parts, rows, axis)[1].max())
+    ax.set_ylim(-0.16, max(top + 0.05, 0.5))  # room below the ground for the times
+    lo, hi = ax.get_xlim()
+    if hi - lo < 1.0:  # a walker that hardly moved: a metre of ground, so the ticks stay apart
+        ax.set_xlim((lo + hi) / 2 - 0.5, (lo + hi) / 2 + 0.5)
     ax.set_xlabel("position along the initial facing (m; negative = backwards)")
     ax.set_ylabel("height (m)")
     shown = f"first {traj.state_time[last]:.1f} s of {traj.end_time:g} s" if last < len(h) - 1 else f"{traj.end_time:g} s"
     ax.set_title(_title(f"Stick figures {spacing:g} m or more apart ({len(rows)} in the {shown}); times below the ground line",
                         f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=9)
-    _side_key(ax, com=True)
+    _side_key(ax, traj, parts, com=True)
     return save_figure(fig, path)
 
 
@@ -301,12 +326,17 @@ def ground_trajectory(trajs: Trajectory | list[Trajectory], path: str | Path, *,
         ax.plot(*xy[0], "o", color="white", ms=8, **marks)
         if tr.source is not None:  # this walker's source, in its colour
             ax.plot(*tr.source[-1], "*", color=c, ms=16, **marks)
+    # the key names only what is drawn, in the colour it is drawn in (one path: its colour; several: each its own)
+    c = colors[0] if len(trajs) == 1 else "0.6"
+    each = "" if len(trajs) == 1 else " (each path's colour)"
     keys = [Line2D([], [], marker="o", ls="", color="white", mec="black", label="start"),
-            Line2D([], [], marker=r"$\rightarrow$", ls="", color="0.3", ms=12, label="initial facing"),
-            Line2D([], [], marker="s", ls="", color="0.6", mec="black", label="end, stayed up"),
-            Line2D([], [], marker="X", ls="", color="0.6", mec="black", label="end, fell")]
+            Line2D([], [], marker=r"$\rightarrow$", ls="", color=c, ms=12, label="initial facing" + each)]
+    if any(not t.fell for t in trajs):
+        keys.append(Line2D([], [], marker="s", ls="", color=c, mec="black", label="end, stayed up"))
+    if any(t.fell for t in trajs):
+        keys.append(Line2D([], [], marker="X", ls="", color=c, mec="black", label="end, fell"))
     if any(t.source is not None for t in trajs):
-        keys.append(Line2D([], [], marker="*", ls="", color="0.6", mec="black", ms=12, label="sound source"))
+        keys.append(Line2D([], [], marker="*", ls="", color=c, mec="black", ms=12, label="sound source"))
     lines, names = ax.get_legend_handles_labels()
     ax.legend(handles=lines + keys, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.set_xlabel("x (m)")
@@ -330,7 +360,7 @@ def replay_figures(traj: Trajectory, out_dir: str | Path, *, history: dict[str, 
     paths = []
     if history is not None:
         paths.append(fitness_graph(history, out / "fitness.png", ylabel=fitness_ylabel, who=who))
-    paths.append(motor_activations(traj, out / "motor_neurons.png", who=who))
+    paths.append(motor_activations(traj, out / motor_file(traj), who=who))
     paths.append(motion_sequence(traj, out / "motion_sequence.png", who=who))
     paths.append(stick_figure(traj, out / "stick_figure.png", who=who))
     paths.append(ground_trajectory(traj, out / "ground_trajectory.png", who=who))

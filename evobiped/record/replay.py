@@ -69,10 +69,13 @@ class ReplayReport:
         return bits and not (self.outcome_checked and self.outcome_failures)
 
 
-def default_out(source: Source) -> Path:
-    """``RUN/replay_best.rrd``, ``RUN/replay_gen_0007.rrd``, or ``runs/<stem>/replay_<stem>.rrd`` for a lone
-    genome file (:func:`evobiped.rundir.genome_outputs`: never beside the file)."""
-    return rundir.replay_file(source.run_dir or rundir.genome_outputs(source.genome_path), source.label)
+def default_out(source: Source, video: bool = False) -> Path:
+    """``RUN/replay_best.rrd``, ``RUN/replay_gen_0007.rrd``, ``RUN/replay_selected.rrd`` for a run's
+    ``selected.json``, or ``runs/<stem>/replay_<stem>.rrd`` for a lone genome file (:attr:`Source.outputs`:
+    never beside a file outside ``runs/``); ``replay_<label>_video.rrd`` for a recording with the video's frames,
+    so a replay without them never overwrites one with them (nor the other way round)."""
+    path = rundir.replay_file(source.outputs, source.label)
+    return path.with_name(f"{path.stem}_video{path.suffix}") if video else path
 
 
 def replay(
@@ -88,7 +91,7 @@ def replay(
     video: str | Path | None = None,
     video_options: dict | None = None,
 ) -> ReplayReport:
-    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`) or a viewer (``spawn``/``connect``).
+    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`, ``_video`` with ``video``) or a viewer (``spawn``/``connect``).
     ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`;
     ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources;
     ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the recording
@@ -131,7 +134,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     from .viewer import connect_url, flush, require_viewer
 
     streaming = spawn or connect is not None
-    target = None if streaming and out is None else Path(out) if out is not None else default_out(source)
+    target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
     if connect is not None and target is None:
         require_viewer(connect_url(connect))
     rec = rr.RecordingStream("evobiped_replay", recording_id=uuid.uuid4().hex)

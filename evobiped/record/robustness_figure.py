@@ -13,8 +13,9 @@ from .figures import pyplot, save_figure
 def robustness_figure(trials: list[Trial], path: str | Path, *, title: str, seconds: float | None = None) -> Path:
     """Left: survival (%) per family of trials.  Right: each trial's forward displacement (m) against the time
     it stayed up (s), coloured by family, a legend decoding colours and markers (o: up at the end, x: fell);
-    the trials that stayed up all ``seconds`` s are spread sideways in a band at the end (their time is
-    exactly ``seconds``); families of a few trials (friction, slope) name each trial's value and outcome."""
+    the trials that stayed up all ``seconds`` s sit in a column of their own right of the time axis (spread
+    sideways so they do not hide each other; the column has no time scale, its one label says they were up all
+    ``seconds`` s); families of a few trials (friction, slope) name each trial's value and outcome."""
     from matplotlib.lines import Line2D
 
     plt = pyplot()
@@ -39,21 +40,26 @@ def robustness_figure(trials: list[Trial], path: str | Path, *, title: str, seco
     a.set_xlabel("trials survived (%)")
     a.set_title("Survival per family", fontsize=10)
     end = seconds if seconds is not None else max(t.end_time for t in trials)
-    band = 0.1 * end  # survivors are spread over [end, end + band] by their order, not piled on one point
+    band = 0.2 * end  # survivors are spread over a column of this width by their order, not piled on one point
+    gap = 0.25 * band  # the column stands apart from the time axis
     k_up = 0
     n_up = max(1, sum(t.survived for t in trials))
     for f in families:
         ts = [t for t in trials if t.family == f]
         up = [t for t in ts if t.survived]
         down = [t for t in ts if not t.survived]
-        xs = [end + band * (k_up + i + 0.5) / n_up for i in range(len(up))]
+        xs = [end + gap + band * (k_up + i + 0.5) / n_up for i in range(len(up))]
         k_up += len(up)
         b.scatter(xs, [t.forward for t in up], color=colours[f], marker="o", s=18, zorder=3)
         b.scatter([t.end_time for t in down], [t.forward for t in down], color=colours[f], marker="x", s=24, zorder=3)
-    b.axvspan(end, end + band, color="0.92", zorder=0)
+    b.axvspan(end + gap, end + gap + band, color="0.92", zorder=0)
     b.axhline(0, color="0.7", lw=0.8)
-    b.set_xlim(0, end + 1.3 * band)
-    b.set_xlabel(f"time up (s); the grey band at {end:g} s: still up at the end (spread sideways)")
+    b.set_xlim(0, end + 2 * gap + band)
+    from matplotlib.ticker import MaxNLocator
+
+    ticks = [t for t in MaxNLocator(nbins=6).tick_values(0, end) if 0 <= t <= end]  # times only on the time axis
+    b.set_xticks([*ticks, end + gap + band / 2], [f"{t:g}" for t in ticks] + [f"up all\n{end:g} s"])
+    b.set_xlabel("time up (s) until the fall; grey column: still up at the end (spread sideways, no time scale)")
     b.set_ylabel("displacement along the initial facing (m)")
     b.set_title("Each trial", fontsize=10)
     keys = [Line2D([], [], marker="s", ls="", color=colours[f], label=f) for f in families]

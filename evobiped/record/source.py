@@ -63,6 +63,19 @@ class Source:
         return rundir.label(self.genome_path)
 
     @property
+    def outputs(self) -> Path:
+        """Where replay and robustness write about this genome when no ``--out`` is given: its run directory; for a
+        genome file in a run directory or anywhere under ``runs/`` (a run's ``selected.json``, distill's
+        ``student.json``), the file's own folder, so two runs' ``selected.json`` never share one; else
+        ``runs/<stem>`` (never beside a file that may sit in a repository)."""
+        if self.run_dir is not None:
+            return self.run_dir
+        folder = self.genome_path.parent
+        if (folder / rundir.CONFIG).is_file() or folder.resolve().is_relative_to(rundir.GENOME_OUTPUTS.resolve()):
+            return folder
+        return rundir.genome_outputs(self.genome_path)
+
+    @property
     def name(self) -> str:
         """What a figure or video calls the walker: ``reil_simbicon_seed5 (best)``, or the genome file's stem."""
         return f"{self.run_dir.name} ({self.label})" if self.run_dir is not None else self.genome_path.stem

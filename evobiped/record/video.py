@@ -4,8 +4,11 @@ Frames are rendered on the CPU by ``mujoco.Renderer`` through whichever OpenGL
 backend :mod:`evobiped.glbackend` chose (EGL or OSMesa headless).  Each frame
 re-poses the model from a recorded :class:`~.trajectory.Trajectory` (its
 ``qpos`` rows), so the video shows exactly the replayed episode.  A camera of
-type ``mjCAMERA_TRACKING`` follows the walker's trunk (the pelvis), from the side
-and a little behind the direction the walker faced at the start; the ground
+type ``mjCAMERA_TRACKING`` follows the walker's trunk (the pelvis) in a raised
+three-quarter view from behind (:data:`CAMERA`: 15 degrees above the pelvis, looking
+70 degrees to the left of the direction the walker faced at the start, so from
+behind it and to its right), and the world's lights move with it so its shadow
+stays under its feet for the whole video; the ground
 path of the trunk so far is drawn on the floor, a steering walker's sound
 sources as orange posts, and the walker's name and the simulated time are
 burned into the top-left corner.  Several trajectories (a steering walker's
@@ -91,7 +94,12 @@ class FrameRenderer:
         row = int(min(np.searchsorted(traj.state_time, t - 1e-9), len(traj.state_time) - 1))
         d.qpos[:] = traj.qpos[row]
         mujoco.mj_forward(m, d)
-        cam.trackbodyid = m.body(BODIES[traj.body_name].trunk).id
+        trunk = m.body(BODIES[traj.body_name].trunk).id
+        # the world's lights travel with the walker: a light's shadow map covers only the ground around the light,
+        # so a light left at the origin casts no shadow of a walker a few metres on (foot contact unseen)
+        world = m.light_bodyid == 0
+        d.light_xpos[world, :2] += d.xpos[trunk, :2]
+        cam.trackbodyid = trunk
         distance, elevation, azimuth = CAMERA
         cam.distance, cam.elevation = distance, elevation
         cam.azimuth = float(np.degrees(np.arctan2(traj.start_facing[1], traj.start_facing[0]))) + azimuth

@@ -20,7 +20,8 @@ def add_study(sub) -> None:
     p.add_argument("--config", metavar="FILE.toml", help="base run settings (as for evolve); flags override it")
     p.add_argument("--population", type=positive_int, help="population size (default 50)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
-    p.add_argument("--episode-seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--seconds", "--episode-seconds", dest="episode_seconds", type=positive_float,
+                   help="episode length in s (default 50; --episode-seconds: the same, its older name)")
     p.add_argument("--first-seed", type=int, default=0, help="seeds are FIRST .. FIRST+K-1 (default 0)")
     p.add_argument("--recheck-seconds", type=positive_float, default=200.0, help="re-simulate stable best walkers this long (default 200)")
     p.add_argument("--backend", default="process", help=f"backend: {choices_text('backend')} (default process: one run per core)")

@@ -1,0 +1,136 @@
+"""The documentation a newcomer follows agrees with the tool: generated tables, docstrings, shipped walkers, commands."""
+
+from __future__ import annotations
+
+import json
+import re
+import shlex
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from evobiped import readme
+
+ROOT = Path(__file__).resolve().parent.parent
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+@pytest.mark.parametrize("page, ids", [
+    (readme.USAGE, ["progress", "presets"]),
+    (readme.GYM, ["environments", "observation reil", "observation taga"]),
+])
+def test_generated_parts_agree_with_the_code(page, ids):
+    """Regenerate with ``python -m evobiped.readme``."""
+    text = page.read_text()
+    assert readme.parts(text) == ids
+    assert readme.render(text) == text, f"{page.name} is out of date: run python -m evobiped.readme"
+
+
+def test_every_preset_is_in_the_presets_table():
+    from evobiped.presets import names
+
+    table = readme.generated()["presets"]
+    assert [line.split("`")[1] for line in table.splitlines()[2:]] == names()
+
+
+def test_every_sensor_an_observation_can_hold_is_described():
+    from evobiped.bodies import BODIES
+    from evobiped.tasks import TASKS
+
+    for body in BODIES.values():
+        assert set(body.sensor_widths) <= set(readme.SENSOR_TEXT), body.name
+    for task in TASKS.values():
+        assert set(task().sensor_widths()) <= set(readme.SENSOR_TEXT), task.name
+
+
+@pytest.mark.parametrize("name", ["ReilBipedEnv", "TagaBipedEnv", "ReilBipedVectorEnv", "TagaBipedVectorEnv"])
+def test_the_environment_docstrings_give_the_observation_the_environment_returns(name):
+    import numpy as np
+
+    pytest.importorskip("gymnasium")
+    from evobiped.envs import walkers
+
+    cls = getattr(walkers, name)
+    shape = re.search(r"Observation ``\((\d+),\)``", cls.__doc__)
+    assert shape, cls.__doc__
+    size = sum(readme.observation(cls.body_name).values())
+    assert int(shape[1]) == size
+    for part in readme.observation(cls.body_name):  # every part is named where the docstring lists them
+        assert f"``{part}``" in cls.__doc__, part
+    if name == "ReilBipedEnv":
+        env = cls(seconds=0.1)
+        obs, _ = env.reset(seed=0)
+        assert obs.shape == env.observation_space.shape == (size,) and np.isfinite(obs).all()
+        env.close()
+
+
+def shipped_walkers() -> list[Path]:
+    return sorted(p for p in (ROOT / "docs" / "walkers").glob("*.json") if not p.stem.endswith("_robustness"))
+
+
+@pytest.mark.parametrize("path", shipped_walkers(), ids=lambda p: p.stem)
+def test_every_shipped_walker_records_its_outcome(path):
+    """What `replay` checks on a machine whose numerical environment differs: without it, nothing would be."""
+    meta = json.loads(path.read_text())
+    outcome = meta.get("outcome")
+    assert isinstance(outcome, dict), f"{path.name} has no outcome: scripts/refresh_walkers.py --write {path}"
+    assert isinstance(outcome.get("fell"), bool) and isinstance(outcome.get("end_time"), (int, float))
+    assert outcome.get("rows") and all("distance" in r and "heading_deg" in r for r in outcome["rows"])
+
+
+def test_ci_cites_a_readme_section_that_exists():
+    cited = re.findall(r'README\.md \("([^"]+)"\)', (ROOT / ".ci" / "run").read_text())
+    assert cited
+    headings = [h.strip() for h in re.findall(r"^#+ (.+)$", (ROOT / "README.md").read_text(), re.M)]
+    for name in cited:
+        assert name in headings, (name, headings)
+
+
+def toml_blocks(text: str) -> list[str]:
+    return re.findall(r"```toml\n(.*?)```", text, re.S)
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_toml_block_in_the_docs_parses(page):
+    """A settings file shown in the docs can be pasted as it stands."""
+    for block in toml_blocks(page.read_text()):
+        tomllib.loads(block)
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_no_settings_file_is_given_as_a_one_line_comment(page):
+    """``# low_noise.toml:  [distill]  target_noise = 0.005   pose_noise = 0.01`` is invalid TOML once pasted."""
+    assert not re.search(r"^# \S+\.toml:\s+\[", page.read_text(), re.M)
+
+
+def readme_commands() -> list[list[str]]:
+    text = (ROOT / "README.md").read_text().replace("\\\n", " ")  # continued lines joined
+    lines = [line.split("#")[0].strip() for block in re.findall(r"```bash\n(.*?)```", text, re.S) for line in block.splitlines()]
+    return [shlex.split(line.replace(".venv/bin/", "")) for line in lines
+            if line.startswith(".venv/bin/evobiped ") or line.startswith("evobiped ")]
+
+
+def test_the_readme_commands_parse():
+    from evobiped.cli import build_parser
+
+    commands = readme_commands()
+    assert any(c[:2] == ["evobiped", "replay"] for c in commands)
+    parser = build_parser()
+    for c in commands:
+        parser.parse_args(c[1:])
+
+
+def test_the_readme_opens_the_recording_its_replay_wrote():
+    """The recording the "Watch it" `rerun` line opens is the one the replay that renders the video wrote."""
+    from evobiped.cli import build_parser
+
+    text = (ROOT / "README.md").read_text()
+    opened = re.findall(r"rerun (\S+\.rrd)", text)
+    assert opened
+    replays = [build_parser().parse_args(c[1:]) for c in readme_commands() if c[1] == "replay"]
+    video = [a for a in replays if a.video and not a.out]
+    assert video, "a replay with --video and the default recording"
+    for path in opened:
+        run, name = Path(path).parent, Path(path).name
+        assert any(Path(a.source) == run and name == "replay_best_video.rrd" for a in video), path
