@@ -20,7 +20,7 @@ from .conftest import ROOT, WALKERS
 
 #: a forward walker (docs/walkers.md): no fall in 200 s, at least 20 m in its first 50 s, within 30 deg of the
 #: direction it faced at the start
-FORWARD_WALKERS = ["simbicon_cma_seed5", "simbicon_cma_seed3", "simbicon_robust_curriculum_seed0_g66"]
+FORWARD_WALKERS = ["simbicon_cma_seed5", "simbicon_cma_seed3", "simbicon_robust_curriculum_seed0_g66", "ctrnn_es_seed5"]
 
 
 @pytest.mark.parametrize("name", FORWARD_WALKERS)
