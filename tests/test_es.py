@@ -47,6 +47,8 @@ def test_the_reil_body_declares_its_mirror_truly():
     state.sims.qpos[:, 7:] += rng.normal(0, 0.2, state.sims.qpos[:, 7:].shape)
     state.sims.qvel[:] = rng.normal(0, 0.5, state.sims.qvel.shape)
     state.sims.qpos[0, 2] -= 0.1  # the left foot on the ground, the right in the air
+    quat = np.array([1.0, 0.08, -0.05, 0.3])  # the pelvis rolled, pitched and turned
+    state.sims.qpos[0, 3:7] = quat / np.linalg.norm(quat)
     pair = Sims(ep.model, 2)
     pair.qpos[:], pair.qvel[:] = state.sims.qpos[0], state.sims.qvel[0]
     mirror_reil_state(ep.model, pair, 1)
@@ -266,3 +268,29 @@ def test_a_ctrnn_with_a_direct_path_contains_the_linear_policy():
     a_net = to_action(net.controller.output_kind, net.low, net.high, "position", o_net)
     assert np.allclose(a_lin, a_net, atol=1e-12)
     assert not np.allclose(a_lin, 0)
+
+
+def test_the_taga_body_declares_its_mirror_truly():
+    """Taga's sagittal walker: swapping its legs' joint coordinates swaps its link senses as declared, and the
+    actions' mirror swaps each right-leg actuator with its left-leg namesake."""
+    ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=0.5).build()
+    body = ep.body
+    sims = Sims(ep.model, 2)
+    body.reset(sims)
+    rng = np.random.default_rng(4)
+    q = body._qadr
+    sims.qpos[0, q[2:]] += rng.normal(0, 0.2, len(q) - 2)
+    sims.qvel[0, body._dadr[2:]] = rng.normal(0, 1.0, len(q) - 2)
+    sims.qpos[1], sims.qvel[1] = sims.qpos[0], sims.qvel[0]
+    for a, b in ((2, 4), (3, 5)):  # right thigh/knee <-> left thigh/knee
+        sims.qpos[1, [q[a], q[b]]] = sims.qpos[0, [q[b], q[a]]]
+        sims.qvel[1, [body._dadr[a], body._dadr[b]]] = sims.qvel[0, [body._dadr[b], body._dadr[a]]]
+    sims.forward()
+    got = {k: v for k, v in body.sensors(sims).items() if k in ("link_angles", "link_velocities")}
+    for name, x in got.items():
+        perm, sign = body.mirror[name]
+        assert np.allclose(x[1], x[0][list(perm)] * np.array(sign)), name
+        assert not np.allclose(x[0], x[1]), name
+    names = [a.name for a in body.actuators]
+    perm, _ = body.actuator_mirror
+    assert [names[i] for i in perm] == [n.replace("right", "L").replace("left", "right").replace("L", "left") for n in names]
