@@ -294,3 +294,15 @@ def test_the_taga_body_declares_its_mirror_truly():
     names = [a.name for a in body.actuators]
     perm, _ = body.actuator_mirror
     assert [names[i] for i in perm] == [n.replace("right", "L").replace("left", "right").replace("L", "left") for n in names]
+
+
+def test_evolve_runs_the_es_preset_from_the_command_line(tmp_path, capsys):
+    """`evobiped evolve --preset walker-es-linear` end to end (two short generations): the run directory holds the ES
+    state, the normaliser and the phase column."""
+    (tmp_path / "short.toml").write_text("[es]\npairs = 2\n[curriculum]\nseconds = [0.4, 0.4]\n")
+    code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "short.toml", "--generations", 2,
+               "--backend", "serial", "--out", tmp_path / "run", "--quiet")
+    assert code == 0, capsys.readouterr().err
+    ck = json.loads((tmp_path / "run" / "checkpoint.json").read_text())
+    assert ck["optimizer"]["name"] == "es" and ck["normaliser"]["count"] > 0
+    assert "phase" in (tmp_path / "run" / "history.csv").read_text().splitlines()[0].split(",")
