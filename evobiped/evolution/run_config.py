@@ -67,7 +67,8 @@ class RunConfig:
         d = dataclasses.asdict(self)
         d["episode"] = self.episode.to_dict()
         for name, cls in (("es", ESOptions), ("normalise", NormaliseOptions), ("curriculum", CurriculumOptions)):
-            if d[name] == dataclasses.asdict(cls()):  # written only when set: older runs' config.json unchanged
+            # written only when set (the ES's only for an ES run): other runs' config.json as before these options
+            if d[name] == dataclasses.asdict(cls()) or (name == "es" and self.optimizer != "es"):
                 del d[name]
         d["frozen_blocks"] = list(self.frozen_blocks)
         return d
