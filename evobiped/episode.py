@@ -588,6 +588,11 @@ class Context:
     #: s: the episodes' length (None: the episode's own)
     seconds: float | None = None
 
+    @property
+    def empty(self) -> bool:
+        """Nothing beyond the config (a plain run's: its evaluations need no context)."""
+        return self.norm is None and not self.observe and self.weights is None and self.seconds is None
+
 
 def sense_sums(result: EpisodeResult, rows: np.ndarray) -> SenseSums:
     """What genomes ``rows`` sensed in an episode run with ``Context(observe=True)``, all presentations together."""

@@ -72,7 +72,7 @@ def test_normalised_inputs_are_the_body_s_declared_standing_values_and_scales():
     g[ep.controller.layout.slices()["time_constants"]] = 1.0
     state = ep.start(g)  # every output 0.5: targets 0, standing straight
     ep.advance(state, ticks=5)  # the feet have touched down
-    x = ep._inputs(state.sims, state.task, 1)[0]
+    x = ep._inputs(state, 1)[0][0]
     raw = np.concatenate([ep.body.sensors(state.sims)[n][0] for n in SENSES])
     centre, scale = ep.controller.input_norm
     assert x.tolist() == pytest.approx(((raw - centre) / scale).tolist())
@@ -83,8 +83,18 @@ def test_normalised_inputs_are_the_body_s_declared_standing_values_and_scales():
 
 
 def test_normalising_a_sensor_with_no_declared_scale_is_one_line():
-    with pytest.raises(ConfigError, match="normalises its inputs, but no standing value and scale is declared for link_angles"):
-        EpisodeConfig(body="taga", controller_options=dict(normalise_inputs=True, inputs=["link_angles"])).build()
+    from evobiped.bodies import BODIES, TagaBiped
+
+    class Undeclared(TagaBiped):
+        name = "undeclared"
+        sensor_norms = {}
+
+    BODIES["undeclared"] = Undeclared
+    try:
+        with pytest.raises(ConfigError, match="normalises its inputs, but no standing value and scale is declared for link_angles"):
+            EpisodeConfig(body="undeclared", controller_options=dict(normalise_inputs=True, inputs=["link_angles"])).build()
+    finally:
+        del BODIES["undeclared"]
 
 
 @pytest.mark.parametrize("bad", [-1, 1.5, 101, True])

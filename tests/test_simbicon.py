@@ -1,6 +1,8 @@
 """The SIMBICON-style balance controller and the Reil body's balance sensors."""
 
 import mujoco
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -166,7 +168,7 @@ def test_the_stance_hip_turns_a_tilted_pelvis_back():
         q0[2] = 2.0
         q0[3:7] = _quat(axis, 0.1)
         sims = _sims(body, q0)
-        x = ep._inputs(sims, {}, 1)
+        x, _ = ep._inputs(SimpleNamespace(sims=sims, task={}, senses=None, norm=None), 1)
         _, out = ctrl.step(params, ctrl.initial_state(params), x)
         sims.ctrl[0] = np.clip(out[0], ep.low, ep.high)
         sims.ctrl[0, 2:] = sims.qpos[0, body._qadr[2:]]  # hold the knees and the swing leg: only the stance hip acts

@@ -287,6 +287,7 @@ def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
     from evobiped.controllers import CONTROLLERS
     from evobiped.episode import EpisodeConfig
     from evobiped.errors import ConfigError
+    from evobiped.mapping import MAPS
     from evobiped.options import parse
 
     rng = np.random.default_rng(0)
@@ -295,6 +296,10 @@ def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
         for ctrl, ccls in CONTROLLERS.items():
             cfg = EpisodeConfig(body=body, controller=ctrl, seconds=0.2)
             why = problem(ccls.needs(parse(ccls.Options, {}, "options")), Offer(bcls.actuators, bcls.sensor_widths))
+            if why is None and (ccls.output_kind, bcls.action_kind) not in MAPS:  # the outputs' kind is declared too
+                with pytest.raises(ConfigError, match=f"controller '{ctrl}' gives {ccls.output_kind} outputs, which body '{body}' cannot take"):
+                    cfg.layout()
+                continue
             if why is not None:
                 with pytest.raises(ConfigError, match=re.escape(f"controller '{ctrl}' (body '{body}', task 'walk') {why}")):
                     cfg.layout()

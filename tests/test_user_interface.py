@@ -73,9 +73,9 @@ def _help(command: str) -> str:
 
 
 @pytest.mark.parametrize("command, listed", [
-    ("evolve", ["reil, taga", "ctrnn, g3, matsuoka, open-loop, simbicon", "walk, steer", "serial, process, thread, ray", "paper, paper-cyclic"]),
-    ("episode", ["reil, taga", "ctrnn, g3, matsuoka, open-loop, simbicon"]),
-    ("bench", ["reil, taga", "ctrnn, g3, matsuoka, open-loop, simbicon"]),
+    ("evolve", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon", "walk, steer", "serial, process, thread, ray", "paper, paper-cyclic"]),
+    ("episode", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon"]),
+    ("bench", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon"]),
     ("study", ["serial, process, thread, ray", "paper, paper-cyclic"]),
     ("g3", ["fig4, fig5a"]),
     ("taga", ["rhythm-generator parameters: taga"]),

@@ -100,6 +100,14 @@ class TagaBiped(Body):
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}
+    #: standing values and scales for a controller that normalises its inputs: about the mean and standard deviation
+    #: of each reading over seconds 2-10 of the Appendix D walker's gait (the same for both legs)
+    sensor_norms: ClassVar[dict] = {
+        "link_angles": ((1.39, 1.72, 1.39, 1.72), (0.3, 0.35, 0.3, 0.35)),
+        "link_velocities": ((0.0,) * 4, (2.2, 2.8, 2.2, 2.8)),
+        "ground_contact": ((0.5, 0.5), (0.5, 0.5)),
+        "ground_force": ((0.0, 335.0, 0.0, 335.0), (120.0, 345.0, 120.0, 345.0)),
+    }
     #: left/right mirror: a sagittal body's legs swap and nothing changes sign
     mirror: ClassVar[dict] = {"link_angles": ((2, 3, 0, 1), (1,) * 4), "link_velocities": ((2, 3, 0, 1), (1,) * 4),
                               "ground_contact": ((1, 0), (1, 1)), "ground_force": ((2, 3, 0, 1), (1,) * 4)}

@@ -152,8 +152,8 @@ class _Watched:
     def __init__(self, evaluator, clock):
         self.evaluator, self.clock = evaluator, clock
 
-    def evaluate(self, genomes, key=None, context=None):
-        result = self.evaluator.evaluate(genomes, key=key, context=context)
+    def evaluate(self, genomes, key=None, **context):
+        result = self.evaluator.evaluate(genomes, key=key, **context)
         self.clock.episodes((result.rows if result.rows is not None else result).end_time)
         return result
 

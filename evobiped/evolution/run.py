@@ -261,7 +261,9 @@ class Run:
         opt = self.optimizer
         pop, unknown = opt.ask()
         context = self.context.now()
-        result = evaluator.evaluate(pop[unknown], key=self._key(opt.generation), context=context)
+        # a plain run's evaluations take no context (an evaluator written before contexts still serves it)
+        more = {} if context.empty else {"context": context}
+        result = evaluator.evaluate(pop[unknown], key=self._key(opt.generation), **more)
         opt.tell(result)
         self.individuals.told(unknown, result)
         f, outcome = opt.fitness, self.individuals.outcome
