@@ -515,9 +515,9 @@ class Episode:
             fell=state.fell.copy(),
             unstable=state.unstable.copy(),
             end_time=state.end_time.copy(),
-            start_position=state.start_position,
+            start_position=state.start_position.copy(),  # copies: a later restart writes into the state's
             end_position=task.end_position(self.body, state.sims, tstate).copy(),
-            start_facing=state.start_facing,
+            start_facing=state.start_facing.copy(),
             terms=task.terms(tstate),
             senses=None if state.senses is None else dict(zip(("count", "total", "squares"), (a.copy() for a in state.senses))),
         )

@@ -185,3 +185,21 @@ def test_restarted_rows_begin_anew_while_the_others_go_on():
         ep.step(whole, a)
     assert np.array_equal(state.sims.qpos[1], alone.sims.qpos[1]) and np.array_equal(state.sims.qpos[0], whole.sims.qpos[0])
     assert np.array_equal(ep.result(state).terms["forward"], [ep.result(whole).terms["forward"][0], ep.result(alone).terms["forward"][1]])
+
+
+def test_a_result_handed_out_stays_as_it_was_after_a_restart():
+    """``Episode.result`` copies what it returns: restarting a row of the state later (a vector environment's autoreset,
+    after the walker moved) leaves an earlier result's start positions and facings alone."""
+    ep = _outside("reil", 0.02)
+    rng = np.random.default_rng(3)
+    state = ep.start(2)
+    for a in np.clip(rng.uniform(-0.3, 0.3, (30, 2, 6)), ep.low, ep.high):
+        ep.step(state, a)
+    first = ep.result(state)
+    kept = (first.start_position.copy(), first.start_facing.copy())
+    state.sims.qpos[1, :2] += 0.5  # the walker somewhere else, turned, when its row begins anew
+    state.sims.qpos[1, 3:7] = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
+    state.sims.forward()
+    ep.restart(state, np.array([1]), pose=lambda sims, ids: (sims.qpos.__setitem__((ids, slice(0, 2)), 0.7), sims.forward(ids)))
+    assert not np.array_equal(state.start_position[1], kept[0][1])  # the state's own start moved
+    assert np.array_equal(first.start_position, kept[0]) and np.array_equal(first.start_facing, kept[1])
