@@ -32,8 +32,11 @@ def test_raw_replay_on_threads_reproduces_the_closed_loop_episodes_exactly():
 def test_cli_json(capsys):
     assert main(["bench", "--population", "1", "--seconds", "0.5", "--workers", "1", "--repeats", "1", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
-    assert r["scaling_pool"] == 1.0 and r["scaling_raw"] == 1.0 and r["population"] == 1 and r["repeats"] == 1
-    assert set(r["median_sim_s_per_s"]) == {"raw 1", "eval", "pool 1", "threads 1"}
+    assert r["population"] == 1 and r["repeats"] == 1 and r["simulated_seconds"] == pytest.approx(0.5)
+    m = r["median_sim_s_per_s"]
+    assert set(m) == {"raw 1", "eval", "pool 1", "threads 1"} and all(np.isfinite(v) and v > 0 for v in m.values())
+    # one worker: the efficiencies are each evaluator's rate over the one raw rate
+    assert r["efficiency_one_core"] == pytest.approx(m["eval"] / m["raw 1"]) and r["efficiency_pool"] == pytest.approx(m["pool 1"] / m["raw 1"])
 
 
 def test_cli_quick_sizes_and_overrides(capsys):

@@ -178,3 +178,24 @@ def test_bad_gene_overrides(genes, words):
 
     with pytest.raises(ConfigError, match=f"^episode.controller_options.genes.*{words}"):
         EpisodeConfig(controller_options={"genes": genes}).layout()
+
+
+def test_children_carry_about_one_mutation_each_at_the_block_sigma():
+    """Mutation at the per-locus rate 1 / G: over 2,000 children the number of changed genes is Binomial(G, 1/G) (mean 1,
+    about (1 - 1/G)^G = 37 % unchanged), and a changed gene moves by the Gaussian of its block's sigma (Table III)."""
+    ga = GA(LAYOUT, GAOptions(population=4000), seed=11)
+    parents = ga.population.copy()
+    fitness = np.arange(4000, dtype=float)
+    ga.tell(fitness)
+    ga.next_generation()
+    best = np.argsort(-fitness, kind="stable")[:2000]  # the survivors, best first; child i is a copy of survivor i
+    assert np.array_equal(ga.population[:2000], parents[best])
+    children, sources = ga.population[2000:], parents[best]
+    changed = children != sources
+    G = LAYOUT.size
+    assert abs(changed.sum(axis=1).mean() - 1.0) < 0.1
+    assert abs((changed.sum(axis=1) == 0).mean() - (1 - 1 / G) ** G) < 0.05
+    w = LAYOUT.slices()["weights"]
+    inside = changed[:, w] & (np.abs(sources[:, w]) < 8)  # far from the clipping bounds (+-16)
+    step = (children[:, w] - sources[:, w])[inside]
+    assert len(step) > 300 and abs(step.std() - LAYOUT.blocks[0].mutation_sigma) < 0.1 * LAYOUT.blocks[0].mutation_sigma

@@ -46,9 +46,16 @@ def test_a_shipped_walker_still_reaches_its_documented_battery_figures(name):
 
 
 def test_a_forward_fitness_walker_replays_with_its_fitness_so_far(tmp_path, capsys):
-    """The recording reads the forward fitness every tick: a walker still up counts as up to the end."""
+    """The recording reads the forward fitness every tick: a walker still up counts as up to the end, so 2 s into its
+    50 s episode its fitness so far is (forward + 5 m) x 1, not x 2/50 (nor 0)."""
     from evobiped.cli import main
 
+    genome, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed5.json")
+    ep = cfg.nominal().build()
+    state = ep.start(genome)
+    ep.advance(state, 2.0)
+    forward = float(ep.task.forward(state.task)[0])
+    assert forward > 0.5 and ep.task.fitness(state.task)[0] == pytest.approx(forward + 5.0)
     assert main(["replay", str(WALKERS / "simbicon_cma_seed5.json"), "--seconds", "2", "--out", str(tmp_path / "r.rrd"), "--quiet"]) == 0
     assert (tmp_path / "r.rrd").stat().st_size > 0
 
