@@ -1,0 +1,57 @@
+"""Fine-tuning a walker with evolution strategies: a run --from a genome file starts its running normaliser from the
+normaliser the file froze (by input name), so the seed walker meets the inputs it was evolved with."""
+
+import tomllib
+
+import numpy as np
+
+from evobiped.evolution import RunConfig
+from evobiped.evolution.run_context import RunContext
+from evobiped.genome_file import load_genome
+from evobiped.presets import path as preset_path
+
+from .conftest import WALKERS
+
+SEED = WALKERS / "ctrnn_es_seed5.json"
+
+
+def _config(**changes) -> RunConfig:
+    table = tomllib.loads(preset_path("walker-ctrnn-es").read_text())
+    table.update({"backend": "serial", "seed": 0})
+    for k, v in changes.items():
+        table[k] = v
+    return RunConfig.from_dict(table)
+
+
+def test_a_run_from_a_genome_file_starts_from_its_normaliser():
+    _, cfg, _ = load_genome(SEED)
+    frozen = cfg.controller_options.input_norm
+    started = RunContext(_config(initial=str(SEED))).now()
+    assert started.norm_count == frozen["count"]
+    assert np.allclose(started.norm[0], frozen["mean"], rtol=0, atol=1e-12)
+    assert np.allclose(started.norm[1], frozen["std"], rtol=1e-9)
+    fresh = RunContext(_config()).now()  # without --from: the declared centres and scales, as before
+    assert fresh.norm_count == 0 and not np.allclose(fresh.norm[1], frozen["std"])
+
+
+def test_inputs_are_matched_by_name_and_a_new_input_starts_at_its_declared_norm():
+    """The run reads the seed's inputs less its first (heading_error) and plus the pelvis height: every shared input keeps
+    the seed's centre and scale, shifted to its new place; the new one is declared."""
+    _, cfg, _ = load_genome(SEED)
+    frozen = cfg.controller_options.input_norm
+    table = tomllib.loads(preset_path("walker-ctrnn-es").read_text())
+    inputs = table["episode"]["controller_options"]["inputs"][1:]
+    table["episode"]["controller_options"]["inputs"] = inputs
+    table.update({"backend": "serial", "seed": 0, "initial": str(SEED)})
+    config = RunConfig.from_dict(table)
+    ctx = RunContext(config)
+    mean, std = ctx.now().norm
+    assert len(mean) == len(frozen["mean"]) - 1
+    assert np.allclose(mean, frozen["mean"][1:]) and np.allclose(std, frozen["std"][1:])
+    declared = RunContext(RunConfig.from_dict({**table, "initial": None})).now().norm
+    assert not np.allclose(declared[1], std)
+
+
+def test_without_a_running_normaliser_nothing_is_seeded():
+    ctx = RunContext(_config(initial=str(SEED), normalise={"running": False}))
+    assert ctx.stats is None and ctx.now().norm is None
