@@ -55,3 +55,20 @@ def test_inputs_are_matched_by_name_and_a_new_input_starts_at_its_declared_norm(
 def test_without_a_running_normaliser_nothing_is_seeded():
     ctx = RunContext(_config(initial=str(SEED), normalise={"running": False}))
     assert ctx.stats is None and ctx.now().norm is None
+
+
+def test_evolve_runs_an_es_preset_from_a_walker_on_the_command_line(tmp_path):
+    """`evobiped evolve --preset walker-es-robust --from WALKER` (the command-line evaluator passes the run's context on):
+    generation 0's theta is the seed walker, normalised as it was evolved, so it stays up its (shortened) episode."""
+    import csv
+    import json
+
+    from .conftest import cli
+
+    out = tmp_path / "run"
+    assert cli("evolve", "--preset", "walker-es-robust", "--from", SEED, "--generations", "1", "--seconds", "3",
+               "--backend", "serial", "--seed", "0", "--out", out, "--quiet") == 0
+    rows = list(csv.DictReader((out / "history.csv").open()))
+    assert len(rows) == 1 and float(rows[0]["evaluation_up"]) == 1.0
+    ck = json.loads((out / "checkpoint.json").read_text())
+    assert ck["normaliser"]["count"] > load_genome(SEED)[1].controller_options.input_norm["count"]

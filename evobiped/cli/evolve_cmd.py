@@ -152,8 +152,8 @@ class _Watched:
     def __init__(self, evaluator, clock):
         self.evaluator, self.clock = evaluator, clock
 
-    def evaluate(self, genomes, key=None):
-        result = self.evaluator.evaluate(genomes, key=key)
+    def evaluate(self, genomes, key=None, **given):
+        result = self.evaluator.evaluate(genomes, key=key, **given)  # e.g. the run's context (normaliser, phase weights)
         self.clock.episodes((result.rows if result.rows is not None else result).end_time)
         return result
 
