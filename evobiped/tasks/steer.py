@@ -46,6 +46,25 @@ in place, or circling close to the source, score alike.  Per presentation
 (what :meth:`SteerTask.fitness` returns, one value per simulation row) the
 fall term is multiplied by S, f_j = -min(d_j, R) - S fell_j (R + c (T - t_j)),
 so that the mean over the presentations is F.
+
+Random sources (``random_sources = S``, beyond the paper).  A policy that
+must reach any source is trained on new ones every generation: S sources at
+distances uniform in ``source_distance`` = [low, high] m and bearings
+uniform in ``source_bearing`` = [low, high] degrees from the initial facing
+(left positive), drawn from (run seed, generation) only, so every genome of a
+generation hears the same S sources (common random numbers; a resume or the
+number of workers changes nothing).  ``sources`` stays what a nominal episode
+(replay, ``episode``, the battery) presents; it must then hold S sources.
+Refused with one line: a nearest source inside the walker's start
+(low < 0.5 m), a bearing range wider than +-180 deg, an empty range (low > high).
+
+Lingering at the source (``reach`` m and ``reach_bonus`` m, arrive fitness
+only).  A walker that arrives early and stops or circles within ``reach`` of
+its source is paid ``reach_bonus`` times the fraction of the episode's control
+ticks it spent there, up: per presentation
+f_j = -min(d_j, R) + b u_j - S fell_j (R + b + c (T - t_j)), u_j that fraction.
+The fall term grows by b, so a fall anywhere still scores below (at most equal
+to) any walker that stays up.
 """
 
 from __future__ import annotations
@@ -101,6 +120,25 @@ def with_sources(config, sources):
     return dataclasses.replace(config, task_options={**given(config.task_options), "sources": [list(map(float, s)) for s in sources]})
 
 
+def _range(v) -> None:
+    r = tuple(v) if isinstance(v, (list, tuple)) else None
+    if r is None or len(r) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool) or not np.isfinite(x)
+                                                 for x in r) or (r and r[0] > r[1]):
+        raise ConfigError(f"must be [] or [low, high] with low <= high (an empty range draws nothing), got {v!r}")
+
+
+def draw_sources(options, key) -> np.ndarray | None:
+    """The random sources ``(S, 2)`` m of generation key = (run seed, generation, ...) under ``options``
+    (:class:`SteerOptions`); None without random sources."""
+    S = int(options.random_sources)
+    if not S or key is None:
+        return None
+    rng = np.random.default_rng([int(key[0]), int(key[1]), 0x50D])
+    d = rng.uniform(*options.source_distance, S)
+    a = np.radians(rng.uniform(*options.source_bearing, S))
+    return np.stack([d * np.cos(a), d * np.sin(a)], axis=1)
+
+
 #: fitness name -> what it pays (see the module docstring)
 FITNESS = {"distance": "the paper's: minus the distance to the source when the episode ends, fall or not (m)",
            "arrive": "minus the distance to the source at the end, minus fall_penalty + fall_time_cost (T - t) per fall (m)"}
@@ -119,6 +157,34 @@ class SteerOptions:
                                  "distance (so any fall scores below any walker that stays up)", unit="m", above=0)
     fall_time_cost: float = option(1.0, "under the arrive fitness: what a fall costs per second of the episode it "
                                    "loses", unit="m/s", low=0)
+    random_sources: int = option(0, "S sources drawn anew each generation of a run from source_distance and "
+                                 "source_bearing (0: the fixed sources); sources must then hold S", low=0, high=64, integer=True)
+    source_distance: tuple = option((), "[low, high]: the distances of random sources", unit="m", check=_range,
+                                    span="[] or [low, high], 0.5 <= low <= high")
+    source_bearing: tuple = option((-60.0, 60.0), "[low, high]: the bearings of random sources from the initial facing, "
+                                   "left positive", unit="deg", check=_range, span="[low, high] within [-180, 180]")
+    reach: float = option(0.0, "under the arrive fitness: within this distance of its source a walker up earns reach_bonus",
+                          unit="m", low=0)
+    reach_bonus: float = option(0.0, "under the arrive fitness: paid times the fraction of the episode spent within reach, up",
+                                unit="m", low=0)
+
+    def __post_init__(self):
+        from ..options import check_fields
+
+        check_fields(self, "episode.task_options")
+        if self.random_sources:
+            if not self.source_distance:
+                raise ConfigError("source_distance: random_sources need a range of distances [low, high] m; the distribution is empty")
+            lo, hi = self.source_distance
+            if lo < MIN_SOURCE_DISTANCE:
+                raise ConfigError(f"source_distance: a source {lo:g} m away is inside the walker's start (nearer than "
+                                  f"{MIN_SOURCE_DISTANCE:g} m); give low >= {MIN_SOURCE_DISTANCE:g}")
+            if len(parse_sources(self.sources)) != self.random_sources:
+                raise ConfigError(f"sources: with random_sources = {self.random_sources}, the nominal sources (what a replay "
+                                  f"presents) must be {self.random_sources} too, got {len(parse_sources(self.sources))}")
+        lo, hi = self.source_bearing
+        if lo < -180 or hi > 180:
+            raise ConfigError(f"source_bearing: a bearing range is at most [-180, 180] deg, got [{lo:g}, {hi:g}]")
 
 
 class SteerTask(Task):
@@ -153,7 +219,16 @@ class SteerTask(Task):
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)]}
+        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)],
+                "near": np.zeros(sims.n), "ticks": 0}
+
+    def draw_sources(self, key) -> np.ndarray | None:
+        """This generation's random sources ``(S, 2)`` m (None: the fixed ones); :func:`draw_sources`."""
+        return draw_sources(self.options, key)
+
+    def take_sources(self, state, sources: np.ndarray) -> None:
+        """Present ``sources`` ``(S, 2)`` m (a generation's draw) instead of the fixed ones."""
+        state["source"] = np.asarray(sources, float)[self.presentation_of(len(state["source"]))]
 
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
@@ -162,15 +237,21 @@ class SteerTask(Task):
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         state["position"][ok] = body.planar_position(sims)[ok]
+        state["ticks"] += 1
+        if self.options.reach > 0:
+            near = np.linalg.norm(state["position"][ok] - state["source"][ok], axis=1) <= self.options.reach
+            state["near"][ok[near]] += 1
 
     def fitness(self, state):
         distance = np.linalg.norm(state["position"] - state["source"], axis=1)
         if self.fitness_name == "distance":
             return -distance
         R, c = float(self.options.fall_penalty), float(self.options.fall_time_cost)
+        b = float(self.options.reach_bonus) if self.options.reach > 0 else 0.0
         lost = state["seconds"] - state["end_time"]  # s of the episode lost to a fall, 0 for a walker up to the end
-        fall = np.where(lost > 0, R + c * lost, 0.0)
-        return -np.minimum(distance, R) - self.presentations * fall
+        fall = np.where(lost > 0, R + b + c * lost, 0.0)
+        linger = b * state["near"] / max(state["ticks"], 1) if b else 0.0
+        return -np.minimum(distance, R) + linger - self.presentations * fall
 
     def terms(self, state):
         return {"distance": np.linalg.norm(state["position"] - state["start"], axis=1),
@@ -189,3 +270,83 @@ class SteerTask(Task):
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:
         return fitness.mean(axis=1)
+
+
+#: controller -> its gene blocks of one row of genes per input (input-major), what :func:`remap_inputs` rearranges
+INPUT_MAJOR = {"ctrnn": ("input_weights", "direct_weights"), "linear": ("weights",)}
+
+
+def remap_inputs(genome: np.ndarray, old, new, *, copy: dict | None = None) -> np.ndarray:
+    """``genome`` of episode config ``old`` as a genome of ``new``: the same controller reading other inputs.
+
+    Every gene block that does not depend on the inputs is kept; a block of one row of genes per input
+    (input-major: a CTRNN's ``input_weights`` and ``direct_weights``, a linear controller's weights) keeps each
+    input's row by name and width, and a new input's row is zero (it has no influence), or ``factor`` times the
+    row of an old input where ``copy`` maps new name -> (old name, factor) (e.g. the ear signal steering where
+    the heading sense did).  An input ``old`` read and ``new`` does not is dropped.  ValueError when the two
+    controllers differ in anything else."""
+    from ..evolution.run_context import _widths
+
+    genome = np.asarray(genome, float)
+    (_, c_old, _), (_, c_new, _) = old.parts(), new.parts()
+    if old.controller != new.controller:
+        raise ValueError(f"a {old.controller} genome cannot become a {new.controller} genome")
+    w_old, w_new = dict(zip(c_old.input_names, _widths(old))), dict(zip(c_new.input_names, _widths(new)))
+    k_old, k_new = sum(w_old.values()), sum(w_new.values())
+    at_old, at = {}, 0
+    for n, w in w_old.items():
+        at_old[n], at = at, at + w
+    s_old, s_new = c_old.layout.slices(), c_new.layout.slices()
+    if list(s_old) != list(s_new):
+        raise ValueError(f"gene blocks differ: {list(s_old)} and {list(s_new)}")
+    major = INPUT_MAJOR.get(new.controller)
+    if major is None:
+        raise ValueError(f"controller {new.controller!r}: which of its gene blocks hold one row per input is not known")
+    out = np.zeros(c_new.layout.size)
+    for name in s_new:
+        a, b = genome[s_old[name]], s_new[name]
+        n_new = b.stop - b.start
+        if name not in major:
+            if len(a) != n_new:
+                raise ValueError(f"gene block {name}: {len(a)} genes cannot become {n_new}")
+            out[b] = a
+            continue
+        m = len(a) // max(k_old, 1)
+        if len(a) != m * k_old or n_new != m * k_new:
+            raise ValueError(f"gene block {name}: {len(a)} genes for {k_old} inputs cannot become {n_new} for {k_new}")
+        rows_old, rows = a.reshape(k_old, m), np.zeros((k_new, m))
+        i = 0
+        for n, w in w_new.items():
+            src, factor = (n, 1.0) if n in w_old else (copy or {}).get(n, (None, 0.0))
+            if src is not None and w_old.get(src) == w:
+                rows[i:i + w] = factor * rows_old[at_old[src]:at_old[src] + w]
+            i += w
+        out[b] = rows.ravel()
+    return out
+
+
+def remap_norm(norm: dict, old, new, extra: dict | None = None) -> dict:
+    """An ``input_norm`` of episode config ``old`` rearranged for ``new``'s inputs by name (as :func:`remap_inputs`);
+    a new input takes ``extra[name]`` = (means, stds), else its declared centre and scale."""
+    from ..evolution.run_context import _widths
+
+    c_old, c_new = old.parts()[1], new.parts()[1]
+    mean, std = np.asarray(norm["mean"], float), np.asarray(norm["std"], float)
+    declared = c_new.input_norm
+    at, old_at = 0, {}
+    for n, w in zip(c_old.input_names, _widths(old)):
+        old_at[n], at = (at, w), at + w
+    out_mean, out_std, at = [], [], 0
+    for n, w in zip(c_new.input_names, _widths(new)):
+        if n in old_at and old_at[n][1] == w:
+            i = old_at[n][0]
+            out_mean += list(mean[i:i + w])
+            out_std += list(std[i:i + w])
+        elif extra and n in extra:
+            out_mean += list(map(float, extra[n][0]))
+            out_std += list(map(float, extra[n][1]))
+        else:
+            out_mean += list(declared[0][at:at + w])
+            out_std += list(declared[1][at:at + w])
+        at += w
+    return {"mean": [float(v) for v in out_mean], "std": [float(v) for v in out_std], "count": float(norm.get("count", 0.0))}
