@@ -65,6 +65,10 @@ ticks it spent there, up: per presentation
 f_j = -min(d_j, R) + b u_j - S fell_j (R + b + c (T - t_j)), u_j that fraction.
 The fall term grows by b, so a fall anywhere still scores below (at most equal
 to) any walker that stays up.
+
+``sound_limit`` L < 1 clips the sense to +-L: the side heard is kept, the
+loudness of a near source capped (a network's input weights act on it
+linearly; near the source s grows towards +-1 and would swamp the gait).
 """
 
 from __future__ import annotations
@@ -108,7 +112,8 @@ def parse_sources(sources) -> np.ndarray:
 
 def with_sources(config, sources):
     """``config`` (an EpisodeConfig of the steer task) with these sources ``[[x, y], ...]`` m, one presentation
-    each; ``sources`` None leaves it as it is.  UserError for an episode of another task."""
+    each (fixed: they replace random sources drawn per generation); ``sources`` None leaves it as it is.  UserError for an
+    episode of another task."""
     import dataclasses
 
     from ..errors import UserError
@@ -117,7 +122,9 @@ def with_sources(config, sources):
         return config
     if config.task != "steer":
         raise UserError(f"--source applies to the steer task (--task steer); this episode's task is {config.task!r}")
-    return dataclasses.replace(config, task_options={**given(config.task_options), "sources": [list(map(float, s)) for s in sources]})
+    options = {**given(config.task_options), "sources": [list(map(float, s)) for s in sources]}
+    options.pop("random_sources", None)  # these sources, fixed, replace a distribution drawn per generation
+    return dataclasses.replace(config, task_options=options)
 
 
 def _range(v) -> None:
@@ -157,6 +164,8 @@ class SteerOptions:
                                  "distance (so any fall scores below any walker that stays up)", unit="m", above=0)
     fall_time_cost: float = option(1.0, "under the arrive fitness: what a fall costs per second of the episode it "
                                    "loses", unit="m/s", low=0)
+    sound_limit: float = option(1.0, "the sense sound is s clipped to +-sound_limit (1: as heard); keeps the side "
+                                "heard and caps the loudness of a near source", above=0, high=1)
     random_sources: int = option(0, "S sources drawn anew each generation of a run from source_distance and "
                                  "source_bearing (0: the fixed sources); sources must then hold S", low=0, high=64, integer=True)
     source_distance: tuple = option((), "[low, high]: the distances of random sources", unit="m", check=_range,
@@ -232,7 +241,8 @@ class SteerTask(Task):
 
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
-        return {"sound": ear_signal(left, right, state["source"])[:, None]}
+        s = ear_signal(left, right, state["source"])[:, None]
+        return {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
