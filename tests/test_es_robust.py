@@ -72,3 +72,33 @@ def test_evolve_runs_an_es_preset_from_a_walker_on_the_command_line(tmp_path):
     assert len(rows) == 1 and float(rows[0]["evaluation_up"]) == 1.0
     ck = json.loads((out / "checkpoint.json").read_text())
     assert ck["normaliser"]["count"] > load_genome(SEED)[1].controller_options.input_norm["count"]
+
+
+def test_the_shipped_robust_walker_reaches_its_documented_random_phase_battery():
+    """ctrnn_es_robust_seed0 (walker-es-robust, seed 0, generation 74) on the battery with pushes at random phases (seed 2,
+    after 12.5 s): its recorded figures, one trial per family allowed to tip; the targets it meets, met."""
+    import json
+
+    from evobiped.robustness import battery, summarise
+
+    documented = json.loads((WALKERS / "ctrnn_es_robust_seed0_robustness_phases2.json").read_text())
+    genome, cfg, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0.json")
+    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"],
+                             phase_seed=documented["phase_seed"]))
+    got = {r["family"]: r["survived"] for r in rows}
+    want = {r["family"]: r["survived"] for r in documented["families"]}
+    assert got.keys() == want.keys() and all(abs(got[f] - want[f]) <= 1 for f in want), (got, want)
+    assert got["push 10 N"] >= 0.95 * 32 - 1 and got["push 15 N"] >= 0.75 * 32 and got["offset 0.05 rad"] == 8
+    assert got["slope 3 %"] == 4
+
+
+def test_the_shipped_hearing_ctrnn_reaches_both_paper_sources_and_stays_up():
+    """steer_ctrnn_es_seed0 passes within 0.5 m of (10, 3) and (10, -3) m and is still up 50 s after (it circles them)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("steer_check", Path(__file__).resolve().parent.parent / "scripts" / "steer_check.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    rows = mod.check(WALKERS / "steer_ctrnn_es_seed0.json", [(10.0, 3.0), (10.0, -3.0)], 65.0, 0.5)
+    assert all(r["arrived_s"] is not None and r["arrived_s"] < 15 and not r["fell"] and r["up_after_arrival_s"] >= 50 for r in rows), rows
