@@ -81,7 +81,7 @@ def test_the_shipped_robust_walker_reaches_its_documented_random_phase_battery()
 
     from evobiped.robustness import battery, summarise
 
-    documented = json.loads((WALKERS / "ctrnn_es_robust_seed0_robustness_phases2.json").read_text())
+    documented = json.loads((WALKERS / "ctrnn_es_robust_seed0_phases2_robustness.json").read_text())
     genome, cfg, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0.json")
     rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"],
                              phase_seed=documented["phase_seed"]))

@@ -146,9 +146,9 @@ def test_cli_phase_seed_writes_its_own_report_and_refuses_a_negative_seed(tmp_pa
     assert main(["robustness", WALKER, "--seconds", "6", "--push-after", "3", "--phase-seed", "3", "--out", str(tmp_path), "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "push 10 N" in out and "gene noise 1 %" in out
-    report = json.loads((tmp_path / "simbicon_seed1_robustness_phases3.json").read_text())
-    assert report["phase_seed"] == 3 and (tmp_path / "simbicon_seed1_robustness_phases3.png").exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["simbicon_seed1_robustness_phases3.json", "simbicon_seed1_robustness_phases3.png"]
+    report = json.loads((tmp_path / "simbicon_seed1_phases3_robustness.json").read_text())
+    assert report["phase_seed"] == 3 and (tmp_path / "simbicon_seed1_phases3_robustness.png").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["simbicon_seed1_phases3_robustness.json", "simbicon_seed1_phases3_robustness.png"]
     assert main(["robustness", WALKER, "--phase-seed", "-1", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--phase-seed" in err[0] and not (tmp_path / "o").exists()

@@ -20,7 +20,7 @@ def add_robustness(sub) -> None:
                    help="pushes fall in the first stride after S s (default 10)")
     p.add_argument("--phase-seed", type=int, metavar="N",
                    help="each push at its own phase of that stride, drawn uniformly from seed N (default: the fixed phases 0, 1/4, 1/2, 3/4)")
-    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (robustness_phasesN.* with --phase-seed N) (default: the run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
+    p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (with --phase-seed N: robustness_phasesN.*, <stem>_phasesN_robustness.*) (default: the run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
     p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
                    help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
     p.add_argument("--json", action="store_true", help="print the score and the summary per family as JSON")
@@ -47,7 +47,8 @@ def run_robustness_cmd(args) -> int:
         raise UserError(f"--out {out} exists and is not a directory")
     stem = robustness_stem(source.label) if source.run_dir is not None else f"{source.genome_path.stem}_robustness"
     if args.phase_seed is not None:  # a battery of its own: never overwrites the fixed-phase results
-        stem += f"_phases{args.phase_seed}"
+        tail = "_robustness"
+        stem = (stem[:-len(tail)] + f"_phases{args.phase_seed}{tail}" if stem.endswith(tail) else f"{stem}_phases{args.phase_seed}")
     progress = Progress("robustness", 1.0, quiet=args.quiet or args.json)
     config = with_sources(source.config.nominal(), [args.sound_source] if args.sound_source else None)
     trials = battery(config.build(), source.genome, seconds=args.seconds, push_after=args.push_after,
