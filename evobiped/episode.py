@@ -174,6 +174,14 @@ class EpisodeConfig:
             except ConfigError as exc:
                 raise ConfigError(f"episode.controller_options.{exc}") from None
         check_timing(body, controller, float(self.seconds))
+        if body.action_kind != "position":  # offsets and noise are PD-target angles: a body of torques has none
+            from .options import scheduled
+
+            for name in ("target_offset", "target_noise"):
+                s = scheduled(self.perturbations, name)
+                if s.start or s.end:
+                    raise ConfigError(f"episode.perturbations.{name}: disturbs PD targets (rad); body {self.body!r} is driven "
+                                      f"by {body.action_kind}s and has none")
         return body, controller, task
 
     def check(self) -> None:
@@ -336,10 +344,14 @@ class Episode:
 
     def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
         """The perturbed presentations of generation key = (run seed, generation); None: nominal."""
-        if key is None or self.perturbations is None:
+        drawn = self.task.draw_sources(key) if key is not None and hasattr(self.task, "draw_sources") else None
+        if key is None or (self.perturbations is None and drawn is None):
             return None
-        return self.perturbations.draw(key, seconds=self.seconds, n_actuators=len(self.body.actuator_names),
-                                       n_genes=None if self.controller is None else self.controller.layout.size)
+        n_act = len(self.body.actuator_names)
+        trials = Trials.nominal(1, n_act) if self.perturbations is None else self.perturbations.draw(
+            key, seconds=self.seconds, n_actuators=n_act, n_genes=None if self.controller is None else self.controller.layout.size)
+        trials.sources = drawn  # a task's random sources of this generation (the steer task's), shared by every genome
+        return trials
 
     def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
             trials: Trials | None = None, context: "Context | None" = None) -> EpisodeResult:
@@ -398,6 +410,8 @@ class Episode:
             pose(sims, np.arange(P))
         end_time = np.full(P, n_ticks * self.control_dt)
         tstate = self.task.start(body, sims)
+        if trials is not None and trials.sources is not None:
+            self.task.take_sources(tstate, trials.sources)
         # the task sees when each walker's episode ends: the full length until it falls (so a
         # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
         tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt

@@ -260,6 +260,8 @@ class Trials:
     assist_damping: float = 0.05
     #: q of the ``quantile`` aggregate
     quantile: float = 0.25
+    #: m, ``(S, 2)``: a generation's sources for a task that draws them (the steer task's random sources; None: its own)
+    sources: np.ndarray | None = None
 
     @property
     def R(self) -> int:

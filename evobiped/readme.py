@@ -116,6 +116,8 @@ def presets_table() -> str:
     for name in names():
         c = RunConfig.from_dict(read_toml(path(name)), where=f"preset {name}")
         population = getattr(getattr(c, c.optimizer, None), "population", None)  # the optimizer's own table
+        if c.optimizer == "es":  # ES: mirrored pairs and theta's own rows, not a population table
+            population = 2 * c.es.pairs + c.es.evaluation_rows
         pop = f", {population}" if population else ", its default (CMA-ES: 4 + ⌊3 ln genes⌋)"
         episode = f"{c.generations} × {c.episode.seconds:g} s"
         what = describe(name).replace("|", "\\|")  # a table cell

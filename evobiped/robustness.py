@@ -29,6 +29,14 @@ gene noise 1 %  8       every gene moved by Gaussian noise of 1 % of its range (
 The stride is measured on a nominal run of the same walker (left-foot
 touchdowns between ``push_after`` and the end; 1 s when the walker does not
 step).  Nothing here is random: the battery is the same for every walker.
+
+**Pushes at random phases** (``phase_seed``): the fixed phases i/4 sample the
+stride at four points only, and a walker tuned on a battery can be tuned to
+them.  With a ``phase_seed`` N, each of the 128 push trials falls instead at
+its own phase drawn uniformly from [0, 1) of the stride (``numpy`` generator
+seeded with (N, 0x9A5E)); the same N gives the same phases for every walker,
+so walkers still compare like with like, and another N is a battery nobody
+tuned on.  The label gives the phase to two decimals (``left, phase 0.37``).
 """
 
 from __future__ import annotations
@@ -120,9 +128,18 @@ def stride(episode: Episode, genome: np.ndarray, seconds: float, after: float) -
     return float(t[0]), float(np.median(np.diff(t)))
 
 
+def push_phases(n: int, phase_seed: int | None) -> np.ndarray:
+    """The phases (fractions of the stride) of ``n`` push trials in battery order: the fixed i/4, cycled, when ``phase_seed``
+    is None; else ``n`` uniform draws in [0, 1) from (``phase_seed``, 0x9A5E)."""
+    if phase_seed is None:
+        return np.arange(n) % PHASES / PHASES
+    return np.random.default_rng([int(phase_seed), 0x9A5E]).uniform(0.0, 1.0, n)
+
+
 def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push_after: float = 10.0,
-            progress: Progress | None = None) -> list[Trial]:
+            phase_seed: int | None = None, progress: Progress | None = None) -> list[Trial]:
     """Run every trial of the battery for one genome ``(G,)``; the episode must be nominal (no perturbations).
+    ``phase_seed``: pushes at random phases of the stride (module docstring; None: the fixed i/4).
     ``progress`` (optional) hears the simulated seconds of its batches."""
     body = episode.body
     if body.contact_sensor is None or "left" not in body.contact_sensor[1]:
@@ -138,12 +155,16 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     t0, period = stride(episode, genome, seconds, push_after)
     labels: list[tuple[str, str]] = []
     starts, forces, offsets = [], [], []
+    if phase_seed is not None and (isinstance(phase_seed, bool) or not isinstance(phase_seed, (int, np.integer)) or phase_seed < 0):
+        raise UserError(f"the battery's phase seed must be an integer >= 0, got {phase_seed!r}")
     directions = {d: unit(d) for d in DIRECTIONS if not (body.sagittal and unit(d)[1])}
+    phases = iter(push_phases(len(PUSH_FORCES) * len(directions) * PHASES, phase_seed))
     for f in PUSH_FORCES:
         for d, (ux, uy) in directions.items():
             for i in range(PHASES):
-                labels.append((f"push {f:g} N", f"{d}, phase {i}/{PHASES}"))
-                starts.append([t0 + period * i / PHASES])
+                p = next(phases)
+                labels.append((f"push {f:g} N", f"{d}, phase {i}/{PHASES}" if phase_seed is None else f"{d}, phase {p:.2f}"))
+                starts.append([t0 + period * p])
                 forces.append([[f * ux, f * uy, 0.0]])
                 offsets.append(np.zeros(n_act))
     for m in OFFSETS:

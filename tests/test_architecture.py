@@ -18,7 +18,7 @@ LAYERS: list[set[str]] = [
     {"bodies", "controllers", "tasks"},
     {"episode_result"},
     {"episode"},
-    {"envs", "genome_file", "rundir", "outcome", "selection"},
+    {"envs", "genome_file", "rundir", "outcome", "selection", "remap"},
     {"robustness", "distill"},
     {"record"},
     {"evolution"},

@@ -115,3 +115,40 @@ def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):
     _, ctrl, task = EpisodeConfig(body="taga", controller="matsuoka").parts()
     with pytest.raises(UserError, match="needs a body that declares its left foot's contact sensor; 'taga' does not"):
         battery(Episode(Numb(), ctrl, task, seconds=2.0), preset_genome(ctrl), seconds=2.0, push_after=1.0)
+
+
+def test_pushes_at_random_phases_fall_where_their_seed_says_and_each_equals_its_push_alone():
+    """--phase-seed: each push trial at its own phase of the stride, drawn from the seed; a trial equals that push run alone,
+    the same seed gives the same phases, another seed other ones, and the fixed phases are still i/4."""
+    from evobiped.robustness import DIRECTIONS, PHASES, push_phases, stride, unit
+
+    g, cfg, _ = load_genome(WALKER)
+    ep = cfg.nominal().build()
+    assert np.array_equal(push_phases(128, None)[:8], [0, 0.25, 0.5, 0.75] * 2)
+    a, b = push_phases(128, 7), push_phases(128, 8)
+    assert np.array_equal(a, push_phases(128, 7)) and not np.allclose(a, b) and ((0 <= a) & (a < 1)).all()
+    assert len(np.unique(np.round(a, 2))) > 60  # not four phases again
+    trials = battery(ep, g, seconds=8.0, push_after=4.0, phase_seed=7)
+    pushes = [t for t in trials if t.family.startswith("push")]
+    assert len(pushes) == 128 and len({t.label for t in pushes if t.family == "push 20 N"}) == 32
+    t0, period = stride(ep, g, 8.0, 4.0)
+    k = 32 + 2 * PHASES + 3  # push 10 N, third direction (left), fourth trial
+    d = list(DIRECTIONS)[2]
+    t = pushes[k]
+    assert t.family == "push 10 N" and t.label == f"{d}, phase {a[k]:.2f}"
+    ux, uy = unit(d)
+    r = ep.run(g, seconds=8.0, trials=Trials.nominal(1, 6, push_start=np.array([[t0 + period * a[k]]]),
+                                                      push_force=np.array([[[10 * ux, 10 * uy, 0.0]]]), push_duration=0.1)).rows
+    assert t.end_time == r.end_time[0] and t.forward == r.end_position[0, 0] - r.start_position[0, 0]
+
+
+def test_cli_phase_seed_writes_its_own_report_and_refuses_a_negative_seed(tmp_path, capsys):
+    assert main(["robustness", WALKER, "--seconds", "6", "--push-after", "3", "--phase-seed", "3", "--out", str(tmp_path), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "push 10 N" in out and "gene noise 1 %" in out
+    report = json.loads((tmp_path / "simbicon_seed1_phases3_robustness.json").read_text())
+    assert report["phase_seed"] == 3 and (tmp_path / "simbicon_seed1_phases3_robustness.png").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["simbicon_seed1_phases3_robustness.json", "simbicon_seed1_phases3_robustness.png"]
+    assert main(["robustness", WALKER, "--phase-seed", "-1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--phase-seed" in err[0] and not (tmp_path / "o").exists()

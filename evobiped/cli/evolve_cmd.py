@@ -153,7 +153,7 @@ class _Watched:
         self.evaluator, self.clock = evaluator, clock
 
     def evaluate(self, genomes, key=None, **context):
-        result = self.evaluator.evaluate(genomes, key=key, **context)
+        result = self.evaluator.evaluate(genomes, key=key, **context)  # the run's context, if any (normaliser, phase weights)
         self.clock.episodes((result.rows if result.rows is not None else result).end_time)
         return result
 

@@ -8,6 +8,14 @@ frozen into the genome file of each generation's best (its controller's
 distilled exactly as it was scored.  The statistics, the phase and the
 evaluation walkers' record per generation (history.csv's ``phase``,
 ``evaluation_up`` and ``evaluation_forward``) are part of the checkpoint.
+
+A run started ``--from`` a genome file (or run directory) whose walker froze an
+``input_norm`` starts its running statistics from that normaliser rather than
+from nothing: the seed genome then meets, in generation 0, exactly the inputs
+it was evolved with (fine-tuning a walker does not begin by breaking it).  The
+statistics are rebuilt as ``count`` ticks of that mean and std (m2 = count
+std^2); an input the seed's controller did not read (a sense added for the new
+run) starts at its declared centre and scale with the same count.
 """
 
 from __future__ import annotations
@@ -19,6 +27,7 @@ import numpy as np
 from ..episode import Context, EpisodeConfig, sense_sums
 from ..episode_result import EpisodeResult
 from ..errors import UserError
+from ..remap import input_widths
 from ..normaliser import Normaliser, frozen_table
 from ..options import given
 from .curriculum import Curriculum
@@ -34,6 +43,8 @@ class RunContext:
         controller = config.episode.parts()[1]
         self.declared = controller.input_norm
         self.stats = Normaliser.empty(len(self.declared[0])) if self.running else None
+        if self.running and getattr(config, "initial", None):
+            self.stats = _seed_stats(config.initial, config.episode, self.declared, self.stats)
         self.floor = self._floors(controller) if self.running else None
         #: per generation: the phase it was scored in and how its evaluation walkers did (history.csv's extra columns)
         self.history: list[dict] = []
@@ -46,7 +57,7 @@ class RunContext:
 
     def _floors(self, controller) -> np.ndarray:
         o = self.config.normalise
-        widths = [(n, w) for n, w in zip(controller.input_names, _widths(self.config.episode))]
+        widths = [(n, w) for n, w in zip(controller.input_names, input_widths(self.config.episode))]
         absolute = np.concatenate([np.full(w, float(o.floors.get(n, 0.0))) for n, w in widths]) if widths else np.zeros(0)
         return np.maximum(o.floor * self.declared[1], absolute)
 
@@ -123,11 +134,43 @@ class RunContext:
         self.best = None if table is None else _context_from(table, len(self.declared[0]) if self.declared else 0)
 
 
-def _widths(episode: EpisodeConfig) -> list[int]:
-    """The widths of the controller's inputs, in input order."""
-    body, controller, task = episode.parts()
-    offered = {**body.sensor_widths, **task.sensor_widths()}
-    return [offered[n] for n in controller.input_names]
+def _seed_stats(source: str, episode: EpisodeConfig, declared: tuple[np.ndarray, np.ndarray], empty: Normaliser) -> Normaliser:
+    """The running statistics a run --from ``source`` starts from: its genome file's ``input_norm`` mapped input by input
+    (by name and width) onto this run's inputs, the declared centre and scale for the others; ``empty`` when the file
+    froze none (or shares no input)."""
+    from pathlib import Path
+
+    from .. import rundir
+    from ..genome_file import load_genome
+
+    path = Path(source)
+    path = path / rundir.BEST if path.is_dir() else path
+    _, cfg, _ = load_genome(path)
+    norm = cfg.controller_options.input_norm
+    if norm is None or cfg.controller != episode.controller:
+        return empty
+    count = float(norm.get("count", 0.0) or 0.0)
+    if count < 2:
+        return empty
+    old_names = cfg.parts()[1].input_names
+    old = {}
+    at = 0
+    for name, width in zip(old_names, input_widths(cfg)):
+        old[name] = (width, slice(at, at + width))
+        at += width
+    if at != len(norm["mean"]):
+        return empty
+    mean, std = declared[0].copy(), declared[1].copy()
+    at, shared = 0, 0
+    for name, width in zip(episode.parts()[1].input_names, input_widths(episode)):
+        if name in old and old[name][0] == width:
+            mean[at:at + width] = np.asarray(norm["mean"], float)[old[name][1]]
+            std[at:at + width] = np.asarray(norm["std"], float)[old[name][1]]
+            shared += 1
+        at += width
+    if not shared:
+        return empty
+    return Normaliser(count, mean, count * std * std)
 
 
 def _row_fell(result: EpisodeResult, genomes: np.ndarray) -> np.ndarray:

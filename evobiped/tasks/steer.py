@@ -46,6 +46,29 @@ in place, or circling close to the source, score alike.  Per presentation
 (what :meth:`SteerTask.fitness` returns, one value per simulation row) the
 fall term is multiplied by S, f_j = -min(d_j, R) - S fell_j (R + c (T - t_j)),
 so that the mean over the presentations is F.
+
+Random sources (``random_sources = S``, beyond the paper).  A policy that
+must reach any source is trained on new ones every generation: S sources at
+distances uniform in ``source_distance`` = [low, high] m and bearings
+uniform in ``source_bearing`` = [low, high] degrees from the initial facing
+(left positive), drawn from (run seed, generation) only, so every genome of a
+generation hears the same S sources (common random numbers; a resume or the
+number of workers changes nothing).  ``sources`` stays what a nominal episode
+(replay, ``episode``, the battery) presents; it must then hold S sources.
+Refused with one line: a nearest source inside the walker's start
+(low < 0.5 m), a bearing range wider than +-180 deg, an empty range (low > high).
+
+Lingering at the source (``reach`` m and ``reach_bonus`` m, arrive fitness
+only).  A walker that arrives early and stops or circles within ``reach`` of
+its source is paid ``reach_bonus`` times the fraction of the episode's control
+ticks it spent there, up: per presentation
+f_j = -min(d_j, R) + b u_j - S fell_j (R + b + c (T - t_j)), u_j that fraction.
+The fall term grows by b, so a fall anywhere still scores below (at most equal
+to) any walker that stays up.
+
+``sound_limit`` L < 1 clips the sense to +-L: the side heard is kept, the
+loudness of a near source capped (a network's input weights act on it
+linearly; near the source s grows towards +-1 and would swamp the gait).
 """
 
 from __future__ import annotations
@@ -89,7 +112,8 @@ def parse_sources(sources) -> np.ndarray:
 
 def with_sources(config, sources):
     """``config`` (an EpisodeConfig of the steer task) with these sources ``[[x, y], ...]`` m, one presentation
-    each; ``sources`` None leaves it as it is.  UserError for an episode of another task."""
+    each (fixed: they replace random sources drawn per generation); ``sources`` None leaves it as it is.  UserError for an
+    episode of another task."""
     import dataclasses
 
     from ..errors import UserError
@@ -98,7 +122,28 @@ def with_sources(config, sources):
         return config
     if config.task != "steer":
         raise UserError(f"--source applies to the steer task (--task steer); this episode's task is {config.task!r}")
-    return dataclasses.replace(config, task_options={**given(config.task_options), "sources": [list(map(float, s)) for s in sources]})
+    options = {**given(config.task_options), "sources": [list(map(float, s)) for s in sources]}
+    options.pop("random_sources", None)  # these sources, fixed, replace a distribution drawn per generation
+    return dataclasses.replace(config, task_options=options)
+
+
+def _range(v) -> None:
+    r = tuple(v) if isinstance(v, (list, tuple)) else None
+    if r is None or len(r) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool) or not np.isfinite(x)
+                                                 for x in r) or (r and r[0] > r[1]):
+        raise ConfigError(f"must be [] or [low, high] with low <= high (an empty range draws nothing), got {v!r}")
+
+
+def draw_sources(options, key) -> np.ndarray | None:
+    """The random sources ``(S, 2)`` m of generation key = (run seed, generation, ...) under ``options``
+    (:class:`SteerOptions`); None without random sources."""
+    S = int(options.random_sources)
+    if not S or key is None:
+        return None
+    rng = np.random.default_rng([int(key[0]), int(key[1]), 0x50D])
+    d = rng.uniform(*options.source_distance, S)
+    a = np.radians(rng.uniform(*options.source_bearing, S))
+    return np.stack([d * np.cos(a), d * np.sin(a)], axis=1)
 
 
 #: fitness name -> what it pays (see the module docstring)
@@ -119,6 +164,36 @@ class SteerOptions:
                                  "distance (so any fall scores below any walker that stays up)", unit="m", above=0)
     fall_time_cost: float = option(1.0, "under the arrive fitness: what a fall costs per second of the episode it "
                                    "loses", unit="m/s", low=0)
+    sound_limit: float = option(1.0, "the sense sound is s clipped to +-sound_limit (1: as heard); keeps the side "
+                                "heard and caps the loudness of a near source", above=0, high=1)
+    random_sources: int = option(0, "S sources drawn anew each generation of a run from source_distance and "
+                                 "source_bearing (0: the fixed sources); sources must then hold S", low=0, high=64, integer=True)
+    source_distance: tuple = option((), "[low, high]: the distances of random sources", unit="m", check=_range,
+                                    span="[] or [low, high], 0.5 <= low <= high")
+    source_bearing: tuple = option((-60.0, 60.0), "[low, high]: the bearings of random sources from the initial facing, "
+                                   "left positive", unit="deg", check=_range, span="[low, high] within [-180, 180]")
+    reach: float = option(0.0, "under the arrive fitness: within this distance of its source a walker up earns reach_bonus",
+                          unit="m", low=0)
+    reach_bonus: float = option(0.0, "under the arrive fitness: paid times the fraction of the episode spent within reach, up",
+                                unit="m", low=0)
+
+    def __post_init__(self):
+        from ..options import check_fields
+
+        check_fields(self, "episode.task_options")
+        if self.random_sources:
+            if not self.source_distance:
+                raise ConfigError("source_distance: random_sources need a range of distances [low, high] m; the distribution is empty")
+            lo, hi = self.source_distance
+            if lo < MIN_SOURCE_DISTANCE:
+                raise ConfigError(f"source_distance: a source {lo:g} m away is inside the walker's start (nearer than "
+                                  f"{MIN_SOURCE_DISTANCE:g} m); give low >= {MIN_SOURCE_DISTANCE:g}")
+            if len(parse_sources(self.sources)) != self.random_sources:
+                raise ConfigError(f"sources: with random_sources = {self.random_sources}, the nominal sources (what a replay "
+                                  f"presents) must be {self.random_sources} too, got {len(parse_sources(self.sources))}")
+        lo, hi = self.source_bearing
+        if lo < -180 or hi > 180:
+            raise ConfigError(f"source_bearing: a bearing range is at most [-180, 180] deg, got [{lo:g}, {hi:g}]")
 
 
 class SteerTask(Task):
@@ -153,24 +228,40 @@ class SteerTask(Task):
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)]}
+        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)],
+                "near": np.zeros(sims.n), "ticks": 0}
+
+    def draw_sources(self, key) -> np.ndarray | None:
+        """This generation's random sources ``(S, 2)`` m (None: the fixed ones); :func:`draw_sources`."""
+        return draw_sources(self.options, key)
+
+    def take_sources(self, state, sources: np.ndarray) -> None:
+        """Present ``sources`` ``(S, 2)`` m (a generation's draw) instead of the fixed ones."""
+        state["source"] = np.asarray(sources, float)[self.presentation_of(len(state["source"]))]
 
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
-        return {"sound": ear_signal(left, right, state["source"])[:, None]}
+        s = ear_signal(left, right, state["source"])[:, None]
+        return {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         state["position"][ok] = body.planar_position(sims)[ok]
+        state["ticks"] += 1
+        if self.options.reach > 0:
+            near = np.linalg.norm(state["position"][ok] - state["source"][ok], axis=1) <= self.options.reach
+            state["near"][ok[near]] += 1
 
     def fitness(self, state):
         distance = np.linalg.norm(state["position"] - state["source"], axis=1)
         if self.fitness_name == "distance":
             return -distance
         R, c = float(self.options.fall_penalty), float(self.options.fall_time_cost)
+        b = float(self.options.reach_bonus) if self.options.reach > 0 else 0.0
         lost = state["seconds"] - state["end_time"]  # s of the episode lost to a fall, 0 for a walker up to the end
-        fall = np.where(lost > 0, R + c * lost, 0.0)
-        return -np.minimum(distance, R) - self.presentations * fall
+        fall = np.where(lost > 0, R + b + c * lost, 0.0)
+        linger = b * state["near"] / max(state["ticks"], 1) if b else 0.0
+        return -np.minimum(distance, R) + linger - self.presentations * fall
 
     def terms(self, state):
         return {"distance": np.linalg.norm(state["position"] - state["start"], axis=1),

@@ -1,0 +1,104 @@
+"""Fine-tuning a walker with evolution strategies: a run --from a genome file starts its running normaliser from the
+normaliser the file froze (by input name), so the seed walker meets the inputs it was evolved with."""
+
+import tomllib
+
+import numpy as np
+
+from evobiped.evolution import RunConfig
+from evobiped.evolution.run_context import RunContext
+from evobiped.genome_file import load_genome
+from evobiped.presets import path as preset_path
+
+from .conftest import WALKERS
+
+SEED = WALKERS / "ctrnn_es_seed5.json"
+
+
+def _config(**changes) -> RunConfig:
+    table = tomllib.loads(preset_path("walker-ctrnn-es").read_text())
+    table.update({"backend": "serial", "seed": 0})
+    for k, v in changes.items():
+        table[k] = v
+    return RunConfig.from_dict(table)
+
+
+def test_a_run_from_a_genome_file_starts_from_its_normaliser():
+    _, cfg, _ = load_genome(SEED)
+    frozen = cfg.controller_options.input_norm
+    started = RunContext(_config(initial=str(SEED))).now()
+    assert started.norm_count == frozen["count"]
+    assert np.allclose(started.norm[0], frozen["mean"], rtol=0, atol=1e-12)
+    assert np.allclose(started.norm[1], frozen["std"], rtol=1e-9)
+    fresh = RunContext(_config()).now()  # without --from: the declared centres and scales, as before
+    assert fresh.norm_count == 0 and not np.allclose(fresh.norm[1], frozen["std"])
+
+
+def test_inputs_are_matched_by_name_and_a_new_input_starts_at_its_declared_norm():
+    """The run reads the seed's inputs less its first (heading_error) and plus the pelvis height: every shared input keeps
+    the seed's centre and scale, shifted to its new place; the new one is declared."""
+    _, cfg, _ = load_genome(SEED)
+    frozen = cfg.controller_options.input_norm
+    table = tomllib.loads(preset_path("walker-ctrnn-es").read_text())
+    inputs = table["episode"]["controller_options"]["inputs"][1:]
+    table["episode"]["controller_options"]["inputs"] = inputs
+    table.update({"backend": "serial", "seed": 0, "initial": str(SEED)})
+    config = RunConfig.from_dict(table)
+    ctx = RunContext(config)
+    mean, std = ctx.now().norm
+    assert len(mean) == len(frozen["mean"]) - 1
+    assert np.allclose(mean, frozen["mean"][1:]) and np.allclose(std, frozen["std"][1:])
+    declared = RunContext(RunConfig.from_dict({**table, "initial": None})).now().norm
+    assert not np.allclose(declared[1], std)
+
+
+def test_without_a_running_normaliser_nothing_is_seeded():
+    ctx = RunContext(_config(initial=str(SEED), normalise={"running": False}))
+    assert ctx.stats is None and ctx.now().norm is None
+
+
+def test_evolve_runs_an_es_preset_from_a_walker_on_the_command_line(tmp_path):
+    """`evobiped evolve --preset walker-es-robust --from WALKER` (the command-line evaluator passes the run's context on):
+    generation 0's theta is the seed walker, normalised as it was evolved, so it stays up its (shortened) episode."""
+    import csv
+    import json
+
+    from .conftest import cli
+
+    out = tmp_path / "run"
+    assert cli("evolve", "--preset", "walker-es-robust", "--from", SEED, "--generations", "1", "--seconds", "3",
+               "--backend", "serial", "--seed", "0", "--out", out, "--quiet") == 0
+    rows = list(csv.DictReader((out / "history.csv").open()))
+    assert len(rows) == 1 and float(rows[0]["evaluation_up"]) == 1.0
+    ck = json.loads((out / "checkpoint.json").read_text())
+    assert ck["normaliser"]["count"] > load_genome(SEED)[1].controller_options.input_norm["count"]
+
+
+def test_the_shipped_robust_walker_reaches_its_documented_random_phase_battery():
+    """ctrnn_es_robust_seed0 (walker-es-robust, seed 0, generation 74) on the battery with pushes at random phases (seed 2,
+    after 12.5 s): its recorded figures, one trial per family allowed to tip; the targets it meets, met."""
+    import json
+
+    from evobiped.robustness import battery, summarise
+
+    documented = json.loads((WALKERS / "ctrnn_es_robust_seed0_phases2_robustness.json").read_text())
+    genome, cfg, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0.json")
+    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"],
+                             phase_seed=documented["phase_seed"]))
+    got = {r["family"]: r["survived"] for r in rows}
+    want = {r["family"]: r["survived"] for r in documented["families"]}
+    assert got.keys() == want.keys() and all(abs(got[f] - want[f]) <= 1 for f in want), (got, want)
+    assert got["push 10 N"] >= 0.95 * 32 - 1 and got["push 15 N"] >= 0.75 * 32 and got["offset 0.05 rad"] == 8
+    assert got["slope 3 %"] == 4
+
+
+def test_the_shipped_hearing_ctrnn_reaches_both_paper_sources_and_stays_up():
+    """steer_ctrnn_es_seed0 passes within 0.5 m of (10, 3) and (10, -3) m and is still up 50 s after (it circles them)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("steer_check", Path(__file__).resolve().parent.parent / "scripts" / "steer_check.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    rows = mod.check(WALKERS / "steer_ctrnn_es_seed0.json", [(10.0, 3.0), (10.0, -3.0)], 65.0, 0.5)
+    assert all(r["arrived_s"] is not None and r["arrived_s"] < 15 and not r["fell"] and r["up_after_arrival_s"] >= 50 for r in rows), rows

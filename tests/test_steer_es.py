@@ -1,0 +1,130 @@
+"""A steering policy trained over random sources: the declared source distribution (drawn per generation, shared by every
+genome), the reward for lingering at the source, moving a walker's genes onto new inputs, and bad input."""
+
+import dataclasses
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evobiped.episode import EpisodeConfig
+from evobiped.genome_file import load_genome
+from evobiped.options import given
+from evobiped.presets import path as preset_path
+from evobiped.remap import remap_inputs, remap_norm
+from evobiped.tasks.steer import SteerTask
+
+from .conftest import WALKERS, cli
+
+SEED = WALKERS / "ctrnn_es_seed5.json"
+RANDOM = {"fitness": "arrive", "random_sources": 3, "source_distance": [5.0, 15.0], "source_bearing": [-60.0, 60.0],
+          "sources": [[10, 3], [10, -3], [6, 0]]}
+
+
+def test_a_generation_draws_its_sources_from_the_declared_distribution_and_every_genome_hears_them():
+    """The sources of generation (seed, g) lie in the declared ranges, are the same for every call, differ between
+    generations; a genome's episode under them equals the same genome with those sources fixed."""
+    ep = EpisodeConfig(task="steer", controller="simbicon", seconds=2.0, task_options=RANDOM).build()
+    a, b, c = (ep.trials_for(k).sources for k in ((4, 7), (4, 7), (4, 8)))
+    assert a.shape == (3, 2) and np.array_equal(a, b) and not np.allclose(a, c)
+    d, bearing = np.hypot(*a.T), np.degrees(np.arctan2(a[:, 1], a[:, 0]))
+    assert ((5 <= d) & (d <= 15)).all() and (np.abs(bearing) <= 60).all()
+    many = np.concatenate([ep.trials_for((0, g)).sources for g in range(40)])
+    assert np.hypot(*many.T).min() < 6 and np.hypot(*many.T).max() > 14  # the whole range is drawn
+    g = load_genome(WALKERS / "steer_simbicon_seed0.json")[0]
+    drawn = ep.run(np.stack([g, g]), trials=ep.trials_for((4, 7)))
+    fixed = EpisodeConfig(task="steer", controller="simbicon", seconds=2.0,
+                          task_options={**RANDOM, "sources": a.tolist()}).build().run(g)
+    assert drawn.fitness[0] == drawn.fitness[1] == pytest.approx(fixed.fitness[0], abs=1e-12)
+    assert ep.trials_for(None) is None  # a nominal episode (replay, battery) presents the fixed sources
+    from evobiped.tasks.steer import with_sources
+
+    given_sources = with_sources(EpisodeConfig(task="steer", controller="simbicon", task_options=RANDOM), [[6, 0]])
+    assert given_sources.build().task.presentations == 1  # --source X Y: fixed sources replace the distribution
+
+
+def test_lingering_within_reach_is_paid_and_a_fall_stays_below_any_walker_up():
+    task = SteerTask(sources=[[10, 0], [5, 5]], fitness="arrive", reach=0.5, reach_bonus=4.0)
+    src = task.sources
+    state = {"position": src + [[0.3, 0.0], [3.0, 0.0]], "source": src, "near": np.array([50.0, 0.0]), "ticks": 100,
+             "end_time": np.array([30.0, 30.0]), "seconds": 30.0}
+    f = task.fitness(state)
+    assert f == pytest.approx([-0.3 + 4.0 * 0.5, -3.0])
+    worst_up = task.fitness({**state, "position": src + 1e3, "near": np.zeros(2)}).mean()
+    best_fall = task.fitness({**state, "position": src.copy(), "near": np.array([100.0, 100.0]),
+                              "end_time": np.array([29.99, 30.0])}).mean()
+    assert best_fall < worst_up
+    plain = SteerTask(sources=[[10, 0], [5, 5]], fitness="arrive")
+    assert plain.fitness(state) == pytest.approx([-0.3, -3.0])  # no reach: the arrive fitness as before
+
+
+def test_a_walker_moved_onto_reordered_inputs_walks_exactly_as_before():
+    """Its heading sense moved from the first input to the last: the input rows follow their names (input weights and
+    direct weights), the normaliser too; the episode is the same (to rounding: the sums run in another order)."""
+    g, old, _ = load_genome(SEED)
+    inputs = list(old.controller_options.inputs)
+    opts = {**given(old.controller_options), "inputs": inputs[1:] + inputs[:1]}
+    new = dataclasses.replace(old, controller_options=opts)
+    new = dataclasses.replace(new, controller_options={**opts, "input_norm": remap_norm(old.controller_options.input_norm, old, new)})
+    moved = remap_inputs(g, old, new)
+    assert not np.array_equal(moved, g)
+    a, b = old.build().run(g, seconds=3.0), new.build().run(moved, seconds=3.0)
+    assert b.fitness[0] == pytest.approx(a.fitness[0], rel=1e-9) and np.allclose(a.end_position, b.end_position, rtol=0, atol=1e-9)
+    heard = remap_inputs(g, old, new, copy={})
+    assert np.array_equal(heard, moved)
+
+
+def test_the_hearing_start_replaces_the_heading_by_the_ear_signal(tmp_path):
+    """scripts/hearing_start.py: the sound rows are minus the heading rows, every other gene the walker's; the steer-es
+    preset's episode takes the genome."""
+    import runpy
+    import sys
+
+    out = tmp_path / "h.json"
+    argv, sys.argv = sys.argv, ["hearing_start.py", str(out), "--walker", str(SEED)]
+    try:
+        with pytest.raises(SystemExit) as done:
+            runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / "hearing_start.py"), run_name="__main__")
+    finally:
+        sys.argv = argv
+    assert done.value.code == 0
+    g, cfg, _ = load_genome(out)
+    old_g, old, _ = load_genome(SEED)
+    c, c_old = cfg.build().controller, old.build().controller
+    s, s_old = c.layout.slices(), c_old.layout.slices()
+    for block in ("input_weights", "direct_weights"):
+        rows, rows_old = g[s[block]].reshape(c.n_inputs, -1), old_g[s_old[block]].reshape(c_old.n_inputs, -1)
+        assert np.array_equal(rows[0], -rows_old[0])  # sound in heading_error's place
+        assert np.array_equal(rows[1:], rows_old[1:])
+    assert np.array_equal(g[s["weights"]], old_g[s_old["weights"]])
+    table = tomllib.loads(preset_path("steer-es").read_text())
+    assert cfg.controller_options.inputs == table["episode"]["controller_options"]["inputs"]
+
+
+@pytest.mark.parametrize("options, words", [
+    ({"source_distance": [0.2, 8.0]}, "inside the walker's start"),
+    ({"source_bearing": [-200.0, 60.0]}, "[-180, 180]"),
+    ({"source_distance": []}, "the distribution is empty"),
+    ({"source_distance": [9.0, 5.0]}, "low <= high"),
+    ({"sources": [[10, 3]]}, "must be 3 too"),
+])
+def test_bad_source_distributions_are_refused_with_one_line(tmp_path, capsys, options, words):
+    cfg = tmp_path / "c.toml"
+    table = {**RANDOM, **options}
+    cfg.write_text("[episode]\ntask = \"steer\"\ncontroller = \"simbicon\"\nseconds = 1.0\n[episode.task_options]\n"
+                   + "".join(f"{k} = {json.dumps(v)}\n" for k, v in table.items()))
+    assert cli("evolve", "--config", cfg, "--generations", "1", "--backend", "serial", "--out", tmp_path / "o") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
+def test_offsets_on_a_body_of_torques_are_refused_with_one_line(tmp_path, capsys):
+    cfg = tmp_path / "t.toml"
+    cfg.write_text('[episode]\nbody = "taga"\ncontroller = "matsuoka"\nseconds = 1.0\n[episode.perturbations]\ntarget_offset = 0.05\n')
+    assert cli("evolve", "--config", cfg, "--generations", "1", "--backend", "serial", "--out", tmp_path / "o") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "target_offset" in err[0] and "torques" in err[0]
+    assert not (tmp_path / "o").exists()
