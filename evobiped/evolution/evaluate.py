@@ -118,6 +118,18 @@ def _fault_point() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
 
+def _thread_fault_point() -> None:
+    """Testing hook of the thread backend: with ``EVOBIPED_FAULT_KILL_WORKER=FILE`` the first batch to find FILE deletes
+    it and dies as a thread's batch can (MemoryError)."""
+    marker = os.environ.get("EVOBIPED_FAULT_KILL_WORKER")
+    if marker:
+        try:
+            os.unlink(marker)
+        except FileNotFoundError:
+            return
+        raise MemoryError("testing hook")
+
+
 def _work(job: tuple[np.ndarray, tuple[int, int] | None]) -> EpisodeResult:
     _fault_point()
     return _evaluate(_worker_episode, *job)
@@ -147,10 +159,12 @@ class ProcessPoolEvaluator(Evaluator):
         genomes = np.asarray(genomes, float)
         jobs = [(genomes[s], key) for s in chunks(len(genomes), self.chunk, self.workers)]
         parts: list[EpisodeResult | None] = [None] * len(jobs)
-        for attempt in range(MAX_RETRIES + 1):
-            todo = [i for i, p in enumerate(parts) if p is None]
-            futures = {i: self.pool.submit(_work, jobs[i]) for i in todo}
-            try:
+        deaths = 0
+        while True:
+            futures = {}
+            try:  # a worker may die at any moment: while batches are fed (submit), collected, or between generations
+                for i in (i for i, p in enumerate(parts) if p is None):
+                    futures[i] = self.pool.submit(_work, jobs[i])
                 for i, f in futures.items():
                     parts[i] = f.result()
                 return concat(parts)
@@ -158,12 +172,18 @@ class ProcessPoolEvaluator(Evaluator):
                 for i, f in futures.items():  # keep what finished before the death
                     if parts[i] is None and f.done() and not f.cancelled() and f.exception() is None:
                         parts[i] = f.result()
-                stop_pool(self.pool)
-                self.pool = self._new_pool()
-                if attempt < MAX_RETRIES and self.on_retry is not None:
-                    self.on_retry(attempt + 1, MAX_RETRIES)
-        raise UserError(f"evaluation workers died {MAX_RETRIES + 1} times in one generation (out of memory? killed?); "
-                        "the last checkpoint is kept: resume the run with evobiped evolve --resume")
+                deaths += 1
+                self._replace_pool()
+                if deaths > MAX_RETRIES:
+                    raise UserError(f"evaluation workers died {deaths} times in one generation (out of memory? killed?); "
+                                    "the last checkpoint is kept: resume the run with evobiped evolve --resume") from None
+                if self.on_retry is not None:
+                    self.on_retry(deaths, MAX_RETRIES)
+
+    def _replace_pool(self) -> None:
+        """Stop the broken pool (its survivors included) and start a fresh one (its workers start at the next submit)."""
+        stop_pool(self.pool)
+        self.pool = self._new_pool()
 
     def close(self):
         stop_pool(self.pool)
@@ -174,20 +194,22 @@ class ThreadEvaluator(Evaluator):
 
     MuJoCo steps a batch with the GIL released, so one thread's physics runs while
     another does its per-tick Python work: no process start, no pickling.  Batches as
-    in the process pool (``chunk``: default about two per worker).
+    in the process pool (``chunk``: default about two per worker).  A batch whose thread runs out of memory is
+    evaluated again, at most :data:`MAX_RETRIES` times per generation (``on_retry`` as in the process pool).
     """
 
-    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None):
+    def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None):
         super().__init__(episode)
         if workers < 1:
             raise ConfigError(f"workers must be >= 1, got {workers}")
-        self.workers, self.chunk = int(workers), chunk
+        self.workers, self.chunk, self.on_retry = int(workers), chunk, on_retry
         self._episodes: queue.SimpleQueue[Episode] = queue.SimpleQueue()
         for _ in range(self.workers):
             self._episodes.put(episode.build())
         self.pool = ThreadPoolExecutor(self.workers, thread_name_prefix="evobiped-eval")
 
     def _work(self, genomes: np.ndarray, key) -> EpisodeResult:
+        _thread_fault_point()
         episode = self._episodes.get()  # a free one: no two threads share an Episode
         try:
             return _evaluate(episode, genomes, key)
@@ -197,7 +219,24 @@ class ThreadEvaluator(Evaluator):
     def evaluate(self, genomes, key=None):
         genomes = np.asarray(genomes, float)
         pieces = [genomes[s] for s in chunks(len(genomes), self.chunk, self.workers)]
-        return concat(list(self.pool.map(lambda g: self._work(g, key), pieces)))
+        parts: list[EpisodeResult | None] = [None] * len(pieces)
+        deaths = 0
+        while True:
+            futures = {i: self.pool.submit(self._work, pieces[i], key) for i, p in enumerate(parts) if p is None}
+            lost = False
+            for i, f in futures.items():
+                try:
+                    parts[i] = f.result()
+                except MemoryError:  # the one way a thread's batch dies alone: the others' results stand
+                    lost = True
+            if not lost:
+                return concat(parts)
+            deaths += 1
+            if deaths > MAX_RETRIES:
+                raise UserError(f"evaluation threads ran out of memory {deaths} times in one generation; "
+                                "the last checkpoint is kept: resume the run with evobiped evolve --resume")
+            if self.on_retry is not None:
+                self.on_retry(deaths, MAX_RETRIES)
 
     def close(self):
         self.pool.shutdown(wait=True)
@@ -322,8 +361,8 @@ class RayEvaluator(Evaluator):
 
 def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: int | None = None, address: str | None = None,
                    on_retry=None) -> Evaluator:
-    """The evaluator for a backend name; ``workers`` defaults to all cores; ``on_retry(n, limit)``: a process-pool
-    batch is evaluated again after its worker died."""
+    """The evaluator for a backend name; ``workers`` defaults to all cores; ``on_retry(n, limit)``: a batch of the
+    process pool or of the threads is evaluated again after its worker died."""
     if backend not in BACKENDS:
         raise ConfigError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
     if workers is not None and workers < 1:
@@ -334,5 +373,5 @@ def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: in
     if backend == "ray":
         return RayEvaluator(episode, workers, address)
     if backend == "thread":
-        return ThreadEvaluator(episode, workers or os.cpu_count() or 1)
+        return ThreadEvaluator(episode, workers or os.cpu_count() or 1, on_retry=on_retry)
     return ProcessPoolEvaluator(episode, workers or os.cpu_count() or 1, on_retry=on_retry)
