@@ -101,7 +101,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
-    from .evolution.run_config import RunConfig
+    from .evolution.run_config import RunConfig, check_tables
     from .fileio import read_toml
     from .tasks import TASKS
 
@@ -110,6 +110,8 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     d = read_toml(path(preset)) if preset else {}
     if config:
         d = merge(d, read_toml(config))
+    where = config or (f"preset {preset}" if preset else "")
+    check_tables(d, where)  # before the flags go into its tables
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
     ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
@@ -127,6 +129,5 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
             d[key] = value
     if freeze:
         d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
-    where = config or (f"preset {preset}" if preset else "")
     built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
     return dataclasses.replace(built, episode=with_sources(built.episode, sources))

@@ -65,6 +65,7 @@ class RunConfig:
         """The config a table of settings (a TOML file, config.json) gives; a bad setting is one ConfigError
         line, ``where: path.of.setting: what is wrong`` (``where``: the file or preset, if any)."""
         try:
+            check_tables(d)
             d = dict(refuse_unknown(cls, d, ""))
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
             ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
@@ -73,6 +74,31 @@ class RunConfig:
             return cls(episode=episode, ga=ga, cma=cma, **d)
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}" if where else str(exc)) from None
+
+
+def _table_fields(cls: type) -> list[str]:
+    """The fields of dataclass ``cls`` that hold a table of settings (an options dataclass, or a dict)."""
+    out = []
+    for f in dataclasses.fields(cls):
+        if f.default_factory is not dataclasses.MISSING:
+            made = f.default_factory()
+            if isinstance(made, dict) or dataclasses.is_dataclass(made):
+                out.append(f.name)
+    return out
+
+
+def check_tables(d, where: str = "") -> None:
+    """ConfigError unless every setting that the declarations make a table (``episode``, ``ga``, ``cma``, the episode's
+    option tables) is one in the settings ``d``, before flags are merged into them."""
+    at = f"{where}: " if where else ""
+    if not isinstance(d, dict):
+        raise ConfigError(f"{at}the settings must be a table, got {type(d).__name__}")
+    for cls, table, prefix in ((RunConfig, d, ""), (EpisodeConfig, d.get("episode"), "episode.")):
+        if not isinstance(table, dict):
+            continue
+        for name in _table_fields(cls):
+            if name in table and not isinstance(table[name], dict):
+                raise ConfigError(f"{at}{prefix}{name}: must be a table of settings, got {table[name]!r}")
 
 
 #: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
