@@ -105,9 +105,9 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     from .fileio import read_toml
     from .tasks import TASKS
 
-    from .presets import merge, path
+    from .presets import merge, read
 
-    d = read_toml(path(preset)) if preset else {}
+    d, declared = read(preset) if preset else ({}, {})
     if config:
         d = merge(d, read_toml(config))
     where = config or (f"preset {preset}" if preset else "")
@@ -130,4 +130,6 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     if freeze:
         d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
     built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    if declared.get("needs_start") and not built.initial:
+        refuse(f"--preset {preset}", "tunes a given genome: name it with --from GENOME_OR_RUN (see `evobiped presets`)")
     return dataclasses.replace(built, episode=with_sources(built.episode, sources))

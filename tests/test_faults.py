@@ -515,7 +515,7 @@ def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, bac
     (done / "config.json").write_text(json.dumps(cfg))
     before = files(done)
     assert cli("evolve", "--resume", done, "--backend", backend) == 2
-    one_line_error(capsys.readouterr().err, "control ticks")
+    one_line_error(capsys.readouterr().err, "differs from the one this checkpoint was made with: episode.seconds 0.5 → 1e-09")
     assert files(done) == before
 
 

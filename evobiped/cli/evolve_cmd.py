@@ -56,6 +56,7 @@ def default_run_dir(config) -> str:
 def run_evolve_cmd(args) -> int:
     from ..evolution.evaluate import make_evaluator
     from ..evolution.run import Run
+    from ..evolution.run_config import check_run
 
     if args.rerun is not None:  # before anything is written
         from ..record.viewer import connect_url, require_display, require_viewer
@@ -90,6 +91,7 @@ def run_evolve_cmd(args) -> int:
         backend, workers, address = config.backend, config.workers, config.address
         check_workers(backend, workers, address)
         out = args.out or default_run_dir(config)
+        check_run(config)  # memory, the start genome: before any worker starts
         evaluator = make_evaluator(config.episode, backend, workers, address, on_retry=on_retry)  # fails before any file is written
         try:
             run = Run.create(out, config)

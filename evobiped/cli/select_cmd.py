@@ -27,6 +27,7 @@ def run_select_cmd(args) -> int:
     from ..fileio import read_json, write_json
     from ..genome_file import load_genome, save_genome
     from ..outcome import outcome
+    from ..evolution.run_config import RunConfig, initial_genome
     from ..selection import best_candidate, try_candidates
 
     d = Path(args.run)
@@ -38,16 +39,24 @@ def run_select_cmd(args) -> int:
     missing = [p for p in paths if not p.is_file()]
     if missing:
         raise UserError(f"{missing[0]} is missing: the run directory is incomplete (resume it first)")
-    candidates = [load_genome(p) for p in paths]
-    labels = [f"generation {g}" for g in top]
     cfg = read_json(d / rundir.CONFIG, what="run config")
-    initial = cfg.get("initial") if isinstance(cfg, dict) else None
-    if initial:  # first: kept unless a tuned genome beats it
-        src = Path(initial) / rundir.BEST if Path(initial).is_dir() else Path(initial)
+    if not isinstance(cfg, dict):
+        raise UserError(f"run config {d / rundir.CONFIG} is not a table of settings")
+    run = RunConfig.from_dict({k: v for k, v in cfg.items() if k not in ("evobiped", "environment")}, where=str(d / rundir.CONFIG))
+    candidates = [load_genome(p) for p in paths]
+    for p, (_, ep, _) in zip(paths, candidates):  # one experiment's walkers, simulated alike
+        if ep.to_dict() != run.episode.to_dict():
+            raise UserError(f"{p} holds a {ep.body}/{ep.controller} genome of another episode than the run's "
+                            f"({run.episode.body}/{run.episode.controller} in {rundir.CONFIG}): the run directory is mixed")
+    labels = [f"generation {g}" for g in top]
+    if run.initial:  # first: kept unless a tuned genome beats it
+        kept = d / rundir.START
+        src = kept if kept.is_file() else Path(run.initial) / rundir.BEST if Path(run.initial).is_dir() else Path(run.initial)
         if not src.is_file():
-            raise UserError(f"the run started from {initial}, which is no longer there")
-        candidates.insert(0, load_genome(src))
-        labels.insert(0, f"start ({src})")
+            raise UserError(f"the run started from {run.initial}, which is no longer there")
+        genome = initial_genome(str(src), run.episode, run.episode.layout())
+        candidates.insert(0, (genome, run.episode, load_genome(src)[2]))
+        labels.insert(0, f"start ({run.initial})")
     config = candidates[-1][1]
     genomes = np.array([c[0] for c in candidates])
     rows = try_candidates(config, genomes, args.seconds)

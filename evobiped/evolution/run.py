@@ -26,7 +26,8 @@ from ..genome_file import genome_text, load_genome, save_genome
 from .evaluate import Evaluator
 from .base import Optimizer
 from .individuals import Individuals
-from .run_config import RunConfig, make_optimizer
+from . import fingerprint
+from .run_config import RunConfig, make_optimizer, start_genome
 from ..rundir import HISTORY_COLUMNS
 
 @dataclass
@@ -57,6 +58,9 @@ class GenerationStats:
 class Run:
     """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
+    #: the start genome ``(G,)`` as a list (None: the run has none), read once when the run was created
+    start: list[float] | None = None
+
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
                  history_terms: list[dict] | None = None, best_walk: dict | None = None):
@@ -84,7 +88,8 @@ class Run:
         directory = Path(directory)
         if directory.exists() and not directory.is_dir():
             raise UserError(f"run directory {directory} exists and is a file; give another --out")
-        opt = make_optimizer(config)
+        start = start_genome(config)
+        opt = make_optimizer(config, start)
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -98,8 +103,12 @@ class Run:
             except OSError as exc:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
             rundir.remove_stale_temporaries(directory)
+            if start is not None:  # before the config: a run whose config names a start genome has it
+                save_genome(directory / rundir.START, start, config.episode, source=config.initial,
+                            source_path=str(Path(config.initial).resolve()))
             write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": provenance.current()})
             run = cls(directory, config, opt, [], None, 0.0)
+            run.start = None if start is None else [float(x) for x in start]
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
             rundir.unlock(directory)
@@ -138,27 +147,58 @@ class Run:
         cfg.pop("evobiped", None)
         started_in = cfg.pop("environment", None)
         config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
-        opt = make_optimizer(config)
         path = directory / rundir.CHECKPOINT
-        if not path.exists():
+        ck = read_json(path, what="checkpoint") if path.exists() else None
+        if path.exists() and ck is None:
+            raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
+        if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:  # what the run was created with, before anything is built
+            fingerprint.check(ck[rundir.SETTINGS_KEY], config, directory / rundir.CONFIG)
+        start = cls._start_genome(directory, config, ck)
+        opt = make_optimizer(config, start)
+        if ck is None:
             committed = cls._committed_files(directory)
             if committed:
                 raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
-            return cls(directory, config, opt, [], None, 0.0), started_in  # killed before its first commit: start over
-        ck = read_json(path, what="checkpoint")
-        if ck is None:
-            raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
-        try:
-            rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
-        except UserError as exc:
-            raise UserError(f"checkpoint {path} is malformed: {exc}") from None
-        opt.restore(opt.state_from(rundir.optimizer_table(ck)))
-        history, best = ck["history"], ck["best"]
-        if len(history) != opt.generation:
-            raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {opt.generation})")
-        individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
-        return cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
-                   ck.get("history_terms", []), ck.get("best_walk")), started_in
+            run = cls(directory, config, opt, [], None, 0.0)  # killed before its first commit: start over
+        else:
+            try:
+                rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
+            except UserError as exc:
+                raise UserError(f"checkpoint {path} is malformed: {exc}") from None
+            opt.restore(opt.state_from(rundir.optimizer_table(ck)))
+            history, best = ck["history"], ck["best"]
+            if len(history) != opt.generation:
+                raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {opt.generation})")
+            individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
+            run = cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
+                      ck.get("history_terms", []), ck.get("best_walk"))
+        run.start = None if start is None else [float(x) for x in start]
+        return run, started_in
+
+    @staticmethod
+    def _start_genome(directory: Path, config: RunConfig, ck) -> np.ndarray | None:
+        """The run's start genome: the checkpoint's, else start.json's (a run cut before its first commit); only a run
+        made before the run directory kept it reads ``config.initial`` again (None here)."""
+        path, file = directory / rundir.CHECKPOINT, directory / rundir.START
+        stored = ck.get(rundir.START_KEY) if isinstance(ck, dict) else None
+        if not config.initial:
+            if stored is not None or (ck is None and file.exists()):
+                raise UserError(f"{directory / rundir.CONFIG} names no start genome (initial) but the run was created with one; "
+                                "restore it, or start a new run")
+            return None
+        if stored is not None:
+            if not (isinstance(stored, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in stored)):
+                raise UserError(f"checkpoint {path} is malformed: start must be a list of numbers (the start genome) or null")
+            return config.episode.layout().validate(stored, what=f"checkpoint {path}: start")[0]
+        if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:
+            raise UserError(f"checkpoint {path} is malformed: start is null although the run's config names a start genome")
+        if file.exists():
+            genome, _, meta = load_genome(file)
+            if meta.get("source") != config.initial:
+                raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names {config.initial!r} "
+                                "as the start genome; restore it, or start a new run")
+            return genome
+        return None  # a run made before its directory kept the start genome: read from its source, as then
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -304,7 +344,8 @@ class Run:
         with _signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
-                {"optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
+                {rundir.SETTINGS_KEY: fingerprint.settings(self.config), rundir.START_KEY: self.start,
+                 "optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
                  "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
                  "best_walk": self.best_walk},
             )

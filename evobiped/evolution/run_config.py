@@ -115,14 +115,15 @@ def check_memory(population: int, genes: int) -> None:
                           f"this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
 
 
-def make_optimizer(config: RunConfig) -> Optimizer:
+def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimizer:
     """Build the optimizer (GA or CMA-ES) for the episode's genome layout, known from the declarations
-    (nothing compiled); fails before any file is written."""
+    (nothing compiled); fails before any file is written.  ``start``: the start genome ``(G,)`` when the run has
+    one (:func:`start_genome`; None: read from ``config.initial``, as a new run does)."""
     layout = config.episode.layout()
     check_memory(config.cma.lam(layout.size) if config.optimizer == "cma" else config.ga.population, layout.size)
     initial = None
     if config.initial:
-        initial = initial_genome(config.initial, config.episode, layout)
+        initial = layout.validate(start, what="start genome")[0] if start is not None else start_genome(config)
     mutable = None
     if config.frozen_blocks:
         slices = layout.slices()
@@ -135,6 +136,23 @@ def make_optimizer(config: RunConfig) -> Optimizer:
     if config.optimizer == "cma":
         return CMAES(layout, config.cma, seed=config.seed, initial=initial, mutable=mutable)
     return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
+
+
+def check_run(config: RunConfig) -> None:
+    """What a new run refuses before any worker starts or file is written: a population beyond this machine's
+    memory, a start genome that cannot be read or does not fit."""
+    layout = config.episode.layout()
+    check_memory(config.cma.lam(layout.size) if config.optimizer == "cma" else config.ga.population, layout.size)
+    if config.initial:
+        start_genome(config)
+
+
+def start_genome(config: RunConfig) -> np.ndarray | None:
+    """The genome ``(G,)`` that ``config.initial`` names (None: the run has none).  Read once, when the run is
+    created: the run directory keeps it (:data:`evobiped.rundir.START`), and a resume never reads the source again."""
+    if not config.initial:
+        return None
+    return initial_genome(config.initial, config.episode, config.episode.layout())
 
 
 def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
@@ -151,4 +169,4 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
     if len(genome) < layout.size and same:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
-    return layout.validate(genome, what=f"genome in {path}")
+    return layout.validate(genome, what=f"genome in {path}")[0]
