@@ -105,9 +105,9 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     from .fileio import read_toml
     from .tasks import TASKS
 
-    from .presets import merge, read
+    from .presets import merge, path, split_declarations
 
-    d, declared = read(preset) if preset else ({}, {})
+    d, declared = split_declarations(preset, read_toml(path(preset))) if preset else ({}, {})
     if config:
         d = merge(d, read_toml(config))
     where = config or (f"preset {preset}" if preset else "")

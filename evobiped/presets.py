@@ -39,11 +39,9 @@ def describe(name: str) -> str:
 DECLARATIONS = {"needs_start": False}
 
 
-def read(name: str) -> tuple[dict, dict]:
-    """The preset's run settings and its declarations (:data:`DECLARATIONS`, checked), apart."""
-    from .fileio import read_toml
-
-    table = read_toml(path(name), what=f"preset {name}")
+def split_declarations(name: str, table: dict) -> tuple[dict, dict]:
+    """Preset ``name``'s table (its TOML) -> its run settings and its declarations (:data:`DECLARATIONS`, checked)."""
+    table = dict(table)
     declared = table.pop("preset", {})
     unknown = set(declared) - set(DECLARATIONS) if isinstance(declared, dict) else None
     if unknown is None or unknown or not all(isinstance(v, bool) for v in declared.values()):

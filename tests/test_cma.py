@@ -129,6 +129,11 @@ def test_resume_with_another_optimizer_is_refused(tmp_path, capsys):
     (tmp_path / "r" / "config.json").write_text(json.dumps(cfg))
     assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'optimizer "cma" → "ga"' in err[0]
+    ck = json.loads((tmp_path / "r" / "checkpoint.json").read_text())  # a checkpoint of before the settings were recorded
+    (tmp_path / "r" / "checkpoint.json").write_text(json.dumps({k: v for k, v in ck.items() if k not in ("settings", "start")}))
+    assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "'cma' optimizer" in err[0]
 
 

@@ -296,10 +296,15 @@ def test_damaged_run_directory_on_resume(finished_run, capsys, damage, words):
 
 
 def test_mismatched_checkpoint(finished_run, capsys):
-    """A checkpoint from a run with another population size does not load."""
+    """A checkpoint from a run with another population size does not load: config.json's edit is named; a checkpoint
+    of before the settings were recorded meets the optimizer's own check."""
     cfg = json.loads((finished_run / "config.json").read_text())
     cfg["ga"]["population"] = 6
     (finished_run / "config.json").write_text(json.dumps(cfg))
+    assert cli("evolve", "--resume", finished_run) == 2
+    assert "config.json differs from the one this checkpoint was made with: ga.population 4 → 6" in capsys.readouterr().err
+    ck = json.loads((finished_run / "checkpoint.json").read_text())
+    (finished_run / "checkpoint.json").write_text(json.dumps({k: v for k, v in ck.items() if k not in ("settings", "start")}))
     assert cli("evolve", "--resume", finished_run) == 2
     assert "checkpoint population has shape (4, 120), the config needs (6, 120)" in capsys.readouterr().err
 

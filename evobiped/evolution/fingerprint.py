@@ -39,7 +39,7 @@ def _text(v: Any) -> str:
 _MISSING = object()
 
 
-def differences(recorded: Any, config: RunConfig) -> list[str]:
+def changes(recorded: Any, config: RunConfig) -> list[str]:
     """``setting old → new`` for each setting of ``config`` that differs from the ``recorded`` one (empty: none)."""
     try:
         then = settings(RunConfig.from_dict(recorded if isinstance(recorded, dict) else {}, where=""))
@@ -54,7 +54,7 @@ def differences(recorded: Any, config: RunConfig) -> list[str]:
 
 def check(recorded: Any, config: RunConfig, config_path) -> None:
     """UserError (one line naming what changed) unless ``config`` has the ``recorded`` settings."""
-    diff = differences(recorded, config)
+    diff = changes(recorded, config)
     if diff:
         more = f" (and {len(diff) - 3} more)" if len(diff) > 3 else ""
         raise UserError(f"{config_path} differs from the one this checkpoint was made with: {'; '.join(diff[:3])}{more}; "

@@ -98,7 +98,7 @@ def check_tables(d, where: str = "") -> None:
             continue
         for name in _table_fields(cls):
             if name in table and not isinstance(table[name], dict):
-                raise ConfigError(f"{at}{prefix}{name}: must be a table of settings, got {table[name]!r}")
+                raise ConfigError(f"{at}{prefix}{name}: must be a table of options, got {table[name]!r}")
 
 
 #: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
