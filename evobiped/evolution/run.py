@@ -165,10 +165,10 @@ class Run:
                 rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
             except UserError as exc:
                 raise UserError(f"checkpoint {path} is malformed: {exc}") from None
-            opt.restore(opt.state_from(rundir.optimizer_table(ck)))
-            history, best = ck["history"], ck["best"]
-            if len(history) != opt.generation:
-                raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {opt.generation})")
+            state, history, best = opt.state_from(rundir.optimizer_table(ck)), ck["history"], ck["best"]
+            if len(history) != state.generation:  # before the state is restored: an older CMA-ES state is replayed
+                raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {state.generation})")
+            opt.restore(state)
             individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
             run = cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
                       ck.get("history_terms", []), ck.get("best_walk"))
