@@ -104,14 +104,21 @@ def run_evolve_cmd(args) -> int:
 
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
-    from ..progress import time_left
-    from ..rundir import HISTORY
-
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     c = run.config
     population = len(run.optimizer.ask()[0])
-    say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
-        f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+    try:
+        say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
+            f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+        return _generations(run, evaluator, c, say, args)
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP, at any moment (closing the workers, the last line)
+        print(_stopped(run), file=sys.stderr)
+        return exit_status(exc)
+
+
+def _generations(run, evaluator, c, say, args) -> int:
+    from ..progress import time_left
+
     with evaluator, contextlib.ExitStack() as stack:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
@@ -135,18 +142,27 @@ def _evolve(run, evaluator, backend: str, args) -> int:
                         f"{s.evals_per_second:.1f} eval/s, {s.simulated_seconds:.0f} s simulated, longest episode "
                         f"{s.longest_seconds:.1f} s{shorter}", left=full)
 
-        try:
-            summary = run.evolve(evaluator, progress)
-        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
-            print(f"evobiped: interrupted after generation {run.optimizer.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
-                  f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
-            return exit_status(exc)
+        summary = run.evolve(evaluator, progress)
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
     print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
           f"{summary['evaluations']} evaluations in {hms(summary['wall_seconds'])}; results in {run.dir}")
     return 0
+
+
+def _stopped(run) -> str:
+    """What a stop signal left: the generations committed and whether the run is complete."""
+    from ..rundir import HISTORY, SUMMARY
+
+    g = run.optimizer.generation
+    if not run.done:
+        return (f"evobiped: interrupted after generation {g - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
+                f"continue with: evobiped evolve --resume {run.dir}")
+    if (run.dir / SUMMARY).is_file():
+        return f"evobiped: interrupted after the run completed: all {g} generations and {SUMMARY} are written in {run.dir}"
+    return (f"evobiped: interrupted after the last of {g} generations was committed, before {SUMMARY} was written; "
+            f"the run is complete once evobiped evolve --resume {run.dir} writes it")
 
 
 def _viewer_log(run, rerun: str):
