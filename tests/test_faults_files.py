@@ -115,6 +115,9 @@ def test_deep_nesting_in_any_file_is_one_line(run, tmp_path, capsys):
     (tmp_path / "g.json").write_text(DEEP)
     assert cli("replay", tmp_path / "g.json", "--quiet") == 2
     one_line_error(capsys.readouterr().err, "nested more than 32 deep")
+    (tmp_path / "g.json").write_text("[" * 40 + "]" * 40)  # parses, but deeper than any file of evobiped's
+    assert cli("replay", tmp_path / "g.json", "--quiet") == 2
+    one_line_error(capsys.readouterr().err, "nested more than 32 deep")
 
 
 @pytest.mark.parametrize("text, words", [("episode = 5", "episode: must be a table"), ("ga = [1, 2]", "ga: must be a table"),
