@@ -328,7 +328,8 @@ CONFIG_EDITS = {
     "seed": lambda c: {**c, "seed": 6},
     "generations": lambda c: {**c, "generations": 7},
     "body": lambda c: {**c, "episode": {**c["episode"], "body": "taga"}},
-    "environment (episode seconds)": lambda c: {**c, "episode": {**c["episode"], "seconds": 3.0}},
+    "episode seconds": lambda c: {**c, "episode": {**c["episode"], "seconds": 3.0}},
+    "environment": lambda c: {**c, "environment": {**c["environment"], "numpy": "1.0"}},
     "population": lambda c: {**c, "ga": {**c["ga"], "population": 10}},
     "start genome added": lambda c: {**c, "initial": "elsewhere.json"},
 }

@@ -388,6 +388,11 @@ def test_a_resume_in_another_numerical_environment_says_so(tmp_path, capsys):
     cfg = json.loads((run / "config.json").read_text())
     cfg["environment"]["numpy_simd"] = ["ELSEWHERE"]
     (run / "config.json").write_text(json.dumps(cfg))
+    assert main(["evolve", "--resume", str(run)]) == 2  # config.json alone edited: refused by name
+    assert 'environment.numpy_simd ' in capsys.readouterr().err
+    ck = json.loads((run / "checkpoint.json").read_text())  # a run that did start elsewhere recorded it there too
+    ck["settings"]["environment"]["numpy_simd"] = ["ELSEWHERE"]
+    (run / "checkpoint.json").write_text(json.dumps(ck))
     assert main(["evolve", "--resume", str(run)]) == 0
     err = capsys.readouterr().err
     assert "note: this run started in another numerical environment (numpy SIMD ELSEWHERE -> " in err

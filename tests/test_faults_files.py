@@ -39,6 +39,7 @@ EDITS = {
     "generations": (lambda c: {**c, "generations": 3}, "generations 2 → 3"),
     "body": (lambda c: {**c, "episode": {**c["episode"], "body": "taga"}}, 'episode.body "reil" → "taga"'),
     "perturbations": (lambda c: {**c, "episode": {**c["episode"], "perturbations": {"presentations": 2}}}, "episode.perturbations"),
+    "environment": (lambda c: {**c, "environment": {**c["environment"], "numpy": "1.0"}}, 'environment.numpy "'),
 }
 
 

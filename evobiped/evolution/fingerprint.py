@@ -2,9 +2,10 @@
 
 config.json is a file a person may edit; the checkpoint records the settings
 the run was made with (``settings``: config.json's, less where the episodes
-run, which no result depends on).  A resume compares the two and refuses any
-difference by name (``seed 5 → 6``): a resumed run never silently mixes two
-experiments.  Both sides are read through :meth:`RunConfig.from_dict` first, so a
+run, which no result depends on) and the numerical environment config.json
+said it started in (``environment``: a resume elsewhere is noted, an edited
+record refused).  A resume compares the two and refuses any difference by name
+(``seed 5 → 6``): a resumed run never silently mixes two experiments.  Both sides are read through :meth:`RunConfig.from_dict` first, so a
 setting added to evobiped since the run began (its default on both sides) is
 no difference.
 """
@@ -21,9 +22,17 @@ from .run_config import RunConfig
 PLACE = ("backend", "workers", "address")
 
 
-def settings(config: RunConfig) -> dict:
-    """The settings a checkpoint records: ``config.to_dict()`` less :data:`PLACE`."""
-    return {k: v for k, v in config.to_dict().items() if k not in PLACE}
+def settings(config: RunConfig, environment: Any = None) -> dict:
+    """The settings a checkpoint records: ``config.to_dict()`` less :data:`PLACE`, and config.json's ``environment``
+    (None: none recorded)."""
+    out = {k: v for k, v in config.to_dict().items() if k not in PLACE}
+    if environment is not None:
+        out[ENVIRONMENT] = environment
+    return out
+
+
+#: the key of the numerical environment the run started in (config.json's, :func:`evobiped.provenance.current`)
+ENVIRONMENT = "environment"
 
 
 def _flat(d: Any, prefix: str = "") -> dict[str, Any]:
@@ -39,22 +48,25 @@ def _text(v: Any) -> str:
 _MISSING = object()
 
 
-def changes(recorded: Any, config: RunConfig) -> list[str]:
-    """``setting old → new`` for each setting of ``config`` that differs from the ``recorded`` one (empty: none)."""
-    try:
-        then = settings(RunConfig.from_dict(recorded if isinstance(recorded, dict) else {}, where=""))
-    except ConfigError as exc:
-        return [f"the recorded settings are unreadable ({exc})"]
+def changes(recorded: Any, config: RunConfig, environment: Any = None) -> list[str]:
+    """``setting old → new`` for each setting of ``config`` (and of config.json's ``environment``) that differs
+    from the ``recorded`` one (empty: none)."""
     if not isinstance(recorded, dict):
         return ["the recorded settings are not a table"]
-    old, new = _flat(then), _flat(settings(config))
+    recorded = dict(recorded)
+    started_in = recorded.pop(ENVIRONMENT, None)
+    try:
+        then = settings(RunConfig.from_dict(recorded, where=""), started_in)
+    except ConfigError as exc:
+        return [f"the recorded settings are unreadable ({exc})"]
+    old, new = _flat(then), _flat(settings(config, environment if started_in is not None else None))
     return [f"{k} {_text(old.get(k, _MISSING))} → {_text(new.get(k, _MISSING))}"
             for k in dict.fromkeys([*old, *new]) if old.get(k, _MISSING) != new.get(k, _MISSING)]
 
 
-def check(recorded: Any, config: RunConfig, config_path) -> None:
-    """UserError (one line naming what changed) unless ``config`` has the ``recorded`` settings."""
-    diff = changes(recorded, config)
+def check(recorded: Any, config: RunConfig, environment: Any, config_path) -> None:
+    """UserError (one line naming what changed) unless ``config`` and config.json's ``environment`` are the ``recorded`` ones."""
+    diff = changes(recorded, config, environment)
     if diff:
         more = f" (and {len(diff) - 3} more)" if len(diff) > 3 else ""
         raise UserError(f"{config_path} differs from the one this checkpoint was made with: {'; '.join(diff[:3])}{more}; "

@@ -60,6 +60,8 @@ class Run:
 
     #: the start genome ``(G,)`` as a list (None: the run has none), read once when the run was created
     start: list[float] | None = None
+    #: the numerical environment config.json says the run started in (None: none recorded)
+    started_in: dict | None = None
 
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
@@ -106,8 +108,10 @@ class Run:
             if start is not None:  # before the config: a run whose config names a start genome has it
                 save_genome(directory / rundir.START, start, config.episode, source=config.initial,
                             source_path=str(Path(config.initial).resolve()))
-            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": provenance.current()})
+            environment = provenance.current()
+            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": environment})
             run = cls(directory, config, opt, [], None, 0.0)
+            run.started_in = environment
             run.start = None if start is None else [float(x) for x in start]
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
@@ -152,7 +156,7 @@ class Run:
         if path.exists() and ck is None:
             raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
         if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:  # what the run was created with, before anything is built
-            fingerprint.check(ck[rundir.SETTINGS_KEY], config, directory / rundir.CONFIG)
+            fingerprint.check(ck[rundir.SETTINGS_KEY], config, started_in, directory / rundir.CONFIG)
         start = cls._start_genome(directory, config, ck)
         opt = make_optimizer(config, start)
         if ck is None:
@@ -173,6 +177,7 @@ class Run:
             run = cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
                       ck.get("history_terms", []), ck.get("best_walk"))
         run.start = None if start is None else [float(x) for x in start]
+        run.started_in = started_in
         return run, started_in
 
     @staticmethod
@@ -344,7 +349,7 @@ class Run:
         with _signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
-                {rundir.SETTINGS_KEY: fingerprint.settings(self.config), rundir.START_KEY: self.start,
+                {rundir.SETTINGS_KEY: fingerprint.settings(self.config, self.started_in), rundir.START_KEY: self.start,
                  "optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
                  "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
                  "best_walk": self.best_walk},
