@@ -6,9 +6,11 @@ tracker then a worker, every worker killed 2 to 6 pools in a row, the whole run 
 to the run.  The other seven are fixed cases: tampered checkpoints, edited configs, hostile settings files, genome
 files, ``select`` on damaged runs, runs started ``--from`` a relative path and refusals before any worker starts.
 
-Each case ends in one verdict: ``identical`` (the run completed, at once or after ``--resume``, and equals an
-undisturbed one file for file, wall times aside), ``refused`` (one line on stderr, exit status 2, and nothing of
-the run directory changed where that is asked), or a failure: ``traceback``, ``hang`` (no answer within the
+Each case ends in one verdict: ``identical`` (the run completed and equals an undisturbed one file for file, wall
+times aside), ``resumed`` (it stopped, with one line where it could say one, and ``--resume`` completed it, equal
+to an undisturbed one), ``refused, resumed`` (the workers died past the retries: one line, exit status 2, then
+the same), ``refused`` (one line on stderr, exit status 2, and nothing of the run directory changed where that is
+asked), or a failure: ``traceback``, ``hang`` (no answer within the
 time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs) and
 ``other``.  The exit status is 1 when any case fails.
 
@@ -104,6 +106,17 @@ def first_commit(p: subprocess.Popen, d: Path) -> None:
         time.sleep(0.002)
 
 
+def last_commit(p: subprocess.Popen, d: Path, generations: int = 6) -> None:
+    deadline = time.time() + LIMIT
+    while p.poll() is None and time.time() < deadline:
+        try:
+            if len(json.loads((d / "checkpoint.json").read_text())["history"]) >= generations:
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.002)
+
+
 def finish(p: subprocess.Popen) -> tuple[int | None, str]:
     try:
         _, err = p.communicate(timeout=LIMIT)
@@ -168,14 +181,16 @@ def resumed(d: Path, reference: dict, rc, err: str) -> str:
         return "traceback"
     if rc not in (0, 2, -signal.SIGKILL, *(128 + s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP))) or rc == 2 and not one_line(err):
         return "other"
+    how = "identical" if rc == 0 else "refused, resumed" if rc == 2 else "resumed"
     for _ in range(3):
         if (d / "summary.json").exists() and contents(d) == reference:
-            return "identical"
+            return how
         rc, err, _ = command("evolve", "--resume", d, "--quiet")
         v = verdict(rc, err)
         if v in ("hang", "traceback", "other"):
             return v
-    return "identical" if contents(d) == reference else "silent"
+        how = how if how != "identical" else "resumed"
+    return how if contents(d) == reference else "silent"
 
 
 # ---- the random-moment classes
@@ -226,7 +241,11 @@ def group_kill(d, reference) -> str:
 def late_signal(d, reference) -> str:
     p = start(d)
     first_commit(p, d)
-    time.sleep(random.uniform(0.0, 1.2))
+    if random.random() < 0.5:  # any moment
+        time.sleep(random.uniform(0.0, 1.0))
+    else:  # within a tenth of a second of the final commit
+        last_commit(p, d)
+        time.sleep(random.uniform(0.0, 0.1))
     sig = random.choice([signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
     kill(p.pid, sig)
     rc, err = finish(p)
@@ -242,7 +261,7 @@ def late_signal(d, reference) -> str:
     says = "run completed" in err if complete else "--resume" in err
     if not says:
         return "silent"
-    return resumed(d, reference, 0, "")
+    return "identical" if complete else resumed(d, reference, rc, err)
 
 
 RANDOM = {

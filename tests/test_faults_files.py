@@ -213,3 +213,16 @@ def test_a_preset_that_tunes_a_given_genome_needs_from(tmp_path, capsys):
 def test_a_source_beyond_10_km_is_one_line(tmp_path, capsys):
     assert cli("evolve", "--task", "steer", "--source", "1e300", "3", "--out", tmp_path / "x") == 2
     one_line_error(capsys.readouterr().err, "farther than 10000 m")
+
+
+# ---- a stop signal at the very end says whether the run is complete
+def test_a_stop_signal_after_the_last_file_says_the_run_is_complete(tmp_path, capsys, monkeypatch):
+    import evobiped.cli.evolve_cmd as evolve_cmd
+
+    def interrupted(*a):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(evolve_cmd, "hms", interrupted)  # while the final line is written
+    assert cli("evolve", *RUN, "--out", tmp_path / "r") == 130
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "interrupted after the run completed: all 2 generations and summary.json are written" in err, err
