@@ -41,6 +41,8 @@ PROCESS = [*RUN, "--backend", "process", "--workers", "2"]
 LIMIT = 180.0  # s: a case that takes longer hangs
 #: the last stderr line of each command run (``--show`` prints the fixed cases' answers)
 ANSWERS: list[str] = []
+#: the whole stderr of each command and run (a failed case's are kept beside its run directory)
+STDERR: list[str] = []
 FAILURES = ("traceback", "hang", "silent", "other")
 
 
@@ -57,6 +59,7 @@ def command(*args, cwd=None, env=None, timeout=LIMIT) -> tuple[int | None, str, 
         out, err = p.communicate()
         return None, err, out
     ANSWERS.append((err.strip().splitlines() or [""])[-1])
+    STDERR.append(err)
     return p.returncode, err, out
 
 
@@ -124,6 +127,7 @@ def finish(p: subprocess.Popen) -> tuple[int | None, str]:
         os.killpg(p.pid, signal.SIGKILL)
         _, err = p.communicate()
         return None, err
+    STDERR.append(err)
     return p.returncode, err
 
 
@@ -156,8 +160,14 @@ def files(d: Path) -> dict:
     return {p: p.read_bytes() for p in d.rglob("*") if p.is_file() and p.name != ".lock"}
 
 
+#: a note a run prints as it goes on, not an error
+RETRY_NOTE = "evobiped: a worker died; evaluating its batch again"
+
+
 def one_line(err: str) -> bool:
-    return err.count("\n") == 1 and "Traceback" not in err
+    """One line of error (beside the notes of retries before it), no traceback."""
+    lines = [x for x in err.splitlines() if not x.startswith(RETRY_NOTE)]
+    return len(lines) == 1 and err.endswith("\n") and "Traceback" not in err
 
 
 def verdict(rc, err: str, d: Path | None = None, reference: dict | None = None) -> str:
@@ -516,10 +526,12 @@ def main() -> int:
         if name in RANDOM:
             for i in range(args.repeat):
                 d = work / f"{name}-{i}"
+                STDERR.clear()
                 v = RANDOM[name](d, reference)
                 results[name][v] += 1
                 if v in FAILURES:
-                    notes.append(f"{name} #{i}: {v} ({d})")
+                    notes.append(f"{name} #{i}: {v} ({d}; its commands' stderr in {d}.stderr)")
+                    Path(f"{d}.stderr").write_text("\n----\n".join(STDERR))
                 else:
                     shutil.rmtree(d, ignore_errors=True)
         else:

@@ -630,7 +630,7 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
 
     from evobiped.episode import EpisodeConfig
     from evobiped.errors import UserError
-    from evobiped.evolution.evaluate import RayEvaluator
+    from evobiped.evolution.ray_backend import RayEvaluator
 
     if how == "node died error":  # the result of a task on the lost node
         monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))
