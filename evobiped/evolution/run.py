@@ -28,6 +28,7 @@ from .base import Optimizer
 from .individuals import Individuals
 from . import fingerprint
 from .run_config import RunConfig, make_optimizer, start_genome
+from .start_genome import keep_start, kept_start
 from ..rundir import HISTORY_COLUMNS
 
 @dataclass
@@ -106,8 +107,7 @@ class Run:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
             rundir.remove_stale_temporaries(directory)
             if start is not None:  # before the config: a run whose config names a start genome has it
-                save_genome(directory / rundir.START, start, config.episode, source=config.initial,
-                            source_path=str(Path(config.initial).resolve()))
+                keep_start(directory, start, config)
             environment = provenance.current()
             write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": environment})
             run = cls(directory, config, opt, [], None, 0.0)
@@ -157,7 +157,7 @@ class Run:
             raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
         if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:  # what the run was created with, before anything is built
             fingerprint.check(ck[rundir.SETTINGS_KEY], config, started_in, directory / rundir.CONFIG)
-        start = cls._start_genome(directory, config, ck)
+        start = kept_start(directory, config, ck)
         opt = make_optimizer(config, start)
         if ck is None:
             committed = cls._committed_files(directory)
@@ -179,31 +179,6 @@ class Run:
         run.start = None if start is None else [float(x) for x in start]
         run.started_in = started_in
         return run, started_in
-
-    @staticmethod
-    def _start_genome(directory: Path, config: RunConfig, ck) -> np.ndarray | None:
-        """The run's start genome: the checkpoint's, else start.json's (a run cut before its first commit); only a run
-        made before the run directory kept it reads ``config.initial`` again (None here)."""
-        path, file = directory / rundir.CHECKPOINT, directory / rundir.START
-        stored = ck.get(rundir.START_KEY) if isinstance(ck, dict) else None
-        if not config.initial:
-            if stored is not None or (ck is None and file.exists()):
-                raise UserError(f"{directory / rundir.CONFIG} names no start genome (initial) but the run was created with one; "
-                                "restore it, or start a new run")
-            return None
-        if stored is not None:
-            if not (isinstance(stored, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in stored)):
-                raise UserError(f"checkpoint {path} is malformed: start must be a list of numbers (the start genome) or null")
-            return config.episode.layout().validate(stored, what=f"checkpoint {path}: start")[0]
-        if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:
-            raise UserError(f"checkpoint {path} is malformed: start is null although the run's config names a start genome")
-        if file.exists():
-            genome, _, meta = load_genome(file)
-            if meta.get("source") != config.initial:
-                raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names {config.initial!r} "
-                                "as the start genome; restore it, or start a new run")
-            return genome
-        return None  # a run made before its directory kept the start genome: read from its source, as then
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
