@@ -96,11 +96,17 @@ def workers(pid: int) -> list[int]:
     return [k for k in children(pid) if not is_tracker(k)]
 
 
-def kill(pid: int, sig=signal.SIGKILL) -> None:
+#: what the random-moment trials of the current class did: trials that killed or signalled a live process
+#: (``struck``), that printed a retry (``retried``), that ended past the retries (``past the retries``)
+STRUCK: Counter = Counter()
+
+
+def kill(pid: int, sig=signal.SIGKILL) -> bool:
     try:
         os.kill(pid, sig)
     except ProcessLookupError:
-        pass
+        return False
+    return True
 
 
 def first_commit(p: subprocess.Popen, d: Path) -> None:
@@ -213,13 +219,13 @@ def worker_kill(d, reference, how: str) -> str:
     first_commit(p, d)
     time.sleep(_moment())
     ws = workers(p.pid)
+    hit = False
     if how == "one" and ws:
-        kill(random.choice(ws))
+        hit = kill(random.choice(ws))
     elif how == "all":
-        for w in ws:
-            kill(w)
+        hit = any([kill(w) for w in ws])
     elif how == "term" and ws:
-        kill(random.choice(ws), random.choice([signal.SIGTERM, signal.SIGHUP]))
+        hit = kill(random.choice(ws), random.choice([signal.SIGTERM, signal.SIGHUP]))
     elif how == "tracker":
         for k in children(p.pid):
             if is_tracker(k):
@@ -227,13 +233,15 @@ def worker_kill(d, reference, how: str) -> str:
         time.sleep(random.uniform(0.0, 0.2))
         ws = workers(p.pid)
         if ws:
-            kill(random.choice(ws))
+            hit = kill(random.choice(ws))
     elif how == "storm":
         for _ in range(random.randint(2, 6)):
-            for w in workers(p.pid):
-                kill(w)
+            hit = any([kill(w) for w in workers(p.pid)]) or hit
             time.sleep(random.uniform(0.05, 0.3))
     rc, err = finish(p)
+    STRUCK["struck"] += hit
+    STRUCK["retried"] += RETRY_NOTE in err
+    STRUCK["past the retries"] += "workers died" in err
     if rc == 2 and "workers died" not in err:
         return "other"
     return resumed(d, reference, rc, err)
@@ -245,6 +253,7 @@ def group_kill(d, reference) -> str:
     time.sleep(_moment())
     os.killpg(p.pid, signal.SIGKILL)
     rc, err = finish(p)
+    STRUCK["struck"] += rc == -signal.SIGKILL
     return resumed(d, reference, rc, err)
 
 
@@ -259,6 +268,7 @@ def late_signal(d, reference) -> str:
     sig = random.choice([signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
     kill(p.pid, sig)
     rc, err = finish(p)
+    STRUCK["struck"] += rc != 0
     if rc is None:
         return "hang"
     if "Traceback" in err:
@@ -524,6 +534,7 @@ def main() -> int:
     notes = []
     t0 = time.time()
     for name in classes:
+        STRUCK.clear()
         if name in RANDOM:
             for i in range(args.repeat):
                 d = work / f"{name}-{i}"
@@ -542,7 +553,9 @@ def main() -> int:
                 results[name][v] += 1
                 if v in FAILURES:
                     notes.append(f"{name}: {case}: {v}")
-        print(f"{name:<22} {sum(results[name].values()):>4} cases  " + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())), flush=True)
+        struck = f"  ({', '.join(f'{k} {n}' for k, n in STRUCK.items())})" if name in RANDOM else ""
+        print(f"{name:<22} {sum(results[name].values()):>4} cases  " + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())) + struck,
+              flush=True)
     total = sum((sum(c.values()) for c in results.values()))
     failed = {f: sum(c[f] for c in results.values()) for f in FAILURES}
     print(f"{total} cases in {len(results)} classes, {time.time() - t0:.0f} s: " + ", ".join(f"{n} {f}" for f, n in failed.items()))

@@ -105,3 +105,20 @@ def test_workers_killed_at_random_moments(tmp_path):
                        capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "0 traceback, 0 hang, 0 silent, 0 other" in r.stdout
+
+
+def test_a_pool_that_breaks_while_it_starts_its_workers_costs_a_retry(monkeypatch):
+    """A worker killed while the next is spawned: the shared pipe is closed under the spawn (OSError, not
+    BrokenProcessPool); a retry like any other death."""
+    g = genomes()
+    want = SerialEvaluator(CFG).evaluate(g)
+    retries = []
+    with ProcessPoolEvaluator(CFG, 2, on_retry=lambda n, limit: retries.append(n)) as ev:
+        broken = ev.pool
+
+        def closed(*a, **k):
+            raise OSError("handle is closed")
+
+        monkeypatch.setattr(broken, "submit", closed)
+        assert same(ev.evaluate(g), want)
+    assert retries == [1]

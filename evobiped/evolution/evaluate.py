@@ -160,7 +160,7 @@ class ProcessPoolEvaluator(Evaluator):
             futures = {}
             try:  # a worker may die at any moment: while batches are fed (submit), collected, or between generations
                 for i in (i for i, p in enumerate(parts) if p is None):
-                    futures[i] = self.pool.submit(_work, jobs[i])
+                    futures[i] = self._submit(jobs[i])
                 for i, f in futures.items():
                     parts[i] = f.result()
                 return concat(parts)
@@ -175,6 +175,14 @@ class ProcessPoolEvaluator(Evaluator):
                                     "the last checkpoint is kept: resume the run with evobiped evolve --resume") from None
                 if self.on_retry is not None:
                     self.on_retry(deaths, MAX_RETRIES)
+
+    def _submit(self, job):
+        """Send one batch; a pool that breaks while it starts its workers (one killed as the next is spawned: the
+        pipe they share is closed under it) is a broken pool like any other."""
+        try:
+            return self.pool.submit(_work, job)
+        except (OSError, ValueError) as exc:
+            raise BrokenProcessPool(f"the pool broke while starting its workers ({exc})") from None
 
     def _replace_pool(self) -> None:
         """Stop the broken pool (its survivors included) and start a fresh one (its workers start at the next submit)."""
