@@ -93,17 +93,47 @@ def write_json(path: str | Path, obj: Any) -> None:
     atomic_write(path, json_text(obj))
 
 
+#: the most bytes a file a command reads may hold (a checkpoint of CMA-ES on thousands of genes is a few MiB)
+MAX_BYTES = 256 * 2**20
+#: the deepest nesting of tables and lists a file may have (evobiped's own files nest at most 5 deep)
+MAX_DEPTH = 32
+
+
+def depth_error(obj: Any, limit: int = MAX_DEPTH) -> str | None:
+    """Why ``obj`` (parsed JSON or TOML) nests too deeply, or None; iterative, so any depth is safe to check."""
+    todo = [(obj, 1)]
+    while todo:
+        v, d = todo.pop()
+        if isinstance(v, (dict, list)):
+            if d > limit:
+                return f"tables and lists nested more than {limit} deep"
+            todo.extend((x, d + 1) for x in (v.values() if isinstance(v, dict) else v))
+    return None
+
+
 def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, error: type[UserError] = UserError) -> Any:
-    """``loads(text)`` of the file at ``path``; a missing or malformed file is one line naming ``what``."""
+    """``loads(text)`` of the file at ``path``; a missing, oversized, malformed or too deeply nested file is one
+    line naming ``what`` (every file a command reads comes through here)."""
     path = Path(path)
     if not path.is_file():
         raise UserError(f"{what} not found: {path}")
     try:
-        return loads(path.read_text())
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise error(f"{what} {path} is {size / 2**20:.0f} MiB; evobiped reads files of at most {MAX_BYTES // 2**20} MiB")
+        obj = loads(path.read_text())
     except (*errors, UnicodeDecodeError) as exc:
-        raise error(f"{what} {path} is not valid {form} ({exc})") from None
+        raise error(f"{what} {path} is not valid {form} ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+    except RecursionError:
+        raise error(f"{what} {path} is not valid {form} (tables and lists nested more than {MAX_DEPTH} deep)") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
     except ValueError:  # Python's limit on the digits of a whole number read from text
         raise error(f"{what} {path} is not valid {form} (a whole number of more than {sys.get_int_max_str_digits()} digits)") from None
+    deep = depth_error(obj)
+    if deep:
+        raise error(f"{what} {path} is not valid {form} ({deep})")
+    return obj
 
 
 def read_json(path: str | Path, *, what: str = "file", file_format: str | None = None) -> Any:

@@ -103,15 +103,17 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
-    from .evolution.run_config import RunConfig
+    from .evolution.run_config import RunConfig, check_tables
     from .fileio import read_toml
     from .tasks import TASKS
 
-    from .presets import merge, path
+    from .presets import merge, path, split_declarations
 
-    d = read_toml(path(preset)) if preset else {}
+    d, declared = split_declarations(preset, read_toml(path(preset))) if preset else ({}, {})
     if config:
         d = merge(d, read_toml(config))
+    where = config or (f"preset {preset}" if preset else "")
+    check_tables(d, where)  # before the flags go into its tables
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
     ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
@@ -130,6 +132,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
             d[key] = value
     if freeze:
         d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
-    where = config or (f"preset {preset}" if preset else "")
     built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    if declared.get("needs_start") and not built.initial:
+        refuse(f"--preset {preset}", "tunes a given genome: name it with --from GENOME_OR_RUN (see `evobiped presets`)")
     return dataclasses.replace(built, episode=with_sources(built.episode, sources))

@@ -51,20 +51,40 @@ def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **
 
 
 def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
-    """Read a genome file -> ``(genome (G,), EpisodeConfig, metadata)``; UserError if malformed."""
+    """Read a genome file -> ``(genome (G,), EpisodeConfig, metadata)``; UserError (one line) if malformed: the genome
+    must fit its episode's layout (length, finite, within bounds) and a stored ``outcome`` must be what
+    :func:`evobiped.outcome.outcome` writes."""
     obj = read_json(path, what="genome file", file_format=FORMAT)
     if not isinstance(obj, dict) or "genome" not in obj or "episode" not in obj:
         raise UserError(f"{path} is not an evobiped genome file (needs 'genome' and 'episode')")
-    if not isinstance(obj["genome"], list) or not all(isinstance(x, (int, float)) for x in obj["genome"]):
+    if not isinstance(obj["genome"], list) or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in obj["genome"]):
         raise UserError(f"{path}: 'genome' must be a list of numbers")
     if not isinstance(obj["episode"], dict):
         raise UserError(f"{path}: 'episode' must be a table")
     try:
         cfg = EpisodeConfig(**refuse_unknown(EpisodeConfig, obj["episode"], "episode"))
+        genome = cfg.layout().validate(obj["genome"], what=f"{path}: the genome")[0]
     except ConfigError as exc:
         raise ConfigError(f"{path}: {exc}") from None
+    if "outcome" in obj:
+        _check_outcome(obj["outcome"], path)
     meta = {k: v for k, v in obj.items() if k not in ("genome", "episode")}
-    return np.array(obj["genome"], float), cfg, meta
+    return genome, cfg, meta
+
+
+def _check_outcome(stored: Any, path) -> None:
+    """UserError unless ``stored`` has the shape of :func:`evobiped.outcome.outcome`'s table (any part of it)."""
+    def number(v):
+        return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v))
+
+    def row_ok(r):
+        return (isinstance(r, dict) and ("fell" not in r or isinstance(r["fell"], bool))
+                and all(number(r.get(k)) for k in ("end_time", "distance", "heading_deg", "to_target")))
+
+    rows = stored.get("rows") if isinstance(stored, dict) else None
+    if not (row_ok(stored) and (rows is None or (isinstance(rows, list) and all(map(row_ok, rows))))):
+        raise UserError(f"{path}: 'outcome' must be a table of fell (true/false), end_time (s) and rows, each a table of "
+                        "fell, end_time, distance, heading_deg and to_target (numbers)")
 
 
 def _plain(v: Any) -> Any:

@@ -3,6 +3,9 @@
 Each preset is a TOML file in ``evobiped/presets/`` in the format of
 ``evobiped evolve --config``; its first line is a ``#`` comment that says
 what it is.  A ``--config`` file and command-line flags override a preset.
+A ``[preset]`` table declares what the preset itself needs and is no run
+setting: ``needs_start = true`` for one that tunes a given genome (the run
+is refused without ``--from``).
 """
 
 from __future__ import annotations
@@ -30,6 +33,20 @@ def describe(name: str) -> str:
     """The preset's one-line description (its first comment line)."""
     first = path(name).read_text().splitlines()[0]
     return first.lstrip("#").strip()
+
+
+#: the ``[preset]`` table's declarations and their defaults
+DECLARATIONS = {"needs_start": False}
+
+
+def split_declarations(name: str, table: dict) -> tuple[dict, dict]:
+    """Preset ``name``'s table (its TOML) -> its run settings and its declarations (:data:`DECLARATIONS`, checked)."""
+    table = dict(table)
+    declared = table.pop("preset", {})
+    unknown = set(declared) - set(DECLARATIONS) if isinstance(declared, dict) else None
+    if unknown is None or unknown or not all(isinstance(v, bool) for v in declared.values()):
+        raise UserError(f"preset {name}: [preset] may only declare {', '.join(DECLARATIONS)} (true or false)")
+    return table, {**DECLARATIONS, **declared}
 
 
 def merge(base: dict, over: dict) -> dict:

@@ -2,6 +2,7 @@
 
 A run directory (``evobiped evolve --out DIR``)::
 
+    start.json             the start genome (genome-file format, ``source``: where it came from), for a run started --from
     config.json            the full resolved RunConfig
     checkpoint.json        the commit point: optimizer state (key ``optimizer``), history, best genome, outcomes after the last generation
     history.csv            one row per generation (HISTORY_COLUMNS)           } derived from the checkpoint,
@@ -14,6 +15,12 @@ A run directory (``evobiped evolve --out DIR``)::
 Other commands add to it: ``outcome.json`` (a study's result for the run),
 ``replay_<label>.rrd`` and ``figures_<label>/`` (replay), ``robustness[_<label>].json/.png``
 (the robustness battery), where the label is ``best`` or ``gen_NNNN``.
+
+``start.json`` is written before config.json when the run is created: a resume
+never reads ``--from`` again (the run may be resumed from any directory, its
+source gone).  The checkpoint holds the start genome too, and the settings the
+run was created with (``settings``: config.json's, less where episodes run),
+so a resume refuses an edited config.json by name (:mod:`evobiped.evolution.fingerprint`).
 
 ``checkpoint.json`` is the run's one commit point per generation and its one
 source of truth: ``history.csv``, ``best.json``, ``summary.json`` and
@@ -40,6 +47,7 @@ from .errors import UserError
 from .fileio import WriteError, atomic_write
 
 CONFIG = "config.json"
+START = "start.json"
 CHECKPOINT = "checkpoint.json"
 HISTORY = "history.csv"
 BEST = "best.json"
@@ -141,9 +149,19 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
     if not rows or not {"generation", "best", "mean"} <= set(rows[0]):
         raise UserError(f"{path} is not a run history (needs columns generation, best, mean)")
     try:
-        return {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k is not None}
+        out = {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k is not None}
     except (TypeError, ValueError) as exc:
         raise UserError(f"{path}: not a number in the history ({exc})") from None
+    for name, values in out.items():
+        bad = np.isnan(values) | (values == np.inf) if name in _FITNESS else ~np.isfinite(values) if name in HISTORY_COLUMNS else None
+        if name in _COUNTS:
+            bad = bad | (values < 0) | (values != np.round(values))
+        if bad is not None and bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise UserError(f"{path}: {name} of row {row + 1} is {values[row]:g}, not a {'count' if name in _COUNTS else 'fitness' if name in _FITNESS else 'number'}")
+    if not np.array_equal(out["generation"], np.arange(len(rows))):
+        raise UserError(f"{path}: the generations must be numbered 0, 1, 2, ... one row each")
+    return out
 
 
 def history_text(rows: list[list], terms: list[dict] | None = None, extra: list[dict] | None = None) -> str:
@@ -174,11 +192,13 @@ def remove_stale_temporaries(directory: Path) -> list[Path]:
 
 def is_unused(directory: Path) -> bool:
     """True for a directory that holds no run: nothing, or only what a run killed before writing its config leaves
-    (the lock, an empty generations folder, temporaries); a directory that cannot be listed is a WriteError."""
+    (the lock, an empty generations folder, temporaries, the start genome); a directory that cannot be listed is a WriteError."""
     try:
+        configured = (Path(directory) / CONFIG).exists()
         for p in Path(directory).iterdir():
             temporary = p.name.startswith(".") and p.name.endswith(".tmp")
-            if not (p.name == LOCK or temporary or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
+            start = p.name == START and not configured
+            if not (p.name == LOCK or temporary or start or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
                 return False
     except OSError as exc:
         raise WriteError(exc.filename or directory, exc) from None
@@ -271,6 +291,11 @@ def _number(v: Any, field: str, *, integer: bool = False, low: float | None = No
 OPTIMIZER_KEY, OLD_OPTIMIZER_KEY = "optimizer", "ga"
 
 
+#: the checkpoint's keys for the settings the run was created with and its start genome (null: none); a checkpoint
+#: that has them must have every key this version writes
+SETTINGS_KEY, START_KEY = "settings", "start"
+
+
 def optimizer_table(ck: dict) -> Any:
     """The optimizer's state in checkpoint ``ck`` (under ``optimizer``, or ``ga`` in an older checkpoint)."""
     return ck[OPTIMIZER_KEY] if OPTIMIZER_KEY in ck else ck[OLD_OPTIMIZER_KEY]
@@ -337,6 +362,16 @@ def validate_checkpoint(ck: Any, *, generations: int, low: np.ndarray, high: np.
                 _number(v, f"best_genome[{i}]")
                 if not low[i] <= v <= high[i]:
                     raise _bad(f"best_genome[{i}]", f"must be within the gene's bounds [{low[i]:g}, {high[i]:g}], got {v!r}")
+    if SETTINGS_KEY in ck:  # written by a run that records its settings: nothing it writes may be missing
+        for key in ("best_genome", "outcome", "history_terms", "best_walk", START_KEY):
+            if key not in ck:
+                raise _bad(key, "is missing")
+        if history and len(ck["history_terms"]) != len(history):
+            raise _bad("history_terms", f"must have one table per generation ({len(history)})")
+        if history and not {"fell", "unstable", "end_time", "walk"} <= set(ck["outcome"] if isinstance(ck["outcome"], dict) else ()):
+            raise _bad("outcome", "must hold fell, unstable, end_time and walk")
+        if history and any(ck["history_terms"]) and "terms" not in ck["outcome"]:
+            raise _bad("outcome.terms", "is missing")
     outcome = ck.get("outcome", {})
     if not isinstance(outcome, dict) or not set(outcome) <= {"fell", "unstable", "end_time", "terms", "walk"}:
         raise _bad("outcome", "must be a table of fell, unstable and end_time lists (and tables of terms and walk)")

@@ -84,22 +84,50 @@ def test_bad_settings(bad):
 
 def test_tampered_state_is_refused():
     opt = CMAES(LAYOUT, CMAOptions(population=4), seed=0)
-    good = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state().to_dict()
-    for bad in ({**good, "told": [[1.0] * 3, [1.0] * 4]}, {**good, "generation": 5}, {**good, "told": "x"}, {"name": "ga"},
-                {**good, "told": [[1.0] * 4, ["x"] * 4]}, {**good, "fitness": [1.0]}):
+    good = json.loads(json.dumps(optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state().to_dict()))
+    strategy = good["strategy"]
+    foreign = json.loads(json.dumps(strategy).replace('"cma.sampler:', '"os:', 1))  # a class outside pycma named
+    assert foreign != strategy
+    old = {"name": "cma", "generation": 2, "fitness": [None] * 4}
+    for bad in ({**good, "strategy": "x"}, {**good, "strategy": foreign}, {**good, "strategy": {**strategy, "asked": strategy["es"]}},
+                {**good, "generation": "5"}, {"name": "ga"}, {**good, "fitness": [1.0]}, {**good, "restart": 3}, {**good, "restart": True},
+                {**old, "told": [[1.0] * 3, [1.0] * 4]}, {**old, "told": "x"}, {**old, "told": [[1.0] * 4, ["x"] * 4]},
+                {**old, "generation": 5, "told": [[1.0] * 4] * 2}):
         with pytest.raises(UserError):
             opt.restore(opt.state_from(bad))
 
 
 def test_a_cma_state_of_an_older_checkpoint_is_read():
-    """Before the state had a ``name`` it said ``optimizer``: such a table restores the same strategy."""
-    a = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=1), lambda p: -np.abs(p).sum(axis=1), 3)
-    old = json.loads(json.dumps(a.state().to_dict()))
-    old["optimizer"] = old.pop("name")
+    """Older checkpoints kept the fitness told at every generation (``told``; before that the state's name was
+    ``optimizer``): such a table is replayed into the same strategy."""
+    told = []
+
+    def f(p):
+        told.append((-np.abs(p).sum(axis=1)).tolist())
+        return np.array(told[-1])
+
+    a = optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=1), f, 3)
+    old = {"optimizer": "cma", "generation": 3, "told": told, "fitness": [None] * 4}
     b = CMAES(LAYOUT, CMAOptions(population=4), seed=1)
     b.restore(b.state_from(old))
     assert b.generation == 3 and np.array_equal(a.ask()[0], b.ask()[0])
-    assert not a.state().told[0].flags.writeable
+    assert not b.state().fitness.flags.writeable
+
+
+def test_a_resume_costs_the_same_at_any_generation():
+    """The stored strategy is written into a fresh one: restoring generation 200 takes no longer than generation 2."""
+    import time
+
+    f = lambda p: -np.abs(p).sum(axis=1)  # noqa: E731
+    costs = []
+    for n in (2, 200):
+        state = json.loads(json.dumps(optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=1), f, n).state().to_dict()))
+        t = time.perf_counter()
+        b = CMAES(LAYOUT, CMAOptions(population=4), seed=1)
+        b.restore(b.state_from(state))
+        costs.append(time.perf_counter() - t)
+        assert b.generation == n
+    assert costs[1] < 5 * costs[0] + 0.05, costs
 
 
 SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task_options={"fitness": "forward"}),
@@ -127,6 +155,11 @@ def test_resume_with_another_optimizer_is_refused(tmp_path, capsys):
     cfg = json.loads((tmp_path / "r" / "config.json").read_text())
     cfg["optimizer"] = "ga"
     (tmp_path / "r" / "config.json").write_text(json.dumps(cfg))
+    assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'optimizer "cma" → "ga"' in err[0]
+    ck = json.loads((tmp_path / "r" / "checkpoint.json").read_text())  # a checkpoint of before the settings were recorded
+    (tmp_path / "r" / "checkpoint.json").write_text(json.dumps({k: v for k, v in ck.items() if k not in ("settings", "start")}))
     assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "'cma' optimizer" in err[0]

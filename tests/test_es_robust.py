@@ -26,7 +26,7 @@ def _config(**changes) -> RunConfig:
 def test_a_run_from_a_genome_file_starts_from_its_normaliser():
     _, cfg, _ = load_genome(SEED)
     frozen = cfg.controller_options.input_norm
-    started = RunContext(_config(initial=str(SEED))).now()
+    started = RunContext(_config(initial=str(SEED)), cfg).now()
     assert started.norm_count == frozen["count"]
     assert np.allclose(started.norm[0], frozen["mean"], rtol=0, atol=1e-12)
     assert np.allclose(started.norm[1], frozen["std"], rtol=1e-9)
@@ -44,7 +44,7 @@ def test_inputs_are_matched_by_name_and_a_new_input_starts_at_its_declared_norm(
     table["episode"]["controller_options"]["inputs"] = inputs
     table.update({"backend": "serial", "seed": 0, "initial": str(SEED)})
     config = RunConfig.from_dict(table)
-    ctx = RunContext(config)
+    ctx = RunContext(config, cfg)
     mean, std = ctx.now().norm
     assert len(mean) == len(frozen["mean"]) - 1
     assert np.allclose(mean, frozen["mean"][1:]) and np.allclose(std, frozen["std"][1:])
@@ -53,7 +53,7 @@ def test_inputs_are_matched_by_name_and_a_new_input_starts_at_its_declared_norm(
 
 
 def test_without_a_running_normaliser_nothing_is_seeded():
-    ctx = RunContext(_config(initial=str(SEED), normalise={"running": False}))
+    ctx = RunContext(_config(initial=str(SEED), normalise={"running": False}), load_genome(SEED)[1])
     assert ctx.stats is None and ctx.now().norm is None
 
 
@@ -102,3 +102,26 @@ def test_the_shipped_hearing_ctrnn_reaches_both_paper_sources_and_stays_up():
     spec.loader.exec_module(mod)
     rows = mod.check(WALKERS / "steer_ctrnn_es_seed0.json", [(10.0, 3.0), (10.0, -3.0)], 65.0, 0.5)
     assert all(r["arrived_s"] is not None and r["arrived_s"] < 15 and not r["fell"] and r["up_after_arrival_s"] >= 50 for r in rows), rows
+
+
+def test_a_run_from_a_walker_resumed_elsewhere_keeps_its_seeded_normaliser(tmp_path, monkeypatch):
+    """The run directory keeps the start genome in its source's episode (start.json, with the frozen normaliser): a run
+    cut before its first commit and resumed from another directory, the source gone, starts from the same statistics."""
+    import shutil
+
+    from evobiped.evolution import Run
+
+    (tmp_path / "a").mkdir()
+    shutil.copy(SEED, tmp_path / "a" / "seed.json")
+    monkeypatch.chdir(tmp_path / "a")
+    config = _config(initial="seed.json")
+    run = Run.create(tmp_path / "run", config)
+    first = run.context.now()
+    run.close()
+    (tmp_path / "a" / "seed.json").unlink()
+    monkeypatch.chdir(tmp_path)
+    again = Run.resume(tmp_path / "run")  # no checkpoint yet: it starts over from start.json
+    later = again.context.now()
+    again.close()
+    assert later.norm_count == first.norm_count > 0
+    assert np.array_equal(later.norm[0], first.norm[0]) and np.array_equal(later.norm[1], first.norm[1])

@@ -297,10 +297,15 @@ def test_damaged_run_directory_on_resume(finished_run, capsys, damage, words):
 
 
 def test_mismatched_checkpoint(finished_run, capsys):
-    """A checkpoint from a run with another population size does not load."""
+    """A checkpoint from a run with another population size does not load: config.json's edit is named; a checkpoint
+    of before the settings were recorded meets the optimizer's own check."""
     cfg = json.loads((finished_run / "config.json").read_text())
     cfg["ga"]["population"] = 6
     (finished_run / "config.json").write_text(json.dumps(cfg))
+    assert cli("evolve", "--resume", finished_run) == 2
+    assert "config.json differs from the one this checkpoint was made with: ga.population 4 → 6" in capsys.readouterr().err
+    ck = json.loads((finished_run / "checkpoint.json").read_text())
+    (finished_run / "checkpoint.json").write_text(json.dumps({k: v for k, v in ck.items() if k not in ("settings", "start")}))
     assert cli("evolve", "--resume", finished_run) == 2
     assert "checkpoint population has shape (4, 120), the config needs (6, 120)" in capsys.readouterr().err
 
@@ -384,6 +389,11 @@ def test_a_resume_in_another_numerical_environment_says_so(tmp_path, capsys):
     cfg = json.loads((run / "config.json").read_text())
     cfg["environment"]["numpy_simd"] = ["ELSEWHERE"]
     (run / "config.json").write_text(json.dumps(cfg))
+    assert main(["evolve", "--resume", str(run)]) == 2  # config.json alone edited: refused by name
+    assert 'environment.numpy_simd ' in capsys.readouterr().err
+    ck = json.loads((run / "checkpoint.json").read_text())  # a run that did start elsewhere recorded it there too
+    ck["settings"]["environment"]["numpy_simd"] = ["ELSEWHERE"]
+    (run / "checkpoint.json").write_text(json.dumps(ck))
     assert main(["evolve", "--resume", str(run)]) == 0
     err = capsys.readouterr().err
     assert "note: this run started in another numerical environment (numpy SIMD ELSEWHERE -> " in err

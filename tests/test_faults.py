@@ -515,7 +515,7 @@ def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, bac
     (done / "config.json").write_text(json.dumps(cfg))
     before = files(done)
     assert cli("evolve", "--resume", done, "--backend", backend) == 2
-    one_line_error(capsys.readouterr().err, "control ticks")
+    one_line_error(capsys.readouterr().err, "differs from the one this checkpoint was made with: episode.seconds 0.5 → 1e-09")
     assert files(done) == before
 
 
@@ -630,7 +630,7 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
 
     from evobiped.episode import EpisodeConfig
     from evobiped.errors import UserError
-    from evobiped.evolution.evaluate import RayEvaluator
+    from evobiped.evolution.ray_backend import RayEvaluator
 
     if how == "node died error":  # the result of a task on the lost node
         monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))

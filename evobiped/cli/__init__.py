@@ -14,11 +14,12 @@ import argparse
 import importlib
 import os
 import pkgutil
+import signal
 import sys
 from types import ModuleType
 
 from .. import __version__
-from ..errors import UserError, exit_status, stop_on_signals
+from ..errors import STOP_SIGNALS, UserError, exit_status, stop_on_signals
 
 #: how every refusal begins, a bad argument's and a UserError's alike
 ERROR = "evobiped: error: "
@@ -79,3 +80,6 @@ def main(argv: list[str] | None = None) -> int:
         return exit_status(exc)
     finally:
         restore()
+        if argv is None:  # the command's own process: its work is done and said; a stop signal now would only cut
+            for s in (signal.SIGINT, *STOP_SIGNALS):  # the interpreter's teardown short and hide the exit status
+                signal.signal(s, signal.SIG_IGN)

@@ -59,6 +59,7 @@ def default_run_dir(config) -> str:
 def run_evolve_cmd(args) -> int:
     from ..evolution.evaluate import make_evaluator
     from ..evolution.run import Run
+    from ..evolution.run_config import check_run
 
     if args.rerun is not None:  # before anything is written
         from ..record.viewer import connect_url, require_display, require_viewer
@@ -93,6 +94,7 @@ def run_evolve_cmd(args) -> int:
         backend, workers, address = config.backend, config.workers, config.address
         check_workers(backend, workers, address)
         out = args.out or default_run_dir(config)
+        check_run(config)  # memory, the start genome: before any worker starts
         evaluator = make_evaluator(config.episode, backend, workers, address, on_retry=on_retry)  # fails before any file is written
         try:
             run = Run.create(out, config)
@@ -105,14 +107,21 @@ def run_evolve_cmd(args) -> int:
 
 def _evolve(run, evaluator, backend: str, args) -> int:
     """The generations left, with progress lines and an optional live viewer; the summary line."""
-    from ..progress import GenerationClock, generation_note
-    from ..rundir import HISTORY
-
     say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     c = run.config
     population = len(run.optimizer.ask()[0])
-    say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
-        f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+    try:
+        say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
+            f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+        return _generations(run, evaluator, c, say, args)
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP, at any moment (closing the workers, the last line)
+        print(_stopped(run), file=sys.stderr)
+        return exit_status(exc)
+
+
+def _generations(run, evaluator, c, say, args) -> int:
+    from ..progress import GenerationClock, generation_note
+
     with evaluator, contextlib.ExitStack() as stack:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
 
@@ -130,12 +139,7 @@ def _evolve(run, evaluator, backend: str, args) -> int:
                 evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds),
                 left=clock.left(s.generation + 1))
 
-        try:
-            summary = run.evolve(_Watched(evaluator, clock), progress)
-        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
-            print(f"evobiped: interrupted after generation {run.optimizer.generation - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
-                  f"continue with: evobiped evolve --resume {run.dir}", file=sys.stderr)
-            return exit_status(exc)
+        summary = run.evolve(_Watched(evaluator, clock), progress)
     best = summary["best"]
     state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
@@ -144,6 +148,20 @@ def _evolve(run, evaluator, backend: str, args) -> int:
     print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
           f"{summary['evaluations']} evaluations, elapsed {hms(line.elapsed)}{earlier}; results in {run.dir}")
     return 0
+
+
+def _stopped(run) -> str:
+    """What a stop signal left: the generations committed and whether the run is complete."""
+    from ..rundir import HISTORY, SUMMARY
+
+    g = run.optimizer.generation
+    if not run.done:
+        return (f"evobiped: interrupted after generation {g - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
+                f"continue with: evobiped evolve --resume {run.dir}")
+    if (run.dir / SUMMARY).is_file():
+        return f"evobiped: interrupted after the run completed: all {g} generations and {SUMMARY} are written in {run.dir}"
+    return (f"evobiped: interrupted after the last of {g} generations was committed, before {SUMMARY} was written; "
+            f"the run is complete once evobiped evolve --resume {run.dir} writes it")
 
 
 class _Watched:

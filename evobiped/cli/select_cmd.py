@@ -27,6 +27,7 @@ def run_select_cmd(args) -> int:
     from ..fileio import read_json, write_json
     from ..genome_file import load_genome, save_genome
     from ..outcome import outcome
+    from ..evolution.run_config import RunConfig, initial_genome
     from ..selection import best_candidate, try_candidates
 
     d = Path(args.run)
@@ -38,16 +39,26 @@ def run_select_cmd(args) -> int:
     missing = [p for p in paths if not p.is_file()]
     if missing:
         raise UserError(f"{missing[0]} is missing: the run directory is incomplete (resume it first)")
-    candidates = [load_genome(p) for p in paths]
-    labels = [f"generation {g}" for g in top]
     cfg = read_json(d / rundir.CONFIG, what="run config")
-    initial = cfg.get("initial") if isinstance(cfg, dict) else None
-    if initial:  # first: kept unless a tuned genome beats it
-        src = Path(initial) / rundir.BEST if Path(initial).is_dir() else Path(initial)
+    if not isinstance(cfg, dict):
+        raise UserError(f"run config {d / rundir.CONFIG} is not a table of settings")
+    run = RunConfig.from_dict({k: v for k, v in cfg.items() if k not in ("evobiped", "environment")}, where=str(d / rundir.CONFIG))
+    candidates = [load_genome(p) for p in paths]
+    for p, (_, ep, _) in zip(paths, candidates):  # one experiment's walkers (what a generation froze in aside)
+        if _experiment(ep) != _experiment(run.episode):
+            raise UserError(f"{p} holds a {ep.body}/{ep.controller} genome of another episode than the run's "
+                            f"({run.episode.body}/{run.episode.controller} in {rundir.CONFIG}): the run directory is mixed")
+    labels = [f"generation {g}" for g in top]
+    if run.initial:  # first: kept unless a tuned genome beats it
+        kept = d / rundir.START
+        src = kept if kept.is_file() else Path(run.initial) / rundir.BEST if Path(run.initial).is_dir() else Path(run.initial)
         if not src.is_file():
-            raise UserError(f"the run started from {initial}, which is no longer there")
-        candidates.insert(0, load_genome(src))
-        labels.insert(0, f"start ({src})")
+            raise UserError(f"the run started from {run.initial}, which is no longer there")
+        start = load_genome(src)
+        if len(start[0]) != run.episode.layout().size:  # a walker given more inputs to learn: padded, the run's episode
+            start = (initial_genome(str(src), run.episode, run.episode.layout()), run.episode, start[2])
+        candidates.insert(0, start)  # else in its own episode (e.g. the normaliser it was evolved with)
+        labels.insert(0, f"start ({run.initial})")
     configs = [c[1] for c in candidates]  # each its own: generation files may freeze their own normaliser
     same = all(c.to_dict() == configs[-1].to_dict() for c in configs)
     genomes = np.array([c[0] for c in candidates])
@@ -69,6 +80,16 @@ def run_select_cmd(args) -> int:
                                                "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
     print(f"selected: {labels[k]} -> {out}")
     return 0
+
+
+def _experiment(episode) -> dict:
+    """An episode config as a table without what a run sets per generation (the normaliser, the curriculum phase's
+    weights and episode length: evobiped.evolution.run_context), so generation files of one run compare equal."""
+    d = episode.to_dict()
+    d.pop("seconds", None)
+    d["controller_options"] = {k: v for k, v in d["controller_options"].items() if k != "input_norm"}
+    d["task_options"] = {k: v for k, v in d["task_options"].items() if k != "weights"}
+    return d
 
 
 SUBCOMMANDS = (add_select,)

@@ -4,11 +4,12 @@ The library is ``cma`` (pycma, Hansen's reference implementation): maintained
 by the method's author, pure Python + numpy, with bound handling, the standard
 (mu/mu_w, lambda) update and its stopping rules.  Only the random numbers are
 ours: every generation's samples come from (run seed, generation) through a
-normal generator handed to pycma as its ``randn`` option.  The strategy is
-then a pure function of the run seed and the fitness told so far, so the
-checkpoint stores those numbers (not a pickle, which a tampered file could
-abuse) and a resume replays them: it asks exactly the solutions an
-uninterrupted run asks.
+normal generator handed to pycma as its ``randn`` option.  The checkpoint
+stores pycma's strategy itself as data (:mod:`.cma_state`: its mean, step
+size, covariance, paths and counters, every bit; not a pickle, which a tampered
+file could abuse), so a resume costs the same at any generation and asks
+exactly the solutions an uninterrupted run asks.  A checkpoint of before
+(``told``: the fitness told at every generation) is replayed from the run seed.
 
 Search space.  CMA-ES runs in coordinates normalised to each gene's range,
 z = (gene - low) / (high - low) in [0, 1]^G, bounded there by pycma's
@@ -36,6 +37,7 @@ import numpy as np
 from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 from ..options import check_fields, option
+from . import cma_state
 from .base import Optimizer, OptimizerState, frozen_array
 from .ga import MAX_POPULATION, generation_rng
 
@@ -66,12 +68,15 @@ class CMAOptions:
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class CMAState(OptimizerState):
-    """CMA-ES between generations: the fitness told at each generation so far (``told``, one read-only ``(lam,)``
-    array per generation: the strategy's whole history, replayed from the run seed) and the current
-    population's fitness ``(lam,)``."""
+    """CMA-ES between generations: pycma's strategy as data (``strategy``, :func:`.cma_state.encode`), the
+    IPOP restarts so far (``restart``) and the current population's fitness ``(lam,)``.  A state read from a
+    checkpoint of before has ``told`` instead (one read-only ``(lam,)`` array per generation, replayed from the run
+    seed) and no strategy."""
 
     name = "cma"
-    told: tuple[np.ndarray, ...]
+    told: tuple[np.ndarray, ...] = ()
+    strategy: dict | None = None
+    restart: int = 0
 
     def __post_init__(self):
         object.__setattr__(self, "told", tuple(frozen_array(f) for f in self.told))
@@ -79,7 +84,8 @@ class CMAState(OptimizerState):
 
     def to_dict(self) -> dict:
         plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
-        return {"name": self.name, "generation": self.generation, "told": [plain(f) for f in self.told], "fitness": plain(self.fitness)}
+        return {"name": self.name, "generation": self.generation, "restart": self.restart, "fitness": plain(self.fitness),
+                "strategy": self.strategy}
 
 
 class GenerationNormal:
@@ -119,8 +125,6 @@ class CMAES(Optimizer):
     def _rewind(self) -> None:
         self.generation = 0
         self.restart = 0
-        #: the fitness told at each generation, ``(lam,)`` each: the strategy's whole history
-        self.told: list[np.ndarray] = []
         self._start(self.restart)
         self._sample()
 
@@ -171,7 +175,6 @@ class CMAES(Optimizer):
         return np.full(len(self.population), -1)
 
     def _advance(self, f: np.ndarray) -> None:
-        self.told.append(f)
         finite = np.isfinite(f)
         # pycma needs numbers: an unstable individual ranks below every finite one
         f = np.where(finite, f, (f[finite].min() if finite.any() else 0.0) - 1e6)
@@ -190,24 +193,50 @@ class CMAES(Optimizer):
 
     # ---- its state as a value
     def state(self) -> CMAState:
-        return CMAState(generation=self.generation, told=tuple(self.told), fitness=self.fitness)
+        return CMAState(generation=self.generation, fitness=self.fitness, restart=self.restart,
+                        strategy=cma_state.encode(self.es, self._asked))
 
     def restore(self, state: CMAState) -> None:
-        """Replay the told fitness from generation 0 (UserError when a generation's count does not fit this run)."""
-        self._rewind()
-        for g, f in enumerate(state.told):
-            if len(f) != len(self.population):
-                raise UserError(f"checkpoint: CMA-ES told[{g}] must be a list of {len(self.population)} finite numbers or nulls")
-            self._advance(np.array(f, float))
+        """Put the strategy in ``state``: pycma's stored strategy written into a fresh one (the same cost at any
+        generation), or, for a checkpoint of before, the told fitness replayed from generation 0 (UserError when
+        a generation's count does not fit this run)."""
+        if state.strategy is None:
+            self._replay(state.told)
+        else:
+            if state.restart > self.config.restarts:
+                raise UserError(f"checkpoint: CMA-ES restart {state.restart} is beyond this run's {self.config.restarts} restarts")
+            self.generation, self.restart = 0, state.restart
+            self._start(self.restart)
+            self._asked = cma_state.restore(self.es, state.strategy)
+            if len(self._asked) != self.es.popsize:
+                raise UserError(f"checkpoint: the CMA-ES strategy asked {len(self._asked)} solutions, its population is {self.es.popsize}")
+            self.generation = state.generation
+            self.population = self._genes(np.array(self._asked))
         # a restart may have happened after the last generation told: the population matches the state
         if len(state.fitness) != len(self.population):
             raise UserError(f"checkpoint: CMA-ES fitness must be a list of {len(self.population)} finite numbers or nulls")
         self.fitness = np.array(state.fitness, float)
 
+    def _replay(self, told) -> None:
+        self._rewind()
+        for g, f in enumerate(told):
+            if len(f) != len(self.population):
+                raise UserError(f"checkpoint: CMA-ES told[{g}] must be a list of {len(self.population)} finite numbers or nulls")
+            self._advance(np.array(f, float))
+
     def _state_from(self, table: dict) -> CMAState:
-        told, fitness, generation = table.get("told"), table.get("fitness"), table.get("generation")
-        if not (isinstance(told, list) and isinstance(generation, int) and not isinstance(generation, bool) and generation == len(told) and isinstance(fitness, list)):
-            raise UserError("checkpoint: the CMA-ES state needs 'told' (one list per generation), 'generation' and 'fitness'")
+        fitness, generation = table.get("fitness"), CMAState.generation_of(table)
+        if not isinstance(fitness, list):
+            raise UserError("checkpoint: the CMA-ES state needs 'fitness' (a list)")
+        if "strategy" in table:
+            restart = table.get("restart")
+            if not (isinstance(restart, int) and not isinstance(restart, bool) and restart >= 0):
+                raise UserError(f"checkpoint: cma.restart must be a whole number >= 0, got {restart!r}")
+            return CMAState(generation=generation, fitness=_numbers(fitness, "fitness", allow_nan=True), strategy=table["strategy"],
+                            restart=restart)
+        told = table.get("told")
+        if not (isinstance(told, list) and generation == len(told)):
+            raise UserError("checkpoint: the CMA-ES state needs 'strategy' (or, from an older checkpoint, 'told': one list per generation)")
         return CMAState(generation=generation, told=tuple(_numbers(f, f"told[{g}]") for g, f in enumerate(told)),
                         fitness=_numbers(fitness, "fitness", allow_nan=True))
 

@@ -155,8 +155,8 @@ class GA(Optimizer):
     def _state_from(self, table: dict) -> GAState:
         gen, pop, fit = GAState.generation_of(table), table.get("population"), table.get("fitness")
         rows_ok = isinstance(pop, list) and all(isinstance(r, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in pop)
-        if not rows_ok or len({len(r) for r in pop}) > 1:
-            raise UserError("checkpoint: ga.population must be a list of genomes (lists of numbers of one length)")
+        if not rows_ok or not pop or len({len(r) for r in pop}) > 1:
+            raise UserError("checkpoint: ga.population must be a non-empty list of genomes (lists of numbers of one length)")
         pop = np.array(pop, float).reshape(len(pop), -1)
         P = len(pop)
         if not (isinstance(fit, list) and len(fit) == P and all(f is None or (isinstance(f, (int, float)) and not isinstance(f, bool) and not np.isnan(f) and f != np.inf) for f in fit)):

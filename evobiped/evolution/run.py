@@ -26,8 +26,10 @@ from ..genome_file import genome_text, load_genome, save_genome
 from .evaluate import Evaluator
 from .base import Optimizer
 from .individuals import Individuals
-from .run_config import RunConfig, make_optimizer
+from . import fingerprint
+from .run_config import RunConfig, make_optimizer, start_genome
 from .run_context import RunContext
+from .start_genome import keep_start, kept_start, start_episode
 from ..rundir import HISTORY_COLUMNS
 
 @dataclass
@@ -58,6 +60,11 @@ class GenerationStats:
 class Run:
     """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
+    #: the start genome ``(G,)`` as a list (None: the run has none), read once when the run was created
+    start: list[float] | None = None
+    #: the numerical environment config.json says the run started in (None: none recorded)
+    started_in: dict | None = None
+
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
                  history_terms: list[dict] | None = None, best_walk: dict | None = None, context: RunContext | None = None):
@@ -87,7 +94,8 @@ class Run:
         directory = Path(directory)
         if directory.exists() and not directory.is_dir():
             raise UserError(f"run directory {directory} exists and is a file; give another --out")
-        opt = make_optimizer(config)
+        start = start_genome(config)
+        opt = make_optimizer(config, start)
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -101,8 +109,13 @@ class Run:
             except OSError as exc:
                 raise WriteError(directory / rundir.GENERATIONS, exc) from None
             rundir.remove_stale_temporaries(directory)
-            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": provenance.current()})
-            run = cls(directory, config, opt, [], None, 0.0)
+            if start is not None:  # before the config: a run whose config names a start genome has it
+                keep_start(directory, start, config)
+            environment = provenance.current()
+            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": environment})
+            run = cls(directory, config, opt, [], None, 0.0, context=RunContext(config, start_episode(directory, config)))
+            run.started_in = environment
+            run.start = None if start is None else [float(x) for x in start]
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
             rundir.unlock(directory)
@@ -141,29 +154,37 @@ class Run:
         cfg.pop("evobiped", None)
         started_in = cfg.pop("environment", None)
         config = RunConfig.from_dict(cfg, where=str(directory / rundir.CONFIG))
-        opt = make_optimizer(config)
         path = directory / rundir.CHECKPOINT
-        if not path.exists():
+        ck = read_json(path, what="checkpoint") if path.exists() else None
+        if path.exists() and ck is None:
+            raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
+        if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:  # what the run was created with, before anything is built
+            fingerprint.check(ck[rundir.SETTINGS_KEY], config, started_in, directory / rundir.CONFIG)
+        start = kept_start(directory, config, ck)
+        opt = make_optimizer(config, start)
+        if ck is None:
             committed = cls._committed_files(directory)
             if committed:
                 raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
-            return cls(directory, config, opt, [], None, 0.0), started_in  # killed before its first commit: start over
-        ck = read_json(path, what="checkpoint")
-        if ck is None:
-            raise UserError(f"checkpoint {path} is null, not a checkpoint: the run cannot be resumed; start a new run")
-        try:
-            rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
-        except UserError as exc:
-            raise UserError(f"checkpoint {path} is malformed: {exc}") from None
-        opt.restore(opt.state_from(rundir.optimizer_table(ck)))
-        history, best = ck["history"], ck["best"]
-        if len(history) != opt.generation:
-            raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {opt.generation})")
-        individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
-        context = RunContext(config)
-        context.restore(ck)
-        return cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
-                   ck.get("history_terms", []), ck.get("best_walk"), context), started_in
+            # killed before its first commit: start over (the normaliser from the start genome's file again)
+            run = cls(directory, config, opt, [], None, 0.0, context=RunContext(config, start_episode(directory, config)))
+        else:
+            try:
+                rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
+            except UserError as exc:
+                raise UserError(f"checkpoint {path} is malformed: {exc}") from None
+            state, history, best = opt.state_from(rundir.optimizer_table(ck)), ck["history"], ck["best"]
+            if len(history) != state.generation:  # before the state is restored: an older CMA-ES state is replayed
+                raise UserError(f"checkpoint {path} is inconsistent (history has {len(history)} rows for generation {state.generation})")
+            opt.restore(state)
+            individuals = Individuals.from_dict(ck.get("outcome", {}), len(opt.population))
+            context = RunContext(config)  # its state is the checkpoint's
+            context.restore(ck)
+            run = cls(directory, config, opt, history, best, float(ck["wall_seconds"]), ck.get("best_genome"), individuals,
+                      ck.get("history_terms", []), ck.get("best_walk"), context)
+        run.start = None if start is None else [float(x) for x in start]
+        run.started_in = started_in
+        return run, started_in
 
     @staticmethod
     def _committed_files(directory: Path) -> list[str]:
@@ -318,7 +339,8 @@ class Run:
         with _signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
-                {"optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
+                {rundir.SETTINGS_KEY: fingerprint.settings(self.config, self.started_in), rundir.START_KEY: self.start,
+                 "optimizer": self.optimizer.state().to_dict(), "history": self.history, "best": self.best, "best_genome": self.best_genome,
                  "wall_seconds": self.wall, "outcome": self.individuals.to_dict(), "history_terms": self.history_terms,
                  "best_walk": self.best_walk, **self.context.to_dict()},
             )

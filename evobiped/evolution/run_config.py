@@ -78,6 +78,7 @@ class RunConfig:
         """The config a table of settings (a TOML file, config.json) gives; a bad setting is one ConfigError
         line, ``where: path.of.setting: what is wrong`` (``where``: the file or preset, if any)."""
         try:
+            check_tables(d)
             d = dict(refuse_unknown(cls, d, ""))
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
             ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
@@ -109,6 +110,31 @@ class NormaliseOptions:
         check_fields(self, "normalise")
 
 
+def _table_fields(cls: type) -> list[str]:
+    """The fields of dataclass ``cls`` that hold a table of settings (an options dataclass, or a dict)."""
+    out = []
+    for f in dataclasses.fields(cls):
+        if f.default_factory is not dataclasses.MISSING:
+            made = f.default_factory()
+            if isinstance(made, dict) or dataclasses.is_dataclass(made):
+                out.append(f.name)
+    return out
+
+
+def check_tables(d, where: str = "") -> None:
+    """ConfigError unless every setting that the declarations make a table (``episode``, ``ga``, ``cma``, the episode's
+    option tables) is one in the settings ``d``, before flags are merged into them."""
+    at = f"{where}: " if where else ""
+    if not isinstance(d, dict):
+        raise ConfigError(f"{at}the settings must be a table, got {type(d).__name__}")
+    for cls, table, prefix in ((RunConfig, d, ""), (EpisodeConfig, d.get("episode"), "episode.")):
+        if not isinstance(table, dict):
+            continue
+        for name in _table_fields(cls):
+            if name in table and not isinstance(table[name], dict):
+                raise ConfigError(f"{at}{prefix}{name}: must be a table of options, got {table[name]!r}")
+
+
 #: memory a walker needs besides its genome: MuJoCo state, sensors, controller state (bytes, an upper estimate)
 WALKER_BYTES = 256 * 1024
 
@@ -123,15 +149,15 @@ def check_memory(population: int, genes: int) -> None:
                           f"this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
 
 
-def make_optimizer(config: RunConfig) -> Optimizer:
-    """Build the optimizer (GA or CMA-ES) for the episode's genome layout, known from the declarations
-    (nothing compiled); fails before any file is written."""
+def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimizer:
+    """Build the optimizer (GA, CMA-ES or ES) for the episode's genome layout, known from the declarations
+    (nothing compiled); fails before any file is written.  ``start``: the start genome ``(G,)`` when the run has
+    one (:func:`start_genome`; None: read from ``config.initial``, as a new run does)."""
     layout = config.episode.layout()
-    rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows}
-    check_memory(rows.get(config.optimizer, config.ga.population), layout.size)
+    check_memory(population_of(config), layout.size)
     initial = None
     if config.initial:
-        initial = initial_genome(config.initial, config.episode, layout)
+        initial = layout.validate(start, what="start genome")[0] if start is not None else start_genome(config)
     mutable = None
     if config.frozen_blocks:
         slices = layout.slices()
@@ -148,6 +174,30 @@ def make_optimizer(config: RunConfig) -> Optimizer:
     return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
 
 
+def check_run(config: RunConfig) -> None:
+    """What a new run refuses before any worker starts or file is written: a population beyond this machine's
+    memory, a start genome that cannot be read or does not fit."""
+    layout = config.episode.layout()
+    check_memory(population_of(config), layout.size)
+    if config.initial:
+        start_genome(config)
+
+
+def population_of(config: RunConfig) -> int:
+    """Walkers evaluated per generation by the run's optimizer."""
+    layout = config.episode.layout()
+    rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows}
+    return rows.get(config.optimizer, config.ga.population)
+
+
+def start_genome(config: RunConfig) -> np.ndarray | None:
+    """The genome ``(G,)`` that ``config.initial`` names (None: the run has none).  Read once, when the run is
+    created: the run directory keeps it (:data:`evobiped.rundir.START`), and a resume never reads the source again."""
+    if not config.initial:
+        return None
+    return initial_genome(config.initial, config.episode, config.episode.layout())
+
+
 def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     """The genome that seeds a run: a genome file or a run directory's best.json.
 
@@ -162,4 +212,4 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
     if len(genome) < layout.size and same:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
-    return layout.validate(genome, what=f"genome in {path}")
+    return layout.validate(genome, what=f"genome in {path}")[0]

@@ -36,15 +36,17 @@ from .curriculum import Curriculum
 class RunContext:
     """The per-generation settings of a run with config ``config`` (a no-op for a run that has neither)."""
 
-    def __init__(self, config):
+    def __init__(self, config, start: EpisodeConfig | None = None):
+        """``start``: the episode config of the genome file the run starts from (``--from``), whose frozen normaliser
+        the running statistics start from (None: the declared centres and scales)."""
         self.config = config
         self.curriculum = Curriculum(config.curriculum)
         self.running = bool(config.normalise.running)
         controller = config.episode.parts()[1]
         self.declared = controller.input_norm
         self.stats = Normaliser.empty(len(self.declared[0])) if self.running else None
-        if self.running and getattr(config, "initial", None):
-            self.stats = _seed_stats(config.initial, config.episode, self.declared, self.stats)
+        if self.running and start is not None:
+            self.stats = _seed_stats(start, config.episode, self.declared, self.stats)
         self.floor = self._floors(controller) if self.running else None
         #: per generation: the phase it was scored in and how its evaluation walkers did (history.csv's extra columns)
         self.history: list[dict] = []
@@ -134,18 +136,10 @@ class RunContext:
         self.best = None if table is None else _context_from(table, len(self.declared[0]) if self.declared else 0)
 
 
-def _seed_stats(source: str, episode: EpisodeConfig, declared: tuple[np.ndarray, np.ndarray], empty: Normaliser) -> Normaliser:
-    """The running statistics a run --from ``source`` starts from: its genome file's ``input_norm`` mapped input by input
-    (by name and width) onto this run's inputs, the declared centre and scale for the others; ``empty`` when the file
-    froze none (or shares no input)."""
-    from pathlib import Path
-
-    from .. import rundir
-    from ..genome_file import load_genome
-
-    path = Path(source)
-    path = path / rundir.BEST if path.is_dir() else path
-    _, cfg, _ = load_genome(path)
+def _seed_stats(cfg: EpisodeConfig, episode: EpisodeConfig, declared: tuple[np.ndarray, np.ndarray], empty: Normaliser) -> Normaliser:
+    """The running statistics a run --from a genome file of episode config ``cfg`` starts from: its ``input_norm`` mapped
+    input by input (by name and width) onto this run's inputs, the declared centre and scale for the others; ``empty``
+    when the file froze none (or shares no input)."""
     norm = cfg.controller_options.input_norm
     if norm is None or cfg.controller != episode.controller:
         return empty

@@ -94,6 +94,10 @@ def ear_signal(left: np.ndarray, right: np.ndarray, source: np.ndarray) -> np.nd
     return (a - b) / (a + b)
 
 
+#: the farthest a source may be from the start (m)
+MAX_SOURCE_DISTANCE = 1e4
+
+
 def parse_sources(sources) -> np.ndarray:
     """``[[x, y], ...]`` in m -> ``(S, 2)``; ConfigError for anything else (e.g. a lone number)."""
     try:
@@ -102,11 +106,16 @@ def parse_sources(sources) -> np.ndarray:
         arr = None
     if arr is None or arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0 or not np.isfinite(arr).all():
         raise ConfigError(f"sources must be a list of [x, y] positions in m, e.g. [[10, 3], [10, -3]]; got {sources!r}")
-    near = np.linalg.norm(arr, axis=1) < MIN_SOURCE_DISTANCE
+    near = np.hypot(arr[:, 0], arr[:, 1]) < MIN_SOURCE_DISTANCE
     if near.any():
         x, y = arr[np.argmax(near)]
         raise ConfigError(f"the source ({x:g}, {y:g}) is at the walker's start (nearer than {MIN_SOURCE_DISTANCE:g} m "
                           "to the origin, where it starts): it could not walk towards it")
+    far = np.hypot(arr[:, 0], arr[:, 1]) > MAX_SOURCE_DISTANCE
+    if far.any():  # the ears' inverse squares underflow there: the sense would be 0/0
+        x, y = arr[np.argmax(far)]
+        raise ConfigError(f"the source ({x:g}, {y:g}) is farther than {MAX_SOURCE_DISTANCE:g} m from the walker's start: "
+                          "its sound could not be told apart by the two ears")
     return arr
 
 

@@ -40,7 +40,8 @@ from typing import Callable
 from ... import __version__, rundir
 from ...errors import ConfigError, UserError
 from ...options import given
-from ...evolution.evaluate import SerialEvaluator, init_ray
+from ...evolution.evaluate import SerialEvaluator
+from ...evolution.ray_backend import init_ray
 from ...evolution.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
 from ...tasks import TASKS

@@ -1,0 +1,68 @@
+"""A run's start genome (``--from``), kept in its run directory: read once when the run is created, never again.
+
+``start.json`` (genome-file format, ``source``: the path given) is written before config.json; the checkpoint
+holds the genome too (``start``).  A resume takes the checkpoint's, else start.json's (a run cut before its first
+commit); only a run made before the run directory kept it reads its source again, as it did then.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .. import rundir
+from ..errors import UserError
+from ..genome_file import load_genome, save_genome
+from .run_config import RunConfig
+
+
+def keep_start(directory: Path, start: np.ndarray, config: RunConfig) -> None:
+    """Write the run's start genome ``(G,)`` as ``directory/start.json``, with where it came from, in its source's
+    episode config when that fits the genome (so what the source froze, e.g. its normaliser, is kept), else the run's."""
+    episode = config.episode
+    try:
+        _, source, _ = load_genome(_source_file(config.initial))
+        if source.layout().size == len(start) and source.controller == episode.controller:
+            episode = source
+    except UserError:
+        pass
+    save_genome(directory / rundir.START, start, episode, source=config.initial, source_path=str(Path(config.initial).resolve()))
+
+
+def _source_file(initial: str) -> Path:
+    path = Path(initial)
+    return path / rundir.BEST if path.is_dir() else path
+
+
+def start_episode(directory: Path, config: RunConfig):
+    """The episode config the run's start genome was kept in (start.json; None: no start genome, or none kept)."""
+    file = directory / rundir.START
+    if not config.initial or not file.is_file():
+        return None
+    return load_genome(file)[1]
+
+
+def kept_start(directory: Path, config: RunConfig, ck) -> np.ndarray | None:
+    """The run's start genome: the checkpoint's, else start.json's (a run cut before its first commit); only a run
+    made before the run directory kept it reads ``config.initial`` again (None here)."""
+    path, file = directory / rundir.CHECKPOINT, directory / rundir.START
+    stored = ck.get(rundir.START_KEY) if isinstance(ck, dict) else None
+    if not config.initial:
+        if stored is not None or (ck is None and file.exists()):
+            raise UserError(f"{directory / rundir.CONFIG} names no start genome (initial) but the run was created with one; "
+                            "restore it, or start a new run")
+        return None
+    if stored is not None:
+        if not (isinstance(stored, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in stored)):
+            raise UserError(f"checkpoint {path} is malformed: start must be a list of numbers (the start genome) or null")
+        return config.episode.layout().validate(stored, what=f"checkpoint {path}: start")[0]
+    if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:
+        raise UserError(f"checkpoint {path} is malformed: start is null although the run's config names a start genome")
+    if file.exists():
+        genome, _, meta = load_genome(file)
+        if meta.get("source") != config.initial:
+            raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names {config.initial!r} "
+                            "as the start genome; restore it, or start a new run")
+        return genome
+    return None  # a run made before its directory kept the start genome: read from its source, as then

@@ -1,0 +1,568 @@
+"""Fault campaign on ``evobiped evolve`` (and the commands that read its files), for a release check.
+
+Fourteen classes of faults.  The first seven strike at random moments and are repeated ``--repeat`` times (50 or
+more for a release): a pool worker SIGKILLed, every worker killed, SIGTERM/SIGHUP to a worker, the resource
+tracker then a worker, every worker killed 2 to 6 pools in a row, the whole run SIGKILLed, and SIGINT/SIGTERM/SIGHUP
+to the run.  The other seven are fixed cases: tampered checkpoints, edited configs, hostile settings files, genome
+files, ``select`` on damaged runs, runs started ``--from`` a relative path and refusals before any worker starts.
+
+Each case ends in one verdict: ``identical`` (the run completed and equals an undisturbed one file for file, wall
+times aside), ``resumed`` (it stopped, with one line where it could say one, and ``--resume`` completed it, equal
+to an undisturbed one), ``refused, resumed`` (the workers died past the retries: one line, exit status 2, then
+the same), ``refused`` (one line on stderr, exit status 2, and nothing of the run directory changed where that is
+asked), or a failure: ``traceback``, ``hang`` (no answer within the
+time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs) and
+``other``.  The exit status is 1 when any case fails.
+
+    python scripts/fault_campaign.py --repeat 50 --out /tmp/campaign      # about an hour on 2 cores
+    python scripts/fault_campaign.py --repeat 2 --classes worker-sigkill group-kill
+
+Runs are tiny (8 walkers, 6 generations, 2 s episodes); everything is written under ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter, defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RUN = ["--population", "8", "--generations", "6", "--episode-seconds", "2", "--seed", "5", "--quiet"]
+PROCESS = [*RUN, "--backend", "process", "--workers", "2"]
+LIMIT = 180.0  # s: a case that takes longer hangs
+#: the last stderr line of each command run (``--show`` prints the fixed cases' answers)
+ANSWERS: list[str] = []
+#: the whole stderr of each command and run (a failed case's are kept beside its run directory)
+STDERR: list[str] = []
+FAILURES = ("traceback", "hang", "silent", "other")
+
+
+# ---- running the command
+def command(*args, cwd=None, env=None, timeout=LIMIT) -> tuple[int | None, str, str]:
+    """``evobiped ARGS`` in a child process: (exit status, None on a hang; stderr; stdout)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, env=env, text=True,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, err = p.communicate()
+        return None, err, out
+    ANSWERS.append((err.strip().splitlines() or [""])[-1])
+    STDERR.append(err)
+    return p.returncode, err, out
+
+
+def start(d: Path) -> subprocess.Popen:
+    def defaults():  # as a terminal delivers them, even where this runs under nohup
+        for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            signal.signal(s, signal.SIG_DFL)
+        os.setpgrp()
+
+    return subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *PROCESS, "--out", str(d)], text=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=defaults)
+
+
+def children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.append(int(stat.parent.name))
+    return out
+
+
+def is_tracker(pid: int) -> bool:
+    try:
+        return b"resource_tracker" in Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return False
+
+
+def workers(pid: int) -> list[int]:
+    return [k for k in children(pid) if not is_tracker(k)]
+
+
+#: what the random-moment trials of the current class did: trials that killed or signalled a live process
+#: (``struck``), that printed a retry (``retried``), that ended past the retries (``past the retries``)
+STRUCK: Counter = Counter()
+
+
+def kill(pid: int, sig=signal.SIGKILL) -> bool:
+    try:
+        os.kill(pid, sig)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def first_commit(p: subprocess.Popen, d: Path) -> None:
+    deadline = time.time() + LIMIT
+    while not (d / "checkpoint.json").exists() and p.poll() is None and time.time() < deadline:
+        time.sleep(0.002)
+
+
+def last_commit(p: subprocess.Popen, d: Path, generations: int = 6) -> None:
+    deadline = time.time() + LIMIT
+    while p.poll() is None and time.time() < deadline:
+        try:
+            if len(json.loads((d / "checkpoint.json").read_text())["history"]) >= generations:
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.002)
+
+
+def finish(p: subprocess.Popen) -> tuple[int | None, str]:
+    try:
+        _, err = p.communicate(timeout=LIMIT)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        _, err = p.communicate()
+        return None, err
+    STDERR.append(err)
+    return p.returncode, err
+
+
+# ---- comparing runs
+def contents(d: Path) -> dict:
+    """Every file of a run directory, wall-clock times left out (the recording as its fitness series)."""
+    from evobiped.record.evolution_log import recording_series
+
+    out = {}
+    for p in sorted(d.rglob("*")):
+        name = str(p.relative_to(d))
+        if not p.is_file() or name == ".lock" or name.startswith("selected"):
+            continue
+        if name == "evolution.rrd":
+            out[name] = [recording_series(p, f"/evolution/{s}") for s in ("best", "mean", "worst")]
+        elif name == "history.csv":
+            out[name] = [r[:8] + r[9:] for r in csv.reader(p.read_text().splitlines())]
+        elif name in ("checkpoint.json", "summary.json"):
+            obj = json.loads(p.read_text())
+            obj.pop("wall_seconds")
+            for row in obj.get("history", []):
+                row.pop()
+            out[name] = obj
+        else:
+            out[name] = p.read_bytes()
+    return out
+
+
+def files(d: Path) -> dict:
+    return {p: p.read_bytes() for p in d.rglob("*") if p.is_file() and p.name != ".lock"}
+
+
+#: a note a run prints as it goes on, not an error
+RETRY_NOTE = "evobiped: a worker died; evaluating its batch again"
+
+
+def one_line(err: str) -> bool:
+    """One line of error (beside the notes of retries before it), no traceback."""
+    lines = [x for x in err.splitlines() if not x.startswith(RETRY_NOTE)]
+    return len(lines) == 1 and err.endswith("\n") and "Traceback" not in err
+
+
+def verdict(rc, err: str, d: Path | None = None, reference: dict | None = None) -> str:
+    if rc is None:
+        return "hang"
+    if "Traceback" in err:
+        return "traceback"
+    if rc == 0:
+        return "identical" if reference is None or contents(d) == reference else "silent"
+    if rc == 2 and one_line(err):
+        return "refused"
+    return "other"
+
+
+def resumed(d: Path, reference: dict, rc, err: str) -> str:
+    """The verdict of a disturbed run (exit status ``rc``, stderr ``err``): then ``--resume`` until it completes (a
+    one-line refusal before is fine when the resumed run equals the undisturbed one)."""
+    if rc is None:
+        return "hang"
+    if "Traceback" in err:
+        return "traceback"
+    if rc not in (0, 2, -signal.SIGKILL, *(128 + s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP))) or rc == 2 and not one_line(err):
+        return "other"
+    how = "identical" if rc == 0 else "refused, resumed" if rc == 2 else "resumed"
+    for _ in range(3):
+        if (d / "summary.json").exists() and contents(d) == reference:
+            return how
+        rc, err, _ = command("evolve", "--resume", d, "--quiet")
+        v = verdict(rc, err)
+        if v in ("hang", "traceback", "other"):
+            return v
+        how = how if how != "identical" else "resumed"
+    return how if contents(d) == reference else "silent"
+
+
+# ---- the random-moment classes
+def _moment() -> float:
+    return random.uniform(0.0, 0.6)
+
+
+def worker_kill(d, reference, how: str) -> str:
+    p = start(d)
+    first_commit(p, d)
+    time.sleep(_moment())
+    ws = workers(p.pid)
+    hit = False
+    if how == "one" and ws:
+        hit = kill(random.choice(ws))
+    elif how == "all":
+        hit = any([kill(w) for w in ws])
+    elif how == "term" and ws:
+        hit = kill(random.choice(ws), random.choice([signal.SIGTERM, signal.SIGHUP]))
+    elif how == "tracker":
+        for k in children(p.pid):
+            if is_tracker(k):
+                kill(k)
+        time.sleep(random.uniform(0.0, 0.2))
+        ws = workers(p.pid)
+        if ws:
+            hit = kill(random.choice(ws))
+    elif how == "storm":
+        for _ in range(random.randint(2, 6)):
+            hit = any([kill(w) for w in workers(p.pid)]) or hit
+            time.sleep(random.uniform(0.05, 0.3))
+    rc, err = finish(p)
+    STRUCK["struck"] += hit
+    STRUCK["retried"] += RETRY_NOTE in err
+    STRUCK["past the retries"] += "workers died" in err
+    if rc == 2 and "workers died" not in err:
+        return "other"
+    return resumed(d, reference, rc, err)
+
+
+def group_kill(d, reference) -> str:
+    p = start(d)
+    first_commit(p, d)
+    time.sleep(_moment())
+    os.killpg(p.pid, signal.SIGKILL)
+    rc, err = finish(p)
+    STRUCK["struck"] += rc == -signal.SIGKILL
+    return resumed(d, reference, rc, err)
+
+
+def late_signal(d, reference) -> str:
+    p = start(d)
+    first_commit(p, d)
+    if random.random() < 0.5:  # any moment
+        time.sleep(random.uniform(0.0, 1.0))
+    else:  # within a tenth of a second of the final commit
+        last_commit(p, d)
+        time.sleep(random.uniform(0.0, 0.1))
+    sig = random.choice([signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+    kill(p.pid, sig)
+    rc, err = finish(p)
+    STRUCK["struck"] += rc != 0
+    if rc is None:
+        return "hang"
+    if "Traceback" in err:
+        return "traceback"
+    if rc == 0:  # finished before the signal came
+        return "identical" if contents(d) == reference else "silent"
+    if rc != 128 + sig or not one_line(err):
+        return "other"
+    complete = (d / "summary.json").exists() and contents(d) == reference
+    says = "run completed" in err if complete else "--resume" in err
+    if not says:
+        return "silent"
+    return "identical" if complete else resumed(d, reference, rc, err)
+
+
+RANDOM = {
+    "worker-sigkill": lambda d, ref: worker_kill(d, ref, "one"),
+    "workers-all": lambda d, ref: worker_kill(d, ref, "all"),
+    "worker-term-hup": lambda d, ref: worker_kill(d, ref, "term"),
+    "tracker-then-worker": lambda d, ref: worker_kill(d, ref, "tracker"),
+    "worker-storm": lambda d, ref: worker_kill(d, ref, "storm"),
+    "group-kill": group_kill,
+    "late-signal": late_signal,
+}
+
+
+# ---- the fixed classes
+def _case(name: str, v: str) -> tuple[str, str, str]:
+    """A fixed case's name, verdict and the last line its command printed."""
+    return name, v, ANSWERS[-1] if ANSWERS else ""
+
+
+def _tamper(path: Path, change) -> None:
+    path.write_text(json.dumps(change(json.loads(path.read_text()))))
+
+
+def _deep(n: int = 100_000) -> str:
+    return "[" * n + "]" * n
+
+
+CHECKPOINT = {
+    "empty population": lambda ck: {**ck, "optimizer": {**ck["optimizer"], "population": [], "fitness": []}},
+    "outcome deleted": lambda ck: {k: v for k, v in ck.items() if k != "outcome"},
+    "history terms deleted": lambda ck: {k: v for k, v in ck.items() if k != "history_terms"},
+    "outcome.walk deleted": lambda ck: {**ck, "outcome": {k: v for k, v in ck["outcome"].items() if k != "walk"}},
+    "start genome of booleans": lambda ck: {**ck, "start": [True] * 120},
+    "settings a number": lambda ck: {**ck, "settings": 5},
+    "best NaN": lambda ck: {**ck, "best": {**ck["best"], "fitness": float("nan")}},
+    "history row short": lambda ck: {**ck, "history": [r[:3] for r in ck["history"]]},
+    "population of strings": lambda ck: {**ck, "optimizer": {**ck["optimizer"], "population": [["x"] * 120] * 8}},
+    "genome of booleans": lambda ck: {**ck, "best_genome": [True] * 120},
+}
+
+
+def checkpoint_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    out = []
+    for name, change in CHECKPOINT.items():
+        d = work / f"ck-{len(out)}"
+        shutil.copytree(done, d)
+        _tamper(d / "checkpoint.json", change)
+        before = files(d)
+        rc, err, _ = command("evolve", "--resume", d)
+        v = verdict(rc, err)
+        out.append(_case(name, "silent" if v == "identical" or (v == "refused" and files(d) != before) else v))
+    d = work / "ck-deep"
+    shutil.copytree(done, d)
+    (d / "checkpoint.json").write_text(_deep())
+    rc, err, _ = command("evolve", "--resume", d)
+    out.append(_case("100,000-deep checkpoint", verdict(rc, err).replace("identical", "silent")))
+    return out
+
+
+def cma_cases(work: Path) -> list[tuple[str, str]]:
+    """An older CMA-ES checkpoint claiming 20,000 told generations; a CMA-ES strategy tampered with."""
+    d = work / "cma"
+    rc, err, _ = command("evolve", *RUN, "--optimizer", "cma", "--backend", "serial", "--out", d)
+    if rc != 0:
+        return [_case("cma run", verdict(rc, err))]
+    out = []
+    cases = {
+        "20,000 told generations": lambda ck: {**ck, "settings": ck["settings"], "optimizer": {"name": "cma", "generation": 20000,
+                                                "told": [[0.0] * len(ck["optimizer"]["fitness"])] * 20000, "fitness": ck["optimizer"]["fitness"]}},
+        "strategy names os.system": lambda ck: {**ck, "optimizer": json.loads(json.dumps(ck["optimizer"]).replace('"cma.sampler:', '"os:', 1))},
+        "strategy arrays cut": lambda ck: {**ck, "optimizer": json.loads(json.dumps(ck["optimizer"]).replace('"b64": "', '"b64": "AAAA', 1))},
+    }
+    for name, change in cases.items():
+        c = work / f"cma-{len(out)}"
+        shutil.copytree(d, c)
+        _tamper(c / "checkpoint.json", change)
+        rc, err, _ = command("evolve", "--resume", c, timeout=60)
+        out.append(_case(name, verdict(rc, err).replace("identical", "silent")))
+    return out
+
+
+CONFIG_EDITS = {
+    "seed": lambda c: {**c, "seed": 6},
+    "generations": lambda c: {**c, "generations": 7},
+    "body": lambda c: {**c, "episode": {**c["episode"], "body": "taga"}},
+    "episode seconds": lambda c: {**c, "episode": {**c["episode"], "seconds": 3.0}},
+    "environment": lambda c: {**c, "environment": {**c["environment"], "numpy": "1.0"}},
+    "population": lambda c: {**c, "ga": {**c["ga"], "population": 10}},
+    "start genome added": lambda c: {**c, "initial": "elsewhere.json"},
+}
+
+
+def config_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    out = []
+    for name, change in CONFIG_EDITS.items():
+        d = work / f"cfg-{len(out)}"
+        shutil.copytree(done, d)
+        (d / "summary.json").unlink()  # a run cut before its end
+        _tamper(d / "config.json", change)
+        rc, err, _ = command("evolve", "--resume", d)
+        v = verdict(rc, err)
+        out.append(_case(f"config.json {name} edited", "silent" if v == "identical" or (v == "refused" and "differs" not in err) else v))
+    return out
+
+
+SETTINGS = {
+    "100,000-deep TOML": "a = " + _deep(),
+    "episode = 5": "episode = 5",
+    "ga = [1, 2]": "ga = [1, 2]",
+    "cma = 3": "cma = 3",
+    "task_options a number": "[episode]\ntask_options = 3",
+    "a source at 1e300 m": "[episode]\ntask = \"steer\"\n[episode.task_options]\nsources = [[1e300, 3]]",
+    "population 5 million": "[ga]\npopulation = 5000000",
+}
+
+
+def settings_cases(work: Path) -> list[tuple[str, str]]:
+    out = []
+    for name, text in SETTINGS.items():
+        f = work / f"s{len(out)}.toml"
+        f.write_text(text + "\n")
+        d = work / f"s{len(out)}"
+        population = [] if "population" in name else ["--population", "4"]
+        rc, err, _ = command("evolve", "--config", f, "--episode-seconds", "1", *population, "--backend", "thread", "--workers", "2",
+                             "--out", d, "--quiet")
+        v = verdict(rc, err)
+        out.append(_case(name, "silent" if v == "identical" or d.exists() else v))
+    rc, err, _ = command("evolve", "--preset", "walker-ctrnn-distilled", "--out", work / "preset", "--quiet", timeout=60)
+    out.append(_case("preset needing --from without it", "silent" if rc == 0 or (work / "preset").exists() else verdict(rc, err)))
+    return out
+
+
+def genome_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    good = json.loads((done / "best.json").read_text())
+    cases = {
+        "genome of booleans": {**good, "genome": [True] * len(good["genome"])},
+        "short genome": {**good, "genome": good["genome"][:5]},
+        "outcome rows not a list": {**good, "outcome": {"fell": False, "rows": 5}},
+        "outcome rows of strings": {**good, "outcome": {"fell": False, "rows": [{"distance": "far"}]}},
+        "gene 1e300": {**good, "genome": [1e300] + good["genome"][1:]},
+    }
+    out = []
+    for name, obj in cases.items():
+        f = work / f"g{len(out)}.json"
+        f.write_text(json.dumps(obj))
+        rc, err, _ = command("replay", f, "--out", work / f"g{len(out)}.rrd", "--quiet")
+        out.append(_case(f"replay: {name}", verdict(rc, err).replace("identical", "silent")))
+    f = work / "deep.json"
+    f.write_text(_deep())
+    rc, err, _ = command("replay", f, "--quiet")
+    out.append(_case("replay: 100,000-deep genome file", verdict(rc, err).replace("identical", "silent")))
+    return out
+
+
+def _nan_best(path: Path) -> None:
+    rows = list(csv.reader(path.read_text().splitlines()))
+    rows[1][1] = "nan"
+    path.write_text("".join(",".join(r) + "\n" for r in rows))
+
+
+def select_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    def gen(d, change):
+        for p in sorted((d / "generations").glob("gen_*.json"))[:1]:
+            _tamper(p, change)
+
+    cases = {
+        "a short genome in a generation file": lambda d: gen(d, lambda g: {**g, "genome": g["genome"][:7]}),
+        "generation files of mixed controllers": lambda d: gen(d, lambda g: {**g, "episode": {**g["episode"], "controller": "matsuoka"}}),
+        "config names a number as its start genome": lambda d: _tamper(d / "config.json", lambda c: {**c, "initial": 5}),
+        "a NaN best in history.csv": lambda d: _nan_best(d / "history.csv"),
+    }
+    out = []
+    for name, damage in cases.items():
+        d = work / f"sel-{len(out)}"
+        shutil.copytree(done, d)
+        damage(d)
+        rc, err, _ = command("select", d, "--top", "8", "--seconds", "1")
+        out.append(_case(f"select: {name}", verdict(rc, err).replace("identical", "silent")))
+    return out
+
+
+def start_cases(work: Path) -> list[tuple[str, str]]:
+    """A run started --from a relative path, resumed from another directory (cut, and complete), its source gone."""
+    here = work / "from"
+    here.mkdir()
+    ref = work / "from-ref"
+    rc, err, _ = command("evolve", *RUN, "--backend", "serial", "--out", ref)
+    if rc != 0:
+        return [_case("--from setup", verdict(rc, err))]
+    shutil.copy(ref / "best.json", here / "seed.json")
+    whole = here / "whole"
+    rc, err, _ = command("evolve", *RUN, "--backend", "serial", "--from", "seed.json", "--out", "whole", cwd=here)
+    if rc != 0:
+        return [_case("--from run", verdict(rc, err))]
+    reference = contents(whole)
+    out = []
+    for n in (4, 9, 14):  # cut before the first commit, in the middle, at the end
+        d = here / f"cut{n}"
+        command("evolve", *RUN, "--backend", "serial", "--from", "seed.json", "--out", d.name, cwd=here,
+                env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(n)})
+        elsewhere = work / f"elsewhere{n}"
+        elsewhere.mkdir()
+        (here / "seed.json").rename(here / "seed.moved")
+        try:
+            rc, err, _ = command("evolve", "--resume", d, "--quiet", cwd=elsewhere)
+        finally:
+            (here / "seed.moved").rename(here / "seed.json")
+        out.append(_case(f"--from seed.json, cut at write {n}, resumed elsewhere", verdict(rc, err, d, reference)))
+    rc, err, _ = command("evolve", "--resume", whole, cwd=work)
+    out.append(_case("--from seed.json, complete, resumed elsewhere", verdict(rc, err)))
+    return out
+
+
+FIXED = {
+    "checkpoint": checkpoint_cases,
+    "cma-checkpoint": lambda work, done: cma_cases(work),
+    "config-edit": config_cases,
+    "settings-file": lambda work, done: settings_cases(work),
+    "genome-file": genome_cases,
+    "select": select_cases,
+    "start-genome": lambda work, done: start_cases(work),
+}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeat", type=int, default=50, help="trials of each random-moment class (default 50)")
+    ap.add_argument("--out", default="/tmp/evobiped-fault-campaign", help="working folder (emptied first)")
+    ap.add_argument("--classes", nargs="*", help=f"only these: {', '.join([*RANDOM, *FIXED])}")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the random moments")
+    ap.add_argument("--show", action="store_true", help="print each fixed case's verdict and the command's last line")
+    args = ap.parse_args()
+    random.seed(args.seed)
+    work = Path(args.out)
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    classes = args.classes or [*RANDOM, *FIXED]
+    unknown = set(classes) - set(RANDOM) - set(FIXED)
+    if unknown:
+        ap.error(f"unknown classes {sorted(unknown)}")
+    ref_dir = work / "reference"
+    rc, err, _ = command("evolve", *PROCESS, "--out", ref_dir)
+    assert rc == 0, err
+    reference = contents(ref_dir)
+    done = work / "done"  # a completed serial run to damage (the fixed classes)
+    if set(classes) & set(FIXED):
+        rc, err, _ = command("evolve", *RUN, "--backend", "serial", "--out", done)
+        assert rc == 0, err
+    results: dict[str, Counter] = defaultdict(Counter)
+    notes = []
+    t0 = time.time()
+    for name in classes:
+        STRUCK.clear()
+        if name in RANDOM:
+            for i in range(args.repeat):
+                d = work / f"{name}-{i}"
+                STDERR.clear()
+                v = RANDOM[name](d, reference)
+                results[name][v] += 1
+                if v in FAILURES:
+                    notes.append(f"{name} #{i}: {v} ({d}; its commands' stderr in {d}.stderr)")
+                    Path(f"{d}.stderr").write_text("\n----\n".join(STDERR))
+                else:
+                    shutil.rmtree(d, ignore_errors=True)
+        else:
+            for case, v, answer in FIXED[name](work, done):
+                if args.show:
+                    print(f"  {case}: {v}: {answer}")
+                results[name][v] += 1
+                if v in FAILURES:
+                    notes.append(f"{name}: {case}: {v}")
+        struck = f"  ({', '.join(f'{k} {n}' for k, n in STRUCK.items())})" if name in RANDOM else ""
+        print(f"{name:<22} {sum(results[name].values()):>4} cases  " + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())) + struck,
+              flush=True)
+    total = sum((sum(c.values()) for c in results.values()))
+    failed = {f: sum(c[f] for c in results.values()) for f in FAILURES}
+    print(f"{total} cases in {len(results)} classes, {time.time() - t0:.0f} s: " + ", ".join(f"{n} {f}" for f, n in failed.items()))
+    for n in notes:
+        print("  " + n)
+    return 1 if any(failed.values()) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

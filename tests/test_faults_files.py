@@ -1,0 +1,228 @@
+"""What a run reads back: a self-contained checkpoint (the start genome inside), config.json's edits refused by
+name, every file a command takes read with limits and checked against the declarations, refusals before any
+worker starts, and a stop signal's line saying whether the run is complete.  Each case is one line and exit
+status 2, or a run equal to an undisturbed one."""
+
+import json
+import shutil
+import time
+
+import pytest
+
+from .conftest import cli
+from .test_faults import RUN, contents, files, one_line_error
+
+DEEP = "[" * 100_000 + "]" * 100_000
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    d = tmp_path_factory.mktemp("fin") / "run"
+    assert cli("evolve", *RUN, "--out", d) == 0
+    return d
+
+
+@pytest.fixture
+def run(finished, tmp_path):
+    d = tmp_path / "run"
+    shutil.copytree(finished, d)
+    return d
+
+
+def edit(path, change):
+    path.write_text(json.dumps(change(json.loads(path.read_text()))))
+
+
+# ---- config.json edited: refused by name
+EDITS = {
+    "seed": (lambda c: {**c, "seed": 4}, "seed 3 → 4"),
+    "generations": (lambda c: {**c, "generations": 3}, "generations 2 → 3"),
+    "body": (lambda c: {**c, "episode": {**c["episode"], "body": "taga"}}, 'episode.body "reil" → "taga"'),
+    "perturbations": (lambda c: {**c, "episode": {**c["episode"], "perturbations": {"presentations": 2}}}, "episode.perturbations"),
+    "environment": (lambda c: {**c, "environment": {**c["environment"], "numpy": "1.0"}}, 'environment.numpy "'),
+}
+
+
+@pytest.mark.parametrize("name", EDITS)
+def test_an_edited_config_is_refused_by_name(run, capsys, name):
+    change, words = EDITS[name]
+    (run / "summary.json").unlink()  # cut before its end
+    edit(run / "config.json", change)
+    before = files(run)
+    assert cli("evolve", "--resume", run) == 2
+    one_line_error(capsys.readouterr().err, "config.json differs from the one this checkpoint was made with", words)
+    assert files(run) == before
+
+
+def test_where_the_episodes_run_may_change(run, capsys):
+    edit(run / "config.json", lambda c: {**c, "backend": "thread", "workers": 2})
+    assert cli("evolve", "--resume", run) == 0
+    assert "already complete" in capsys.readouterr().out
+
+
+DELETED = {"outcome": "outcome is missing", "history_terms": "history_terms is missing", "best_walk": "best_walk is missing",
+           "start": "start is missing"}
+
+
+@pytest.mark.parametrize("key", DELETED)
+def test_a_checkpoint_missing_what_it_always_holds_is_refused(run, capsys, key):
+    edit(run / "checkpoint.json", lambda ck: {k: v for k, v in ck.items() if k != key})
+    assert cli("evolve", "--resume", run) == 2
+    one_line_error(capsys.readouterr().err, DELETED[key])
+
+
+# ---- the start genome lives in the run directory
+def test_a_run_from_a_relative_path_resumes_anywhere_with_its_source_gone(finished, tmp_path, monkeypatch, capsys):
+    here, elsewhere = tmp_path / "here", tmp_path / "elsewhere"
+    here.mkdir(), elsewhere.mkdir()
+    shutil.copy(finished / "best.json", here / "seed.json")
+    monkeypatch.chdir(here)
+    assert cli("evolve", *RUN, "--from", "seed.json", "--out", "whole") == 0
+    def stop_after_first(*a):
+        raise KeyboardInterrupt
+
+    import evobiped.evolution.run as runmod
+
+    monkeypatch.setattr(runmod.Run, "finish", stop_after_first)  # cut after its last commit, before the summary
+    assert cli("evolve", *RUN, "--from", "seed.json", "--out", "cut") == 130
+    assert "before summary.json was written; the run is complete once evobiped evolve --resume" in capsys.readouterr().err
+    monkeypatch.undo()
+    (here / "seed.json").unlink()
+    monkeypatch.chdir(elsewhere)
+    assert cli("evolve", "--resume", here / "cut", "--quiet") == 0
+    assert cli("evolve", "--resume", here / "whole", "--quiet") == 0
+    assert "started from" not in capsys.readouterr().err
+    assert contents(here / "cut") == contents(here / "whole")
+    assert json.loads((here / "whole" / "start.json").read_text())["source"] == "seed.json"
+
+
+def test_a_start_genome_that_differs_from_the_config_is_refused(finished, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(finished / "best.json", tmp_path / "seed.json")
+    assert cli("evolve", *RUN, "--from", "seed.json", "--out", "r") == 0
+    edit(tmp_path / "r" / "checkpoint.json", lambda ck: {**ck, "start": [True] * len(ck["start"])})
+    assert cli("evolve", "--resume", "r") == 2
+    one_line_error(capsys.readouterr().err, "start must be a list of numbers")
+
+
+# ---- files read with limits and checked against the declarations
+def test_deep_nesting_in_any_file_is_one_line(run, tmp_path, capsys):
+    (run / "checkpoint.json").write_text(DEEP)
+    assert cli("evolve", "--resume", run) == 2
+    one_line_error(capsys.readouterr().err, "nested more than 32 deep")
+    (tmp_path / "c.toml").write_text("a = " + DEEP + "\n")
+    assert cli("evolve", "--config", tmp_path / "c.toml", "--out", tmp_path / "x") == 2
+    one_line_error(capsys.readouterr().err, "nested more than 32 deep")
+    (tmp_path / "g.json").write_text(DEEP)
+    assert cli("replay", tmp_path / "g.json", "--quiet") == 2
+    one_line_error(capsys.readouterr().err, "nested more than 32 deep")
+    (tmp_path / "g.json").write_text("[" * 40 + "]" * 40)  # parses, but deeper than any file of evobiped's
+    assert cli("replay", tmp_path / "g.json", "--quiet") == 2
+    one_line_error(capsys.readouterr().err, "nested more than 32 deep")
+
+
+@pytest.mark.parametrize("text, words", [("episode = 5", "episode: must be a table"), ("ga = [1, 2]", "ga: must be a table"),
+                                         ("cma = 3", "cma: must be a table"), ("[episode]\ntask_options = 3", "episode.task_options: must be")])
+def test_a_table_of_the_wrong_type_is_one_line(tmp_path, capsys, text, words):
+    (tmp_path / "c.toml").write_text(text + "\n")
+    assert cli("evolve", "--config", tmp_path / "c.toml", "--population", "4", "--episode-seconds", "1", "--cyclic", "--out", tmp_path / "x") == 2
+    one_line_error(capsys.readouterr().err, words)
+    assert not (tmp_path / "x").exists()
+
+
+def test_an_empty_population_in_the_checkpoint_is_one_line(run, capsys):
+    edit(run / "checkpoint.json", lambda ck: {**ck, "optimizer": {**ck["optimizer"], "population": [], "fitness": []}})
+    assert cli("evolve", "--resume", run) == 2
+    one_line_error(capsys.readouterr().err, "ga.population must be a non-empty list")
+
+
+GENOMES = {
+    "booleans": (lambda g: {**g, "genome": [True] * len(g["genome"])}, "'genome' must be a list of numbers"),
+    "short": (lambda g: {**g, "genome": g["genome"][:5]}, "has 5 genes, the layout needs"),
+    "outcome rows a number": (lambda g: {**g, "outcome": {"fell": False, "rows": 5}}, "'outcome' must be"),
+    "outcome rows of strings": (lambda g: {**g, "outcome": {"fell": False, "rows": [{"distance": "far"}]}}, "'outcome' must be"),
+}
+
+
+@pytest.mark.parametrize("name", GENOMES)
+def test_a_malformed_genome_file_is_one_line(run, tmp_path, capsys, name):
+    change, words = GENOMES[name]
+    f = tmp_path / "g.json"
+    shutil.copy(run / "best.json", f)
+    edit(f, change)
+    assert cli("replay", f, "--out", tmp_path / "r.rrd", "--quiet") == 2
+    one_line_error(capsys.readouterr().err, words)
+
+
+def test_a_nan_best_in_the_history_is_one_line(run, capsys):
+    rows = (run / "history.csv").read_text().splitlines()
+    cells = rows[1].split(",")
+    cells[1] = "nan"
+    (run / "history.csv").write_text("\n".join([rows[0], ",".join(cells), *rows[2:]]) + "\n")
+    assert cli("select", run, "--seconds", "1") == 2
+    one_line_error(capsys.readouterr().err, "best of row 1 is nan, not a fitness")
+
+
+SELECT = {
+    "short genome": (lambda d: edit(d / "generations" / "gen_0000.json", lambda g: {**g, "genome": g["genome"][:7]}), "has 7 genes"),
+    "start genome a number": (lambda d: edit(d / "config.json", lambda c: {**c, "initial": 5}), "initial: must be a non-empty string"),
+    "another episode": (lambda d: edit(d / "generations" / "gen_0001.json", lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}}),
+                        "of another episode than the run's"),
+}
+
+
+@pytest.mark.parametrize("name", SELECT)
+def test_select_on_a_damaged_run_is_one_line(run, capsys, name):
+    damage, words = SELECT[name]
+    damage(run)
+    assert cli("select", run, "--seconds", "1") == 2
+    one_line_error(capsys.readouterr().err, words)
+
+
+def test_an_older_cma_log_longer_than_the_history_is_refused_at_once(tmp_path, capsys):
+    d = tmp_path / "cma"
+    assert cli("evolve", *RUN, "--optimizer", "cma", "--out", d) == 0
+    lam = len(json.loads((d / "checkpoint.json").read_text())["optimizer"]["fitness"])
+    edit(d / "checkpoint.json", lambda ck: {**ck, "optimizer": {"name": "cma", "generation": 20000, "told": [[0.0] * lam] * 20000,
+                                                                "fitness": [None] * lam}})
+    t = time.perf_counter()
+    assert cli("evolve", "--resume", d) == 2
+    assert time.perf_counter() - t < 10
+    one_line_error(capsys.readouterr().err, "history has 2 rows for generation 20000")
+
+
+# ---- refused before any worker starts or file is written
+def test_a_population_beyond_memory_is_refused_before_any_worker(tmp_path, capsys, monkeypatch):
+    import evobiped.evolution.evaluate as evaluate
+
+    def no_workers(*a, **k):
+        raise AssertionError("workers started")
+
+    monkeypatch.setattr(evaluate, "make_evaluator", no_workers)
+    assert cli("evolve", "--population", "5000000", "--backend", "thread", "--workers", "2", "--out", tmp_path / "x") == 2
+    one_line_error(capsys.readouterr().err, "population 5000000 needs about")
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_preset_that_tunes_a_given_genome_needs_from(tmp_path, capsys):
+    assert cli("evolve", "--preset", "walker-ctrnn-distilled", "--out", tmp_path / "x") == 2
+    one_line_error(capsys.readouterr().err, "--preset walker-ctrnn-distilled: tunes a given genome", "--from")
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_source_beyond_10_km_is_one_line(tmp_path, capsys):
+    assert cli("evolve", "--task", "steer", "--source", "1e300", "3", "--out", tmp_path / "x") == 2
+    one_line_error(capsys.readouterr().err, "farther than 10000 m")
+
+
+# ---- a stop signal at the very end says whether the run is complete
+def test_a_stop_signal_after_the_last_file_says_the_run_is_complete(tmp_path, capsys, monkeypatch):
+    import evobiped.cli.evolve_cmd as evolve_cmd
+
+    def interrupted(*a):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(evolve_cmd, "hms", interrupted)  # while the final line is written
+    assert cli("evolve", *RUN, "--out", tmp_path / "r") == 130
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "interrupted after the run completed: all 2 generations and summary.json are written" in err, err

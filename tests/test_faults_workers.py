@@ -1,0 +1,124 @@
+"""Worker death at every point of a pool's life: while batches are fed, while they are collected, between
+generations; on the process and thread backends.  The retries give an undisturbed run's results; past the
+limit, one line and the last checkpoint kept.  ``scripts/fault_campaign.py`` repeats the random moments many
+times for a release; here a few of each run in seconds."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evobiped.episode import EpisodeConfig
+from evobiped.errors import UserError
+from evobiped.evolution.evaluate import MAX_RETRIES, ProcessPoolEvaluator, SerialEvaluator, ThreadEvaluator
+
+ROOT = Path(__file__).resolve().parents[1]
+CFG = EpisodeConfig(seconds=0.2)
+
+
+def genomes(n=6):
+    return CFG.layout().sample(np.random.default_rng(1), n)
+
+
+def same(a, b) -> bool:
+    return np.array_equal(a.fitness, b.fitness) and np.array_equal(a.end_time, b.end_time) and np.array_equal(a.fell, b.fell)
+
+
+def dead(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+@pytest.mark.parametrize("how", ["one", "all"])
+def test_workers_killed_between_generations_cost_one_retry(how):
+    """A pool broken while idle (its workers killed between two generations) refuses the next batch at once;
+    that costs a retry, not the run."""
+    g = genomes()
+    want = SerialEvaluator(CFG).evaluate(g)
+    retries = []
+    with ProcessPoolEvaluator(CFG, 2, on_retry=lambda n, limit: retries.append((n, limit))) as ev:
+        assert same(ev.evaluate(g), want)
+        procs = list(ev.pool._processes.values())
+        for p in procs[:1] if how == "one" else procs:
+            os.kill(p.pid, signal.SIGKILL)
+        deadline = time.time() + 10
+        while not all(dead(p.pid) for p in procs[:1]) and time.time() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.2)  # the pool's manager thread finds the death
+        assert same(ev.evaluate(g), want)
+    assert retries == [(1, MAX_RETRIES)]
+
+
+def test_a_pool_that_breaks_at_every_submit_stops_after_the_last_retry(monkeypatch):
+    """Every fresh pool refuses its batches (as one whose workers died at once): MAX_RETRIES retries, then one UserError."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    class Broken:
+        def submit(self, *a, **k):
+            raise BrokenProcessPool("a child process terminated abruptly")
+
+        def shutdown(self, *a, **k):
+            pass
+
+    monkeypatch.setattr(ProcessPoolEvaluator, "_new_pool", lambda self: Broken())
+    retries = []
+    ev = ProcessPoolEvaluator(CFG, 2, on_retry=lambda n, limit: retries.append(n))
+    with pytest.raises(UserError, match=f"workers died {MAX_RETRIES + 1} times in one generation"):
+        ev.evaluate(genomes())
+    assert retries == list(range(1, MAX_RETRIES + 1))
+
+
+def test_a_thread_batch_that_runs_out_of_memory_is_evaluated_again(tmp_path, monkeypatch):
+    marker = tmp_path / "kill-one-worker"
+    marker.touch()
+    monkeypatch.setenv("EVOBIPED_FAULT_KILL_WORKER", str(marker))
+    g = genomes()
+    want = SerialEvaluator(CFG).evaluate(g)
+    retries = []
+    with ThreadEvaluator(CFG, 2, on_retry=lambda n, limit: retries.append((n, limit))) as ev:
+        assert same(ev.evaluate(g), want)
+    assert not marker.exists() and retries == [(1, MAX_RETRIES)]
+
+
+def test_thread_batches_that_keep_dying_stop_after_the_last_retry(tmp_path, monkeypatch):
+    marker = tmp_path / "kill-one-worker"
+    marker.touch()
+    monkeypatch.setenv("EVOBIPED_FAULT_KILL_WORKER", str(marker))
+    with ThreadEvaluator(CFG, 1, on_retry=lambda n, limit: marker.touch()) as ev:
+        with pytest.raises(UserError, match="ran out of memory 4 times"):
+            ev.evaluate(genomes(2))
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+def test_workers_killed_at_random_moments(tmp_path):
+    """The release check's random-moment classes, once each: every run completes equal to an undisturbed one."""
+    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "fault_campaign.py"), "--repeat", "1", "--seed", "7", "--out",
+                        str(tmp_path / "c"), "--classes", "worker-sigkill", "worker-storm", "late-signal"],
+                       capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "0 traceback, 0 hang, 0 silent, 0 other" in r.stdout
+
+
+def test_a_pool_that_breaks_while_it_starts_its_workers_costs_a_retry(monkeypatch):
+    """A worker killed while the next is spawned: the shared pipe is closed under the spawn (OSError, not
+    BrokenProcessPool); a retry like any other death."""
+    g = genomes()
+    want = SerialEvaluator(CFG).evaluate(g)
+    retries = []
+    with ProcessPoolEvaluator(CFG, 2, on_retry=lambda n, limit: retries.append(n)) as ev:
+        broken = ev.pool
+
+        def closed(*a, **k):
+            raise OSError("handle is closed")
+
+        monkeypatch.setattr(broken, "submit", closed)
+        assert same(ev.evaluate(g), want)
+    assert retries == [1]
