@@ -110,17 +110,18 @@ def presets_table() -> str:
     """The shipped presets: controller, optimizer and population, generations and episodes, and the preset's own line."""
     from .evolution.run_config import RunConfig
     from .fileio import read_toml
-    from .presets import describe, names, path
+    from .presets import describe, names, path, split_declarations
 
     rows = ["| preset | controller | optimizer, population | generations × episode | what it is |", "|---|---|---|---|---|"]
     for name in names():
-        c = RunConfig.from_dict(read_toml(path(name)), where=f"preset {name}")
+        settings, declared = split_declarations(name, read_toml(path(name)))
+        c = RunConfig.from_dict(settings, where=f"preset {name}")
         population = getattr(getattr(c, c.optimizer, None), "population", None)  # the optimizer's own table
         if c.optimizer == "es":  # ES: mirrored pairs and theta's own rows, not a population table
             population = 2 * c.es.pairs + c.es.evaluation_rows
         pop = f", {population}" if population else ", its default (CMA-ES: 4 + ⌊3 ln genes⌋)"
         episode = f"{c.generations} × {c.episode.seconds:g} s"
-        what = describe(name).replace("|", "\\|")  # a table cell
+        what = describe(name).replace("|", "\\|") + (" (needs `--from`)" if declared["needs_start"] else "")  # a table cell
         rows.append(f"| `{name}` | `{c.episode.controller}` | {c.optimizer}{pop} | {episode} | {what} |")
     return "\n".join(rows) + "\n"
 

@@ -63,8 +63,10 @@ def test_a_bad_student_is_one_line():
     _, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed3.json")
     with pytest.raises(ConfigError, match="n_neurons must be > 0"):
         student_config(cfg, {"n_neurons": 0})
-    with pytest.raises(ConfigError, match="normalises its inputs, but no standing value"):
+    with pytest.raises(ConfigError, match="gives centred_full outputs, which body 'taga' cannot take as torques"):
         student_config(EpisodeConfig(body="taga", controller="matsuoka"), {"inputs": ["link_angles"]}).build()
+    with pytest.raises(ConfigError, match="inputs \\['height'\\] are not sensors of the body or task"):
+        student_config(cfg, {"inputs": ["height"]}).build()
 
 
 def test_selection_trusts_the_long_run_over_the_episode():

@@ -45,7 +45,7 @@ def run_select_cmd(args) -> int:
     run = RunConfig.from_dict({k: v for k, v in cfg.items() if k not in ("evobiped", "environment")}, where=str(d / rundir.CONFIG))
     candidates = [load_genome(p) for p in paths]
     for p, (_, ep, _) in zip(paths, candidates):  # one experiment's walkers (what a generation froze in aside)
-        if _experiment(ep) != _experiment(run.episode):
+        if _experiment(ep, run) != _experiment(run.episode, run):
             raise UserError(f"{p} holds a {ep.body}/{ep.controller} genome of another episode than the run's "
                             f"({run.episode.body}/{run.episode.controller} in {rundir.CONFIG}): the run directory is mixed")
     labels = [f"generation {g}" for g in top]
@@ -82,13 +82,16 @@ def run_select_cmd(args) -> int:
     return 0
 
 
-def _experiment(episode) -> dict:
-    """An episode config as a table without what a run sets per generation (the normaliser, the curriculum phase's
-    weights and episode length: evobiped.evolution.run_context), so generation files of one run compare equal."""
+def _experiment(episode, run) -> dict:
+    """An episode config as a table without what ``run`` sets per generation (its running normaliser, its curriculum
+    phase's weights and episode length: evobiped.evolution.run_context), so generation files of one run compare equal."""
     d = episode.to_dict()
-    d.pop("seconds", None)
-    d["controller_options"] = {k: v for k, v in d["controller_options"].items() if k != "input_norm"}
-    d["task_options"] = {k: v for k, v in d["task_options"].items() if k != "weights"}
+    if run.curriculum.seconds:
+        d.pop("seconds", None)
+    if run.normalise.running:
+        d["controller_options"] = {k: v for k, v in d["controller_options"].items() if k != "input_norm"}
+    if run.curriculum.phases:
+        d["task_options"] = {k: v for k, v in d["task_options"].items() if k != "weights"}
     return d
 
 

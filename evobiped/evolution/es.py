@@ -34,7 +34,7 @@ from ..errors import ConfigError, UserError
 from ..genome import GenomeLayout
 from ..options import check_fields, option
 from .base import Optimizer, OptimizerState, frozen_array
-from .ga import generation_rng
+from .ga import MAX_POPULATION, generation_rng
 
 BETA1, BETA2, EPS = 0.9, 0.999, 1e-8
 
@@ -45,7 +45,7 @@ class ESOptions:
 
     method: str = option("openai", "`openai`: OpenAI-ES (centred ranks, Adam); `ars`: ARS V2-t (top directions, SGD)",
                          choices=("openai", "ars"))
-    pairs: int = option(16, "N, mirrored pairs theta +- sigma eps per generation", low=1, high=100000, integer=True)
+    pairs: int = option(16, "N, mirrored pairs theta +- sigma eps per generation", low=1, high=MAX_POPULATION // 2, integer=True)
     evaluation_rows: int = option(1, "rows of theta itself per generation (its walkers report the run; each meets every presentation)",
                                   low=1, high=64, integer=True)
     sigma: float = option(0.05, "sampling step", unit="gene units", above=0)

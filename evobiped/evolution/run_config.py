@@ -58,10 +58,11 @@ class RunConfig:
 
     def __post_init__(self):
         check_fields(self, "")
-        if self.normalise.running and not self.episode.parts()[1].normalises_inputs:
+        if self.normalise.running and not self.episode.parts()[1].normalises_inputs:  # (parts built only when asked for)
             raise ConfigError(f"normalise.running: controller {self.episode.controller!r} reads raw senses here "
                               "(it does not normalise its inputs)")
-        Curriculum(self.curriculum).check(self.episode.parts()[2])
+        if self.curriculum.phases:
+            Curriculum(self.curriculum).check(self.episode.parts()[2])
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
