@@ -59,3 +59,36 @@ def stop_on_signals() -> Callable[[], None]:
 def exit_status(exc: KeyboardInterrupt) -> int:
     """128 + the number of the signal that interrupted the command (130 for Ctrl-C)."""
     return 128 + getattr(exc, "signum", int(signal.SIGINT))
+
+
+#: a duplicate of the real standard error, kept by :func:`keep_stderr` (None: not kept)
+_STDERR_FD: int | None = None
+
+
+def keep_stderr() -> None:
+    """Keep a duplicate of file descriptor 2 as it is now (a command's start), for :func:`last_line`."""
+    global _STDERR_FD
+    import os
+
+    if _STDERR_FD is not None:  # a command run again in this process: descriptor 2 as it is now
+        os.close(_STDERR_FD)
+    try:
+        _STDERR_FD = os.dup(2)
+    except OSError:
+        _STDERR_FD = None
+
+
+def last_line(message: str) -> None:
+    """Print ``message`` (a command's last word: an error, an interruption) on the real standard error, even at an
+    instant when another thread has sent descriptor 2 to /dev/null (the process pool does while it relaunches
+    multiprocessing's resource tracker)."""
+    import os
+    import sys
+
+    if _STDERR_FD is None or sys.stderr is not sys.__stderr__:  # none kept, or stderr replaced (a caller captures it)
+        print(message, file=sys.stderr, flush=True)
+        return
+    sys.stderr.flush()
+    data = (message + "\n").encode(errors="replace")
+    while data:
+        data = data[os.write(_STDERR_FD, data):]

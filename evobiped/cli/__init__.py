@@ -19,7 +19,7 @@ import sys
 from types import ModuleType
 
 from .. import __version__
-from ..errors import STOP_SIGNALS, UserError, exit_status, stop_on_signals
+from ..errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, last_line, stop_on_signals
 
 #: how every refusal begins, a bad argument's and a UserError's alike
 ERROR = "evobiped: error: "
@@ -56,11 +56,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    keep_stderr()  # the last line reaches the user whatever a pool's thread does with descriptor 2 at that instant
     restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
     try:
         return int(args.func(args) or 0)
     except UserError as exc:
-        print(f"{ERROR}{exc}", file=sys.stderr)
+        last_line(f"{ERROR}{exc}")
         return 2
     except BrokenPipeError:  # the reader went away (`evobiped presets | head -1`): stop quietly, as cat does
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
@@ -73,10 +74,10 @@ def main(argv: list[str] | None = None) -> int:
         where = Path(exc.filename)
         if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
             where = where.parent
-        print(f"{ERROR}cannot access {where}: {exc.strerror or exc}", file=sys.stderr)
+        last_line(f"{ERROR}cannot access {where}: {exc.strerror or exc}")
         return 2
     except KeyboardInterrupt as exc:
-        print("evobiped: interrupted", file=sys.stderr)
+        last_line("evobiped: interrupted")
         return exit_status(exc)
     finally:
         restore()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import sys
 
-from ..errors import UserError, exit_status
+from ..errors import UserError, exit_status, last_line
 from ..flags import RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config, walk_line
 from ..progress import Progress, hms
 
@@ -115,7 +115,7 @@ def _evolve(run, evaluator, backend: str, args) -> int:
             f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
         return _generations(run, evaluator, c, say, args)
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP, at any moment (closing the workers, the last line)
-        print(_stopped(run), file=sys.stderr)
+        last_line(_stopped(run))
         return exit_status(exc)
 
 

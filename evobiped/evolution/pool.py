@@ -45,9 +45,11 @@ def silenced_stderr():
             os.dup2(null.fileno(), 2)
         yield
     finally:
-        sys.stderr.flush()
-        os.dup2(saved, 2)
-        os.close(saved)
+        try:
+            sys.stderr.flush()
+        finally:  # a stop signal raised in the flush must not leave fd 2 on /dev/null (the "interrupted" line would vanish)
+            os.dup2(saved, 2)
+            os.close(saved)
 
 
 def _die_with(parent: int) -> None:

@@ -1,0 +1,20 @@
+"""One episode = body + controller + task, run for a whole population at once.
+
+Control ticks at the controller's period (0.02 s for the CTRNN) over finer
+physics steps stepped in C (``mujoco.batch``); bodies with custom forces (the
+Taga ground) get them before every physics step.  A walker's episode ends at
+``seconds`` or when it falls; a simulation that blows up counts as a fall.
+Row p of every result depends only on genome p: the same genome gives the
+bit-identical fitness alone or inside any batch.
+
+The package's modules, one concept each: :mod:`.config` (what to simulate, built once), :mod:`.state` (an
+episode in progress as a value, a run's per-generation context, listeners), :mod:`.loop` (the one loop,
+:class:`Episode`), :mod:`.disturbances` (what a trial applies while it runs), :mod:`.senses` (what a controller reads each tick).
+"""
+
+from .config import MAX_STEPS, MAX_TICKS, EpisodeConfig, build_episode, check_timing
+from .loop import Episode
+from .state import Context, EpisodeState, Listener, Listeners, Pose, sense_sums
+
+__all__ = ["MAX_STEPS", "MAX_TICKS", "Context", "Episode", "EpisodeConfig", "EpisodeState", "Listener", "Listeners", "Pose",
+           "build_episode", "check_timing", "sense_sums"]

@@ -1,0 +1,201 @@
+"""What to simulate (:class:`EpisodeConfig`): registry names, their options parsed once, the episode's length and
+timing checked; the one path every episode is built by (:meth:`EpisodeConfig.build`)."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..bodies import BODIES
+from ..bodies.base import Body
+from ..contract import Offer, normaliser, wire
+from ..controllers import CONTROLLERS
+from ..controllers.base import Controller
+from ..errors import ConfigError
+from ..frame import StanceFrame
+from ..genome import GenomeLayout
+from ..mapping import MAPS
+from ..options import given, parse, refuse_unknown
+from ..perturb import PerturbationOptions
+from ..tasks import TASKS
+from ..tasks.base import Task
+from ..validate import number
+
+if TYPE_CHECKING:
+    from .loop import Episode
+
+
+#: the most control ticks, and physics steps, one walker's episode may take
+MAX_TICKS = 10**7
+MAX_STEPS = 10**8
+
+
+def check_timing(body: Body, controller: Controller | None, seconds: float, *,
+                 control_dt: float | None = None) -> tuple[float, int]:
+    """``(control period in s, physics steps per control tick)`` of an episode of ``seconds`` s; ConfigError
+    when the controller's outputs do not map onto the body's actions, the period is no multiple of the
+    physics step, or the episode is not 1 to MAX_TICKS ticks and at most MAX_STEPS physics steps per walker.
+    Without a controller (actions from outside) the period is ``control_dt``."""
+    if controller is None:
+        if control_dt is None:
+            raise ConfigError("an episode without a controller needs its control period (control_dt)")
+        number(control_dt, "control_dt:", above=0, unit="s")
+        dt = float(control_dt)
+    else:
+        if (controller.output_kind, body.action_kind) not in MAPS:
+            raise ConfigError(
+                f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} cannot take as {body.action_kind}s"
+            )
+        dt = controller.dt if controller.dt is not None else body.timestep
+    ratio = dt / body.timestep
+    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        raise ConfigError(f"control period {dt} s is not a multiple of the physics step {body.timestep} s")
+    ticks = seconds / dt
+    if not 1 <= round(ticks) <= MAX_TICKS:
+        raise ConfigError(f"episode seconds = {seconds!r} gives {ticks:.3g} control ticks of {dt:g} s; "
+                          f"an episode needs 1 to {MAX_TICKS:.0e}")
+    if round(ticks) * round(ratio) > MAX_STEPS:
+        raise ConfigError(f"an episode of {seconds:g} s at a physics step of {body.timestep:g} s takes "
+                          f"{round(ticks) * round(ratio):.3g} steps per walker, more than {MAX_STEPS:.0e}")
+    return dt, int(round(ratio))
+
+
+@dataclass(frozen=True, kw_only=True)
+class EpisodeConfig:
+    """What to simulate: registry names, their options, and the episode length (s).
+
+    The options are given as tables (a config file's, keyword settings) or as parsed objects; each table
+    is parsed once, here, into its component's frozen ``Options`` (``body_options``: the body's,
+    ``controller_options``: the controller's, with the options every controller takes, ``task_options``:
+    the task's, ``perturbations``: :class:`PerturbationOptions`), which the parts are built from.
+    :meth:`to_dict` writes back the settings the tables gave.
+    """
+
+    body: str = "reil"
+    controller: str = "ctrnn"
+    task: str = "walk"
+    seconds: float = 50.0
+    #: end a walker's episode when it falls (False: run to the end; only blow-ups stop, e.g. for benchmarks)
+    stop_on_fall: bool = True
+    body_options: Any = field(default_factory=dict)
+    controller_options: Any = field(default_factory=dict)
+    task_options: Any = field(default_factory=dict)
+    #: how an evolutionary run perturbs each generation (see evobiped.perturb); {} = none
+    perturbations: Any = field(default_factory=dict)
+
+    def __post_init__(self):
+        for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
+            if name not in reg:
+                raise ConfigError(f"episode.{kind}: unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
+        number(self.seconds, "episode.seconds:", above=0, unit="s")
+        if not isinstance(self.stop_on_fall, bool):
+            raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
+        for name, cls in (("body_options", BODIES[self.body].Options), ("controller_options", CONTROLLERS[self.controller].Options),
+                          ("task_options", TASKS[self.task].Options), ("perturbations", PerturbationOptions)):
+            object.__setattr__(self, name, parse(cls, getattr(self, name), f"episode.{name}"))
+
+    def to_dict(self) -> dict:
+        """The config as a table (config.json, genome files): every option table as its settings were given."""
+        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        for name in ("body_options", "controller_options", "task_options", "perturbations"):
+            d[name] = copy.deepcopy(given(d[name]))
+        return d
+
+    @property
+    def perturbed(self) -> bool:
+        """The config perturbs its episodes (it has a perturbations table)."""
+        return bool(given(self.perturbations)) or self.perturbations.active
+
+    @property
+    def latency(self) -> int:
+        """Control ticks by which the controller's actions reach the body late."""
+        return int(self.controller_options.latency)
+
+    def nominal(self) -> "EpisodeConfig":
+        """The same episode without perturbations (replays, the robustness battery)."""
+        return dataclasses.replace(self, perturbations={})
+
+    def parts(self) -> tuple[Body, Controller, Task]:
+        """The body, controller and task, the controller wired to the sensors it needs: the controller
+        contract checked (one ConfigError line on a mismatch); no model is compiled.  Built once per config
+        and shared by :meth:`layout` and every :meth:`build` (parts keep no episode state: that is the
+        :class:`EpisodeState`'s, and an episode binds its own copy of the controller)."""
+        cached = self.__dict__.get("_parts")
+        if cached is None:
+            cached = self._make_parts()
+            object.__setattr__(self, "_parts", cached)
+        return cached
+
+    def __getstate__(self) -> dict:
+        """Pickled and copied without the built parts (a worker builds its own)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_parts"}
+
+    def _make_parts(self) -> tuple[Body, Controller, Task]:
+        body = BODIES[self.body](self.body_options)
+        task = TASKS[self.task](self.task_options)
+        cls, opts = CONTROLLERS[self.controller], self.controller_options
+        added = task.sensor_widths()
+        offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()})
+        inputs = wire(cls.needs(opts), offer, chosen=opts.inputs,
+                      what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
+        controller = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
+        where = "episode.controller_options"
+        if controller.normalises_inputs:
+            controller.input_norm = normaliser(inputs, offer.norms)
+        if opts.input_norm is not None:
+            width = sum(inputs.values())
+            if not controller.normalises_inputs:
+                raise ConfigError(f"{where}.input_norm: controller {self.controller!r} reads raw senses here (it does not normalise its inputs)")
+            if len(opts.input_norm["mean"]) != width:
+                raise ConfigError(f"{where}.input_norm: normalises {len(opts.input_norm['mean'])} inputs; the controller reads "
+                                  f"{width} ({', '.join(f'{n} {w}' for n, w in inputs.items())})")
+            controller.input_norm = (np.array(opts.input_norm["mean"], float), np.array(opts.input_norm["std"], float))
+        if opts.frame == "stance":
+            if body.actuator_mirror is None or body.contact_sensor is None:
+                raise ConfigError(f"{where}.frame: 'stance' needs a bilateral body with foot contacts; body {self.body!r} "
+                                  "declares no left/right mirror")
+            controller.frame = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror,
+                                           what=f"{where}.frame")
+        if "genes" in given(opts):
+            try:
+                controller.override_genes(opts.genes)
+            except ConfigError as exc:
+                raise ConfigError(f"episode.controller_options.{exc}") from None
+        check_timing(body, controller, float(self.seconds))
+        if body.action_kind != "position":  # offsets and noise are PD-target angles: a body of torques has none
+            from ..options import scheduled
+
+            for name in ("target_offset", "target_noise"):
+                s = scheduled(self.perturbations, name)
+                if s.start or s.end:
+                    raise ConfigError(f"episode.perturbations.{name}: disturbs PD targets (rad); body {self.body!r} is driven "
+                                      f"by {body.action_kind}s and has none")
+        return body, controller, task
+
+    def check(self) -> None:
+        """Every value checked in this process, without compiling a model: the options, the controller
+        contract, the output mapping and the episode's length in control ticks and physics steps (what a worker
+        building the episode would refuse); one ConfigError line otherwise."""
+        self.parts()
+
+    def layout(self) -> GenomeLayout:
+        """The genome layout of this episode's controller, from the declarations alone (no simulation)."""
+        return self.parts()[1].layout
+
+    def build(self) -> "Episode":
+        """The episode, its model compiled once."""
+        from .loop import Episode
+
+        body, controller, task = self.parts()
+        return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
+                       perturbations=self.perturbations if self.perturbations.active else None, latency=self.latency)
+
+
+
+def build_episode(**config: Any) -> "Episode":
+    """Convenience: ``build_episode(body="reil", seconds=10)``."""
+    return EpisodeConfig(**refuse_unknown(EpisodeConfig, config, "episode")).build()

@@ -1,0 +1,286 @@
+"""The loop: one episode = body + controller + task, run for a whole population at once.
+
+Control ticks at the controller's period (0.02 s for the CTRNN) over finer
+physics steps stepped in C (``mujoco.batch``); bodies with custom forces (the
+Taga ground) get them before every physics step.  A walker's episode ends at
+``seconds`` or when it falls; a simulation that blows up counts as a fall.
+Row p of every result depends only on genome p: the same genome gives the
+bit-identical fitness alone or inside any batch.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import numpy as np
+
+from .. import gait
+from ..bodies.base import Body
+from ..controllers.base import Controller
+from ..episode_result import EpisodeResult
+from ..errors import ConfigError
+from ..mapping import to_action
+from ..perturb import PerturbationOptions, Trials
+from ..sim import Sims
+from ..tasks.base import Task
+from .config import check_timing
+from .disturbances import assisted_physics, disturb
+from .senses import controller_inputs
+from .state import Context, EpisodeState, Listener, Pose
+
+
+class Episode:
+    """A body, a controller and a task with the model compiled once; run many times."""
+
+    def __init__(self, body: Body, controller: Controller | None, task: Task, *, seconds: float, stop_on_fall: bool = True,
+                 perturbations: PerturbationOptions | None = None, latency: int = 0, control_dt: float | None = None):
+        """``controller`` None: the actions come from outside (:meth:`step`, the Gymnasium environments), one
+        every ``control_dt`` s (a multiple of the body's physics step)."""
+        self.body, self.controller, self.task = body, controller, task
+        #: control ticks by which each action reaches the body late (a real controller's computation and
+        #: transmission delay; the first action is held until the pipeline is full)
+        self.latency = int(latency)
+        self.seconds = float(seconds)
+        self.stop_on_fall = stop_on_fall
+        self.perturbations = perturbations
+        dt, self.substeps = check_timing(body, controller, self.seconds, control_dt=control_dt)
+        self.model = body.build_model()
+        task.bind_model(self.model)
+        self.low, self.high = body.action_bounds()
+        self.control_dt = dt
+        # the controller told its period: a bound copy, the caller's controller unchanged
+        self.controller = None if controller is None else controller.bound(dt)
+        self._models: dict[tuple, Any] = {}
+        self._trunk = self.model.body(body.trunk).id
+        # qpos address of each actuated joint, in action order (initial-pose noise)
+        self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
+
+    @property
+    def n_ticks(self) -> int:
+        return int(round(self.seconds / self.control_dt))
+
+    def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0, slope_direction: float = 0.0) -> Sims:
+        """A new batch of ``n`` simulations (each :meth:`start` owns one), on the model with this ground: floor
+        ``friction``, and a ``slope`` (grade, rise over run) rising towards ``slope_direction`` (rad from +x, the
+        walker's initial facing, towards +y, its left)."""
+        key = (friction, slope, slope_direction if slope else 0.0)
+        if key not in self._models:
+            model = self.model
+            if friction is not None or slope:
+                model = copy.deepcopy(self.model)
+                if friction is not None:
+                    if self.body.floor_geom is None:
+                        raise ConfigError(f"body {self.body.name!r} has no MuJoCo ground whose friction a trial could change")
+                    model.geom_friction[model.geom(self.body.floor_geom).id, 0] = friction
+                if slope:  # an inclined plane: gravity tilted down the slope, away from where the floor rises
+                    g = float(np.linalg.norm(self.model.opt.gravity))
+                    a = np.arctan(slope)
+                    c, s = (0.0 if abs(v) < 1e-12 else float(v) for v in (np.cos(slope_direction), np.sin(slope_direction)))  # exact on the axes
+                    model.opt.gravity[:] = (-g * np.sin(a) * c, -g * np.sin(a) * s if s else 0.0, -g * np.cos(a))
+            self._models[key] = model
+        return Sims(self._models[key], n)
+
+    def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
+        """The perturbed presentations of generation key = (run seed, generation); None: nominal."""
+        drawn = self.task.draw_sources(key) if key is not None and hasattr(self.task, "draw_sources") else None
+        if key is None or (self.perturbations is None and drawn is None):
+            return None
+        n_act = len(self.body.actuator_names)
+        trials = Trials.nominal(1, n_act) if self.perturbations is None else self.perturbations.draw(
+            key, seconds=self.seconds, n_actuators=n_act, n_genes=None if self.controller is None else self.controller.layout.size)
+        trials.sources = drawn  # a task's random sources of this generation (the steer task's), shared by every genome
+        return trials
+
+    def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
+            trials: Trials | None = None, context: "Context | None" = None) -> EpisodeResult:
+        """Simulate every genome ``(P, G)`` (or one ``(G,)``); returns fitness and outcome.
+
+        A task with S presentations runs each genome S times side by side, and
+        ``trials`` (R perturbed presentations) multiply them: row
+        (p * R + r) * S + j is genome p under trial r and task presentation j.
+        The listener sees all rows; the result has one entry per genome, its
+        fitness combined over j by the task, then over r by the trials' aggregate.
+        ``run`` is :meth:`start`, :meth:`advance` over the whole length, :meth:`result`; ``context``: what a run
+        sets per generation (:class:`Context`).
+        """
+        if seconds is None and context is not None:
+            seconds = context.seconds
+        state = self.start(genomes, seconds=seconds, trials=trials, context=context)
+        if listener is not None:
+            listener.start(self, state.sims)
+        self.advance(state, ticks=state.n_ticks, listener=listener)
+        result = self.result(state)
+        if listener is not None:
+            listener.end(result)
+        return result
+
+    def start(self, genomes: np.ndarray | int, *, seconds: float | None = None, trials: Trials | None = None,
+              pose: Pose | None = None, context: "Context | None" = None) -> EpisodeState:
+        """Every genome ``(P, G)`` (or one ``(G,)``) at t = 0, rows as in :meth:`run`; ``seconds`` (default the
+        episode's) is the planned length: each row's end time until it falls, and the task's ``seconds``.
+        An episode without a controller takes the number of simulation rows instead of genomes (row i has
+        the task's presentation i mod S and trial i // S mod R).  ``pose(sims, ids)``
+        moves rows ``ids`` off the body's initial pose before the task starts (and calls ``sims.forward``)."""
+        S = self.task.presentations
+        R = 1 if trials is None else trials.R
+        if self.controller is None:
+            params: dict[str, np.ndarray] = {}
+            P = int(genomes)
+        elif trials is not None and trials.gene_noise is not None:  # every row its own genome: its trial's gene noise
+            rows = np.repeat(np.atleast_2d(self.controller.layout.validate(genomes)), S * R, axis=0)
+            params = self.controller.decode(self.controller.layout.jitter(rows, trials.gene_noise[np.arange(len(rows)) // S % R]))
+            P = len(rows)
+        else:
+            params = self.controller.decode(genomes)
+            if S * R > 1:
+                params = {k: np.repeat(v, S * R, axis=0) for k, v in params.items()}
+            P = next(iter(params.values())).shape[0]
+        n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
+        body = self.body
+        sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope,
+                                                              slope_direction=trials.slope_direction)
+        body.reset(sims)
+        trial = np.arange(P) // S % R  # each row's trial
+        if trials is not None and trials.pose_offset is not None and trials.pose_offset.any():
+            sims.qpos[:, self._act_qadr] += trials.pose_offset[trial]
+            sims.forward()
+        if pose is not None:
+            pose(sims, np.arange(P))
+        end_time = np.full(P, n_ticks * self.control_dt)
+        tstate = self.task.start(body, sims)
+        if trials is not None and trials.sources is not None:
+            self.task.take_sources(tstate, trials.sources)
+        # the task sees when each walker's episode ends: the full length until it falls (so a
+        # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
+        tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
+        ctx = context or Context()
+        if ctx.weights is not None:
+            tstate["weights"] = dict(ctx.weights)
+        k = self.controller.n_inputs if self.controller is not None and hasattr(self.controller, "n_inputs") else None
+        return EpisodeState(
+            sims=sims, params=params, task=tstate,
+            controller=None if self.controller is None else self.controller.initial_state(params),
+            alive=np.ones(P, bool), fell=np.zeros(P, bool), unstable=np.zeros(P, bool), end_time=end_time,
+            start_position=body.planar_position(sims).copy(), start_facing=body.heading(sims).copy(),
+            control_dt=self.control_dt, n_ticks=n_ticks, trials=trials, trial=trial, born=np.zeros(P, int),
+            noise=trials.noise() if trials is not None else None,
+            offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
+            assist=trials.assist[trial] if trials is not None and trials.assist is not None else None,
+            norm=ctx.norm,
+            senses=(np.zeros(P), np.zeros((P, k)), np.zeros((P, k))) if ctx.observe and k is not None else None,
+        )
+
+    def restart(self, state: EpisodeState, ids: np.ndarray, *, pose: Pose | None = None) -> EpisodeState:
+        """Rows ``ids`` of ``state`` begin anew, in place, while the others go on (a vector environment's
+        autoreset): the body's initial state, moved by ``pose`` as in :meth:`start`, the task's bookkeeping
+        of those rows from its start, up again with their own clock (:attr:`EpisodeState.born`)."""
+        body, sims = self.body, state.sims
+        body.reset(sims, ids)
+        if pose is not None:
+            pose(sims, ids)
+        self.task.restart(body, sims, state.task, ids)
+        if "gait" in sims.extra:
+            gait.restart(body.contacts(sims)[ids], sims, ids)
+        state.alive[ids], state.fell[ids], state.unstable[ids] = True, False, False
+        state.end_time[ids] = state.n_ticks * self.control_dt
+        state.start_position[ids] = body.planar_position(sims)[ids]
+        state.start_facing[ids] = body.heading(sims)[ids]
+        state.born[ids] = state.ticks
+        return state
+
+    def advance(self, state: EpisodeState, seconds: float | None = None, *, ticks: int | None = None,
+                listener: Listener | None = None) -> EpisodeState:
+        """Continue ``state`` by ``seconds`` (or ``ticks`` control ticks), in place; rows that are down stay
+        where they fell, and an all-down batch stops early (its clock stops with it).  Each tick is the
+        controller's action (from its inputs) through :meth:`step`, the one loop every episode runs.  Between
+        calls an experiment may change ``state.params``, the body's ground or forces on ``state.sims``."""
+        n = int(round(seconds / self.control_dt)) if ticks is None else int(ticks)
+        ctrl, st = self.controller, state
+        if ctrl is None:
+            raise ConfigError("this episode has no controller: its actions come from outside (Episode.step)")
+        params, alive = st.params, st.alive
+        P = len(alive)
+        for _ in range(n):
+            if not alive.any():
+                break
+            neurons = ctrl.neuron_outputs(params, st.controller)
+            inputs, flip = self._inputs(st, P)
+            st.controller, out = ctrl.step(params, st.controller, inputs)
+            action = to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out)
+            if flip is not None:
+                action = ctrl.frame.actions(action, flip)
+            self.step(st, action, neurons=neurons, listener=listener)
+        return state
+
+    def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,
+             listener: Listener | None = None, rows: np.ndarray | None = None) -> np.ndarray:
+        """One control tick of ``state``, in place: ``action`` ``(n, n_act)`` (rad targets or N m torques, the
+        body's action kind; a controller's, or an agent's from outside) for every row, the rows that are up
+        take it after the episode's perturbations and latency; then the physics, the task's bookkeeping
+        (``neurons`` ``(n, k)``: the controller's outputs the task may read; default none) and the falls.
+        ``rows``: only these take the tick (default all; a row that is down never does).  Returns the rows
+        that were stepped."""
+        body, task, sims, st = self.body, self.task, state.sims, state
+        tstate, alive, trials = st.task, st.alive, st.trials
+        k = st.ticks
+        ids = np.flatnonzero(alive) if rows is None else rows[alive[rows]]
+        if neurons is None:
+            neurons = np.zeros((len(alive), 0))
+        if trials is not None:
+            action = disturb(st, action, self.low, self.high, self._trunk, k * self.control_dt)
+        if self.latency:
+            st.pending.append(action)
+            action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
+        body.apply(sims, ids, action[ids])
+        bad = self._advance(sims, ids) if st.assist is None else self._assisted(sims, ids, st.assist[ids], trials.assist_damping)
+        st.ticks = k + 1
+        t = (k + 1) * self.control_dt
+        if "gait" in sims.extra:  # a controller reads the gait senses
+            gait.update(body.contacts(sims)[ids], sims, ids)
+        task.on_tick(body, sims, tstate, ids, ~bad, neurons)
+        if listener is not None:
+            listener.tick(t, sims, ids, neurons, action, tstate)
+        down = bad | body.fallen(sims, ids) if self.stop_on_fall else bad
+        if down.any():
+            st.unstable[ids[bad]] = True
+            st.fell[ids[down]] = True
+            alive[ids[down]] = False
+            st.end_time[ids[down]] = (k + 1 - st.born[ids[down]]) * self.control_dt
+        return ids
+
+    def result(self, state: EpisodeState) -> EpisodeResult:
+        """The outcome of ``state`` so far, one entry per genome (see :meth:`run`)."""
+        task, S = self.task, self.task.presentations
+        tstate = state.task
+        result = EpisodeResult(
+            fitness=task.fitness(tstate),
+            fell=state.fell.copy(),
+            unstable=state.unstable.copy(),
+            end_time=state.end_time.copy(),
+            start_position=state.start_position.copy(),  # copies: a later restart writes into the state's
+            end_position=task.end_position(self.body, state.sims, tstate).copy(),
+            start_facing=state.start_facing.copy(),
+            terms=task.terms(tstate),
+            senses=None if state.senses is None else dict(zip(("count", "total", "squares"), (a.copy() for a in state.senses))),
+        )
+        trials = state.trials
+        if trials is not None:
+            R = trials.R
+            result = result.per_genome(S * R, lambda f: trials.combine(task.combine(f.reshape(-1, S)).reshape(-1, R)))
+        elif S > 1:
+            result = result.per_genome(S, task.combine)
+        return result
+
+    def _inputs(self, st: EpisodeState, P: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """The controller's inputs now and the rows its stance frame mirrors (:func:`.senses.controller_inputs`)."""
+        return controller_inputs(self.body, self.controller, self.task, st, P)
+
+    def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
+        """One control period of physics for ``ids``; bool mask of blow-ups."""
+        return self.body.advance(sims, ids, self.substeps)
+
+    def _assisted(self, sims: Sims, ids: np.ndarray, stiffness: np.ndarray, damping: float) -> np.ndarray:
+        """:meth:`_advance` with the pelvis assistance (``stiffness`` ``(len(ids),)`` N m/rad) on the trunk."""
+        return assisted_physics(self.body, sims, ids, self._trunk, self.substeps, stiffness, damping)
+
