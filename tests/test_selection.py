@@ -49,3 +49,22 @@ def test_select_of_a_directory_that_is_not_a_run_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "not a run directory" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "selected.json").exists()
+
+
+def test_select_keeps_a_start_walker_that_no_candidate_beats(tmp_path, capsys):
+    """A forward walker tuned with steps so wild that every sample falls: the 200-s choice keeps the start walker itself
+    (the "unless beaten" branch), which stays up while each generation best falls."""
+    walker = str(WALKERS / "simbicon_cma_seed5.json")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('optimizer = "cma"\n[cma]\npopulation = 4\nsigma0 = 0.9\n[episode]\ncontroller = "simbicon"\nseconds = 4.0\n'
+                   '[episode.task_options]\nfitness = "forward"\n')
+    run = tmp_path / "run"
+    assert main(["evolve", "--config", str(cfg), "--from", walker, "--generations", "2", "--backend", "serial",
+                 "--out", str(run), "--quiet"]) == 0
+    assert main(["select", str(run), "--top", "2", "--seconds", "10"]) == 0
+    rows = json.loads((run / "selected_candidates.json").read_text())["candidates"]
+    assert rows[0]["candidate"].startswith("start") and rows[0].get("up_long") is True
+    assert all(r["fell"] for r in rows[1:])  # the wild samples fall within their 4 s
+    chosen = json.loads((run / "selected.json").read_text())
+    assert chosen["selected_from"].startswith("start")
+    assert chosen["genome"] == json.loads(open(walker).read())["genome"]
