@@ -6,6 +6,7 @@ and an :class:`Interrupted` (SIGINT, SIGTERM, SIGHUP) into exit status 128 + n.
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import threading
 from typing import Callable
@@ -92,3 +93,27 @@ def last_line(message: str) -> None:
     data = (message + "\n").encode(errors="replace")
     while data:
         data = data[os.write(_STDERR_FD, data):]
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """Hold Ctrl-C (and SIGTERM/SIGHUP where they stop the command, see :func:`~evobiped.errors.stop_on_signals`)
+    back for the duration and raise it right after (main thread only).
+
+    A Python-level handler, not a signal mask: the signal may be delivered to
+    any thread (Rerun's, for one), but Python handlers always run in the main thread.
+    Signals this process ignores or handles otherwise (pool workers) are left alone.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    raising = {signal.SIGINT: signal.default_int_handler, **{s: raise_interrupted for s in STOP_SIGNALS}}
+    caught = []
+    old = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s, h in raising.items() if signal.getsignal(s) is h}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+    if caught:
+        raise Interrupted(caught[0])

@@ -65,19 +65,20 @@ class StanceFrame:
 
     def inputs(self, x: np.ndarray, flip: np.ndarray) -> np.ndarray:
         """Readings ``(P, k)`` in the stance frame: rows ``flip`` ``(P,)`` bool mirrored."""
-        if not flip.any():
-            return x
-        out = x.copy()
-        out[flip] = x[flip][:, self.input_perm] * self.input_sign
-        return out
+        return _mirrored(x, flip, self.input_perm, self.input_sign)
 
     def actions(self, a: np.ndarray, flip: np.ndarray) -> np.ndarray:
         """Stance-frame actions ``(P, n_act)`` back on the body's legs: rows ``flip`` mirrored."""
-        if not flip.any():
-            return a
-        out = a.copy()
-        out[flip] = a[flip][:, self.action_perm] * self.action_sign
-        return out
+        return _mirrored(a, flip, self.action_perm, self.action_sign)
+
+
+def _mirrored(a: np.ndarray, flip: np.ndarray, perm: np.ndarray, sign: np.ndarray) -> np.ndarray:
+    """``a`` ``(P, k)`` with rows ``flip`` replaced by their mirror ``sign * a[:, perm]`` (``a`` itself if none flips)."""
+    if not flip.any():
+        return a
+    out = a.copy()
+    out[flip] = a[flip][:, perm] * sign
+    return out
 
 
 def flips(stance_leg: np.ndarray) -> np.ndarray:

@@ -286,21 +286,6 @@ class Trials:
         return AGGREGATES[self.aggregate](fitness, self.quantile)
 
 
-def assist_torque(stiffness: np.ndarray, damping: float, xmat: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """The assistance torque on the trunk, world frame: ``(n, 3)`` N m.
-
-    ``stiffness`` ``(n,)`` N m/rad, ``damping`` s (c = damping * stiffness), ``xmat`` ``(n, 9)`` the trunk's
-    orientation (row-major), ``omega`` ``(n, 3)`` its angular velocity (rad/s, world frame).  Restoring:
-    k (z_b x e_z) = k (z_y, -z_x, 0); damping: -c on the horizontal components of omega.
-    """
-    k = stiffness[:, None]
-    tau = np.zeros((len(stiffness), 3))
-    # z_b = column 2 of the rotation: (m02, m12, m22) = xmat[:, 2], [:, 5], [:, 8]
-    tau[:, 0], tau[:, 1] = xmat[:, 5], -xmat[:, 2]
-    tau[:, :2] = k * tau[:, :2] - damping * k * omega[:, :2]
-    return tau
-
-
 class TargetNoise:
     """Noise on the PD targets: one ``(R, n_act)`` draw per control tick, shared by every genome."""
 

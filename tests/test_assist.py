@@ -12,7 +12,8 @@ from evobiped.evolution.evaluate import make_evaluator
 from evobiped.evolution.run import Run
 from evobiped.evolution.run_config import RunConfig
 from evobiped.genome_file import load_genome
-from evobiped.perturb import PerturbationOptions, Trials, assist_torque
+from evobiped.episode.disturbances import assist_torque
+from evobiped.perturb import PerturbationOptions, Trials
 
 from .conftest import WALKERS
 from .test_evolve import fitness_history, whole_and_resumed

@@ -153,29 +153,16 @@ def _history(path: Path) -> list[list[str]]:
 def test_an_es_run_resumes_bit_identically_with_its_normaliser_and_curriculum(tmp_path):
     """Stopped after generation 1 and resumed on two workers: the same history (with the phase column), checkpoint
     state and best genome; the curriculum advanced (its condition: the evaluation walker up its whole 0.4 s episode)."""
-    from .test_evolve import Stop
+    from .test_evolve import whole_and_resumed
 
     config = RunConfig.from_dict({
         "optimizer": "es", "generations": 4, "seed": 3, "backend": "serial",
         "episode": {**STANCE_LINEAR, "seconds": 0.4, "perturbations": {"presentations": 2, "pose_noise": 0.01}},
         "es": {"pairs": 3}, "normalise": {"running": True},
         "curriculum": {"phases": [{"time_up": 2.0, "steps": 0.5}, {"forward": 10.0, "time_up": 5.0}], "advance_for": 1}})
-    whole = Run.create(tmp_path / "whole", config)
-    with make_evaluator(config.episode, "serial") as ev:
-        whole.evolve(ev)
-    cut = Run.create(tmp_path / "cut", config)
-
-    def stop(stats):
-        if stats.generation == 1:
-            raise Stop
-
-    with make_evaluator(config.episode, "serial") as ev, pytest.raises(Stop):
-        cut.evolve(ev, stop)
-    resumed = Run.resume(cut.dir)
-    with make_evaluator(config.episode, "process", 2) as ev:
-        resumed.evolve(ev)
-    assert _history(whole.dir) == _history(cut.dir)
-    a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut.dir))
+    whole, cut_dir = whole_and_resumed(tmp_path, config, stop_after=1)
+    assert _history(whole.dir) == _history(cut_dir)
+    a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut_dir))
     for k in ("optimizer", "normaliser", "curriculum", "history_extra", "best_genome", "best_context"):
         assert a[k] == b[k], k
     phases = [int(r[_history(whole.dir)[0].index("phase")]) for r in _history(whole.dir)[1:]]

@@ -22,14 +22,20 @@ def test_the_long_run_outranks_the_episode_then_heading_then_distance():
     assert best_candidate([up_long, dict(up_long)]) == 0  # a tie keeps the first
 
 
-def test_select_keeps_the_start_walker_unless_a_candidate_beats_it(tmp_path, capsys):
-    walker = str(WALKERS / "simbicon_seed1.json")
+def _tuned(tmp_path, walker: str, *, sigma0: float, seconds: float):
+    """A two-generation CMA-ES run of the balance controller --from ``walker`` (steps ``sigma0``, episodes of ``seconds``)."""
     cfg = tmp_path / "c.toml"
-    cfg.write_text('optimizer = "cma"\n[cma]\npopulation = 4\nsigma0 = 0.3\n[episode]\ncontroller = "simbicon"\nseconds = 2.0\n'
-                   '[episode.task_options]\nfitness = "forward"\n')
+    cfg.write_text(f'optimizer = "cma"\n[cma]\npopulation = 4\nsigma0 = {sigma0}\n[episode]\ncontroller = "simbicon"\n'
+                   f'seconds = {seconds}\n[episode.task_options]\nfitness = "forward"\n')
     run = tmp_path / "run"
     assert main(["evolve", "--config", str(cfg), "--from", walker, "--generations", "2", "--backend", "serial",
                  "--out", str(run), "--quiet"]) == 0
+    return run
+
+
+def test_select_keeps_the_start_walker_unless_a_candidate_beats_it(tmp_path, capsys):
+    walker = str(WALKERS / "simbicon_seed1.json")
+    run = _tuned(tmp_path, walker, sigma0=0.3, seconds=2.0)
     capsys.readouterr()
     assert main(["select", str(run), "--top", "2", "--seconds", "20"]) == 0
     out = capsys.readouterr().out
@@ -55,12 +61,7 @@ def test_select_keeps_a_start_walker_that_no_candidate_beats(tmp_path, capsys):
     """A forward walker tuned with steps so wild that every sample falls: the 200-s choice keeps the start walker itself
     (the "unless beaten" branch), which stays up while each generation best falls."""
     walker = str(WALKERS / "simbicon_cma_seed5.json")
-    cfg = tmp_path / "c.toml"
-    cfg.write_text('optimizer = "cma"\n[cma]\npopulation = 4\nsigma0 = 0.9\n[episode]\ncontroller = "simbicon"\nseconds = 4.0\n'
-                   '[episode.task_options]\nfitness = "forward"\n')
-    run = tmp_path / "run"
-    assert main(["evolve", "--config", str(cfg), "--from", walker, "--generations", "2", "--backend", "serial",
-                 "--out", str(run), "--quiet"]) == 0
+    run = _tuned(tmp_path, walker, sigma0=0.9, seconds=4.0)
     assert main(["select", str(run), "--top", "2", "--seconds", "10"]) == 0
     rows = json.loads((run / "selected_candidates.json").read_text())["candidates"]
     assert rows[0]["candidate"].startswith("start") and rows[0].get("up_long") is True

@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..bodies.base import Body
-from ..perturb import assist_torque
 from ..sim import Sims
 from .state import EpisodeState
 
@@ -39,3 +38,18 @@ def assisted_physics(body: Body, sims: Sims, ids: np.ndarray, trunk: int, subste
         sims.xfrc_applied[ids, trunk, 3:] = assist_torque(stiffness, damping, sims.xmat[ids, trunk], sims.cvel[ids, trunk, :3])
         bad |= body.advance(sims, ids, 1)
     return bad
+
+
+def assist_torque(stiffness: np.ndarray, damping: float, xmat: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """The assistance torque on the trunk, world frame: ``(n, 3)`` N m.
+
+    ``stiffness`` ``(n,)`` N m/rad, ``damping`` s (c = damping * stiffness), ``xmat`` ``(n, 9)`` the trunk's
+    orientation (row-major), ``omega`` ``(n, 3)`` its angular velocity (rad/s, world frame).  Restoring:
+    k (z_b x e_z) = k (z_y, -z_x, 0); damping: -c on the horizontal components of omega.
+    """
+    k = stiffness[:, None]
+    tau = np.zeros((len(stiffness), 3))
+    # z_b = column 2 of the rotation: (m02, m12, m22) = xmat[:, 2], [:, 5], [:, 8]
+    tau[:, 0], tau[:, 1] = xmat[:, 5], -xmat[:, 2]
+    tau[:, :2] = k * tau[:, :2] - damping * k * omega[:, :2]
+    return tau

@@ -1,12 +1,5 @@
-"""The loop: one episode = body + controller + task, run for a whole population at once.
-
-Control ticks at the controller's period (0.02 s for the CTRNN) over finer
-physics steps stepped in C (``mujoco.batch``); bodies with custom forces (the
-Taga ground) get them before every physics step.  A walker's episode ends at
-``seconds`` or when it falls; a simulation that blows up counts as a fall.
-Row p of every result depends only on genome p: the same genome gives the
-bit-identical fitness alone or inside any batch.
-"""
+"""The one loop: :class:`Episode` runs a body, a controller and a task for a whole population (see the package's
+docstring): :meth:`Episode.step` is one control tick, :meth:`Episode.advance` a controller's actions through it."""
 
 from __future__ import annotations
 

@@ -105,26 +105,27 @@ def _init_worker(config: EpisodeConfig) -> None:
     _worker_episode = config.build()
 
 
-def _fault_point() -> None:
-    """Testing hook: with ``EVOBIPED_FAULT_KILL_WORKER=FILE`` the first worker to find FILE deletes it and SIGKILLs itself."""
+def _fault_marker_taken() -> bool:
+    """Testing hook: with ``EVOBIPED_FAULT_KILL_WORKER=FILE``, True for the first caller to find FILE (it deletes it)."""
     marker = os.environ.get("EVOBIPED_FAULT_KILL_WORKER")
-    if marker:
-        try:
-            os.unlink(marker)
-        except FileNotFoundError:
-            return
+    if not marker:
+        return False
+    try:
+        os.unlink(marker)
+    except FileNotFoundError:
+        return False
+    return True
+
+
+def _fault_point() -> None:
+    """Testing hook of the process pool and Ray: the worker that takes the marker SIGKILLs itself."""
+    if _fault_marker_taken():
         os.kill(os.getpid(), signal.SIGKILL)
 
 
 def _thread_fault_point() -> None:
-    """Testing hook of the thread backend: with ``EVOBIPED_FAULT_KILL_WORKER=FILE`` the first batch to find FILE deletes
-    it and dies as a thread's batch can (MemoryError)."""
-    marker = os.environ.get("EVOBIPED_FAULT_KILL_WORKER")
-    if marker:
-        try:
-            os.unlink(marker)
-        except FileNotFoundError:
-            return
+    """Testing hook of the thread backend: the batch that takes the marker dies as a thread's batch can (MemoryError)."""
+    if _fault_marker_taken():
         raise MemoryError("testing hook")
 
 

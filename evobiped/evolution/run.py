@@ -8,19 +8,15 @@ and yields exactly the files an uninterrupted run with the same config writes
 
 from __future__ import annotations
 
-import contextlib
-import signal
-import threading
 import time
 import uuid
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from .. import __version__, provenance, rundir
-from ..errors import STOP_SIGNALS, Interrupted, UserError, raise_interrupted
+from ..errors import UserError, signals_deferred
 from ..fileio import WriteError, atomic_write, json_text, read_json, write_json
 from ..genome_file import genome_text, load_genome, save_genome
 from .evaluate import Evaluator
@@ -28,33 +24,9 @@ from .base import Optimizer
 from .individuals import Individuals
 from . import fingerprint
 from .run_config import RunConfig, make_optimizer, start_genome
+from .generation_stats import GenerationStats
 from .run_context import RunContext
 from .start_genome import keep_start, kept_start, start_episode
-from ..rundir import HISTORY_COLUMNS
-
-@dataclass
-class GenerationStats:
-    """One row of history.csv plus what a progress display needs."""
-
-    generation: int
-    best: float
-    mean: float
-    median: float
-    worst: float
-    evaluations: int
-    falls: int
-    unstable: int
-    wall_seconds: float
-    best_fell: bool = False
-    evals_per_second: float = 0.0
-    generations_total: int = 0
-    #: simulated seconds of this generation's evaluations, every presentation's row until it ended (a fall or T)
-    simulated_seconds: float = 0.0
-    #: the longest of those episodes (s): the batches wait for their longest row
-    longest_seconds: float = 0.0
-
-    def row(self) -> list:
-        return [getattr(self, c) for c in HISTORY_COLUMNS]
 
 
 class Run:
@@ -336,7 +308,7 @@ class Run:
     def checkpoint(self) -> None:
         """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
         Ctrl-C (SIGTERM, SIGHUP) waits until all are written."""
-        with _signals_deferred():
+        with signals_deferred():
             write_json(
                 self.dir / rundir.CHECKPOINT,
                 {rundir.SETTINGS_KEY: fingerprint.settings(self.config, self.started_in), rundir.START_KEY: self.start,
@@ -396,27 +368,3 @@ class Run:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-@contextlib.contextmanager
-def _signals_deferred():
-    """Hold Ctrl-C (and SIGTERM/SIGHUP where they stop the command, see :func:`~evobiped.errors.stop_on_signals`)
-    back for the duration and raise it right after (main thread only).
-
-    A Python-level handler, not a signal mask: the signal may be delivered to
-    any thread (Rerun's, for one), but Python handlers always run in the main thread.
-    Signals this process ignores or handles otherwise (pool workers) are left alone.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    raising = {signal.SIGINT: signal.default_int_handler, **{s: raise_interrupted for s in STOP_SIGNALS}}
-    caught = []
-    old = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s, h in raising.items() if signal.getsignal(s) is h}
-    try:
-        yield
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
-    if caught:
-        raise Interrupted(caught[0])

@@ -33,6 +33,10 @@ from ..options import given
 from .curriculum import Curriculum
 
 
+#: history.csv's columns of a run with a context (after the best's terms)
+HISTORY_EXTRA = ("phase", "evaluation_up", "evaluation_forward")
+
+
 class RunContext:
     """The per-generation settings of a run with config ``config`` (a no-op for a run that has neither)."""
 
@@ -101,7 +105,8 @@ class RunContext:
         forward = float(np.mean(np.asarray(result.terms["forward"])[rows])) if "forward" in result.terms and len(rows) else float("nan")
         if len(rows):
             self.curriculum.after(result, rows)
-        self.history.append({"phase": phase, "evaluation_up": up, "evaluation_forward": None if not np.isfinite(forward) else forward})
+        values = (phase, up, None if not np.isfinite(forward) else forward)
+        self.history.append(dict(zip(HISTORY_EXTRA, values)))
 
     def early_phase(self, generation: int) -> bool:
         """Generation ``generation`` was (or, the next one, is) scored in a phase before the curriculum's last."""
