@@ -293,3 +293,16 @@ def test_evolve_runs_the_es_preset_from_the_command_line(tmp_path, capsys):
     ck = json.loads((tmp_path / "run" / "checkpoint.json").read_text())
     assert ck["optimizer"]["name"] == "es" and ck["normaliser"]["count"] > 0
     assert "phase" in (tmp_path / "run" / "history.csv").read_text().splitlines()[0].split(",")
+
+
+def test_a_stance_frame_network_s_motor_neurons_are_labelled_by_leg_role():
+    """In the stance frame motor neuron i drives the stance (first half) or swing leg's joint, not actuator i: the
+    motor figure names it so."""
+    from types import SimpleNamespace
+
+    from evobiped.record.figures import _motor_label
+
+    names = ("left_hip_pitch", "left_hip_roll", "left_knee", "right_hip_pitch", "right_hip_roll", "right_knee")
+    framed, plain = (SimpleNamespace(actuator_names=names, stance_frame=f) for f in (True, False))
+    assert [_motor_label(framed, i) for i in (0, 2, 3, 5)] == ["stance hip_pitch", "stance knee", "swing hip_pitch", "swing knee"]
+    assert _motor_label(plain, 3) == "right_hip_pitch" and _motor_label(framed, 7) == "output 8"

@@ -135,8 +135,7 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
     fig, axes = plt.subplots(n, 1, figsize=(7.0, 1.0 + 0.85 * n), sharex=True, squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
         ax.plot(t[keep], traj.neurons[keep, i], color="black", lw=1.0)
-        name = traj.actuator_names[i] if i < len(traj.actuator_names) else f"output {i + 1}"
-        ax.text(1.0, 0.5, f" {name}", transform=ax.transAxes, va="center", fontsize=8)
+        ax.text(1.0, 0.5, f" {_motor_label(traj, i)}", transform=ax.transAxes, va="center", fontsize=8)
         if unit:
             ax.set_ylim(-0.05, 1.05)
             ax.set_yticks([0, 1])
@@ -144,9 +143,25 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
     fig.supylabel(quantity, fontsize=9)
     axes[-1, 0].set_xlabel("time (s)")
     what = "Motor neuron outputs" if unit else "Joint target angles (the controller's outputs)" if target else "Motor outputs"
+    if traj.stance_frame:
+        what += " in the stance frame"
+    if traj.direct_path:
+        what += " (the direct path adds to them)"
     shown = f"first {seconds:g} s of {traj.end_time:g} s" if keep.sum() < len(t) else f"{traj.end_time:g} s"
     fig.suptitle(_title(f"{what}, {shown}", f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=9)
     return save_figure(fig, path)
+
+
+def _motor_label(traj: Trajectory, i: int) -> str:
+    """Motor output ``i``'s name: its actuator, or in the stance frame its joint on the stance (first half) or swing leg."""
+    if i >= len(traj.actuator_names):
+        return f"output {i + 1}"
+    name = traj.actuator_names[i]
+    if not traj.stance_frame:
+        return name
+    half = len(traj.actuator_names) // 2
+    role = name.split("_", 1)[1] if "_" in name else name
+    return f"{'stance' if i < half else 'swing'} {role}"
 
 
 def _side_axis(traj: Trajectory) -> np.ndarray:

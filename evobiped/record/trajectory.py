@@ -57,6 +57,10 @@ class Trajectory:
     #: (2,) unit vector: the direction the walker faced at the start (``Body.heading`` after reset)
     start_facing: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))
     final_fitness: float = float("nan")
+    #: the controller read and wrote in the stance frame (its motor neuron i drives the stance leg's joint i, not
+    #: actuator i), and it has a direct input-to-motor path beside its neurons
+    stance_frame: bool = False
+    direct_path: bool = False
     fell: bool = False
     end_time: float = float("nan")
 
@@ -121,6 +125,8 @@ class TrajectoryRecorder:
             action_kind=ep.body.action_kind,
             actuator_names=tuple(ep.body.actuator_names),
             n_motor=ep.controller.n_outputs,
+            stance_frame=getattr(ep.controller, "frame", None) is not None,
+            direct_path=bool(getattr(ep.controller, "direct", False)),
             touch_names=self._touch_names,
             start_facing=self._facing,
             state_time=np.array([r[0] for r in st]),
