@@ -126,6 +126,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
         ga["population"] = population
         d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": population}
         d["es"] = {**(d.get("es") if isinstance(d.get("es"), dict) else {}), "pairs": max(1, population // 2)}
+        d["map_elites"] = {**(d.get("map_elites") if isinstance(d.get("map_elites"), dict) else {}), "batch": population}
     for key, value in (("optimizer", optimizer), ("generations", generations), ("seed", seed), ("backend", backend),
                        ("workers", workers), ("address", address), ("initial", initial)):
         if value is not None:

@@ -16,8 +16,8 @@ def add_evolve(sub) -> None:
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
-    p.add_argument("--optimizer", choices=("ga", "cma", "es"), help="ga (Reil & Husbands' GA, default), cma (CMA-ES) or es "
-                   "(evolution strategies)")
+    p.add_argument("--optimizer", choices=("ga", "cma", "es", "map-elites"), help="ga (Reil & Husbands' GA, default), cma (CMA-ES), "
+                   "es (evolution strategies) or map-elites (a repertoire of gaits; the qd extra)")
     p.add_argument("--body", help=f"body: {choices_text('body')} (default reil)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")

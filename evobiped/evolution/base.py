@@ -103,6 +103,11 @@ class Optimizer:
     def _state_from(self, table: dict) -> OptimizerState:
         raise NotImplementedError
 
+    def derived_files(self, generation_committed: bool) -> dict[str, str | None]:
+        """Files of the run directory this optimizer derives from its state (name -> text; None: no such file yet),
+        written at each commit and rebuilt on a resume; default none.  ``generation_committed``: a generation is."""
+        return {}
+
     def ranking(self) -> np.ndarray:
         """Indices best first; ties keep population order (stable)."""
         return np.argsort(-self.fitness, kind="stable")

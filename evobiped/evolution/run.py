@@ -207,6 +207,8 @@ class Run:
 
         self._sync(rundir.HISTORY, rundir.history_text(self.history, self.history_terms, self.context.history), repair=repair)
         self._sync(rundir.BEST, self._best_text(), repair=repair)
+        for name, text in self.optimizer.derived_files(bool(self.history)).items():  # e.g. MAP-Elites' archive.json
+            self._sync(name, text, repair=repair)
         rec = self.dir / rundir.RECORDING
         if not self.history:
             self._sync(rundir.RECORDING, None, repair=repair) if rec.exists() else None

@@ -21,9 +21,10 @@ from .curriculum import Curriculum, CurriculumOptions
 from .es import ESOptions, EvolutionStrategy
 from .evaluate import BACKENDS
 from .ga import GA, GAOptions
+from .map_elites import MapElites, MapElitesOptions
 
 #: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation) with state/restore
-OPTIMIZERS = {"ga": GA, "cma": CMAES, "es": EvolutionStrategy}
+OPTIMIZERS = {"ga": GA, "cma": CMAES, "es": EvolutionStrategy, "map-elites": MapElites}
 
 
 def _text(v) -> None:
@@ -41,10 +42,12 @@ class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
-    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA), `cma` (CMA-ES) or `es` (evolution strategies)", choices=tuple(OPTIMIZERS))
+    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA), `cma` (CMA-ES), `es` (evolution strategies) or `map-elites` "
+                           "(a repertoire: one elite per cell of two measures; needs the qd extra)", choices=tuple(OPTIMIZERS))
     ga: GAOptions = field(default_factory=GAOptions)
     cma: CMAOptions = field(default_factory=CMAOptions)
     es: ESOptions = field(default_factory=ESOptions)
+    map_elites: MapElitesOptions = field(default_factory=MapElitesOptions)
     normalise: NormaliseOptions = field(default_factory=lambda: NormaliseOptions())
     curriculum: CurriculumOptions = field(default_factory=CurriculumOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
@@ -61,15 +64,19 @@ class RunConfig:
         if self.normalise.running and not self.episode.parts()[1].normalises_inputs:  # (parts built only when asked for)
             raise ConfigError(f"normalise.running: controller {self.episode.controller!r} reads raw senses here "
                               "(it does not normalise its inputs)")
+        if self.optimizer == "map-elites":
+            task = self.episode.parts()[2]
+            self.map_elites.check_terms(tuple(task.term_names), task.name)
         if self.curriculum.phases:
             Curriculum(self.curriculum).check(self.episode.parts()[2])
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
         d["episode"] = self.episode.to_dict()
-        for name, cls in (("es", ESOptions), ("normalise", NormaliseOptions), ("curriculum", CurriculumOptions)):
-            # written only when set (the ES's only for an ES run): other runs' config.json as before these options
-            if d[name] == dataclasses.asdict(cls()) or (name == "es" and self.optimizer != "es"):
+        for name, cls in (("es", ESOptions), ("map_elites", MapElitesOptions), ("normalise", NormaliseOptions),
+                          ("curriculum", CurriculumOptions)):
+            # written only when set (the ES's and MAP-Elites' only for their runs): other runs' config.json as before
+            if d[name] == dataclasses.asdict(cls()) or (name in ("es", "map_elites") and self.optimizer != name.replace("_", "-")):
                 del d[name]
         d["frozen_blocks"] = list(self.frozen_blocks)
         return d
@@ -84,7 +91,8 @@ class RunConfig:
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
             ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
             extra = {name: parse(cls, d.pop(name, {}), name)
-                     for name, cls in (("es", ESOptions), ("normalise", NormaliseOptions), ("curriculum", CurriculumOptions))}
+                     for name, cls in (("es", ESOptions), ("map_elites", MapElitesOptions), ("normalise", NormaliseOptions),
+                                       ("curriculum", CurriculumOptions))}
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, ga=ga, cma=cma, **extra, **d)
@@ -170,6 +178,8 @@ def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimi
             mutable[slices[b]] = False
     if config.optimizer == "cma":
         return CMAES(layout, config.cma, seed=config.seed, initial=initial, mutable=mutable)
+    if config.optimizer == "map-elites":
+        return MapElites(layout, config.map_elites, seed=config.seed, initial=initial, mutable=mutable)
     if config.optimizer == "es":
         return EvolutionStrategy(layout, config.es, seed=config.seed, initial=initial, mutable=mutable)
     return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
@@ -187,7 +197,7 @@ def check_run(config: RunConfig) -> None:
 def population_of(config: RunConfig) -> int:
     """Walkers evaluated per generation by the run's optimizer."""
     layout = config.episode.layout()
-    rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows}
+    rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows, "map-elites": config.map_elites.batch}
     return rows.get(config.optimizer, config.ga.population)
 
 

@@ -38,6 +38,12 @@ weights a run's curriculum may change from one phase to the next
 switches (a touchdown of the swing foot, :mod:`evobiped.gait`): paying for
 steps teaches a policy on point feet to step, the only way it stays up.
 
+Gait measures (``gait_measures = true``): the terms ``speed``, the mean forward
+speed (m/s: the pelvis's path projected each tick on the direction it faces,
+over the time up, so a walker on a circle walks at its speed along it), and
+``turning``, the mean turning rate (deg/s: the facing's unwrapped change over
+the time up, + to the left): what a gait repertoire's cells are measured by.
+
 Heading sense (``heading_sense = true``): the task adds the sensor
 ``heading_error`` (rad, in (-pi, pi]): the angle from the direction the walker
 faced at the start to the direction it faces now, + turned to its left; fed to a
@@ -105,6 +111,8 @@ def direction_words(heading_deg: float) -> str:
 FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T",
            "weighted": "sum of weights[term] * term"}
 TERMS = ("distance", "forward", "cyclicity", "time_up", "steps")
+#: the terms ``gait_measures`` adds: mean forward speed (m/s), mean turning rate (deg/s, + left)
+GAIT_TERMS = ("speed", "turning")
 
 
 def _weights(v) -> None:
@@ -136,6 +144,8 @@ class WalkOptions:
     cyclic_band: float = option(0.05, "hysteresis band of a cycle, in unit motor output", above=0)
     weights: dict = option({"forward": 10.0, "time_up": 5.0, "steps": 0.1}, "the weighted fitness's weight of each term "
                            "(forward m, time_up s, steps, distance m)", check=_weights)
+    gait_measures: bool = option(False, "add the terms speed (mean forward speed, m/s) and turning (mean turning rate, "
+                                 "deg/s, + left)")
     heading_sense: bool = option(False, "add the sensor heading_error: the facing's angle from the initial facing (rad, + left)")
 
     def __post_init__(self):
@@ -172,7 +182,7 @@ class WalkTask(Task):
         self.heading_sense = bool(o.heading_sense)
         self.counts_steps = self.weighs_terms = self.fitness_name == "weighted"
         # time_up and steps only under the weighted fitness: the other fitnesses' files keep their columns
-        self.term_names = TERMS if self.counts_steps else TERMS[:3]
+        self.term_names = (TERMS if self.counts_steps else TERMS[:3]) + (GAIT_TERMS if o.gait_measures else ())
 
     def sensor_widths(self):
         return {"heading_error": 1} if self.heading_sense else {}
@@ -201,6 +211,8 @@ class WalkTask(Task):
             gait.read(body.contacts(sims), sims)  # the episode keeps the gait tracker from now on
             state["stance"] = sims.extra["gait"]["stance"].copy()
             state["steps"] = np.zeros(sims.n)
+        if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
+            state["travel"], state["yaw"], state["facing_now"] = np.zeros(sims.n), np.zeros(sims.n), state["facing"].copy()
         return state
 
     def reads_neurons(self):
@@ -208,6 +220,12 @@ class WalkTask(Task):
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
+        if self.options.gait_measures:
+            f, f1 = state["facing_now"][ok], body.heading(sims)[ok]  # the facing before and after this tick
+            step = body.planar_position(sims)[ok] - state["position"][ok]
+            state["travel"][ok] += np.einsum("pi,pi->p", step, f1)
+            state["yaw"][ok] += np.arctan2(f[:, 0] * f1[:, 1] - f[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f, f1))
+            state["facing_now"][ok] = f1
         state["position"][ok] = body.planar_position(sims)[ok]
         if self.counts_steps:
             stance = sims.extra["gait"]["stance"][ok]
@@ -236,6 +254,9 @@ class WalkTask(Task):
         out = {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
         if self.counts_steps:
             out["time_up"], out["steps"] = np.array(state["end_time"], float), state["steps"].copy()
+        if self.options.gait_measures:
+            up = np.maximum(np.asarray(state["end_time"], float), 1e-9)
+            out["speed"], out["turning"] = state["travel"] / up, np.degrees(state["yaw"]) / up
         return out
 
     def end_position(self, body, sims, state):
