@@ -80,7 +80,7 @@ def read_archive(source: str | Path) -> Archive:
     path = path / ARCHIVE if path.is_dir() else path
     if not path.is_file():
         raise UserError(f"{path}: no archive (a map-elites run writes {ARCHIVE} after its first generation)")
-    t = read_json(path, what="archive")
+    t = read_json(path, what="archive", file_format=FORMAT)
     try:
         if t["format"] != FORMAT:
             raise ValueError(f"format must be {FORMAT}")

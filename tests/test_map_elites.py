@@ -1,0 +1,139 @@
+"""MAP-Elites: the walk task's gait measures against an independent calculation, the archive's cells against the
+grid arithmetic, a resume bit-identical to an uninterrupted run, archive.json, and bad settings refused."""
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ribs")
+
+from evobiped.episode import EpisodeConfig  # noqa: E402
+from evobiped.errors import UserError  # noqa: E402
+from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
+from evobiped.evolution.archive_file import read_archive  # noqa: E402
+from evobiped.evolution.map_elites import MapElites, MapElitesOptions  # noqa: E402
+from evobiped.genome_file import load_genome  # noqa: E402
+
+from .conftest import WALKERS, cli  # noqa: E402
+
+GAIT = {"fitness": "weighted", "weights": {"time_up": 1.0}, "gait_measures": True}
+#: a short balance-controller repertoire run
+TINY = {"optimizer": "map-elites", "generations": 4, "seed": 2, "backend": "serial",
+        "episode": {"body": "reil", "controller": "simbicon", "seconds": 1.0, "task_options": GAIT},
+        "map_elites": {"resolution": [5, 4], "low": [0.0, -40.0], "high": [1.0, 40.0], "batch": 6, "sigma": 0.05, "line_sigma": 0.3}}
+
+
+class Track:
+    """A listener keeping the pelvis's planar position and facing after every tick of row 0."""
+
+    def __init__(self, body):
+        self.body, self.xy, self.facing = body, [], []
+
+    def start(self, episode, sims):
+        self.xy.append(self.body.planar_position(sims)[0].copy())
+        self.facing.append(self.body.heading(sims)[0].copy())
+
+    def tick(self, t, sims, ids, neurons, action, tstate):
+        if 0 in ids:
+            self.start(None, sims)
+
+    def end(self, result):
+        pass
+
+
+def test_gait_measures_match_an_independent_calculation_and_leave_the_fitness_alone():
+    """speed = the path's steps projected on the facing after each step / time up; turning = np.unwrap of the facing's
+    angle, end minus start / time up, in deg/s.  The shipped walker that turns round in its first 4 s (-184 deg) and the
+    straight one; the fitness with the measures on is bit for bit the fitness without."""
+    for name, turns in (("simbicon_cma_seed3.json", True), ("simbicon_cma_seed5.json", False)):
+        genome, cfg, _ = load_genome(WALKERS / name)
+        d = {**cfg.to_dict(), "seconds": 6.0}
+        ep = EpisodeConfig(**{**d, "task_options": {**d["task_options"], "gait_measures": True}}).build()
+        track = Track(ep.body)
+        r = ep.run(genome[None], listener=track)
+        xy, f = np.array(track.xy), np.array(track.facing)
+        speed = np.sum(np.einsum("ti,ti->t", np.diff(xy, axis=0), f[1:])) / r.end_time[0]
+        yaw = np.unwrap(np.arctan2(f[:, 1], f[:, 0]))
+        turning = np.degrees(yaw[-1] - yaw[0]) / r.end_time[0]
+        assert r.terms["speed"][0] == pytest.approx(speed, rel=1e-9)
+        assert r.terms["turning"][0] == pytest.approx(turning, rel=1e-9, abs=1e-9)
+        assert (abs(turning) > 20) == turns  # seed 3 turns round (about 180 deg in 6 s), seed 5 walks straight
+        plain = EpisodeConfig(**d).build().run(genome[None])
+        assert plain.fitness[0] == r.fitness[0] and "speed" not in plain.terms
+
+
+def test_the_archive_keeps_the_fittest_of_each_cell_of_the_grid():
+    """Cells by the grid arithmetic (floor((m - low) / width), beyond the bounds the edge cell); of two genomes in one
+    cell the fitter stays, a later worse one does not replace it; a non-finite measure is left out."""
+    layout = EpisodeConfig(body="reil", controller="simbicon").layout()
+    opt = MapElites(layout, MapElitesOptions(resolution=[4, 3], low=[0.0, -30.0], high=[1.0, 30.0], batch=5), seed=0)
+
+    class R:
+        def __init__(self, f, m):
+            self.fitness, self.fell, self.end_time = np.array(f, float), np.zeros(len(f)), np.full(len(f), 2.0)
+            self.terms = {"speed": np.array(m)[:, 0], "turning": np.array(m)[:, 1]}
+
+    m = [[0.1, -29.0], [0.12, -25.0], [0.6, 5.0], [2.0, 99.0], [np.nan, 0.0]]
+    opt.tell(R([1.0, 3.0, 2.0, 4.0, 9.0], m))
+    e = opt.elites()
+    expect = [(0, 0), (2, 1), (3, 2)]  # speed 0.1/0.12 -> column 0 (both; the fitter 3.0), 0.6 -> 2, 2.0 -> the edge 3
+    assert [tuple(c) for c in opt.cells(e["index"])] == expect
+    assert e["objective"].tolist() == [3.0, 2.0, 4.0]
+    assert np.array_equal(e["genome"][0], opt.population[1])
+    opt.next_generation()
+    opt.tell(R([2.5, 1.0, 1.0, 1.0, 1.0], [[0.05, -28.0]] * 5))
+    assert opt.elites()["objective"][0] == 3.0 and opt.progress[-1][:2] == [10, 3]
+
+
+def test_a_map_elites_run_resumes_bit_identically_and_derives_its_archive(tmp_path):
+    """Stopped after generation 1 and resumed on two workers: the same checkpoint state (the elites as data), history,
+    archive.json; the archive's elites are the checkpoint's, and its progress counts every evaluation."""
+    from .test_evolve import fitness_history, whole_and_resumed
+
+    config = RunConfig.from_dict(TINY)
+    whole, cut_dir = whole_and_resumed(tmp_path, config, stop_after=1)
+    a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut_dir))
+    assert a["optimizer"] == b["optimizer"] and a["best_genome"] == b["best_genome"]
+    assert fitness_history(whole.dir) == fitness_history(cut_dir)
+    assert (whole.dir / "archive.json").read_text() == (cut_dir / "archive.json").read_text()
+    arch = read_archive(whole.dir)
+    assert len(arch.cell) == len(a["optimizer"]["index"]) >= 3
+    assert arch.progress[:, 0].tolist() == [6, 12, 18, 24] and arch.progress[-1, 1] == len(arch.cell)
+    assert arch.genome.tolist() == a["optimizer"]["genome"]
+
+
+def test_an_archive_is_seeded_from_a_genome_file(tmp_path):
+    """--from: the first batch is the start genome itself and its mutants."""
+    config = RunConfig.from_dict({**TINY, "generations": 1, "initial": str(WALKERS / "simbicon_cma_seed5.json")})
+    run = Run.create(tmp_path / "run", config)
+    start, _, _ = load_genome(WALKERS / "simbicon_cma_seed5.json")
+    assert np.array_equal(run.optimizer.population[0], start)
+    assert not np.array_equal(run.optimizer.population[1], start)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.evolve(ev)
+    assert len(read_archive(run.dir).cell) >= 1
+
+
+@pytest.mark.parametrize("setting, words", [
+    ("measures = ['speed', 'cadence']", "cadence names no term of the walk task"),
+    ("resolution = [0, 10]", "cells per measure must be 1 to 1000"),
+    ("low = [1.0, -30.0]\nhigh = [0.5, 30.0]", "low 1 must be below high 0.5"),
+])
+def test_bad_map_elites_settings_one_line_exit_2_nothing_written(tmp_path, capsys, setting, words):
+    cfg = tmp_path / "me.toml"
+    cfg.write_text("optimizer = 'map-elites'\n[episode]\ncontroller = 'simbicon'\nseconds = 1.0\n[episode.task_options]\n"
+                   "fitness = 'weighted'\ngait_measures = true\n[map_elites]\n" + setting + "\n")
+    out = tmp_path / "run"
+    assert cli("evolve", "--config", cfg, "--out", out, "--quiet") == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and "\n" not in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_without_pyribs_one_line(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "ribs", None)
+    with pytest.raises(UserError, match="needs pyribs"):
+        MapElites(EpisodeConfig(controller="simbicon").layout(), MapElitesOptions(), seed=0)
