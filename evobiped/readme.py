@@ -21,6 +21,7 @@ from .envs.walkers import EnvOptions
 from .evolution.cma import CMAOptions
 from .evolution.curriculum import CurriculumOptions
 from .evolution.es import ESOptions
+from .evolution.map_elites import MapElitesOptions
 from .evolution.run_config import NormaliseOptions
 from .evolution.ga import GAOptions
 from .options import markdown_table
@@ -76,6 +77,7 @@ def tables() -> dict[str, str]:
     out["optimizer ga"] = markdown_table(GAOptions)
     out["optimizer cma"] = markdown_table(CMAOptions)
     out["optimizer es"] = markdown_table(ESOptions)
+    out["optimizer map-elites"] = markdown_table(MapElitesOptions)
     out["run normalise"] = markdown_table(NormaliseOptions)
     out["run curriculum"] = markdown_table(CurriculumOptions)
     out["environment"] = markdown_table(EnvOptions)
@@ -119,6 +121,8 @@ def presets_table() -> str:
         population = getattr(getattr(c, c.optimizer, None), "population", None)  # the optimizer's own table
         if c.optimizer == "es":  # ES: mirrored pairs and theta's own rows, not a population table
             population = 2 * c.es.pairs + c.es.evaluation_rows
+        if c.optimizer == "map-elites":  # MAP-Elites: the batch asked per generation
+            population = c.map_elites.batch
         pop = f", {population}" if population else ", its default (CMA-ES: 4 + ⌊3 ln genes⌋)"
         episode = f"{c.generations} × {c.episode.seconds:g} s"
         what = describe(name).replace("|", "\\|") + (" (needs `--from`)" if declared["needs_start"] else "")  # a table cell
