@@ -22,6 +22,7 @@ LAYERS: list[set[str]] = [
     {"robustness", "distill"},
     {"record"},
     {"evolution"},
+    {"repertoire"},
     {"bench", "readme", "flags"},
     {"experiments", "experiments.reil", "experiments.taga", "experiments.g3"},
     {"cli"},

@@ -10,6 +10,7 @@ def add_replay(sub) -> None:
     p = sub.add_parser("replay", help="re-simulate a stored genome into a Rerun recording (and figures)")
     p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
     p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
+    p.add_argument("--cell", metavar="I,J", help="replay the elite of cell I,J of a map-elites run's archive (evobiped repertoire)")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, RUN/replay_best_video.rrd with --video; for a genome file in a "
@@ -43,7 +44,14 @@ def run_replay_cmd(args) -> int:
         refuse("--video-size", f"width and height must be even (H.264), got {args.video_size[0]} {args.video_size[1]}")
     if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
         refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
-    source = resolve(args.source, args.generation)
+    if args.cell is not None:
+        from ..repertoire.elites import load, parse_cell
+
+        if args.generation is not None:
+            refuse("--cell", "an archive's elite is of no generation: give --cell or --generation")
+        source = load(args.source).source(parse_cell(args.cell))
+    else:
+        source = resolve(args.source, args.generation)
     figures = args.figures
     if figures == "":
         base = Path(args.out).parent if args.out else source.outputs

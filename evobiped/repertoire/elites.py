@@ -1,0 +1,89 @@
+"""A run's gait repertoire: its archive (archive.json) and the episode its genomes walk (the run's best.json).
+
+A *walking* elite stayed up its whole evaluation and walked at least :data:`WALK_SPEED` m/s (the measure
+``speed``, when the archive has it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import rundir
+from ..episode import EpisodeConfig
+from ..errors import UserError
+from ..evolution.archive_file import Archive, read_archive
+from ..genome_file import load_genome
+from ..record.source import Source
+
+#: m/s: the least mean forward speed of a walking elite
+WALK_SPEED = 0.2
+
+
+@dataclass(frozen=True)
+class Repertoire:
+    """The archive of a map-elites run directory and the episode (``EpisodeConfig``) its genomes were evaluated in."""
+
+    run_dir: Path
+    archive: Archive
+    episode: EpisodeConfig
+    #: the numerical environment the run evaluated its genomes in (best.json's; None: not recorded)
+    environment: dict | None = None
+
+    def measure(self, name: str) -> np.ndarray:
+        """Every elite's value of measure ``name`` ``(E,)`` (UserError when the archive has no such measure)."""
+        if name not in self.archive.measures:
+            raise UserError(f"{self.archive.path}: the archive measures {' and '.join(self.archive.measures)}, not {name}")
+        return self.archive.values[:, self.archive.measures.index(name)]
+
+    def walking(self) -> np.ndarray:
+        """Bool ``(E,)``: the elite stayed up its whole episode and (with a ``speed`` measure) walked >= WALK_SPEED m/s."""
+        a = self.archive
+        ok = ~a.fell & (a.end_time >= self.episode.seconds - 1e-9)
+        return ok & (self.measure("speed") >= WALK_SPEED) if "speed" in a.measures else ok
+
+    def source(self, cell: tuple[int, int]) -> Source:
+        """The elite of grid cell ``cell`` as a genome to replay (its stored fitness: the archive's objective)."""
+        k = self.archive.find(cell)
+        a = self.archive
+        meta = {"fitness": float(a.objective[k]), "fell": bool(a.fell[k]), "end_time": float(a.end_time[k]),
+                **({"environment": self.environment} if self.environment else {})}
+        path = self.run_dir / f"cell_{cell[0]}_{cell[1]}.json"  # no such file: names what replay writes
+        return Source(genome=a.genome[k].copy(), config=self.episode, meta=meta, genome_path=path, run_dir=self.run_dir)
+
+    def nearest(self, speed: float, turning: float = 0.0) -> int:
+        """The walking elite whose (speed, turning) is nearest the commanded one, in cell widths; UserError naming the
+        range the walking elites cover when the command is outside it."""
+        walk = np.flatnonzero(self.walking())
+        if not len(walk):
+            raise UserError(f"{self.archive.path}: no elite walks yet")
+        v, w = self.measure("speed")[walk], self.measure("turning")[walk]
+        for name, x, have, unit in (("speed", speed, v, "m/s"), ("turning rate", turning, w, "deg/s")):
+            if not have.min() <= x <= have.max():
+                raise UserError(f"{name} {x:g} {unit} is outside the archive's walking gaits ({have.min():.3g} to {have.max():.3g} {unit})")
+        width = (self.archive.high - self.archive.low) / np.asarray(self.archive.resolution)
+        d = ((v - speed) / width[0]) ** 2 + ((w - turning) / width[1]) ** 2
+        return int(walk[np.argmin(d)])
+
+
+def load(run_dir: str | Path) -> Repertoire:
+    """The repertoire of a map-elites run directory (UserError, one line, for anything else)."""
+    path = Path(run_dir)
+    if not path.is_dir():
+        raise UserError(f"{path}: not a run directory (a map-elites run's directory holds archive.json)")
+    archive = read_archive(path)
+    if not (path / rundir.BEST).is_file():
+        raise UserError(f"{path}: no {rundir.BEST}, so the episode its genomes walk is unknown")
+    _, episode, meta = load_genome(path / rundir.BEST)
+    return Repertoire(path, archive, episode, meta.get("environment") if isinstance(meta.get("environment"), dict) else None)
+
+
+def parse_cell(text: str) -> tuple[int, int]:
+    """``"I,J"`` -> (I, J) (UserError otherwise)."""
+    try:
+        i, j = (int(x) for x in text.split(","))
+    except ValueError:
+        raise UserError(f"--cell: expected I,J (two whole numbers), got {text!r}") from None
+    return i, j
