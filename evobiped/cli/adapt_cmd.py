@@ -1,0 +1,43 @@
+"""``evobiped adapt``: a gait repertoire adapting to a damaged body by intelligent trial and error (Cully et al. 2015)."""
+
+from __future__ import annotations
+
+from ..flags import positive_float, positive_int
+
+
+def add_adapt(sub) -> None:
+    p = sub.add_parser("adapt", help="find a gait of a map-elites run's archive that walks on a damaged body (intelligent trial and error)")
+    p.add_argument("run", metavar="RUN", help="a map-elites run directory (its archive.json)")
+    p.add_argument("--damage", required=True, action="append", metavar="KIND:PART[:AMOUNT]",
+                   help="weak:JOINT:F (strength kept, 0-1), locked:JOINT or short:LEG:D (m); repeat for several cases")
+    p.add_argument("--seconds", type=positive_float, default=50.0, metavar="S", help="length of each trial (default 50 s)")
+    p.add_argument("--trials", type=positive_int, default=20, metavar="N", help="most trials per damage (default 20)")
+    p.set_defaults(func=run_adapt_cmd)
+
+
+def run_adapt_cmd(args) -> int:
+    import time
+
+    from ..repertoire.adaptation import adapt, walks
+    from ..repertoire.damage import parse_damage
+    from ..repertoire.elites import load
+    from ..repertoire.trial_error import TrialAndError
+
+    rep = load(args.run)
+    damages = [parse_damage(d, rep.episode) for d in args.damage]  # every one checked before any trial
+    a = rep.archive
+    for damage in damages:
+        t0 = time.perf_counter()
+        trials, prior = adapt(rep, damage, seconds=args.seconds, search=TrialAndError(trials=args.trials))
+        print(f"damage {damage}: {len(prior)} walking elites; the archive's best walker (predicted {trials[0].predicted:.1f} m) "
+              f"on the damaged body: {trials[0].distance:.1f} m, " + (f"fell at {trials[0].end_time:.1f} s" if trials[0].fell else "up"))
+        for n, t in enumerate(trials, 1):
+            print(f"  trial {n}: cell {a.cell[t.elite, 0]},{a.cell[t.elite, 1]} ({', '.join(f'{m} {v:.3g}' for m, v in zip(a.measures, a.values[t.elite]))}): "
+                  f"predicted {t.predicted:.1f} m, walked {t.distance:.1f} m, " + (f"fell at {t.end_time:.1f} s" if t.fell else f"up {t.end_time:g} s"))
+        first = next((n for n, t in enumerate(trials, 1) if walks(t)), None)
+        print(f"  {'walks (>= 10 m, no fall) from trial ' + str(first) if first else 'no trial walked (>= 10 m, no fall)'}; "
+              f"{len(trials)} trials, {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+SUBCOMMANDS = (add_adapt,)

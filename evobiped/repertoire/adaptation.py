@@ -1,0 +1,44 @@
+"""A repertoire adapting to damage: trials of its walking elites on the damaged body, chosen by intelligent trial and error."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .damage import Damage, damaged_episode
+from .elites import Repertoire
+from .trial_error import Trial, TrialAndError, prior_distance
+
+#: m in 50 s without a fall: a gait that walks on the damaged body
+WALKS = (10.0, 50.0)
+
+
+def candidates(rep: Repertoire, seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The walking elites' rows ``(E,)``, their measures scaled to [0, 1] by the archive's bounds ``(E, 2)`` and their
+    prior distance in ``seconds`` s ``(E,)`` m."""
+    rows = np.flatnonzero(rep.walking())
+    a = rep.archive
+    x = np.clip((a.values[rows] - a.low) / (a.high - a.low), 0, 1)
+    return rows, x, prior_distance(rep.measure("speed")[rows], rep.measure("turning")[rows], seconds)
+
+
+def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], search: TrialAndError = TrialAndError()
+          ) -> tuple[list[Trial], np.ndarray]:
+    """Intelligent trial and error on the body with ``damage``, each trial ``seconds`` s (nominal, no perturbations).
+    Returns the trials (``Trial.elite``: a row of the archive) and the prior distances of the candidates ``(E,)``."""
+    episode = dataclasses.replace(rep.episode.nominal(), seconds=seconds)
+    ep = damaged_episode(episode, damage)
+    rows, x, prior = candidates(rep, seconds)
+
+    def trial(k: int) -> tuple[float, bool, float, float]:
+        r = ep.run(rep.archive.genome[rows[k]][None])
+        return float(r.walk()["distance"]), bool(r.fell[0]), float(r.end_time[0]), seconds
+
+    trials = search.run(x, prior, trial)
+    return [dataclasses.replace(t, elite=int(rows[t.elite])) for t in trials], prior
+
+
+def walks(t: Trial) -> bool:
+    """The trial walked: at least 10 m without a fall (in a 50 s trial)."""
+    return not t.fell and t.distance >= WALKS[0]
