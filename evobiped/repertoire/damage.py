@@ -4,7 +4,8 @@ A damage is written ``KIND:PART[:AMOUNT]``:
 
 * ``weak:JOINT:F`` - the actuator of joint ``JOINT`` keeps the fraction ``F`` (0 to 1) of its strength: its
   gains (a position actuator's stiffness and damping, a motor's gear) times ``F``;
-* ``locked:JOINT`` - the joint is held at its angle of the initial pose (its range narrowed to +- 0.5 mrad);
+* ``locked:JOINT`` - the joint is held at its angle of the initial pose (its range narrowed to +- 0.5 mrad, its
+  limit as stiff as MuJoCo keeps stable: time constant two timesteps);
 * ``short:LEG:D`` - leg ``LEG``'s shank is ``D`` m shorter (its capsule, foot and foot site moved up by ``D``; masses
   and inertias as before).
 
@@ -97,4 +98,5 @@ def damaged_episode(episode: EpisodeConfig, damage: Damage | None):
     q0 = float(sims.qpos[0, m.jnt_qposadr[j]])
     m.jnt_range[j] = (q0 - LOCK_SLACK, q0 + LOCK_SLACK)
     m.jnt_limited[j] = 1  # (the simulations made from now on; the one above is dropped)
+    m.jnt_solref[j] = (2 * m.opt.timestep, 1.0)  # the stiffest limit MuJoCo keeps stable: a lock, not a spring
     return ep

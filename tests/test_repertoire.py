@@ -1,0 +1,137 @@
+"""A gait repertoire in use: replaying an elite, the figures, the speed knob, damage and intelligent trial and error."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ribs")
+
+from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
+from evobiped.genome_file import load_genome  # noqa: E402
+from evobiped.repertoire.damage import damaged_episode, parse_damage  # noqa: E402
+from evobiped.repertoire.elites import load  # noqa: E402
+from evobiped.repertoire.speed import follow  # noqa: E402
+from evobiped.repertoire.trial_error import TrialAndError, matern52, posterior, prior_distance  # noqa: E402
+
+from .conftest import WALKERS, cli  # noqa: E402
+
+SEED5 = WALKERS / "simbicon_cma_seed5.json"
+
+
+@pytest.fixture(scope="module")
+def archive_run(tmp_path_factory):
+    """Two generations of six 3 s episodes from the shipped straight walker: an archive with walking elites."""
+    config = RunConfig.from_dict({
+        "optimizer": "map-elites", "generations": 2, "seed": 1, "backend": "serial", "initial": str(SEED5),
+        "episode": {"body": "reil", "controller": "simbicon", "seconds": 3.0,
+                    "task_options": {"fitness": "weighted", "weights": {"time_up": 1.0}, "gait_measures": True}},
+        "map_elites": {"resolution": [20, 10], "low": [0.0, -30.0], "high": [1.0, 30.0], "batch": 6, "sigma": 0.01}})
+    run = Run.create(tmp_path_factory.mktemp("rep") / "run", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.evolve(ev)
+    run.close()
+    return run.dir
+
+
+def test_an_elite_replays_bit_for_bit_and_the_figures_are_drawn(archive_run, capsys):
+    rep = load(archive_run)
+    k = int(np.flatnonzero(rep.walking())[0])
+    i, j = rep.archive.cell[k]
+    assert cli("replay", archive_run, "--cell", f"{i},{j}", "--out", archive_run / "cell.rrd", "--quiet") == 0
+    out = capsys.readouterr().out
+    assert "the replay equals it bit for bit" in out and "stayed up for 3.0 s" in out
+    assert cli("repertoire", archive_run, "--list") == 0
+    out = capsys.readouterr().out
+    assert f"{len(rep.archive.cell)} elites in 200 cells after 12 evaluations; {int(rep.walking().sum())} walk" in out
+    assert f"cell {i},{j}: speed" in out
+    assert (archive_run / "figures_archive" / "archive.png").stat().st_size > 10_000
+    assert (archive_run / "figures_archive" / "archive_progress.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, words", [
+    (("replay", "{run}", "--cell", "19,0"), "cell 19,0 holds no elite"),
+    (("replay", "{run}", "--cell", "x"), "--cell: expected I,J"),
+    (("gait", "{run}", "--speed", "3.5"), "speed 3.5 m/s is outside the archive's walking gaits ("),
+    (("gait", "{run}", "--speed", "0.5", "--turning", "80"), "turning rate 80 deg/s is outside"),
+    (("adapt", "{run}", "--damage", "weak:left_elbow:0.5"), "the reil body has no joint 'left_elbow' (its joints: left_hip_pitch"),
+    (("adapt", "{run}", "--damage", "short:middle:0.05"), "has no leg 'middle' (its legs: left, right)"),
+    (("adapt", "{run}", "--damage", "weak:left_knee:1.5"), "F must be a fraction 0 to 1"),
+])
+def test_bad_input_one_line_exit_2_nothing_written(archive_run, capsys, args, words):
+    before = sorted(p.name for p in archive_run.rglob("*"))
+    assert cli(*(a.format(run=archive_run) for a in args)) == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and "\n" not in err
+    assert sorted(p.name for p in archive_run.rglob("*")) == before
+
+
+def test_the_speed_knob_walks_the_elites_own_speed_and_switches_without_stopping(archive_run):
+    """The first stretch, as long as the archive's episodes, is the elite's own evaluation: its speed bit for bit;
+    the second stretch runs on from there with the other elite's parameters (not a restart: its speed differs from
+    that elite's own evaluation)."""
+    rep = load(archive_run)
+    walk = np.flatnonzero(rep.walking())
+    slow = walk[np.argmin(rep.measure("speed")[walk])]
+    v, w = rep.measure("speed")[slow], rep.measure("turning")[slow]
+    s = follow(rep, [v, float(rep.measure("speed")[walk].max())], rep.episode.seconds, turning=w)
+    assert s[0].elite == slow and s[0].measured == s[0].archive_speed == v and s[0].up
+    assert s[1].elite != slow and s[1].measured != s[1].archive_speed
+
+
+def test_damage_changes_the_model_as_named():
+    """weak: the actuator's stiffness and damping times F; short: the foot 5 cm higher in the initial pose; locked:
+    the knee within 5 mrad of its initial angle after 1 s of walking (it bends 0.33 rad unlocked)."""
+    genome, cfg, _ = load_genome(SEED5)
+    cfg = dataclasses.replace(cfg, seconds=1.0)
+    intact = damaged_episode(cfg, None).model
+    weak = damaged_episode(cfg, parse_damage("weak:left_knee:0.3", cfg)).model
+    a = intact.actuator("left_knee").id
+    assert weak.actuator_gainprm[a, 0] == pytest.approx(0.3 * intact.actuator_gainprm[a, 0])
+    assert weak.actuator_biasprm[a, 1] == pytest.approx(0.3 * intact.actuator_biasprm[a, 1])
+    assert np.array_equal(np.delete(weak.actuator_gainprm, a, 0), np.delete(intact.actuator_gainprm, a, 0))
+    ep = damaged_episode(cfg, parse_damage("short:left:0.05", cfg))
+    s = ep.sims(1)
+    ep.body.reset(s)
+    left, right = (s.site_xpos[0, ep.model.site(f"{leg}_foot").id, 2] for leg in ("left", "right"))
+    assert left - right == pytest.approx(0.05, abs=1e-9)
+    for damage, most in ((None, None), ("locked:right_knee", 5e-3)):
+        ep = damaged_episode(cfg, damage and parse_damage(damage, cfg))
+        adr = ep.model.jnt_qposadr[ep.model.joint("right_knee").id]
+        st = ep.start(genome[None])
+        q0 = st.sims.qpos[0, adr]
+        ep.advance(st, 1.0)
+        moved = abs(st.sims.qpos[0, adr] - q0)
+        assert moved < most if most else moved > 0.1
+
+
+def test_prior_distance_is_the_chord_of_the_circle():
+    assert prior_distance(np.array([0.5]), np.array([0.0]), 50.0)[0] == 25.0
+    assert prior_distance(np.array([0.5]), np.array([360 / 50]), 50.0)[0] == pytest.approx(0.0, abs=1e-12)  # a full circle
+    r = 0.5 / np.radians(360 / 100)  # half a circle: the diameter
+    assert prior_distance(np.array([0.5]), np.array([360 / 100]), 50.0)[0] == pytest.approx(2 * r)
+
+
+def test_the_gp_after_one_trial_and_the_search_on_a_known_damage():
+    """One observation: mu = P + k(x, x1) / (1 + noise) (y1 - P(x1)), s^2 = 1 - k^2 / (1 + noise).  The search on a
+    line of 50 gaits whose best half is broken (performance 0): it tries the prior's best first and stops at the
+    first trial reaching 0.9 of the best posterior mean (Cully's rule; performances in units of the best prior, 2),
+    an unbroken gait, within a few trials; on an intact body it stops after one."""
+    x = np.linspace(0, 1, 50)[:, None]
+    prior = 1 + x[:, 0]  # the fastest gaits at the right
+    mean, sd = posterior(x, prior, [49], np.array([0.2]), rho=0.15, noise=1e-3)
+    k = matern52(x, x[[49]], 0.15)[:, 0]
+    assert np.allclose(mean, prior + k / (1 + 1e-3) * (0.2 - 2.0))
+    assert np.allclose(sd, np.sqrt(1 - k**2 / (1 + 1e-3)))
+    true = np.where(x[:, 0] > 0.5, 0.0, prior)
+    trials = TrialAndError().run(x, prior, lambda k: (float(true[k]), false_if(true[k]), 50.0, 50.0))
+    assert trials[0].elite == 49 and true[trials[-1].elite] > 0 and len(trials) <= 6
+    tried = [t.elite for t in trials]
+    after, _ = posterior(x, prior / 2, tried, np.array([t.performance for t in trials]) / 2, rho=0.15, noise=1e-3)
+    before, _ = posterior(x, prior / 2, tried[:-1], np.array([t.performance for t in trials[:-1]]) / 2, rho=0.15, noise=1e-3)
+    assert trials[-1].performance / 2 >= 0.9 * after.max() and max(t.performance for t in trials[:-1]) / 2 < 0.9 * before.max()
+    assert len(TrialAndError().run(x, prior, lambda k: (float(prior[k]), False, 50.0, 50.0))) == 1
+
+
+def false_if(performance: float) -> bool:
+    return performance == 0.0
