@@ -71,7 +71,7 @@ def test_a_bad_option_is_refused_when_the_config_is_loaded_naming_its_path(episo
                                           ({"cma": {"population": 1}}, "cma.population: must be a whole number in [2, 1e+07]"),
                                           ({"generations": 0}, "generations: must be in [1, 1e+06], got 0"),
                                           ({"workers": 0}, "workers: must be >= 1, got 0"),
-                                          ({"optimizer": "de"}, "optimizer: must be one of ga, cma, es, got 'de'")])
+                                          ({"optimizer": "de"}, "optimizer: must be one of ga, cma, es, map-elites, got 'de'")])
 def test_bad_run_settings_name_their_path(table, words):
     with pytest.raises(ConfigError, match="^c.toml: " + words.replace("[", r"\[").replace("+", r"\+")):
         RunConfig.from_dict(table, where="c.toml")

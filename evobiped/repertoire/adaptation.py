@@ -8,7 +8,7 @@ import numpy as np
 
 from .damage import Damage, damaged_episode
 from .elites import Repertoire
-from .trial_error import Trial, TrialAndError, prior_distance
+from .trial_error import Attempt, TrialAndError, prior_distance
 
 #: m in 50 s without a fall: a gait that walks on the damaged body
 WALKS = (10.0, 50.0)
@@ -24,9 +24,9 @@ def candidates(rep: Repertoire, seconds: float) -> tuple[np.ndarray, np.ndarray,
 
 
 def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], search: TrialAndError = TrialAndError()
-          ) -> tuple[list[Trial], np.ndarray]:
+          ) -> tuple[list[Attempt], np.ndarray]:
     """Intelligent trial and error on the body with ``damage``, each trial ``seconds`` s (nominal, no perturbations).
-    Returns the trials (``Trial.elite``: a row of the archive) and the prior distances of the candidates ``(E,)``."""
+    Returns the trials (``Attempt.elite``: a row of the archive) and the prior distances of the candidates ``(E,)``."""
     episode = dataclasses.replace(rep.episode.nominal(), seconds=seconds)
     ep = damaged_episode(episode, damage)
     rows, x, prior = candidates(rep, seconds)
@@ -39,6 +39,6 @@ def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], 
     return [dataclasses.replace(t, elite=int(rows[t.elite])) for t in trials], prior
 
 
-def walks(t: Trial) -> bool:
+def walks(t: Attempt) -> bool:
     """The trial walked: at least 10 m without a fall (in a 50 s trial)."""
     return not t.fell and t.distance >= WALKS[0]

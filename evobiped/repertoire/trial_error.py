@@ -24,7 +24,7 @@ import numpy as np
 
 
 @dataclass(frozen=True)
-class Trial:
+class Attempt:
     """One trial: the elite tried (row of the archive), what the GP predicted of it and what it did."""
 
     elite: int
@@ -73,7 +73,7 @@ class TrialAndError:
     noise: float = 1e-3
     trials: int = 20
 
-    def run(self, x: np.ndarray, prior_m: np.ndarray, trial: Callable[[int], tuple[float, bool, float, float]]) -> list[Trial]:
+    def run(self, x: np.ndarray, prior_m: np.ndarray, trial: Callable[[int], tuple[float, bool, float, float]]) -> list[Attempt]:
         """Search the candidates at ``x`` ``(E, d)`` (scaled measures) with prior performances ``prior_m`` ``(E,)`` m;
         ``trial(row) -> (distance m, fell, end_time s, seconds s)`` runs one elite on the damaged body.  Returns the
         trials in order; the last one met the stopping rule unless ``trials`` ran out."""
@@ -81,7 +81,7 @@ class TrialAndError:
         prior = prior_m / scale
         tried: list[int] = []
         y: list[float] = []
-        out: list[Trial] = []
+        out: list[Attempt] = []
         while len(out) < self.trials:
             mean, sd = posterior(x, prior, tried, np.array(y), rho=self.rho, noise=self.noise)
             if out and max(y) >= self.alpha * mean.max():
@@ -93,5 +93,5 @@ class TrialAndError:
             perf = distance * end_time / seconds
             tried.append(k)
             y.append(perf / scale)
-            out.append(Trial(k, float(mean[k] * scale), float(perf), float(distance), bool(fell), float(end_time)))
+            out.append(Attempt(k, float(mean[k] * scale), float(perf), float(distance), bool(fell), float(end_time)))
         return out
