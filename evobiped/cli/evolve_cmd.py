@@ -33,7 +33,8 @@ def add_evolve(sub) -> None:
     p.add_argument("--workers", type=positive_int, help="worker processes / threads / Ray actors (default: all cores; "
                    "more than the cores earns a warning; not with the serial backend)")
     p.add_argument("--address", help="Ray cluster address (only with --backend ray; default: start a local Ray)")
-    p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="start from this genome (the GA: a population of its clones; CMA-ES: the initial mean)")
+    p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="start from this genome (the GA: a population of its clones; CMA-ES: the initial mean; "
+                   "MAP-Elites: the first batch, it and its mutants)")
     p.add_argument("--freeze", metavar="BLOCKS", help="gene blocks the optimizer must not change, comma-separated "
                    "(e.g. weights,time_constants,biases: evolve only a CTRNN's input weights)")
     p.add_argument("--out", metavar="DIR", help="run directory (default runs/<body>_<controller>_seed<seed>)")
