@@ -137,3 +137,28 @@ def test_without_pyribs_one_line(monkeypatch):
     monkeypatch.setitem(sys.modules, "ribs", None)
     with pytest.raises(UserError, match="needs pyribs"):
         MapElites(EpisodeConfig(controller="simbicon").layout(), MapElitesOptions(), seed=0)
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("genome", "x", "map-elites.genome must be a list of finite numbers (a row each)"),
+    ("index", 999, "map-elites.index must be different cells 0 to 19"),
+    ("measures", [[5.0, 0.0]], "map-elites.measures do not lie in the cells map-elites.index names"),
+])
+def test_a_damaged_archive_in_the_checkpoint_is_refused_in_one_line(tmp_path, capsys, field, value, words):
+    config = RunConfig.from_dict({**TINY, "generations": 1})
+    run = Run.create(tmp_path / "run", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.evolve(ev)
+    run.close()
+    path = tmp_path / "run" / "checkpoint.json"
+    ck = json.loads(path.read_text())
+    table = ck["optimizer"]
+    if field == "measures":  # one elite whose measures lie in another cell
+        table["index"], table["genome"], table["objective"] = table["index"][:1], table["genome"][:1], table["objective"][:1]
+        table["fell"], table["end_time"] = table["fell"][:1], table["end_time"][:1]
+        table["index"][0] = 0
+    table[field] = value if field == "measures" else [value] + table[field][1:]
+    path.write_text(json.dumps(ck))
+    assert cli("evolve", "--resume", tmp_path / "run") == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and "\n" not in err
