@@ -5,7 +5,7 @@ evaluated genome lands in the cell of its measures (two task terms, e.g. the wal
 m/s and ``turning`` deg/s; values beyond the bounds fall in the edge cells) and stays there if its
 objective (the task's fitness) beats the cell's elite; of a batch's genomes in one cell the fittest,
 the first on a tie.  Each generation asks ``batch`` new genomes: a uniformly drawn elite plus
-Gaussian noise of ``sigma`` times each gene's range, and with ``line_sigma`` > 0 a step along the
+Gaussian noise of ``sigma`` times each gene's range (``parents = "up"``: an elite that did not fall), and with ``line_sigma`` > 0 a step along the
 line to a second drawn elite (Vassiliades & Mouret 2018's iso+line variation), clipped to the
 genes' bounds.  The first batch, while the archive is empty, is the start genome (``--from``: it
 and its mutants) or the layout's initial distribution.
@@ -64,6 +64,8 @@ class MapElitesOptions:
     batch: int = option(32, "genomes asked per generation", low=1, high=MAX_POPULATION, integer=True)
     sigma: float = option(0.02, "Gaussian step, a fraction of each gene's range", above=0, high=1)
     line_sigma: float = option(0.0, "step along the line to a second elite (0: Gaussian only)", low=0, high=2)
+    parents: str = option("all", "`all`: parents drawn among every elite (Mouret & Clune); `up`: among the elites that did not "
+                          "fall, while any did not", choices=("all", "up"))
 
     def __post_init__(self):
         check_fields(self, "map_elites")
@@ -158,7 +160,9 @@ class MapElites(Optimizer):
                 rows = self.initial + c.sigma * span * rng.standard_normal((c.batch, G))
                 rows[0] = self.initial
         else:
-            genomes = self.elites()["genome"]
+            e = self.elites()
+            up = e["fell"] == 0
+            genomes = e["genome"][up] if c.parents == "up" and up.any() else e["genome"]
             parents = genomes[rng.integers(len(genomes), size=c.batch)]
             rows = parents + c.sigma * span * rng.standard_normal((c.batch, G))
             if c.line_sigma:
