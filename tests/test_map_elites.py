@@ -162,3 +162,28 @@ def test_a_damaged_archive_in_the_checkpoint_is_refused_in_one_line(tmp_path, ca
     assert cli("evolve", "--resume", tmp_path / "run") == 2
     err = capsys.readouterr().err.strip()
     assert words in err and "\n" not in err
+
+
+def test_parents_up_draws_only_elites_that_stayed_up():
+    """parents = up: with a vanishing step each new genome is a copy of an elite that did not fall; all: of any elite."""
+    layout = EpisodeConfig(body="reil", controller="simbicon").layout()
+    drawn = {}
+    for parents in ("up", "all"):
+        opt = MapElites(layout, MapElitesOptions(resolution=[4, 3], batch=40, sigma=1e-12, parents=parents), seed=0)
+        fitness = np.r_[1.0, 2.0, 3.0, np.full(37, -np.inf)]  # three elites; the rest unstable, kept out
+        opt.tell(_result(fitness, np.r_[1.0, 0.0, 1.0, np.ones(37)], np.r_[0.1, 0.5, 0.9, np.zeros(37)]))
+        e = opt.elites()
+        opt.next_generation()
+        near = np.abs(opt.population[:, None, :] - e["genome"][None]).max(axis=2) < 1e-9  # (batch, elites)
+        assert near.any(axis=1).all()
+        drawn[parents] = set(np.flatnonzero(near.any(axis=0)))
+    assert drawn["up"] == {1} and drawn["all"] == {0, 1, 2}
+
+
+def _result(fitness, fell, speed):
+    class R:
+        pass
+    r = R()
+    r.fitness, r.fell, r.end_time = np.asarray(fitness, float), np.asarray(fell, float), np.full(len(fitness), 2.0)
+    r.terms = {"speed": np.asarray(speed, float), "turning": np.zeros(len(fitness))}
+    return r
