@@ -116,7 +116,7 @@ def test_the_gp_after_one_trial_and_the_search_on_a_known_damage():
     """One observation: mu = P + k(x, x1) / (1 + noise) (y1 - P(x1)), s^2 = 1 - k^2 / (1 + noise).  The search on a
     line of 50 gaits whose best half is broken (performance 0): it tries the prior's best first and stops at the
     first trial reaching 0.9 of the best posterior mean (Cully's rule; performances in units of the best prior, 2),
-    an unbroken gait, within a few trials; on an intact body it stops after one."""
+    an unbroken gait, within a few trials; on an intact body it stops after one; only an acceptable trial ends it."""
     x = np.linspace(0, 1, 50)[:, None]
     prior = 1 + x[:, 0]  # the fastest gaits at the right
     mean, sd = posterior(x, prior, [49], np.array([0.2]), rho=0.15, noise=1e-3)
@@ -131,6 +131,10 @@ def test_the_gp_after_one_trial_and_the_search_on_a_known_damage():
     before, _ = posterior(x, prior / 2, tried[:-1], np.array([t.performance for t in trials[:-1]]) / 2, rho=0.15, noise=1e-3)
     assert trials[-1].performance / 2 >= 0.9 * after.max() and max(t.performance for t in trials[:-1]) / 2 < 0.9 * before.max()
     assert len(TrialAndError().run(x, prior, lambda k: (float(prior[k]), False, 50.0, 50.0))) == 1
+    # only an acceptable trial (here: performance >= 1.45, gaits 22 to 24) may end the search
+    strict = TrialAndError().run(x, prior, lambda k: (float(true[k]), false_if(true[k]), 50.0, 50.0),
+                                 acceptable=lambda t: t.performance >= 1.45)
+    assert strict[-1].performance >= 1.45 > max(t.performance for t in strict[:-1]) and len(strict) <= 20
 
 
 def false_if(performance: float) -> bool:

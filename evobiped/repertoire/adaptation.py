@@ -25,7 +25,8 @@ def candidates(rep: Repertoire, seconds: float) -> tuple[np.ndarray, np.ndarray,
 
 def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], search: TrialAndError = TrialAndError()
           ) -> tuple[list[Attempt], np.ndarray]:
-    """Intelligent trial and error on the body with ``damage``, each trial ``seconds`` s (nominal, no perturbations).
+    """Intelligent trial and error on the body with ``damage``, each trial ``seconds`` s (nominal, no perturbations);
+    only a trial that walks (:func:`walks`) ends the search early.
     Returns the trials (``Attempt.elite``: a row of the archive) and the prior distances of the candidates ``(E,)``."""
     episode = dataclasses.replace(rep.episode.nominal(), seconds=seconds)
     ep = damaged_episode(episode, damage)
@@ -35,7 +36,7 @@ def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], 
         r = ep.run(rep.archive.genome[rows[k]][None])
         return float(r.walk()["distance"]), bool(r.fell[0]), float(r.end_time[0]), seconds
 
-    trials = search.run(x, prior, trial)
+    trials = search.run(x, prior, trial, acceptable=walks)
     return [dataclasses.replace(t, elite=int(rows[t.elite])) for t in trials], prior
 
 

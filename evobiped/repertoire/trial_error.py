@@ -10,8 +10,8 @@ observation noise ``noise``) learns from each trial on the damaged body
     mu(x) = P(x) + k(x)^T (K + noise I)^-1 (y - P(X)),   s^2(x) = 1 - k(x)^T (K + noise I)^-1 k(x)
 
 and the next trial is the untried elite with the highest upper confidence bound mu + kappa s.  The search stops
-when a trial's performance reaches ``alpha`` times the best mu of any elite (Cully's stopping rule), or after
-``trials`` trials.  A trial's performance: the distance from the start (m) times the fraction of the episode
+when a trial's performance reaches ``alpha`` times the best mu of any elite (Cully's stopping rule) and that
+trial is acceptable (here: it walked; a caller's test, by default any), or after ``trials`` trials.  A trial's performance: the distance from the start (m) times the fraction of the episode
 the walker stayed up (a fall costs what it did not walk).  Cully's values: alpha 0.9, kappa 0.05, noise 1e-3.
 """
 
@@ -73,10 +73,12 @@ class TrialAndError:
     noise: float = 1e-3
     trials: int = 20
 
-    def run(self, x: np.ndarray, prior_m: np.ndarray, trial: Callable[[int], tuple[float, bool, float, float]]) -> list[Attempt]:
+    def run(self, x: np.ndarray, prior_m: np.ndarray, trial: Callable[[int], tuple[float, bool, float, float]],
+            acceptable: Callable[[Attempt], bool] = lambda attempt: True) -> list[Attempt]:
         """Search the candidates at ``x`` ``(E, d)`` (scaled measures) with prior performances ``prior_m`` ``(E,)`` m;
         ``trial(row) -> (distance m, fell, end_time s, seconds s)`` runs one elite on the damaged body.  Returns the
-        trials in order; the last one met the stopping rule unless ``trials`` ran out."""
+        trials in order; the last one met the stopping rule unless ``trials`` ran out.  ``acceptable(attempt)``: whether a
+        trial may end the search."""
         scale = float(prior_m.max())
         prior = prior_m / scale
         tried: list[int] = []
@@ -84,7 +86,8 @@ class TrialAndError:
         out: list[Attempt] = []
         while len(out) < self.trials:
             mean, sd = posterior(x, prior, tried, np.array(y), rho=self.rho, noise=self.noise)
-            if out and max(y) >= self.alpha * mean.max():
+            ok = [i for i, a in enumerate(out) if acceptable(a)]
+            if ok and max(y[i] for i in ok) >= self.alpha * mean.max():
                 break
             ucb = mean + self.kappa * sd
             ucb[tried] = -np.inf
