@@ -20,6 +20,8 @@ from ..record.source import Source
 
 #: m/s: the least mean forward speed of a walking elite
 WALK_SPEED = 0.2
+#: how near a commanded speed (a fraction of it) and turning rate (deg/s) an elite must be to count as that gait
+SPEED_TOLERANCE, TURNING_TOLERANCE = 0.05, 3.0
 
 
 @dataclass(frozen=True)
@@ -53,9 +55,11 @@ class Repertoire:
         path = self.run_dir / f"cell_{cell[0]}_{cell[1]}.json"  # no such file: names what replay writes
         return Source(genome=a.genome[k].copy(), config=self.episode, meta=meta, genome_path=path, run_dir=self.run_dir)
 
-    def nearest(self, speed: float, turning: float = 0.0) -> int:
-        """The walking elite whose (speed, turning) is nearest the commanded one, in cell widths; UserError naming the
-        range the walking elites cover when the command is outside it."""
+    def nearest(self, speed: float, turning: float = 0.0, like: int | None = None) -> int:
+        """The walking elite whose (speed, turning) is nearest the commanded one, in cell widths; with ``like`` (an elite's
+        row), among the walking elites within SPEED_TOLERANCE and TURNING_TOLERANCE of the command the one whose genome
+        is nearest that elite's (the sum of gene differences over the archive's span of each gene: the gait most like the
+        current one).  UserError naming the range the walking elites cover when the command is outside it."""
         walk = np.flatnonzero(self.walking())
         if not len(walk):
             raise UserError(f"{self.archive.path}: no elite walks yet")
@@ -63,6 +67,11 @@ class Repertoire:
         for name, x, have, unit in (("speed", speed, v, "m/s"), ("turning rate", turning, w, "deg/s")):
             if not have.min() <= x <= have.max():
                 raise UserError(f"{name} {x:g} {unit} is outside the archive's walking gaits ({have.min():.3g} to {have.max():.3g} {unit})")
+        near = (np.abs(v - speed) <= SPEED_TOLERANCE * speed) & (np.abs(w - turning) <= TURNING_TOLERANCE)
+        if like is not None and near.any():
+            g = self.archive.genome
+            span = np.maximum(np.ptp(g, axis=0), 1e-12)
+            return int(walk[near][np.argmin((np.abs(g[walk[near]] - g[like]) / span).sum(axis=1))])
         width = (self.archive.high - self.archive.low) / np.asarray(self.archive.resolution)
         d = ((v - speed) / width[0]) ** 2 + ((w - turning) / width[1]) ** 2
         return int(walk[np.argmin(d)])
