@@ -139,3 +139,22 @@ def test_the_gp_after_one_trial_and_the_search_on_a_known_damage():
 
 def false_if(performance: float) -> bool:
     return performance == 0.0
+
+
+def test_the_knob_switches_to_the_gait_most_like_the_current_one():
+    """Among the walking elites within 5 % of the commanded speed, ``like`` picks the genome nearest the current elite's;
+    without it, the nearest in speed and turning."""
+    from pathlib import Path
+
+    from evobiped.episode import EpisodeConfig
+    from evobiped.evolution.archive_file import Archive
+    from evobiped.repertoire.elites import Repertoire
+
+    g = np.array([[0.0, 0.0], [1.0, 1.0], [0.1, 0.2], [0.15, 0.1]])  # A far from D, B far, C near D
+    values = np.array([[0.5, 0.0], [0.51, 0.0], [0.49, 1.0], [0.3, 0.0]])
+    arch = Archive(Path("a.json"), ("speed", "turning"), np.array([0.0, -30.0]), np.array([1.0, 30.0]), (20, 60),
+                   np.array([[10, 30], [10, 31], [9, 31], [6, 30]]), values, np.full(4, 20.0), np.zeros(4, bool),
+                   np.full(4, 20.0), g, np.zeros((1, 3)))
+    rep = Repertoire(Path("."), arch, EpisodeConfig(seconds=20.0))
+    assert rep.nearest(0.5, 0.0) == 0 and rep.nearest(0.5, 0.0, like=3) == 2
+    assert rep.nearest(0.3, 0.0, like=1) == 3  # the only gait within 5 %
