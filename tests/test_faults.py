@@ -523,7 +523,7 @@ def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, bac
 def test_full_disk_at_the_lock_is_one_line_and_leaves_no_empty_lock(tmp_path, capsys, monkeypatch, reference):
     import errno
 
-    from evobiped import rundir
+    from evobiped.rundir import locking
 
     def full(fd, data, offset):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
@@ -531,7 +531,7 @@ def test_full_disk_at_the_lock_is_one_line_and_leaves_no_empty_lock(tmp_path, ca
     d = tmp_path / "run"
     d.mkdir()
     (d / ".lock").touch()  # an empty lock an earlier version left
-    monkeypatch.setattr(rundir.os, "pwrite", full)
+    monkeypatch.setattr(locking.os, "pwrite", full)
     assert cli("evolve", *RUN, "--out", d) == 2
     one_line_error(capsys.readouterr().err, f"cannot write {d.resolve() / '.lock'}: No space left on device")
     assert list(d.iterdir()) == []
