@@ -9,6 +9,7 @@ run with the same config writes (wall times aside).
 
 from __future__ import annotations
 
+import contextlib
 import time
 import uuid
 from pathlib import Path
@@ -37,6 +38,8 @@ class Run:
     start: list[float] | None = None
     #: the numerical environment config.json says the run started in (None: none recorded)
     started_in: dict | None = None
+    #: :meth:`create` made the run directory (it did not exist before)
+    made_directory: bool = False
 
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
@@ -69,6 +72,7 @@ class Run:
             raise UserError(f"run directory {directory} exists and is a file; give another --out")
         start = start_genome(config)
         opt = make_optimizer(config, start)
+        made = not directory.exists()
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -89,6 +93,7 @@ class Run:
             run = cls(directory, config, opt, [], None, 0.0, context=RunContext(config, start_episode(directory, config)))
             run.started_in = environment
             run.start = None if start is None else [float(x) for x in start]
+            run.made_directory = made
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
             rundir.unlock(directory)
@@ -207,6 +212,19 @@ class Run:
     def finish(self) -> dict:
         """Write summary.json (the run is complete); returns it."""
         return commit_point.write_summary(self)
+
+    def abandon(self) -> None:
+        """Undo :meth:`create` of a run that never evolved (its evaluator could not start): remove the files it wrote,
+        and the directory when it made it; release the lock."""
+        for name in (rundir.CONFIG, rundir.START, rundir.HISTORY):
+            (self.dir / name).unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            (self.dir / rundir.GENERATIONS).rmdir()
+        self.close()
+        if self.made_directory:
+            (self.dir / rundir.LOCK).unlink(missing_ok=True)
+            with contextlib.suppress(OSError):
+                self.dir.rmdir()
 
     def close(self) -> None:
         """Release the run directory's lock."""

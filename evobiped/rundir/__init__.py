@@ -1,5 +1,6 @@
-"""The run-directory format in one place: file names (:mod:`.layout`), history.csv (:mod:`.history_file`), the record
-of every individual (:mod:`.individuals_file`), the lock (:mod:`.locking`), the checkpoint's checks (:mod:`.checkpoint_check`).
+"""The run-directory format in one place: file names (:mod:`.layout`), history.csv (:mod:`.history_file`), the
+record of every individual (:mod:`.individuals_file`), the lock (:mod:`.locking`), the checkpoint's checks
+(:mod:`.checkpoint_check`), and which genome "a run directory or a genome file" names (:mod:`.genome_source`).
 
 A run directory (``evobiped evolve --out DIR``)::
 
@@ -38,6 +39,7 @@ generation is duplicated or lost (:mod:`.individuals_file`).
 """
 
 from .checkpoint_check import OLD_OPTIMIZER_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, optimizer_table, validate_checkpoint
+from .genome_source import GenomeSource, genome_path, resolve_genome
 from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, read_individuals
 from .history_file import HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history, write_history
 from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HISTORY, LOCK, OUTCOME, RECORDING, START, SUMMARY,
@@ -46,9 +48,9 @@ from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HIST
 from .locking import lock, unlock
 
 __all__ = [
-    "BEST", "CHECKPOINT", "CONFIG", "GENERATIONS", "GENOME_OUTPUTS", "HISTORY", "HISTORY_COLUMNS", "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY",
+    "BEST", "CHECKPOINT", "CONFIG", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS", "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY",
     "OPTIMIZER_KEY", "OUTCOME", "RECORDING", "SETTINGS_KEY", "START", "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",
-    "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "history_columns", "history_text",
-    "is_unused", "label", "lock", "optimizer_table", "read_history", "read_individuals", "remove_stale_temporaries", "replay_file",
+    "figures_dir", "generation_file", "generation_files", "generation_of", "genome_path", "genome_outputs", "history_columns", "history_text",
+    "is_unused", "label", "lock", "optimizer_table", "read_history", "read_individuals", "resolve_genome", "remove_stale_temporaries", "replay_file",
     "robustness_stem", "unlock", "validate_checkpoint", "write_history",
 ]

@@ -59,7 +59,7 @@ def run_study_cmd(args) -> int:
     for path in write_results(args.out, cfg, outcomes):
         say(f"wrote {path}")
     if args.replays:
-        from ...record.replay import replay
+        from ...usecases.replaying import replay
         from ...record.source import resolve
         from .study import run_dir
 
