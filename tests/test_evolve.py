@@ -342,11 +342,11 @@ def test_existing_run_directory_is_left_untouched(finished_run, capsys):
 def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_checked(finished_run, tmp_path, monkeypatch, capsys):
     """The evolve use case checks everything, creates or resumes the run, and only then starts the evaluator (the
     process pool); an evaluator that cannot start removes the new run again."""
-    import evobiped.usecases.evolving as evolving
     from evobiped.errors import UserError
+    from evobiped.evolution import evaluate
 
     started = []
-    monkeypatch.setattr(evolving, "make_evaluator", lambda *a, **k: started.append(a) or pytest.fail("a worker started"))
+    monkeypatch.setattr(evaluate, "make_evaluator", lambda *a, **k: started.append(a) or pytest.fail("a worker started"))
     for flags, words in ((["--out", finished_run], "exists and is not empty"), (["--from", tmp_path / "gone.json", "--out", tmp_path / "x"],
                                                                                "no such run directory or genome file")):
         assert cli("evolve", "--generations", 1, "--backend", "process", "--workers", 2, *flags, "--quiet") == 2
@@ -357,7 +357,7 @@ def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_chec
         started.append(a)
         raise UserError("cannot start the workers")
 
-    monkeypatch.setattr(evolving, "make_evaluator", fails)
+    monkeypatch.setattr(evaluate, "make_evaluator", fails)
     assert cli("evolve", "--generations", 1, "--population", 4, "--backend", "process", "--workers", 2, "--out", tmp_path / "y", "--quiet") == 2
     assert "cannot start the workers" in capsys.readouterr().err and len(started) == 1
     assert not (tmp_path / "y").exists()  # the run it had created is gone: the same --out works again

@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import Callable
 
 from .. import rundir
-from ..evolution.evaluate import Evaluator, make_evaluator
+from ..evolution import evaluate
+from ..evolution.evaluate import Evaluator
 from ..evolution.run import Run
 from ..evolution.run_config import RunConfig, check_run
 from ..fileio import read_json
@@ -64,7 +65,7 @@ def start_evaluator(opened: OpenRun, on_retry: Callable[[int, int], None] | None
     """Start the evaluator of an opened run (``on_retry(n, limit)``: a dead worker's batch is evaluated again).  When
     it cannot start, the run's lock is released, and a new run's directory is removed again (nothing half-made)."""
     try:
-        return make_evaluator(opened.run.config.episode, opened.backend, opened.workers, opened.address, on_retry=on_retry)
+        return evaluate.make_evaluator(opened.run.config.episode, opened.backend, opened.workers, opened.address, on_retry=on_retry)
     except BaseException:
         opened.run.abandon() if not opened.resumed else opened.run.close()
         raise
