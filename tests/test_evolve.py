@@ -259,6 +259,29 @@ def test_a_resume_cuts_individuals_back_to_its_committed_generations(tmp_path):
     assert (cut.dir / "individuals.jsonl").read_bytes() == (whole.dir / "individuals.jsonl").read_bytes()
 
 
+def test_what_a_resume_keeps_of_individuals_jsonl(tmp_path):
+    """The committed generations' whole lines in order are kept, from wherever the file starts (a run made before
+    the file was kept starts it when resumed); a line cut short, a gap or a generation not committed ends what is
+    kept; a resume that finds committed generations missing says so."""
+    from evobiped.rundir import committed_size, individuals_text
+
+    rows = lambda g, n: [{"generation": g, "row": i, "evaluated": True, "previous": None, "parents": None, "fitness": 1.0,  # noqa: E731
+                          "fell": False, "unstable": False, "end_time": 1.0, "terms": {}} for i in range(n)]
+    path = tmp_path / "individuals.jsonl"
+    three, four = individuals_text(rows(3, 2)), individuals_text(rows(4, 2))
+    path.write_text(three + four + '{"generation":5,"ro')
+    assert committed_size(path, 5) == (len(three + four), 5)
+    assert committed_size(path, 4) == (len(three), 4)
+    path.write_text(three + individuals_text(rows(5, 2)))
+    assert committed_size(path, 9) == (len(three), 4)
+    run = Run.create(tmp_path / "r", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        run.evolve(ev)
+    run.close()
+    (run.dir / "individuals.jsonl").unlink()
+    assert f"individuals.jsonl lacks generations 0..{SMALL.generations - 1} (not in the checkpoint: lost)" in Run.resume(run.dir).repairs
+
+
 def snapshot(d: Path) -> dict:
     return {p.relative_to(d): (p.stat().st_mtime_ns, p.read_bytes()) for p in d.rglob("*") if p.is_file()}
 

@@ -40,7 +40,7 @@ generation is duplicated or lost (:mod:`.individuals_file`).
 
 from .checkpoint_check import OLD_OPTIMIZER_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, optimizer_table, validate_checkpoint
 from .genome_source import GenomeSource, genome_path, resolve_genome
-from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, read_individuals
+from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, individuals_text, read_individuals
 from .history_file import HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history, write_history
 from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HISTORY, LOCK, OUTCOME, RECORDING, START, SUMMARY,
                      figures_dir, generation_file, generation_files, generation_of, genome_outputs, is_unused, label,
@@ -48,9 +48,11 @@ from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HIST
 from .locking import lock, unlock
 
 __all__ = [
-    "BEST", "CHECKPOINT", "CONFIG", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS", "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY",
-    "OPTIMIZER_KEY", "OUTCOME", "RECORDING", "SETTINGS_KEY", "START", "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",
-    "figures_dir", "generation_file", "generation_files", "generation_of", "genome_path", "genome_outputs", "history_columns", "history_text",
-    "is_unused", "label", "lock", "optimizer_table", "read_history", "read_individuals", "resolve_genome", "remove_stale_temporaries", "replay_file",
+    "BEST", "CHECKPOINT", "CONFIG", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
+    "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY", "OPTIMIZER_KEY", "OUTCOME", "RECORDING", "SETTINGS_KEY", "START",
+    "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",
+    "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "genome_path",
+    "history_columns", "history_text", "individuals_text", "is_unused", "label", "lock", "optimizer_table",
+    "read_history", "read_individuals", "remove_stale_temporaries", "replay_file", "resolve_genome",
     "robustness_stem", "unlock", "validate_checkpoint", "write_history",
 ]
