@@ -32,7 +32,7 @@ def add_replay(sub) -> None:
 def run_replay_cmd(args) -> int:
     from pathlib import Path
 
-    from ..record.replay import replay
+    from ..usecases.replaying import replay
     from ..record.source import resolve
     from ..rundir import figures_dir
 
