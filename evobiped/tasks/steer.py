@@ -69,8 +69,7 @@ to) any walker that stays up.
 ``sound_limit`` L < 1 clips the sense to +-L: the side heard is kept, the
 loudness of a near source capped (a network's input weights act on it
 linearly; near the source s grows towards +-1 and would swamp the gait).
-``loudness = true`` offers a distance cue, the sensor ``loudness`` =
-min(1, (a + b) / 2 * 1 m^2) ~ min(1, 1 / D^2) (1 within 1 m of the source).
+``loudness = true`` adds the distance cue ``loudness`` = min(1, (a + b) / 2 * 1 m^2) ~ min(1, 1 / D^2) (1 within 1 m).
 """
 
 from __future__ import annotations
@@ -89,10 +88,14 @@ DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
 MIN_SOURCE_DISTANCE = 0.5
 
 
+def intensity(ear: np.ndarray, source: np.ndarray) -> np.ndarray:
+    """I = 1 / |e - q|^2 (1/m^2) at ear ground positions ``(n, 2)`` from sources ``(n, 2)`` -> ``(n,)``."""
+    return 1.0 / np.maximum(np.sum((ear - source) ** 2, axis=1), 1e-12)
+
+
 def ear_signal(left: np.ndarray, right: np.ndarray, source: np.ndarray) -> np.ndarray:
     """s = (a - b) / (a + b) for ear ground positions ``(n, 2)`` and sources ``(n, 2)`` -> ``(n,)``."""
-    a = 1.0 / np.maximum(np.sum((left - source) ** 2, axis=1), 1e-12)
-    b = 1.0 / np.maximum(np.sum((right - source) ** 2, axis=1), 1e-12)
+    a, b = intensity(left, source), intensity(right, source)
     return (a - b) / (a + b)
 
 
@@ -256,8 +259,7 @@ class SteerTask(Task):
         s = ear_signal(left, right, state["source"])[:, None]
         out = {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
         if self.options.loudness:
-            i = sum(1.0 / np.maximum(np.sum((e - state["source"]) ** 2, axis=1), 1e-12) for e in (left, right)) / 2
-            out["loudness"] = np.minimum(i, 1.0)[:, None]
+            out["loudness"] = np.minimum((intensity(left, state["source"]) + intensity(right, state["source"])) / 2, 1.0)[:, None]
         return out
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
