@@ -53,12 +53,28 @@ COMMANDS: dict[str, list[str]] = {
     "study": ["study", "--runs", "2", "--conditions", "plain,cyclic", "--generations", "2", "--population", "4",
               "--episode-seconds", "3", "--recheck-seconds", "4", "--workers", "2", "--out", "OUT", "--quiet"],
     "robustness": ["robustness", "RUNS/evolve_reil_simbicon_cma", "--seconds", "3", "--push-after", "1", "--out", "OUT", "--json"],
+    "evolve_reil_es_linear": ["evolve", "--preset", "walker-es-linear", "--generations", "3", "--seed", "1", "--workers", "2",
+                              "--out", "OUT"],
+    "evolve_reil_es_robust": ["evolve", "--preset", "walker-es-robust", "--from", "ctrnn_es_seed5.json", "--generations", "2",
+                              "--seed", "2", "--workers", "2", "--out", "OUT"],
+    "evolve_reil_steer_es": ["evolve", "--preset", "steer-es", "--from", "steer_ctrnn_es_seed0.json", "--generations", "2",
+                             "--episode-seconds", "4", "--seed", "3", "--workers", "2", "--out", "OUT"],
+    "replay_ctrnn_es": ["replay", "ctrnn_es_seed5.json", "--seconds", "3", "--out", "OUT/replay.rrd", "--figures", "OUT"],
+    "robustness_es": ["robustness", "ctrnn_es_robust_seed0.json", "--seconds", "3", "--push-after", "1", "--phase-seed", "2",
+                      "--out", "OUT", "--json"],
 }
+#: shipped genome files copied into the recording's folder first (so every recording names them alike)
+FILES = ("ctrnn_es_seed5.json", "ctrnn_es_robust_seed0.json", "steer_ctrnn_es_seed0.json")
 
 #: file names never compared (volatile by nature)
 SKIP_SUFFIXES = (".rrd", ".lock")
 #: JSON keys and CSV columns holding wall-clock measurements
 VOLATILE = ("wall", "elapsed", "seconds_taken", "started", "finished", "date")
+#: JSON keys whose values differ between any two runs: pycma's timers, its logger, its tables of sent and injected
+#: solutions (keyed by Python's per-process hashes), and where a start genome was read from (the recording's folder)
+VOLATILE_KEYS = ("timer", "logger", "sent_solutions", "_injected_solutions_archive", "source_path")
+#: where a history row (checkpoint.json's ``history``) holds its wall-clock seconds: history.csv's column 8
+WALL_COLUMN = 8
 
 
 def _volatile(key: str) -> bool:
@@ -67,9 +83,9 @@ def _volatile(key: str) -> bool:
 
 def _strip(obj):
     if isinstance(obj, dict):
-        if isinstance(obj.get("history"), list):  # a checkpoint's history rows end with the wall time
-            obj = dict(obj, history=[row[:-1] for row in obj["history"]])
-        return {k: _strip(v) for k, v in obj.items() if not _volatile(k)}
+        if isinstance(obj.get("history"), list):  # a checkpoint's history rows hold the wall time
+            obj = dict(obj, history=[row[:WALL_COLUMN] + row[WALL_COLUMN + 1:] for row in obj["history"]])
+        return {k: _strip(v) for k, v in obj.items() if not _volatile(k) and k not in VOLATILE_KEYS}
     if isinstance(obj, list):
         return [_strip(v) for v in obj]
     return obj
@@ -97,6 +113,8 @@ def record(root: Path) -> int:
     root = root.resolve()
     root.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+    for name in FILES:
+        (root / name).write_bytes((REPO / "docs" / "walkers" / name).read_bytes())
     for name, args in COMMANDS.items():
         out = Path("runs") / name  # relative to root: paths printed or drawn are the same in every recording
         (root / "runs").mkdir(exist_ok=True)

@@ -28,14 +28,15 @@ def optimise(opt, f, generations):
 
 def test_nothing_is_carried():
     """CMA-ES samples a fresh population each generation: every new row is a new individual, so a run's outcomes
-    are unknown (zeros) after it."""
+    are unknown after it (NaN here, null in the checkpoint, never zeros)."""
     opt = CMAES(LAYOUT, CMAOptions(population=4), seed=2)
     opt.tell(np.array([1.0, 4.0, 2.0, 3.0]))
     ind = Individuals(outcome={"end_time": np.array([0.5, 2.0, 1.0, 1.5])})
     rows = opt.next_generation()
     assert rows.tolist() == [-1] * 4
     ind.carry(rows)
-    assert ind.outcome["end_time"].tolist() == [0.0] * 4
+    assert np.isnan(ind.outcome["end_time"]).all() and not ind.known.any()
+    assert ind.to_dict()["end_time"] == [None] * 4 and ind.to_dict()["previous"] == [None] * 4
 
 
 def test_minimises_a_sphere_inside_the_bounds():

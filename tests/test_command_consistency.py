@@ -57,7 +57,7 @@ def _genome(path):
 
 def test_two_runs_selected_genomes_replay_into_their_own_run_directories(tmp_path, monkeypatch):
     """Each run's selected.json used to replay into runs/selected/: the second overwrote the first."""
-    from evobiped.record.replay import default_out
+    from evobiped.usecases.replaying import default_out
     from evobiped.record.source import resolve
 
     monkeypatch.chdir(tmp_path)
@@ -75,7 +75,7 @@ def test_two_runs_selected_genomes_replay_into_their_own_run_directories(tmp_pat
 
 
 def test_a_recording_with_the_video_and_one_without_have_different_names(tmp_path):
-    from evobiped.record.replay import default_out
+    from evobiped.usecases.replaying import default_out
     from evobiped.record.source import resolve
 
     source = resolve(_genome(tmp_path / "w.json"))

@@ -125,3 +125,53 @@ def test_a_run_from_a_walker_resumed_elsewhere_keeps_its_seeded_normaliser(tmp_p
     again.close()
     assert later.norm_count == first.norm_count > 0
     assert np.array_equal(later.norm[0], first.norm[0]) and np.array_equal(later.norm[1], first.norm[1])
+
+
+def _gene_ranges(*argv) -> int:
+    import runpy
+    import sys
+    from pathlib import Path
+
+    import pytest
+
+    old, sys.argv = sys.argv, ["gene_ranges.py", *map(str, argv)]
+    try:
+        with pytest.raises(SystemExit) as done:
+            runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / "gene_ranges.py"), run_name="__main__")
+    finally:
+        sys.argv = old
+    return done.value.code
+
+
+TIGHT = ["--block", "weights", -2, 2, "--block", "biases", -1, 1, "--block", "input_weights", -1.5, 1.5,
+         "--block", "direct_biases", -1, 1, "--block", "direct_weights", -1, 1]
+
+
+def test_a_walker_declared_with_tight_ranges_is_the_same_walker_and_the_battery_noise_is_smaller(tmp_path):
+    """ctrnn_es_robust_seed0_tight is scripts/gene_ranges.py's output: the shipped genes, the same episode, ranges 8 (recurrent
+    weights) to 5 (direct) times narrower; the battery's 1 % gene noise draws on the paper's ranges fell it in all 8."""
+    from evobiped.robustness import GENE_NOISE, GENE_NOISE_DRAWS, GENE_NOISE_SEED
+
+    robust = WALKERS / "ctrnn_es_robust_seed0.json"
+    out = tmp_path / "t.json"
+    assert _gene_ranges(robust, out, *TIGHT) == 0
+    g, cfg, _ = load_genome(robust)
+    gt, ct, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0_tight.json")
+    assert np.array_equal(gt, g) and np.array_equal(load_genome(out)[0], g) and ct == load_genome(out)[1]
+    paper, tight = cfg.build(), ct.build()
+    span = {n: (paper.controller.layout.high - paper.controller.layout.low)[s] / (tight.controller.layout.high - tight.controller.layout.low)[s]
+            for n, s in paper.controller.layout.slices().items()}
+    assert (span["weights"] == 8.0).all() and (span["direct_weights"] == 5.0).all() and (span["time_constants"] == 1.0).all()
+    a, b = paper.run(g, seconds=5.0), tight.run(g, seconds=5.0)
+    assert np.array_equal(a.end_position, b.end_position)
+    noise = np.random.default_rng(GENE_NOISE_SEED).normal(0.0, GENE_NOISE, (GENE_NOISE_DRAWS, g.size))
+    fell = paper.run(paper.controller.layout.jitter(np.tile(g, (GENE_NOISE_DRAWS, 1)), noise), seconds=10.0).fell
+    assert fell.all()
+
+
+def test_gene_ranges_refuses_a_range_that_would_clip_a_gene(tmp_path, capsys):
+    out = tmp_path / "t.json"
+    assert _gene_ranges(WALKERS / "ctrnn_es_robust_seed0.json", out, "--block", "weights", -0.5, 0.5) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "clipped" in err[0] and not out.exists()
+    assert _gene_ranges(WALKERS / "ctrnn_es_robust_seed0.json", out, "--block", "weights", 2, -2) == 2 and not out.exists()

@@ -198,6 +198,90 @@ def test_resume_discards_files_of_an_unfinished_generation(tmp_path):
 
 
 
+def test_individuals_jsonl_records_every_row_with_its_lineage(tmp_path):
+    """individuals.jsonl: every row of every generation; a GA's survivors are the previous generation's rows of
+    the same outcome, its children bred from the fittest rows before them (the truncation selection, recomputed
+    here from the previous lines); each generation's fittest line is its generation file's walker; rows not yet
+    evaluated are null in the checkpoint, never zeros."""
+    from evobiped.rundir import read_individuals
+
+    run = Run.create(tmp_path / "r", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        run.evolve(ev)
+    lines = read_individuals(run.dir / "individuals.jsonl")
+    P, k = SMALL.ga.population, SMALL.ga.n_survivors
+    assert [(r["generation"], r["row"]) for r in lines] == [(g, i) for g in range(SMALL.generations) for i in range(P)]
+    by = [lines[g * P:(g + 1) * P] for g in range(SMALL.generations)]
+    assert all(r["evaluated"] and r["previous"] is None and r["parents"] is None for r in by[0])
+    outcome = ("fitness", "fell", "unstable", "end_time", "terms")
+    for g in range(1, SMALL.generations):
+        fittest = sorted(range(P), key=lambda i: -by[g - 1][i]["fitness"])[:k]
+        survivors = [r for r in by[g] if not r["evaluated"]]
+        assert [r["previous"] for r in survivors] == fittest and all(r["parents"] is None for r in survivors)
+        for r in survivors:
+            assert {f: r[f] for f in outcome} == {f: by[g - 1][r["previous"]][f] for f in outcome}
+        children = [r for r in by[g] if r["evaluated"]]
+        assert len(children) == P - k and all(r["previous"] is None and r["parents"][0] in fittest for r in children)
+        assert {r["parents"][0] for r in children} == set(fittest)
+    for g, rows in enumerate(by):
+        best = max(rows, key=lambda r: r["fitness"])
+        stored = json.loads((run.dir / "generations" / f"gen_{g:04d}.json").read_text())
+        assert {f: best[f] for f in ("fitness", "fell", "end_time", "terms")} == {f: stored[f] for f in ("fitness", "fell", "end_time", "terms")}
+    ck = json.loads((run.dir / "checkpoint.json").read_text())["outcome"]
+    new = [i for i, r in enumerate(ck["previous"]) if r is None]
+    assert len(new) == P - k and all(ck[f][i] is None for f in ("fell", "unstable", "end_time") for i in new)
+    assert all(ck["terms"]["distance"][i] is None for i in new) and all(ck["end_time"][i] > 0 for i in range(P) if i not in new)
+    # each child of the next generation is nearest, gene by gene, to the survivor that was its parent (a few mutated loci)
+    pop = np.array(json.loads((run.dir / "checkpoint.json").read_text())["optimizer"]["population"])
+    holder = {p: j for j, p in enumerate(ck["previous"]) if p is not None}
+    for i in new:
+        nearest = int(np.argmin([np.sum(pop[i] != pop[j]) for j in range(k)]))
+        assert nearest == holder[ck["parents"][i]]
+
+
+def test_a_resume_cuts_individuals_back_to_its_committed_generations(tmp_path):
+    """A crash after a generation's lines were appended (whole, or cut in the middle of a line) and before its
+    commit: the resumed run's individuals.jsonl is the uninterrupted run's, byte for byte."""
+    whole = Run.create(tmp_path / "whole", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        whole.evolve(ev)
+        cut = Run.create(tmp_path / "cut", SMALL)
+        cut.step(ev)
+        cut.checkpoint()
+        cut.step(ev)  # generation 1's lines appended, never committed
+    with (cut.dir / "individuals.jsonl").open("a") as f:
+        f.write('{"generation":2,"row":0,"evalu')  # and a line cut short
+    cut.close()
+    resumed = Run.resume(cut.dir)
+    assert any("individuals.jsonl cut back" in r for r in resumed.repairs)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        resumed.evolve(ev)
+    assert (cut.dir / "individuals.jsonl").read_bytes() == (whole.dir / "individuals.jsonl").read_bytes()
+
+
+def test_what_a_resume_keeps_of_individuals_jsonl(tmp_path):
+    """The committed generations' whole lines in order are kept, from wherever the file starts (a run made before
+    the file was kept starts it when resumed); a line cut short, a gap or a generation not committed ends what is
+    kept; a resume that finds committed generations missing says so."""
+    from evobiped.rundir import committed_size, individuals_text
+
+    rows = lambda g, n: [{"generation": g, "row": i, "evaluated": True, "previous": None, "parents": None, "fitness": 1.0,  # noqa: E731
+                          "fell": False, "unstable": False, "end_time": 1.0, "terms": {}} for i in range(n)]
+    path = tmp_path / "individuals.jsonl"
+    three, four = individuals_text(rows(3, 2)), individuals_text(rows(4, 2))
+    path.write_text(three + four + '{"generation":5,"ro')
+    assert committed_size(path, 5) == (len(three + four), 5)
+    assert committed_size(path, 4) == (len(three), 4)
+    path.write_text(three + individuals_text(rows(5, 2)))
+    assert committed_size(path, 9) == (len(three), 4)
+    run = Run.create(tmp_path / "r", SMALL)
+    with make_evaluator(SMALL.episode, "serial") as ev:
+        run.evolve(ev)
+    run.close()
+    (run.dir / "individuals.jsonl").unlink()
+    assert f"individuals.jsonl lacks generations 0..{SMALL.generations - 1} (not in the checkpoint: lost)" in Run.resume(run.dir).repairs
+
+
 def snapshot(d: Path) -> dict:
     return {p.relative_to(d): (p.stat().st_mtime_ns, p.read_bytes()) for p in d.rglob("*") if p.is_file()}
 
@@ -223,7 +307,7 @@ BAD_FLAGS = [
     (["--population", "1"], "population"),
     (["--backend", "ray", "--address", "127.0.0.1:1"], "cannot reach a Ray cluster at 127.0.0.1:1"),
     (["--backend", "ray", "--address", "no-port"], "bad Ray address"),
-    (["--from", "/nonexistent/run"], "not found"),
+    (["--from", "/nonexistent/run"], "no such run directory or genome file"),
 ]
 
 
@@ -276,6 +360,30 @@ def test_existing_run_directory_is_left_untouched(finished_run, capsys):
     assert cli("evolve", "--generations", 1, "--out", finished_run, "--quiet") == 2
     assert "exists and is not empty" in capsys.readouterr().err
     assert snapshot(finished_run) == before
+
+
+def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_checked(finished_run, tmp_path, monkeypatch, capsys):
+    """The evolve use case checks everything, creates or resumes the run, and only then starts the evaluator (the
+    process pool); an evaluator that cannot start removes the new run again."""
+    from evobiped.errors import UserError
+    from evobiped.evolution import evaluate
+
+    started = []
+    monkeypatch.setattr(evaluate, "make_evaluator", lambda *a, **k: started.append(a) or pytest.fail("a worker started"))
+    for flags, words in ((["--out", finished_run], "exists and is not empty"), (["--from", tmp_path / "gone.json", "--out", tmp_path / "x"],
+                                                                               "no such run directory or genome file")):
+        assert cli("evolve", "--generations", 1, "--backend", "process", "--workers", 2, *flags, "--quiet") == 2
+        assert words in capsys.readouterr().err and not started
+    assert not (tmp_path / "x").exists()
+
+    def fails(*a, **k):
+        started.append(a)
+        raise UserError("cannot start the workers")
+
+    monkeypatch.setattr(evaluate, "make_evaluator", fails)
+    assert cli("evolve", "--generations", 1, "--population", 4, "--backend", "process", "--workers", 2, "--out", tmp_path / "y", "--quiet") == 2
+    assert "cannot start the workers" in capsys.readouterr().err and len(started) == 1
+    assert not (tmp_path / "y").exists()  # the run it had created is gone: the same --out works again
 
 
 @pytest.mark.parametrize(

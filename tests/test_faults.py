@@ -451,7 +451,7 @@ def test_a_killed_resource_tracker_prints_nothing(tmp_path):
 def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch, signum):
     """Ctrl-C, SIGTERM or SIGHUP between writing checkpoint.json and history.csv stops the run only after both are
     written (KeyboardInterrupt; Interrupted carrying the signal for the other two)."""
-    import evobiped.evolution.run as runmod
+    import evobiped.evolution.checkpoint as commit_point
     from evobiped.errors import stop_on_signals
     from evobiped.evolution.evaluate import make_evaluator
     from evobiped.evolution.run import Run
@@ -459,7 +459,7 @@ def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkey
 
     config = RunConfig.from_dict({"episode": {"seconds": 0.5}, "ga": {"population": 4}, "generations": 2, "backend": "serial"})
     run = Run.create(tmp_path / "r", config)
-    write = runmod.write_json
+    write = commit_point.write_json
 
     def write_then_signal(path, obj):
         write(path, obj)
@@ -468,7 +468,7 @@ def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkey
             # and reach the interpreter only after the deferral ended, which makes the test flaky
             signal.raise_signal(signum)
 
-    monkeypatch.setattr(runmod, "write_json", write_then_signal)
+    monkeypatch.setattr(commit_point, "write_json", write_then_signal)
     # the default handlers, as a terminal or a process manager meets them (a background job ignores SIGINT)
     old = signal.signal(signum, signal.default_int_handler if signum == signal.SIGINT else signal.SIG_DFL)
     restore = stop_on_signals()
@@ -523,7 +523,7 @@ def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, bac
 def test_full_disk_at_the_lock_is_one_line_and_leaves_no_empty_lock(tmp_path, capsys, monkeypatch, reference):
     import errno
 
-    from evobiped import rundir
+    from evobiped.rundir import locking
 
     def full(fd, data, offset):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
@@ -531,7 +531,7 @@ def test_full_disk_at_the_lock_is_one_line_and_leaves_no_empty_lock(tmp_path, ca
     d = tmp_path / "run"
     d.mkdir()
     (d / ".lock").touch()  # an empty lock an earlier version left
-    monkeypatch.setattr(rundir.os, "pwrite", full)
+    monkeypatch.setattr(locking.os, "pwrite", full)
     assert cli("evolve", *RUN, "--out", d) == 2
     one_line_error(capsys.readouterr().err, f"cannot write {d.resolve() / '.lock'}: No space left on device")
     assert list(d.iterdir()) == []

@@ -72,27 +72,53 @@ def test_a_checkpoint_missing_what_it_always_holds_is_refused(run, capsys, key):
 
 
 # ---- the start genome lives in the run directory
-def test_a_run_from_a_relative_path_resumes_anywhere_with_its_source_gone(finished, tmp_path, monkeypatch, capsys):
+def _cut_mid_run(monkeypatch):
+    """Stop the run after generation 0's commit, while generation 1 is evaluated (a Ctrl-C in the middle of a run)."""
+    import evobiped.evolution.run as runmod
+
+    step = runmod.Run.step
+
+    def stopped(self, evaluator):
+        if self.optimizer.generation == 1:
+            raise KeyboardInterrupt
+        return step(self, evaluator)
+
+    monkeypatch.setattr(runmod.Run, "step", stopped)
+    return "interrupted after generation 0"
+
+
+def _cut_before_summary(monkeypatch):
+    """Stop the run after its last commit, before summary.json (a finished run's last step)."""
+    import evobiped.evolution.run as runmod
+
+    def stop(*a):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runmod.Run, "finish", stop)
+    return "before summary.json was written; the run is complete once evobiped evolve --resume"
+
+
+@pytest.mark.parametrize("cut", [_cut_mid_run, _cut_before_summary])
+def test_a_run_from_a_relative_path_resumes_anywhere_with_its_source_gone(finished, tmp_path, monkeypatch, capsys, cut):
+    """``--from seed.json`` (relative), cut, then ``--resume /abs/path`` from another directory with the seed gone:
+    every file equals the uninterrupted run's (individuals.jsonl included)."""
     here, elsewhere = tmp_path / "here", tmp_path / "elsewhere"
     here.mkdir(), elsewhere.mkdir()
     shutil.copy(finished / "best.json", here / "seed.json")
     monkeypatch.chdir(here)
     assert cli("evolve", *RUN, "--from", "seed.json", "--out", "whole") == 0
-    def stop_after_first(*a):
-        raise KeyboardInterrupt
-
-    import evobiped.evolution.run as runmod
-
-    monkeypatch.setattr(runmod.Run, "finish", stop_after_first)  # cut after its last commit, before the summary
+    said = cut(monkeypatch)
     assert cli("evolve", *RUN, "--from", "seed.json", "--out", "cut") == 130
-    assert "before summary.json was written; the run is complete once evobiped evolve --resume" in capsys.readouterr().err
+    assert said in capsys.readouterr().err
     monkeypatch.undo()
     (here / "seed.json").unlink()
     monkeypatch.chdir(elsewhere)
-    assert cli("evolve", "--resume", here / "cut", "--quiet") == 0
-    assert cli("evolve", "--resume", here / "whole", "--quiet") == 0
+    assert (here / "cut").resolve().is_absolute()
+    assert cli("evolve", "--resume", (here / "cut").resolve(), "--quiet") == 0
+    assert cli("evolve", "--resume", (here / "whole").resolve(), "--quiet") == 0
     assert "started from" not in capsys.readouterr().err
     assert contents(here / "cut") == contents(here / "whole")
+    assert (here / "cut" / "individuals.jsonl").read_bytes() == (here / "whole" / "individuals.jsonl").read_bytes()
     assert json.loads((here / "whole" / "start.json").read_text())["source"] == "seed.json"
 
 

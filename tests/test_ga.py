@@ -82,7 +82,8 @@ def _result(fitness, fell, unstable, end_time):
 
 def test_survivors_keep_their_outcome():
     """The rows the GA keeps (next_generation's answer) carry each survivor's fell / unstable / end_time, terms and
-    walk along (best first); the children's are unknown (zeros) until told; a second tell fills only their rows."""
+    walk along (best first); the children's are unknown (NaN; null in the checkpoint, never zeros) until told, with
+    the survivor each was bred from; a second tell fills only their rows."""
     ga = GA(LAYOUT, GAOptions(population=6), seed=5)
     ind = Individuals()
     fit = np.array([3.0, 1.0, 5.0, 0.0, 4.0, 2.0])
@@ -91,9 +92,11 @@ def test_survivors_keep_their_outcome():
     ga.tell(r)
     ind.told(unknown, r)
     assert ind.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
-    ind.carry(ga.next_generation())  # survivors 2, 4, 0 (fitness 5, 4, 3)
-    assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 0.0, 0.0, 0.0]
-    assert ind.outcome["fell"].tolist() == [False] * 6
+    ind.carry(ga.next_generation(), ga.parent_rows())  # survivors 2, 4, 0 (fitness 5, 4, 3)
+    assert ind.outcome["end_time"][:3].tolist() == [50.0, 40.0, 30.0] and np.isnan(ind.outcome["end_time"][3:]).all()
+    carried = ind.to_dict()
+    assert carried["end_time"] == [50.0, 40.0, 30.0, None, None, None] and carried["fell"] == [False] * 3 + [None] * 3
+    assert carried["previous"] == [2, 4, 0, None, None, None] and carried["parents"] == [None, None, None, 2, 4, 0]
     assert ind.terms_of(1) == {"distance": 4.0} and ind.walk_of(0) == {"distance": 5.0, "heading_deg": 0.0, "displacement": [5.0, 0.0]}
     _, unknown = ga.ask()
     r = _result(np.array([6.0, 1.0, 2.0]), np.array([False, True, True]), np.array([False, False, True]), np.array([60.0, 1.5, 2.5]))
@@ -104,8 +107,8 @@ def test_survivors_keep_their_outcome():
     back = Individuals.from_dict(json.loads(json.dumps(ind.to_dict())), 6)
     assert back.to_dict() == ind.to_dict() and back.to_dict()["fell"] == [False, False, False, False, True, True]
     ind.carry(ga.next_generation())  # survivors: rows 3 (6.0), 0 (5.0), 1 (4.0)
-    assert ind.outcome["end_time"].tolist() == [60.0, 50.0, 40.0, 0.0, 0.0, 0.0]
-    assert ind.terms["distance"].tolist() == [6.0, 5.0, 4.0, 0.0, 0.0, 0.0]
+    assert ind.to_dict()["end_time"] == [60.0, 50.0, 40.0, None, None, None]
+    assert ind.to_dict()["terms"]["distance"] == [6.0, 5.0, 4.0, None, None, None]
 
 
 def test_frozen_genes_never_change():

@@ -284,7 +284,7 @@ def test_importing_the_package_does_not_import_rerun_or_matplotlib():
     import subprocess
     import sys
 
-    code = "import sys, evobiped.cli, evobiped.record.replay, evobiped.record.figures, evobiped.record.rerun_recorder, evobiped.record.evolution_log; print(sorted({m.split('.')[0] for m in sys.modules} & {'rerun', 'matplotlib'}))"
+    code = "import sys, evobiped.cli, evobiped.usecases.replaying, evobiped.record.replay_recording, evobiped.usecases.evolving, evobiped.usecases.selecting, evobiped.record.figures, evobiped.record.rerun_recorder, evobiped.record.evolution_log; print(sorted({m.split('.')[0] for m in sys.modules} & {'rerun', 'matplotlib'}))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 

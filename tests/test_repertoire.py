@@ -10,7 +10,7 @@ pytest.importorskip("ribs")
 from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
 from evobiped.genome_file import load_genome  # noqa: E402
 from evobiped.repertoire.damage import damaged_episode, parse_damage  # noqa: E402
-from evobiped.repertoire.elites import load  # noqa: E402
+from evobiped.repertoire.elites import load_repertoire as load  # noqa: E402
 from evobiped.repertoire.speed import follow  # noqa: E402
 from evobiped.repertoire.trial_error import TrialAndError, matern52, posterior, prior_distance  # noqa: E402
 

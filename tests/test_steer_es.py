@@ -128,3 +128,38 @@ def test_offsets_on_a_body_of_torques_are_refused_with_one_line(tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "target_offset" in err[0] and "torques" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_the_distance_cue_is_the_ears_mean_intensity_capped_at_1_and_offered_only_when_asked():
+    """loudness = min(1, (1/|l - q|^2 + 1/|r - q|^2) / 2) at the start (ears at (0, +-0.25) m); without the option
+    the task offers the ear signal alone (every walker so far reads the same senses)."""
+    assert SteerTask().sensor_widths() == {"sound": 1}
+    sources = [[10.0, 0.0], [0.0, 2.0], [0.6, 0.0]]
+    ep = EpisodeConfig(task="steer", task_options={"sources": sources, "loudness": True}).build()
+    sims = ep.sims(3)
+    ep.body.reset(sims)
+    sims.forward()
+    cue = ep.task.sensors(ep.body, sims, ep.task.start(ep.body, sims))["loudness"][:, 0]
+    e = 0.25
+    by_hand = [1 / (100 + e**2), (1 / (2 - e) ** 2 + 1 / (2 + e) ** 2) / 2, 1.0]  # (0.6, 0): 2.37, capped
+    assert cue == pytest.approx(by_hand, rel=1e-6)
+
+
+def test_a_hearing_walker_given_the_distance_cue_with_zero_weights_walks_as_before():
+    """The shipped hearing CTRNN moved onto inputs with loudness added (its rows zero) walks exactly as before; a weight
+    on the cue changes the walk (the cue reaches the network)."""
+    g, old, _ = load_genome(WALKERS / "steer_ctrnn_es_seed0.json")
+    co = {k: v for k, v in given(old.controller_options).items() if k != "input_norm"}
+    inputs = list(co["inputs"])
+    inputs.insert(1, "loudness")
+    new = dataclasses.replace(old, task_options={**given(old.task_options), "loudness": True},
+                              controller_options={**co, "inputs": inputs})
+    norm = remap_norm(old.controller_options.input_norm, old, new, {"loudness": ([0.0], [0.1])})
+    new = dataclasses.replace(new, controller_options={**given(new.controller_options), "input_norm": norm})
+    moved = remap_inputs(g, old, new)
+    a, b = old.nominal().build().run(g, seconds=4.0), new.nominal().build().run(moved, seconds=4.0)
+    assert np.array_equal(a.end_position, b.end_position) and np.array_equal(a.end_time, b.end_time)
+    rows, w = new.parts()[1].layout.slices()["direct_weights"], moved.copy()
+    w[rows] = np.where(np.arange(rows.stop - rows.start) // 6 == 1, 0.5, moved[rows])  # loudness (input 1) to six motors
+    c = new.nominal().build().run(w, seconds=4.0)
+    assert not np.allclose(c.end_position, b.end_position, atol=1e-3)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from evobiped.experiments.reil.stats import histogram_edges, mean_std, wilson_interval
-from evobiped.experiments.reil.study import summarize
+from evobiped.experiments.reil.study_results import summarize
 
 from .conftest import cli
 

@@ -20,10 +20,10 @@ def run_adapt_cmd(args) -> int:
 
     from ..repertoire.adaptation import adapt, walks
     from ..repertoire.damage import parse_damage
-    from ..repertoire.elites import load
+    from ..repertoire.elites import load_repertoire
     from ..repertoire.trial_error import TrialAndError
 
-    rep = load(args.run)
+    rep = load_repertoire(args.run)
     damages = [parse_damage(d, rep.episode) for d in args.damage]  # every one checked before any trial
     a = rep.archive
     for damage in damages:

@@ -58,9 +58,7 @@ def default_run_dir(config) -> str:
 
 
 def run_evolve_cmd(args) -> int:
-    from ..evolution.evaluate import make_evaluator
-    from ..evolution.run import Run
-    from ..evolution.run_config import check_run
+    from ..usecases.evolving import open_run, start_evaluator
 
     if args.rerun is not None:  # before anything is written
         from ..record.viewer import connect_url, require_display, require_viewer
@@ -71,39 +69,24 @@ def run_evolve_cmd(args) -> int:
     if args.resume:
         if any(getattr(args, f) is not None for f in (*RUN_FLAGS, "out") if f not in ("backend", "workers", "address")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
-        run = Run.resume(args.resume)  # locks the directory and repairs its derived files
-        try:
-            for repair in run.repairs:
-                print(f"evobiped: repaired: {repair}", file=sys.stderr)
-            if run.environment_differences:
-                print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
-                      " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
-            if run.done:
-                print(f"run {args.resume} is already complete ({run.optimizer.generation} generations)")
-                run.close()
-                return 0
-            backend = args.backend or run.config.backend
-            workers = args.workers or run.config.workers
-            address = args.address or run.config.address
-            check_workers(backend, workers, address)
-            evaluator = make_evaluator(run.config.episode, backend, workers, address, on_retry=on_retry)
-        except BaseException:
-            run.close()
-            raise
+        # locks the directory, repairs its derived files, checks where the episodes run
+        opened = open_run(resume=args.resume, backend=args.backend, workers=args.workers, address=args.address, check=check_workers)
     else:
         config = run_config(**{f: getattr(args, f) for f in RUN_FLAGS})
-        backend, workers, address = config.backend, config.workers, config.address
-        check_workers(backend, workers, address)
-        out = args.out or default_run_dir(config)
-        check_run(config)  # memory, the start genome: before any worker starts
-        evaluator = make_evaluator(config.episode, backend, workers, address, on_retry=on_retry)  # fails before any file is written
-        try:
-            run = Run.create(out, config)
-        except BaseException:
-            evaluator.close()
-            raise
+        # the settings, the start genome and the run directory are checked before anything is written
+        opened = open_run(config, out=args.out or default_run_dir(config), check=check_workers)
+    run = opened.run
     with run:
-        return _evolve(run, evaluator, backend, args)
+        for repair in run.repairs:
+            print(f"evobiped: repaired: {repair}", file=sys.stderr)
+        if run.environment_differences:
+            print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
+                  " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
+        if run.done:
+            print(f"run {args.resume} is already complete ({run.optimizer.generation} generations)")
+            return 0
+        evaluator = start_evaluator(opened, on_retry)  # last: the workers start once the run is created or resumed
+        return _evolve(run, evaluator, opened.backend, args)
 
 
 def _evolve(run, evaluator, backend: str, args) -> int:

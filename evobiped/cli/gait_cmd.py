@@ -20,7 +20,7 @@ def add_gait(sub) -> None:
 def run_gait_cmd(args) -> int:
     import math
 
-    from ..repertoire.elites import load
+    from ..repertoire.elites import load_repertoire
     from ..repertoire.speed import follow, tracking
 
     try:
@@ -31,7 +31,7 @@ def run_gait_cmd(args) -> int:
         refuse("--speed", f"expected positive speeds in m/s, comma-separated, got {args.speed!r}")
     if not (math.isfinite(args.ramp) and args.ramp >= 0):
         refuse("--ramp", f"must be a finite number >= 0 m/s per s, got {args.ramp}")
-    rep = load(args.run)
+    rep = load_repertoire(args.run)
     stretches = follow(rep, speeds, args.hold, args.turning, ramp=args.ramp, step=min(1.0, args.hold))
     a = rep.archive
     t = 0.0

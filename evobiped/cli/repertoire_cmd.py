@@ -16,10 +16,10 @@ def run_repertoire_cmd(args) -> int:
 
     from ..record.archive_figures import archive_figure, progress_figure
     from ..record.figures import fitness_label
-    from ..repertoire.elites import WALK_SPEED, load
+    from ..repertoire.elites import WALK_SPEED, load_repertoire
     from ..rundir import figures_dir
 
-    rep = load(args.run)
+    rep = load_repertoire(args.run)
     a, walk = rep.archive, rep.walking()
     names = tuple(f"{m} ({ {'speed': 'm/s', 'turning': 'deg/s'}.get(m, 'term units') })" for m in a.measures)
     cells = int(a.resolution[0] * a.resolution[1])

@@ -33,7 +33,7 @@ def add_replay(sub) -> None:
 def run_replay_cmd(args) -> int:
     from pathlib import Path
 
-    from ..record.replay import replay
+    from ..usecases.replaying import replay
     from ..record.source import resolve
     from ..rundir import figures_dir
 
@@ -45,11 +45,11 @@ def run_replay_cmd(args) -> int:
     if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
         refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
     if args.cell is not None:
-        from ..repertoire.elites import load, parse_cell
+        from ..repertoire.elites import load_repertoire, parse_cell
 
         if args.generation is not None:
             refuse("--cell", "an archive's elite is of no generation: give --cell or --generation")
-        source = load(args.source).source(parse_cell(args.cell))
+        source = load_repertoire(args.source).source(parse_cell(args.cell))
     else:
         source = resolve(args.source, args.generation)
     figures = args.figures

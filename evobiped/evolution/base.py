@@ -111,3 +111,9 @@ class Optimizer:
     def ranking(self) -> np.ndarray:
         """Indices best first; ties keep population order (stable)."""
         return np.argsort(-self.fitness, kind="stable")
+
+    def parent_rows(self) -> np.ndarray | None:
+        """After ``next_generation()``: for each new row, the previous generation's row it was bred from (-1: none,
+        e.g. a survivor); None (this default): the optimizer does not say (it samples a distribution).  Optional:
+        the run writes it into individuals.jsonl only."""
+        return None

@@ -129,7 +129,12 @@ class GA(Optimizer):
         if not self.config.reevaluate_survivors:
             fit[:k] = self.fitness[parents]
         self.fitness = fit
+        self._bred_from = np.concatenate([np.full(k, -1), children_of])
         return np.concatenate([parents, np.full(P - k, -1)])
+
+    def parent_rows(self) -> np.ndarray | None:
+        """Each child's parent row in the previous generation (-1: a survivor), after :meth:`next_generation`."""
+        return getattr(self, "_bred_from", None)
 
     def mutate(self, genomes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Gaussian mutation per locus with probability :attr:`mutation_rate`, clipped."""

@@ -6,14 +6,12 @@ from __future__ import annotations
 import dataclasses
 import os
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from .. import rundir
 from ..episode import EpisodeConfig
 from ..errors import ConfigError, UserError
-from ..genome_file import load_genome
 from ..options import check_fields, option, parse, refuse_unknown
 from .base import Optimizer
 from .cma import CMAES, CMAOptions
@@ -215,9 +213,8 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     A genome of a walking run seeds a run with extra input weights (steering):
     the missing trailing genes are filled with zeros (no influence).
     """
-    path = Path(source)
-    path = path / rundir.BEST if path.is_dir() else path
-    genome, cfg, _ = load_genome(path)
+    found = rundir.resolve_genome(source)
+    genome, cfg, path = found.genome, found.config, found.genome_path
     if cfg.body != episode.body or cfg.controller != episode.controller:
         raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
     same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)

@@ -22,17 +22,12 @@ def keep_start(directory: Path, start: np.ndarray, config: RunConfig) -> None:
     episode config when that fits the genome (so what the source froze, e.g. its normaliser, is kept), else the run's."""
     episode = config.episode
     try:
-        _, source, _ = load_genome(_source_file(config.initial))
+        source = rundir.resolve_genome(config.initial).config
         if source.layout().size == len(start) and source.controller == episode.controller:
             episode = source
     except UserError:
         pass
     save_genome(directory / rundir.START, start, episode, source=config.initial, source_path=str(Path(config.initial).resolve()))
-
-
-def _source_file(initial: str) -> Path:
-    path = Path(initial)
-    return path / rundir.BEST if path.is_dir() else path
 
 
 def start_episode(directory: Path, config: RunConfig):

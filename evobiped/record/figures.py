@@ -6,7 +6,8 @@
 * :func:`stick_figure` - strobed stick figures along the ground, spaced apart (Taga Figs. 5, 9);
 * :func:`ground_trajectory` - the path on the ground plane, sources if any (Fig. 12).
 
-The steering experiment's pair (Figs. 12-13) is :mod:`.steering_figures`.
+The steering experiment's pair (Figs. 12-13) is :mod:`.steering_figures`; the side view's drawing :mod:`.side_view`,
+the motor outputs' names :mod:`.motor_labels`.
 
 Drawing is generic over the model: every shape of :mod:`.geometry` is drawn
 as its long axis (spheres as circles), so a sagittal biped draws as well as the
@@ -27,13 +28,14 @@ from pathlib import Path
 import numpy as np
 
 from ..fileio import atomic_write
-from .geometry import Shape, body_names, segment, shapes
+from .geometry import shapes
+from .motor_labels import _motor_label, _motor_quantity, motor_file
+from .side_view import _draw_walker, _side_axis, _side_key, _side_points, steady_stride
 from .trajectory import Trajectory
 
 DPI = 120
 #: no figure is drawn larger than this (inches; at DPI 120: 1920 x 1680 px before the tight bounding box)
 MAX_SIZE = (16.0, 14.0)
-LEFT, RIGHT, OTHER = "tab:blue", "tab:red", "0.25"
 
 
 def pyplot():
@@ -105,22 +107,6 @@ def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: st
     return save_figure(fig, path)
 
 
-def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:
-    """(outputs are neuron outputs in [0, 1], commands are PD target angles, the y-axis label)."""
-    motor = traj.neurons[:, : traj.n_motor]
-    unit = motor.size == 0 or (np.nanmin(motor) >= 0.0 and np.nanmax(motor) <= 1.0)  # else e.g. angles, torques
-    target = traj.action_kind == "position"  # PD target angles
-    quantity = "output (0-1)" if unit else "target angle (rad)" if target else "torque (N m)" if traj.action_kind == "torque" else "command"
-    return unit, target, quantity
-
-
-def motor_file(traj: Trajectory) -> str:
-    """The motor figure's file name, for what it shows: ``motor_neurons.png`` (a network's motor neurons),
-    ``joint_targets.png`` (a controller without neurons setting PD targets), else ``motor_outputs.png``."""
-    unit, target, _ = _motor_quantity(traj)
-    return "motor_neurons.png" if unit else "joint_targets.png" if target else "motor_outputs.png"
-
-
 def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | None = 10.0, who: str = "") -> Path:
     """One panel per motor output against time (Fig. 7): a neuron's output in [0, 1], or what the
     controller commands (joint target angles in rad, torques in N m).
@@ -150,96 +136,6 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
     shown = f"first {seconds:g} s of {traj.end_time:g} s" if keep.sum() < len(t) else f"{traj.end_time:g} s"
     fig.suptitle(_title(f"{what}, {shown}", f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=9)
     return save_figure(fig, path)
-
-
-def _motor_label(traj: Trajectory, i: int) -> str:
-    """Motor output ``i``'s name: its actuator, or in the stance frame its joint on the stance (first half) or swing leg."""
-    if i >= len(traj.actuator_names):
-        return f"output {i + 1}"
-    name = traj.actuator_names[i]
-    if not traj.stance_frame:
-        return name
-    half = len(traj.actuator_names) // 2
-    role = name.split("_", 1)[1] if "_" in name else name
-    return f"{'stance' if i < half else 'swing'} {role}"
-
-
-def _side_axis(traj: Trajectory) -> np.ndarray:
-    """Unit vector on the ground along which the side views look: the walker's initial facing."""
-    f = np.asarray(traj.start_facing, float)
-    return f / max(float(np.linalg.norm(f)), 1e-12)
-
-
-def _middle(traj: Trajectory, parts: list[Shape]) -> str:
-    """The bodies drawn in neither leg's colour, by their model names (``pelvis`` for Reil's, ``trunk`` for Taga's)."""
-    names = body_names(traj.model)
-    found = dict.fromkeys(names[s.body] for s in parts if s.body != 0 and _color(names[s.body] + s.name) == OTHER)
-    return ", ".join(found) or "other"
-
-
-def _side_key(ax, traj: Trajectory, parts: list[Shape], *, com: bool = False) -> None:
-    """The key of a side view: left and right limbs, the bodies between them by name (and the centre-of-mass line)."""
-    from matplotlib.lines import Line2D
-
-    handles = [Line2D([], [], color=LEFT, lw=3, label="left leg"), Line2D([], [], color=RIGHT, lw=3, label="right leg"),
-               Line2D([], [], color=OTHER, lw=3, label=_middle(traj, parts))]
-    if com:
-        handles.append(Line2D([], [], color="black", lw=0.8, label="centre of mass"))
-    ax.legend(handles=handles, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-
-
-def _color(name: str) -> str:
-    n = name.lower()
-    return LEFT if "left" in n else RIGHT if "right" in n else OTHER
-
-
-def _side_points(traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Side-view coordinates ``(R, n)`` (along ``axis``, height) of every shape's extreme points."""
-    pts = []
-    for s in parts:
-        if s.body == 0:
-            continue
-        seg = segment(s, traj.body_pos[rows, s.body], traj.body_quat[rows, s.body])  # (R, 2, 3)
-        r = s.size[0] if s.kind in ("sphere", "capsule", "cylinder") else 0.0
-        for dz in (-r, r):
-            pts.append(seg + np.array([0.0, 0.0, dz]))
-    allp = np.concatenate(pts, axis=1)  # (R, n, 3)
-    return allp[..., :2] @ axis, allp[..., 2]
-
-
-def _draw_walker(ax, traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray, offset: float = 0.0, alpha: float = 1.0) -> None:
-    """Side view of the walker at state rows ``rows``: horizontal = along ``axis``, vertical = z."""
-    import matplotlib.patches as mpatches
-
-    names = body_names(traj.model)
-    for s in parts:
-        if s.body == 0:
-            continue
-        seg = segment(s, traj.body_pos[rows, s.body], traj.body_quat[rows, s.body])  # (R, 2, 3)
-        h = seg[..., :2] @ axis - offset
-        z = seg[..., 2]
-        col = _color(names[s.body] + s.name)
-        for r in range(len(rows)):
-            if s.kind == "sphere":
-                ax.add_patch(mpatches.Circle((h[r, 0], z[r, 0]), s.size[0], color=col, alpha=alpha, lw=0))
-            else:
-                ax.plot(h[r], z[r], color=col, lw=3.0, alpha=alpha, solid_capstyle="round")
-
-
-def steady_stride(traj: Trajectory, after: float = 10.0) -> tuple[float, float, str]:
-    """(start s, end s, what it is) of one stride of steady walking: from the first left-foot touchdown after
-    ``after`` s to the next; without two such touchdowns (no touch sensors, a fall, no steps) the 2.4 s
-    from ``after`` (or the episode's last 2.4 s)."""
-    left = [k for k, name in enumerate(traj.touch_names) if "left" in name.lower()]
-    if left and traj.n_ticks:
-        down = traj.touch[:, left[0]] > 0
-        rises = traj.tick_time[1:][down[1:] & ~down[:-1]]
-        rises = rises[rises >= after]
-        if len(rises) >= 2:
-            return float(rises[0]), float(rises[1]), "one stride (left touchdown to left touchdown)"
-    end = float(traj.state_time[-1])
-    t0 = max(0.0, min(after, end - 2.4))
-    return t0, min(end, t0 + 2.4), "no stride found: 2.4 s"
 
 
 def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, columns: int = 4, after: float = 10.0,

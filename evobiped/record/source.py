@@ -1,34 +1,23 @@
-"""What ``evobiped replay SOURCE`` reads: a run directory or a genome file.
-
-A run directory (written by ``evobiped evolve``; format in :mod:`evobiped.rundir`)
-holds the best genome and each generation's; a genome file is any genome JSON
-(:mod:`evobiped.genome_file`).  Every problem is a
-:class:`~evobiped.errors.UserError` raised before anything is written.
+"""What ``evobiped replay SOURCE`` reads: a run directory or a genome file (which one:
+:func:`evobiped.rundir.resolve_genome`), with what a replay, a recording and the robustness battery ask of it
+(its stored outcome, where its outputs go, its name).  Every problem is a :class:`~evobiped.errors.UserError`
+raised before anything is written.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from ..episode import EpisodeConfig
 from ..errors import UserError
 from ..fileio import read_json
 from .. import rundir
-from ..genome_file import load_genome
 
 
 @dataclass
-class Source:
+class Source(rundir.GenomeSource):
     """A genome ready to replay, and where it came from."""
-
-    genome: np.ndarray  # (G,)
-    config: EpisodeConfig
-    meta: dict
-    genome_path: Path
-    run_dir: Path | None  # None for a lone genome file
 
     @property
     def environment(self) -> dict | None:
@@ -83,30 +72,5 @@ class Source:
 
 def resolve(source: str | Path, generation: int | None = None) -> Source:
     """Load the genome named by ``source`` (``generation``: a run directory's best of that generation)."""
-    path = Path(source)
-    if not path.exists():
-        raise UserError(f"no such run directory or genome file: {path}")
-    if path.is_dir():
-        if generation is None:
-            gpath = path / rundir.BEST
-            if not gpath.is_file():
-                raise UserError(f"{path} is not a run directory (it has no {rundir.BEST})")
-        else:
-            gpath = rundir.generation_file(path, generation)
-            if not gpath.is_file():
-                have = rundir.generation_files(path)
-                span = f"{have[0].stem[4:]}..{have[-1].stem[4:]}" if have else "none"
-                raise UserError(f"{path} has no generation {generation} (generations saved: {span})")
-        run_dir = path
-    else:
-        if generation is not None:
-            raise UserError("--generation needs a run directory, not a genome file")
-        gpath, run_dir = path, None
-    genome, cfg, meta = load_genome(gpath)
-    try:
-        layout = cfg.layout()  # from the declarations: the replay compiles the model once, later
-    except UserError as exc:
-        raise UserError(f"{gpath}: {exc}") from None
-    layout.validate(genome, what=f"genome in {gpath}")
-    return Source(genome=genome, config=cfg, meta=meta, genome_path=gpath, run_dir=run_dir)
-
+    found = rundir.resolve_genome(source, generation)
+    return Source(**{f.name: getattr(found, f.name) for f in dataclasses.fields(found)})

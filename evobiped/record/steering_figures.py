@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .figures import _motor_quantity, _title, ground_trajectory, pyplot, save_figure
+from .figures import _title, ground_trajectory, pyplot, save_figure
+from .motor_labels import _motor_quantity
 from .trajectory import Trajectory
 
 

@@ -77,7 +77,7 @@ class Repertoire:
         return int(walk[np.argmin(d)])
 
 
-def load(run_dir: str | Path) -> Repertoire:
+def load_repertoire(run_dir: str | Path) -> Repertoire:
     """The repertoire of a map-elites run directory (UserError, one line, for anything else)."""
     path = Path(run_dir)
     if not path.is_dir():

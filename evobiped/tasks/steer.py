@@ -69,6 +69,7 @@ to) any walker that stays up.
 ``sound_limit`` L < 1 clips the sense to +-L: the side heard is kept, the
 loudness of a near source capped (a network's input weights act on it
 linearly; near the source s grows towards +-1 and would swamp the gait).
+``loudness = true`` adds the distance cue ``loudness`` = min(1, (a + b) / 2 * 1 m^2) ~ min(1, 1 / D^2) (1 within 1 m).
 """
 
 from __future__ import annotations
@@ -87,10 +88,14 @@ DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
 MIN_SOURCE_DISTANCE = 0.5
 
 
+def intensity(ear: np.ndarray, source: np.ndarray) -> np.ndarray:
+    """I = 1 / |e - q|^2 (1/m^2) at ear ground positions ``(n, 2)`` from sources ``(n, 2)`` -> ``(n,)``."""
+    return 1.0 / np.maximum(np.sum((ear - source) ** 2, axis=1), 1e-12)
+
+
 def ear_signal(left: np.ndarray, right: np.ndarray, source: np.ndarray) -> np.ndarray:
     """s = (a - b) / (a + b) for ear ground positions ``(n, 2)`` and sources ``(n, 2)`` -> ``(n,)``."""
-    a = 1.0 / np.maximum(np.sum((left - source) ** 2, axis=1), 1e-12)
-    b = 1.0 / np.maximum(np.sum((right - source) ** 2, axis=1), 1e-12)
+    a, b = intensity(left, source), intensity(right, source)
     return (a - b) / (a + b)
 
 
@@ -185,6 +190,7 @@ class SteerOptions:
                           unit="m", low=0)
     reach_bonus: float = option(0.0, "under the arrive fitness: paid times the fraction of the episode spent within reach, up",
                                 unit="m", low=0)
+    loudness: bool = option(False, "offer the distance cue `loudness` = min(1, 1 m^2 / D^2), D the ears' distance (m) to the source")
 
     def __post_init__(self):
         from ..options import check_fields
@@ -227,13 +233,13 @@ class SteerTask(Task):
             raise ConfigError("steer task: the body has no ears (sites 'left_ear' and 'right_ear')") from None
 
     def sensor_widths(self):
-        return {"sound": 1}
+        return {"sound": 1, **({"loudness": 1} if self.options.loudness else {})}
 
-    def sensor_norms(self):
-        return {"sound": ((0.0,), (1.0,))}  # already in [-1, 1], 0 when the source is straight ahead or behind
+    def sensor_norms(self):  # sound in [-1, 1], 0 when the source is straight ahead or behind; loudness in [0, 1]
+        return {"sound": ((0.0,), (1.0,)), "loudness": ((0.0,), (0.1,))}
 
-    def sensor_mirror(self):
-        return {"sound": ((0,), (-1,))}  # a source on the left is on the right of the mirrored body
+    def sensor_mirror(self):  # a source on the left is on the right of the mirrored body; loudness is the same
+        return {"sound": ((0,), (-1,)), "loudness": ((0,), (1,))}
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
@@ -251,7 +257,10 @@ class SteerTask(Task):
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
         s = ear_signal(left, right, state["source"])[:, None]
-        return {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
+        out = {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
+        if self.options.loudness:
+            out["loudness"] = np.minimum((intensity(left, state["source"]) + intensity(right, state["source"])) / 2, 1.0)[:, None]
+        return out
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]

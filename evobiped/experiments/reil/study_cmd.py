@@ -36,7 +36,8 @@ def add_study(sub) -> None:
 def run_study_cmd(args) -> int:
     from pathlib import Path
 
-    from .study import StudyConfig, run_study, write_results
+    from .study import StudyConfig, run_study
+    from .study_results import write_results
 
     base = run_config(preset=args.preset, config=args.config, episode_seconds=args.episode_seconds, population=args.population,
                       generations=args.generations)
@@ -59,7 +60,7 @@ def run_study_cmd(args) -> int:
     for path in write_results(args.out, cfg, outcomes):
         say(f"wrote {path}")
     if args.replays:
-        from ...record.replay import replay
+        from ...usecases.replaying import replay
         from ...record.source import resolve
         from .study import run_dir
 

@@ -1,8 +1,8 @@
-"""Replay a stored genome: re-simulate it deterministically, record it, compare fitness.
+"""The replay use case: re-simulate a stored genome deterministically, record it, compare fitness.
 
 The replay is the same episode the GA ran (``EpisodeConfig(**stored).build()``
-with the genome alone; batch size does not change results) with a
-:class:`~.rerun_recorder.RerunRecorder` attached, so in the numerical environment
+with the genome alone; batch size does not change results) with its recording
+(:class:`~evobiped.record.replay_recording.ReplayRecording`) listening, so in the numerical environment
 the genome was stored in (:mod:`evobiped.provenance`) the replayed fitness
 equals the stored one to the last bit; in another, the report says what differs
 and how far the outcome drifted (:mod:`evobiped.outcome`).  The ``.rrd`` is made in memory and
@@ -13,16 +13,14 @@ replay leaves nothing half-written.
 from __future__ import annotations
 
 import dataclasses
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
 from .. import rundir
-from ..fileio import atomic_write
 from ..outcome import compare, outcome
 from ..provenance import differences
-from .source import Source
-from .trajectory import Trajectory, TrajectoryRecorder
+from ..record.source import Source
+from ..record.trajectory import Trajectory, TrajectoryRecorder
 from ..tasks.steer import with_sources
 
 
@@ -95,13 +93,13 @@ def replay(
     ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`;
     ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources;
     ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the recording
-    (``video_options``: :func:`~.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``)."""
-    from .viewer import require_display
+    (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``)."""
+    from ..record.viewer import require_display
 
     if spawn:
         require_display()
     if video is not None:
-        from .video import check_video_path
+        from ..record.video import check_video_path
 
         video = check_video_path(video)
     cfg = source.config
@@ -112,7 +110,7 @@ def replay(
     history = _history(source)
     opts = dict(video_options or {})
     if video is not None:  # an OpenGL context first: without one, the one line comes before anything is recorded
-        from .video import SIZE, FrameRenderer
+        from ..record.video import SIZE, FrameRenderer
 
         opts["renderer"] = FrameRenderer(episode.model, *opts.get("size", SIZE))
     try:
@@ -124,60 +122,32 @@ def replay(
 
 
 def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options):
-    import rerun as rr
-
-    from .evolution_log import log_history
     from ..episode import Listeners
-    from .figures import fitness_label, replay_figures
-    from .steering_figures import steering_figures
-    from .rerun_recorder import RerunRecorder, blueprint, log_presentations
-    from .viewer import connect_url, flush, require_viewer
+    from ..record.figures import fitness_label, replay_figures
+    from ..record.replay_recording import ReplayRecording
+    from ..record.steering_figures import steering_figures
 
     streaming = spawn or connect is not None
     target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
-    if connect is not None and target is None:
-        require_viewer(connect_url(connect))
-    rec = rr.RecordingStream("evobiped_replay", recording_id=uuid.uuid4().hex)
-    stream = None
-    if target is not None:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        stream = rec.binary_stream()
-    elif spawn:
-        rec.spawn()
-    else:
-        rec.connect_grpc(connect_url(connect))
-    rec.send_recording_name(f"{cfg.body}/{cfg.controller}: {source.genome_path}")
-    recorder = RerunRecorder(rec)
+    recording = ReplayRecording(target, spawn=spawn, connect=connect, name=f"{cfg.body}/{cfg.controller}: {source.genome_path}")
+    recorder = recording.recorder
     # one walker per presentation when the task names each one's target (a steering walker's sound sources)
     others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)] if episode.task.targets() is not None else []
     watchers = [recorder, *others] + ([listener] if listener is not None else [])
     result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
     traj = recorder.trajectory
     trajs = [traj] + [o.trajectory for o in others]
-    if others:
-        log_presentations(rec, trajs)
-    if history is not None:
-        log_history(rec, history)
-    frames = None
+    frames = times = None
     if video is not None:
-        from .video import FPS, log_frames, render_frames
+        from ..record.video import render_frames
 
-        opts = video_options
         names = [source.name] if not others else [f"{source.name}, source ({q[0]:g}, {q[1]:g}) m" for q in traj.sources]
-        frames, times = render_frames(trajs, names, **opts)
-        log_frames(rec, frames, times)
-    rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=bool(others),
-                                 with_video=video is not None))
-    if stream is None:
-        flush(rec, streaming=True)
-    else:
-        data = stream.read(flush=True) or b""
-        rec.disconnect()
-        atomic_write(target, data)
+        frames, times = render_frames(trajs, names, **video_options)
+    recording.finish(trajs, history=history, frames=frames, times=times)
     if video is not None:
-        from .video import write_video
+        from ..record.video import FPS, write_video
 
-        write_video(video, frames, opts.get("fps", FPS))
+        write_video(video, frames, video_options.get("fps", FPS))
     figs = []
     if figures_dir is not None:
         seed = source.meta.get("seed")
