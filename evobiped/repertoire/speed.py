@@ -5,7 +5,7 @@ speed moves towards the command by at most ``ramp`` m/s per s (0: at once) and t
 become those of the walking elite for it: the one most like the current elite in its genome among those
 within 5 % of that speed (else the nearest in speed and turning), while the body and the controller's state
 go on: gaits switched without stopping.  Jumping from a 0.3 to a 0.9 m/s elite felled the walker in our
-archive; ramping at 0.1 m/s per s through similar genomes did not (docs/repertoire.md).  A stretch's measured
+archive; ramping through similar genomes sometimes keeps it up, not always (docs/repertoire.md).  A stretch's measured
 speed is the walk task's mean forward speed over it (the path along the facing, m, per s).
 """
 
