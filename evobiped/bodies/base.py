@@ -71,10 +71,15 @@ class Body(ABC):
         self.model_file = self.options.model_file or str(model_path(self.model_name))
 
     def build_model(self) -> mujoco.MjModel:
-        """Compile the MJCF once (per worker); the timestep is this body's."""
-        model = load_model(self.model_file)
-        model.opt.timestep = self.timestep
-        self.bind_model(model)
+        """The MJCF compiled once per body (so once per process and body options: an episode's parts are built once,
+        :mod:`evobiped.episode.parts`); the timestep is this body's.  Every episode of the body shares the model and
+        never changes it (one on another ground takes a copy)."""
+        model = self.__dict__.get("_model")
+        if model is None:
+            model = load_model(self.model_file)
+            model.opt.timestep = self.timestep
+            self.bind_model(model)
+            self._model = model
         return model
 
     def bind_model(self, model: mujoco.MjModel) -> None:
