@@ -189,14 +189,14 @@ class EpisodeConfig:
 
     def build(self, controller: Controller | None = None) -> "Episode":
         """The episode, its model compiled once per process.  ``controller``: drives it in place of the config's,
-        e.g. distillation's blend of a teacher and a student (controllers built and checked by their own configs
-        of this body and task)."""
+        without the config's latency (it delays what it must itself): distillation's blend of a teacher and a
+        student, controllers built and checked by their own configs of this body and task."""
         from .loop import Episode
 
         body, own, task = self.parts()
         return Episode(body, own if controller is None else controller, task, seconds=float(self.seconds),
                        stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations if self.perturbations.active else None,
-                       latency=self.latency, control_dt=self.control_dt)
+                       latency=self.latency if controller is None else 0, control_dt=self.control_dt)
 
 
 def build_episode(**config: Any) -> "Episode":
