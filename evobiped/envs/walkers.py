@@ -20,7 +20,7 @@ from gymnasium import spaces
 
 from ..episode import EpisodeConfig, EpisodeState
 from ..episode.parts import parsed
-from ..options import option, parse
+from ..options import option
 from ..tasks import TASKS
 
 _HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
@@ -56,7 +56,7 @@ def env_config(body: str, default_control_dt: float, kwargs: dict, where: str) -
     """The episode of an environment of ``body`` from its keyword arguments (:class:`EnvOptions`', then the body's),
     and those options; one ConfigError line for a bad one."""
     names = EnvOptions.__dataclass_fields__
-    options = parse(EnvOptions, {k: v for k, v in kwargs.items() if k in names}, where)
+    options = parsed(EnvOptions, {k: v for k, v in kwargs.items() if k in names}, where)
     config = EpisodeConfig(body=body, controller=None, task=options.task, seconds=options.seconds,
                            body_options={k: v for k, v in kwargs.items() if k not in names}, task_options=options.task_options,
                            control_dt=default_control_dt if options.control_dt is None else options.control_dt)
