@@ -10,6 +10,7 @@ used :data:`KEPT` of each kind are kept.
 
 from __future__ import annotations
 
+import copy
 from collections import OrderedDict
 from dataclasses import fields, is_dataclass
 from typing import Any, Callable, Hashable
@@ -71,14 +72,15 @@ def table_key(value: Any) -> Hashable:
 
 
 def parsed(cls: type, table: Any, where: str) -> Any:
-    """``parse(cls, table, where)``, once per process for each table (an ``Options`` object is taken as it is)."""
+    """``parse(cls, table, where)``, once per process for each table (an ``Options`` object is taken as it is); the
+    object parsed holds a copy of the table's values, so a caller changing its table later changes no config."""
     if isinstance(table, cls):
         return table
     try:
         key = (cls, table_key(table))
     except TypeError:
         return parse(cls, table, where)
-    return _PARSED.get(key, lambda: parse(cls, table, where))
+    return _PARSED.get(key, lambda: parse(cls, copy.deepcopy(table), where))
 
 
 def body_part(name: str, options: Any) -> tuple[Body, Hashable]:
