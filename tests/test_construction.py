@@ -132,3 +132,37 @@ collect(teacher, g, student, student.layout().init_mean, beta=0.5, options=Disti
 student.build().run(student.layout().init_mean)
 ''', Path.cwd())
     once_each(counts, "compile", "ReilBiped", "Simbicon", "CTRNN", "WalkTask")
+
+
+def test_configs_of_the_same_tables_share_their_parts_and_write_back_what_they_were_given():
+    """The parts are kept by the tables as given: another length shares them, other settings do not, and 100 and
+    100.0 stay apart (a config writes back the type it read)."""
+    import dataclasses
+
+    from evobiped.episode import EpisodeConfig
+
+    a = EpisodeConfig(seconds=1.0, body_options={"kp": 100})
+    same = EpisodeConfig(seconds=1.0, body_options={"kp": 100})
+    longer = dataclasses.replace(a, seconds=3.0)
+    assert all(x is y for x, y in zip(a.parts(), same.parts())) and all(x is y for x, y in zip(a.parts(), longer.parts()))
+    as_float = EpisodeConfig(seconds=1.0, body_options={"kp": 100.0})
+    assert as_float.body_options is not a.body_options and as_float.parts()[0] is not a.parts()[0]
+    assert type(a.to_dict()["body_options"]["kp"]) is int and type(as_float.to_dict()["body_options"]["kp"]) is float
+    assert EpisodeConfig(body_options={"kp": 120.0}).parts()[0].kp != a.parts()[0].kp
+
+
+def test_an_episode_without_a_controller_needs_its_period_and_takes_no_controller_settings():
+    from evobiped.episode import EpisodeConfig
+    from evobiped.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="needs its control period"):
+        EpisodeConfig(controller=None)
+    with pytest.raises(ConfigError, match="^episode.control_dt: only an episode without a controller takes one"):
+        EpisodeConfig(control_dt=0.02)
+    with pytest.raises(ConfigError, match="^episode.controller_options: an episode without a controller takes none"):
+        EpisodeConfig(controller=None, control_dt=0.02, controller_options={"latency": 1})
+    outside = EpisodeConfig(controller=None, control_dt=0.02)
+    with pytest.raises(ConfigError, match="no genome"):
+        outside.layout()
+    assert outside.build().control_dt == 0.02 and outside.parts()[1] is None
+    assert "control_dt" not in EpisodeConfig().to_dict() and outside.to_dict()["control_dt"] == 0.02
