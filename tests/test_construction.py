@@ -136,7 +136,7 @@ student.build().run(student.layout().init_mean)
 
 def test_configs_of_the_same_tables_share_their_parts_and_write_back_what_they_were_given():
     """The parts are kept by the tables as given: another length shares them, other settings do not, and 100 and
-    100.0 stay apart (a config writes back the type it read)."""
+    100.0 stay apart (a config writes back the type it read); each episode has its own copy of the body's model."""
     import dataclasses
 
     from evobiped.episode import EpisodeConfig
@@ -149,6 +149,9 @@ def test_configs_of_the_same_tables_share_their_parts_and_write_back_what_they_w
     assert as_float.body_options is not a.body_options and as_float.parts()[0] is not a.parts()[0]
     assert type(a.to_dict()["body_options"]["kp"]) is int and type(as_float.to_dict()["body_options"]["kp"]) is float
     assert EpisodeConfig(body_options={"kp": 120.0}).parts()[0].kp != a.parts()[0].kp
+    changed = a.build()
+    changed.model.opt.gravity[:] = 0.0  # an episode's model is its own: another episode of the body keeps its gravity
+    assert longer.build().model.opt.gravity[2] == -9.81 and a.parts()[0].build_model().opt.gravity[2] == -9.81
 
 
 def test_an_episode_without_a_controller_needs_its_period_and_takes_no_controller_settings():
