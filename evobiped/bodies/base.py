@@ -8,6 +8,7 @@ batch and return ``(P, ...)`` arrays; ``ids`` selects the simulations to touch.
 
 from __future__ import annotations
 
+import copy
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar, Literal
 
@@ -71,11 +72,15 @@ class Body(ABC):
         self.model_file = self.options.model_file or str(model_path(self.model_name))
 
     def build_model(self) -> mujoco.MjModel:
-        """Compile the MJCF once (per worker); the timestep is this body's."""
-        model = load_model(self.model_file)
-        model.opt.timestep = self.timestep
-        self.bind_model(model)
-        return model
+        """A model of this body, the timestep this body's: the MJCF compiled once per body (so once per process and
+        body options, :mod:`evobiped.episode.parts`), each caller given its own copy (an episode's, which it may change)."""
+        model = self.__dict__.get("_model")
+        if model is None:
+            model = load_model(self.model_file)
+            model.opt.timestep = self.timestep
+            self.bind_model(model)
+            self._model = model
+        return copy.deepcopy(model)
 
     def bind_model(self, model: mujoco.MjModel) -> None:
         """Look up names and ids in the compiled model (UserError if one is missing)."""

@@ -98,6 +98,12 @@ class EpisodeState:
     #: per row: control ticks, sums and sums of squares of the inputs it sensed ``(n,)``, ``(n, k)``, ``(n, k)``
     #: (None: not collected; :mod:`evobiped.normaliser`)
     senses: tuple | None = None
+    #: what an episode stepped by outside actions (a Gymnasium environment's) keeps per row ``(n,)``, None otherwise:
+    #: the task's fitness when the row last stepped or began (the reward baseline: a reward is its increment), the
+    #: generator of the row's reset noise, and whether its episode ended and waits for a reset
+    fitness: np.ndarray | None = None
+    rngs: list | None = None
+    ended: np.ndarray | None = None
 
     @property
     def time(self) -> float:

@@ -77,9 +77,7 @@ def _title(what: str, who: str, traj: Trajectory | None = None) -> str:
 
 def fitness_label(config) -> str:
     """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit (``Task.fitness_label``)."""
-    from ..tasks import TASKS
-
-    return TASKS[config.task](config.task_options).fitness_label()
+    return config.parts()[2].fitness_label()
 
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",
