@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from evobiped.experiments.taga import generator, protocols
-from evobiped.fileio import atomic_write
-from evobiped.progress import Progress
+from evobiped.core.fileio import atomic_write
+from evobiped.core.progress import Progress
 from evobiped.experiments.taga import taga_figures as fig
 from evobiped.experiments.taga.stride import contact_onsets
 

@@ -19,7 +19,7 @@ from .conftest import ROOT, WALKERS
 HARNESS = r'''
 import collections, json, sys
 import mujoco
-import evobiped.cli, evobiped.episode.parts as parts, evobiped.options as options
+import evobiped.cli, evobiped.episode.parts as parts, evobiped.core.options as options
 from evobiped.bodies import BODIES
 from evobiped.controllers import CONTROLLERS
 from evobiped.tasks import TASKS
@@ -125,7 +125,7 @@ protocols.steady(5.5, seconds=0.2, window=0.1)
 def test_a_distillation_s_rollouts_and_student_share_the_teacher_s_body():
     counts = constructions(f'''
 from evobiped.distill import DistillOptions, collect, student_config
-from evobiped.genome_file import load_genome
+from evobiped.files.genome_file import load_genome
 g, teacher, _ = load_genome({str(WALKERS / "simbicon_cma_seed3.json")!r})
 student = student_config(teacher.nominal(), {{"n_neurons": 8}}, seconds=0.2)
 collect(teacher, g, student, student.layout().init_mean, beta=0.5, options=DistillOptions(rollouts=2, seconds=0.2), key=(0, 0))
@@ -156,7 +156,7 @@ def test_configs_of_the_same_tables_share_their_parts_and_write_back_what_they_w
 
 def test_an_episode_without_a_controller_needs_its_period_and_takes_no_controller_settings():
     from evobiped.episode import EpisodeConfig
-    from evobiped.errors import ConfigError
+    from evobiped.core.errors import ConfigError
 
     with pytest.raises(ConfigError, match="needs its control period"):
         EpisodeConfig(controller=None)

@@ -28,7 +28,7 @@ def test_generated_parts_agree_with_the_code(page, ids):
 
 
 def test_every_preset_is_in_the_presets_table():
-    from evobiped.presets import names
+    from evobiped.files.presets import names
 
     table = readme.generated()["presets"]
     assert [line.split("`")[1] for line in table.splitlines()[2:]] == names()

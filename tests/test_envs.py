@@ -12,7 +12,7 @@ import pytest
 gymnasium = pytest.importorskip("gymnasium")
 
 from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402  (importing registers the environments)
-from evobiped.errors import ConfigError  # noqa: E402
+from evobiped.core.errors import ConfigError  # noqa: E402
 
 IDS = ["evobiped/ReilBiped-v0", "evobiped/TagaBiped-v0"]
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -12,8 +12,8 @@ from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.bodies.taga import TagaBiped
 from evobiped.cli import main
 from evobiped.controllers.matsuoka import Matsuoka, taga_feedback
-from evobiped.errors import UserError
-from evobiped.sim import Sims
+from evobiped.core.errors import UserError
+from evobiped.physics.sim import Sims
 
 
 # ---------------------------------------------------------------- structure
@@ -264,7 +264,7 @@ def test_cli_bad_arguments(argv, needle, capsys):
 def test_cli_json_and_genome_file_replays_the_same_walk(capsys, tmp_path):
     import json
 
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     f = tmp_path / "taga.json"
     assert main(["taga", "--u0", "5.5", "--seconds", "4", "--window", "3", "--json", "--save-genome", str(f)]) == 0
@@ -283,12 +283,12 @@ def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
     """Every registered body with every registered controller: a pair whose declarations agree runs and gives
     finite fitness; a pair they refuse is one ConfigError before anything is compiled."""
     from evobiped.bodies import BODIES
-    from evobiped.contract import Offer, problem
+    from evobiped.interface.contract import Offer, problem
     from evobiped.controllers import CONTROLLERS
     from evobiped.episode import EpisodeConfig
-    from evobiped.errors import ConfigError
-    from evobiped.mapping import MAPS
-    from evobiped.options import parse
+    from evobiped.core.errors import ConfigError
+    from evobiped.interface.mapping import MAPS
+    from evobiped.core.options import parse
 
     rng = np.random.default_rng(0)
     ran = []
@@ -349,7 +349,7 @@ def test_replay_records_the_taga_stick_figure(tmp_path, capsys):
     import rerun as rr
 
     from evobiped.episode import EpisodeConfig
-    from evobiped.genome_file import save_genome
+    from evobiped.files.genome_file import save_genome
 
     cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=0.5, controller_options={"u0": 5.5})
     ep = cfg.build()

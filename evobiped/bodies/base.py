@@ -15,11 +15,11 @@ from typing import Any, ClassVar, Literal
 import mujoco
 import numpy as np
 
-from ..contract import Actuator
-from ..errors import ConfigError
-from ..models import load_model, model_path
-from ..sim import Sims
-from ..options import option, taken
+from ..interface.contract import Actuator
+from ..core.errors import ConfigError
+from ..physics.models import load_model, model_path
+from ..physics.sim import Sims
+from ..core.options import option, taken
 
 
 def model_file_option(stem: str):
@@ -57,12 +57,12 @@ class Body(ABC):
     #: how a controller that normalises its inputs reads each sensor: name -> (standing values, scales), one per
     #: component, in the sensor's units; the controller sees (reading - standing value) / scale
     sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}
-    #: a bilateral body's left/right mirror (:mod:`evobiped.frame`): sensor name -> (column permutation, sign
+    #: a bilateral body's left/right mirror (:mod:`evobiped.interface.frame`): sensor name -> (column permutation, sign
     #: per column) giving the mirrored body's reading, and the same over the action vector (None: not bilateral)
     mirror: ClassVar[dict[str, tuple[tuple[int, ...], tuple[float, ...]]]] = {}
     actuator_mirror: ClassVar[tuple[tuple[int, ...], tuple[float, ...]] | None] = None
 
-    #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
+    #: the body's options (a dataclass of :func:`evobiped.core.options.option` fields, each with a
     #: ``timestep`` and a ``model_file``); constructed as ``cls(options)`` (or ``cls(**settings)``)
     Options: ClassVar[type]
 

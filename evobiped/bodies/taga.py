@@ -38,10 +38,10 @@ from typing import ClassVar
 import mujoco
 import numpy as np
 
-from ..contract import Actuator
-from ..errors import ConfigError, UserError
-from ..sim import Sims
-from ..options import option
+from ..interface.contract import Actuator
+from ..core.errors import ConfigError, UserError
+from ..physics.sim import Sims
+from ..core.options import option
 from .base import Body, model_file_option
 
 #: actions in this order (N m); T_r1, T_r3, T_r5 (right) and T_r2, T_r4, T_r6 (left)

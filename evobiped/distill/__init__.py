@@ -17,7 +17,7 @@ would do there, add those to a growing data set, refit, repeat.  Here:
   Genes are kept inside their bounds after every step.  JAX is an optional dependency
   (``pip install 'evobiped[distill]'``): it differentiates the network's recurrence exactly, fast on a CPU.
 - **Selection.**  Each iteration's student is a candidate (later ones imitate better, but an imitation can
-  settle into a gait that drifts or falls late); :func:`evobiped.selection.best_candidate` keeps the one that is up
+  settle into a gait that drifts or falls late); :func:`evobiped.analysis.selection.best_candidate` keeps the one that is up
   through ``select_seconds`` alone, then walks within ``heading_limit`` of its initial facing, then farthest
   along it.  ``select_seconds = 0`` keeps the last iteration's.
 

@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 
 from ..episode import EpisodeConfig
-from ..selection import best_candidate, try_candidates
+from ..analysis.selection import best_candidate, try_candidates
 from .fit import Fitter
 from .settings import DistillOptions
 from .rollouts import Rollouts, collect
@@ -62,7 +62,7 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
 
 def select(student: EpisodeConfig, genomes: list[np.ndarray], rows: list[dict], options: DistillOptions,
            say: Callable[[str], None]) -> int:
-    """The index of the best student (:func:`evobiped.selection.best_candidate` over their runs alone); adds ``up_long``
+    """The index of the best student (:func:`evobiped.analysis.selection.best_candidate` over their runs alone); adds ``up_long``
     (bool: up through ``select_seconds``) to the row of every student."""
     if options.select_seconds <= 0:
         return len(genomes) - 1

@@ -8,7 +8,7 @@ from typing import Callable
 import numpy as np
 
 from ..episode import EpisodeConfig
-from ..errors import ConfigError, UserError
+from ..core.errors import ConfigError, UserError
 from .settings import DistillOptions
 from .rollouts import Rollouts
 

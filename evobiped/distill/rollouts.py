@@ -10,8 +10,8 @@ import numpy as np
 
 from ..controllers.base import Controller
 from ..episode import EpisodeConfig
-from ..mapping import to_action
-from ..perturb import PerturbationOptions
+from ..interface.mapping import to_action
+from ..physics.perturb import PerturbationOptions
 from .settings import DistillOptions
 
 

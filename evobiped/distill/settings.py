@@ -7,11 +7,11 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
-from .. import gait
+from ..physics import gait
 from ..bodies import BODIES
 from ..episode import EpisodeConfig
-from ..errors import ConfigError
-from ..options import option, parse
+from ..core.errors import ConfigError
+from ..core.options import option, parse
 
 #: the student's controller options: every sense of the Reil body normalised, 40 neurons whose outputs follow
 #: the update, ln-tau genes down to the control period, centre-crossing biases, the full-range motor map
@@ -59,7 +59,7 @@ def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None 
                    seconds: float | None = None) -> EpisodeConfig:
     """The student's episode: the teacher's body and task, ``seconds`` long (default the teacher's), the ``ctrnn``
     controller with :data:`STUDENT` (and ``overrides``) reading every sensor the body declares a standing value for
-    but the gait senses (:mod:`evobiped.gait`: the teacher's phase is learnt from the instantaneous senses;
+    but the gait senses (:mod:`evobiped.physics.gait`: the teacher's phase is learnt from the instantaneous senses;
     ``inputs`` in ``overrides`` adds them); no latency, no perturbations."""
     senses = [n for n in BODIES[teacher_cfg.body].sensor_norms if n not in gait.NAMES]
     opts = {**STUDENT, "inputs": senses, **(overrides or {})}

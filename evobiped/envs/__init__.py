@@ -15,7 +15,7 @@ gives 64 stepped as one MuJoCo batch.
 try:
     import gymnasium
 except ImportError:  # pragma: no cover - depends on the installation
-    from ..errors import UserError
+    from ..core.errors import UserError
 
     raise UserError("the Gymnasium environments need gymnasium: pip install 'evobiped[gym]'") from None
 

@@ -18,8 +18,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..bodies import BODIES
-from ..errors import ConfigError
-from ..options import markdown_table
+from ..core.errors import ConfigError
+from ..core.options import markdown_table
 from .camera import Camera
 from .walkers import EnvOptions, Walkers, env_config
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from ..errors import ConfigError
-from ..glbackend import no_backend_message
+from ..core.errors import ConfigError
+from ..core.glbackend import no_backend_message
 from .walkers import Walkers
 
 

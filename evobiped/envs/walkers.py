@@ -20,7 +20,7 @@ from gymnasium import spaces
 
 from ..episode import EpisodeConfig, EpisodeState
 from ..episode.parts import parsed
-from ..options import option
+from ..core.options import option
 from ..tasks import TASKS
 
 _HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)

@@ -12,14 +12,14 @@ from ..bodies import BODIES
 from ..bodies.base import Body
 from ..controllers import CONTROLLERS
 from ..controllers.base import Controller, ControllerOptions
-from ..errors import ConfigError
-from ..genome import GenomeLayout
-from ..mapping import MAPS
-from ..options import given, refuse_unknown
-from ..perturb import PerturbationOptions
+from ..core.errors import ConfigError
+from ..interface.genome import GenomeLayout
+from ..interface.mapping import MAPS
+from ..core.options import given, refuse_unknown
+from ..physics.perturb import PerturbationOptions
 from ..tasks import TASKS
 from ..tasks.base import Task
-from ..validate import number
+from ..core.validate import number
 from .parts import body_part, controller_part, parsed, task_part
 
 if TYPE_CHECKING:
@@ -84,7 +84,7 @@ class EpisodeConfig:
     body_options: Any = field(default_factory=dict)
     controller_options: Any = field(default_factory=dict)
     task_options: Any = field(default_factory=dict)
-    #: how an evolutionary run perturbs each generation (see evobiped.perturb); {} = none
+    #: how an evolutionary run perturbs each generation (see evobiped.physics.perturb); {} = none
     perturbations: Any = field(default_factory=dict)
     #: s: the control period of an episode without a controller (a multiple of the body's physics step); a
     #: controller's period is its own (its ``dt`` option, else the physics step)
@@ -165,7 +165,7 @@ class EpisodeConfig:
             controller = controller_part(self.controller, self.controller_options, body, task, (body_key, task_key))
         check_timing(body, controller, float(self.seconds), control_dt=self.control_dt)
         if body.action_kind != "position":  # offsets and noise are PD-target angles: a body of torques has none
-            from ..options import scheduled
+            from ..core.options import scheduled
 
             for name in ("target_offset", "target_noise"):
                 s = scheduled(self.perturbations, name)

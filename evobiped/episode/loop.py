@@ -8,14 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from .. import gait
+from ..physics import gait
 from ..bodies.base import Body
 from ..controllers.base import Controller
-from ..episode_result import EpisodeResult
-from ..errors import ConfigError
-from ..mapping import to_action
-from ..perturb import PerturbationOptions, Trials
-from ..sim import Sims
+from .result import EpisodeResult
+from ..core.errors import ConfigError
+from ..interface.mapping import to_action
+from ..physics.perturb import PerturbationOptions, Trials
+from ..physics.sim import Sims
 from ..tasks.base import Task
 from .config import check_timing
 from .disturbances import assisted_physics, disturb

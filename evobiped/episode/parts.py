@@ -19,12 +19,12 @@ import numpy as np
 
 from ..bodies import BODIES
 from ..bodies.base import Body
-from ..contract import Offer, normaliser, wire
+from ..interface.contract import Offer, normaliser, wire
 from ..controllers import CONTROLLERS
 from ..controllers.base import Controller
-from ..errors import ConfigError
-from ..frame import StanceFrame
-from ..options import given, parse
+from ..core.errors import ConfigError
+from ..interface.frame import StanceFrame
+from ..core.options import given, parse
 from ..tasks import TASKS
 from ..tasks.base import Task
 

@@ -6,9 +6,9 @@ import json
 
 import numpy as np
 
-from ...errors import UserError
+from ...core.errors import UserError
 from ...flags import positive_float, refuse
-from ...progress import Progress
+from ...core.progress import Progress
 
 
 def add_taga(sub) -> None:
@@ -43,8 +43,8 @@ def run_taga_cmd(args) -> int:
     from ...controllers.matsuoka import MatsuokaOptions
     from . import protocols
     from .parameters import PRESETS, preset_genome
-    from ...options import check_value, option_bounds
-    from ...validate import number
+    from ...core.options import check_value, option_bounds
+    from ...core.validate import number
 
     if args.preset not in PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(PRESETS)})")
@@ -69,7 +69,7 @@ def run_taga_cmd(args) -> int:
     progress = Progress("taga", total, "s simulated", quiet=args.quiet or args.json)
     if args.save_genome:
         from ...episode import EpisodeConfig
-        from ...genome_file import save_genome
+        from ...files.genome_file import save_genome
 
         body = {k: v for k, v in opts.items() if k != "preset"}
         cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=seconds, body_options=body, controller_options={"u0": args.u0[0]})

@@ -20,10 +20,10 @@ from typing import Callable
 import numpy as np
 
 from ...controllers.matsuoka import MatsuokaOptions
-from ...errors import UserError
+from ...core.errors import UserError
 from ...episode import EpisodeConfig
-from ...options import check_value
-from ...sim import Sims
+from ...core.options import check_value
+from ...physics.sim import Sims
 from .parameters import PRESETS, preset_genome
 from .stride import StrideMetrics, analyse_strides
 

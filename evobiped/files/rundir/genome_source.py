@@ -2,7 +2,7 @@
 
 A run directory (written by ``evobiped evolve``) stands for its best genome (``best.json``) or, with
 ``generation``, that generation's best (``generations/gen_NNNN.json``); any other path is a genome file
-(:mod:`evobiped.genome_file`).  Every problem is one :class:`~evobiped.errors.UserError` line.
+(:mod:`evobiped.files.genome_file`).  Every problem is one :class:`~evobiped.core.errors.UserError` line.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..episode import EpisodeConfig
-from ..errors import UserError
+from ...episode import EpisodeConfig
+from ...core.errors import UserError
 from ..genome_file import load_genome
 from .layout import BEST, generation_file, generation_files
 

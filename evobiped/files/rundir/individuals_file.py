@@ -24,8 +24,8 @@ import json
 import os
 from pathlib import Path
 
-from ..errors import UserError
-from ..fileio import WriteError
+from ...core.errors import UserError
+from ...core.fileio import WriteError
 
 INDIVIDUALS = "individuals.jsonl"
 INDIVIDUAL_KEYS = ("generation", "row", "evaluated", "previous", "parents", "fitness", "fell", "unstable", "end_time", "terms")
@@ -37,7 +37,7 @@ def individuals_text(rows: list[dict]) -> str:
 
 
 def append_individuals(path: str | Path, rows: list[dict]) -> None:
-    """Append ``rows``' lines to ``path`` and make them durable (fsync); :class:`~evobiped.fileio.WriteError` if it cannot."""
+    """Append ``rows``' lines to ``path`` and make them durable (fsync); :class:`~evobiped.core.fileio.WriteError` if it cannot."""
     try:
         with open(path, "a") as f:
             f.write(individuals_text(rows))

@@ -35,7 +35,7 @@ class EpisodeResult:
     def displacements(self) -> tuple[np.ndarray, np.ndarray]:
         """Where each walker went in its first presentation: displacement ``(P, 2)`` m and direction ``(P,)``
         degrees (see :func:`evobiped.tasks.walk.displacement_heading`; NaN: it did not move)."""
-        from .tasks.walk import displacement_heading
+        from ..tasks.walk import displacement_heading
 
         rows = self.rows if self.rows is not None else self
         S = len(rows.fitness) // len(self.fitness)

@@ -34,7 +34,7 @@ the trials of an evolutionary run are drawn: from (run seed, generation) only,
 so every genome of a generation meets the same disturbances (common random
 numbers: selection compares like with like), and neither a resume nor the
 number of workers changes anything.  Every strength may be a schedule over the
-generations (:mod:`evobiped.schedule`: a curriculum from mild to hard).  A
+generations (:mod:`evobiped.core.schedule`: a curriculum from mild to hard).  A
 genome's fitness is the ``aggregate`` of its presentations' fitness:
 
 * ``mean``: the mean over the R presentations;
@@ -56,8 +56,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ConfigError
-from .options import check_fields, option, parse, scheduled
+from ..core.errors import ConfigError
+from ..core.options import check_fields, option, parse, scheduled
 
 #: aggregate name -> ``((P, R) fitness, q) -> (P,)``
 AGGREGATES = {

@@ -19,7 +19,7 @@ from __future__ import annotations
 import platform
 import sys
 
-from . import __version__
+from .. import __version__
 
 #: the fields that decide the last bits of a simulation (see the module docstring)
 NUMERICAL_FIELDS = ("mujoco", "numpy", "numpy_simd", "machine", "system")

@@ -32,7 +32,7 @@ def option(default: Any, doc: str, *, unit: str = "", low: float | None = None, 
     a bool default: true or false; ``check(value)``: anything else (ConfigError without the
     path); ``span``: the range as the README shows it when ``check`` decides it.  A None
     default also takes None.  ``schedule``: the value may also be a schedule over the generations
-    (:class:`~evobiped.schedule.Schedule`: a table whose ``start`` and ``end`` are each checked as a plain value);
+    (:class:`~evobiped.core.schedule.Schedule`: a table whose ``start`` and ``end`` are each checked as a plain value);
     read it with :func:`scheduled`.
     """
     meta = dict(doc=doc, unit=unit, low=low, high=high, above=above, below=below, integer=integer, choices=choices, check=check, span=span,

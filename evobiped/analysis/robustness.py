@@ -45,11 +45,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contract import index
-from .episode import Episode
-from .errors import UserError
-from .perturb import Trials
-from .progress import Progress
+from ..interface.contract import index
+from ..episode import Episode
+from ..core.errors import UserError
+from ..physics.perturb import Trials
+from ..core.progress import Progress
 
 PUSH_FORCES = (5.0, 10.0, 15.0, 20.0)  # N
 PUSH_DURATION = 0.1  # s

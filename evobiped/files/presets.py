@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import UserError
+from ..core.errors import UserError
 
-DIRECTORY = Path(__file__).with_name("presets")
+DIRECTORY = Path(__file__).resolve().parent.parent / "presets"
 
 
 def names() -> list[str]:

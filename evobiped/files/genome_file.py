@@ -6,12 +6,12 @@ needs to rebuild the simulation)::
 
     {"format": "evobiped-genome/1", "genome": [...G floats...],
      "episode": {EpisodeConfig fields}, ...metadata..., "version": "0.1.0",
-     "environment": {versions, numpy's SIMD kernels, machine: evobiped.provenance.current()}}
+     "environment": {versions, numpy's SIMD kernels, machine: evobiped.core.provenance.current()}}
 
 The metadata is whatever the writer passes: a run's generation files carry
 ``fitness``, ``fell``, ``end_time`` (s), ``seed`` and ``generation``;
 ``evobiped taga --save-genome`` carries ``preset``; a shipped walker carries ``outcome``
-(:func:`evobiped.outcome.outcome`), what a replay in another numerical environment checks.  A reader returns the
+(:func:`evobiped.files.outcome.outcome`), what a replay in another numerical environment checks.  A reader returns the
 metadata, ``environment`` included, as a dict.
 """
 
@@ -22,18 +22,19 @@ from typing import Any
 
 import numpy as np
 
-from . import __version__, provenance
-from .episode import EpisodeConfig
-from .options import refuse_unknown
-from .errors import ConfigError, UserError
-from .fileio import atomic_write, json_text, read_json
+from .. import __version__
+from ..core import provenance
+from ..episode import EpisodeConfig
+from ..core.options import refuse_unknown
+from ..core.errors import ConfigError, UserError
+from ..core.fileio import atomic_write, json_text, read_json
 
 FORMAT = "evobiped-genome/1"
 
 
 def genome_text(genome: np.ndarray, episode: EpisodeConfig, **meta: Any) -> str:
     """The exact content of a genome file for one genome ``(G,)``, its episode config and metadata, with the
-    numerical environment of this process (:func:`evobiped.provenance.current`)."""
+    numerical environment of this process (:func:`evobiped.core.provenance.current`)."""
     obj = {
         "format": FORMAT,
         "genome": [float(x) for x in np.asarray(genome, float).ravel()],
@@ -53,7 +54,7 @@ def save_genome(path: str | Path, genome: np.ndarray, episode: EpisodeConfig, **
 def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
     """Read a genome file -> ``(genome (G,), EpisodeConfig, metadata)``; UserError (one line) if malformed: the genome
     must fit its episode's layout (length, finite, within bounds) and a stored ``outcome`` must be what
-    :func:`evobiped.outcome.outcome` writes."""
+    :func:`evobiped.files.outcome.outcome` writes."""
     obj = read_json(path, what="genome file", file_format=FORMAT)
     if not isinstance(obj, dict) or "genome" not in obj or "episode" not in obj:
         raise UserError(f"{path} is not an evobiped genome file (needs 'genome' and 'episode')")
@@ -73,7 +74,7 @@ def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
 
 
 def _check_outcome(stored: Any, path) -> None:
-    """UserError unless ``stored`` has the shape of :func:`evobiped.outcome.outcome`'s table (any part of it)."""
+    """UserError unless ``stored`` has the shape of :func:`evobiped.files.outcome.outcome`'s table (any part of it)."""
     def number(v):
         return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v))
 

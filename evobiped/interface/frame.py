@@ -12,7 +12,7 @@ velocity or a heading error change sign; a model whose roll axes are already
 mirrored keeps their signs).  A controller with ``frame = "stance"`` always sees
 the body as if its stance leg were the first leg of the contact sensor (the
 Reil body's left): on rows whose stance leg is the other one
-(``stance_leg`` = -1, :mod:`evobiped.gait`) its inputs are mirrored before it
+(``stance_leg`` = -1, :mod:`evobiped.physics.gait`) its inputs are mirrored before it
 reads them and its actions mirrored back before the body takes them.  So the
 controller's inputs read "stance side, then swing side" and its outputs are
 stance-leg and swing-leg targets, whichever leg stands.
@@ -24,7 +24,7 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import ConfigError
+from ..core.errors import ConfigError
 
 #: the frames a controller may take (``frame`` controller option)
 FRAMES = ("body", "stance")

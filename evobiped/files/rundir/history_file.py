@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError
-from ..fileio import atomic_write
+from ...core.errors import UserError
+from ...core.fileio import atomic_write
 
 HISTORY_COLUMNS = ("generation", "best", "mean", "median", "worst", "evaluations", "falls", "unstable", "wall_seconds")
 #: history.csv's further columns: the best individual's task terms (``best_distance``, ...; the mean over its

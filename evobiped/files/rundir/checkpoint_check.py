@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UserError
+from ...core.errors import UserError
 from .history_file import _COUNTS, _FITNESS, HISTORY_COLUMNS
 
 def _bad(field: str, why: str):

@@ -11,7 +11,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .errors import ConfigError, GenomeError
+from ..core.errors import ConfigError, GenomeError
 
 
 @dataclass(frozen=True, kw_only=True)

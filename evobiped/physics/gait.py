@@ -33,7 +33,7 @@ NAMES = ("stance_leg", "since_touchdown")
 WIDTHS = {"stance_leg": 1, "since_touchdown": 1}
 #: standing values and scales for a controller that normalises its inputs
 NORMS = {"stance_leg": ((0.0,), (1.0,)), "since_touchdown": ((0.2,), (0.2,))}
-#: their left/right mirror (:mod:`evobiped.frame`): the stance flag changes sign, the time does not
+#: their left/right mirror (:mod:`evobiped.interface.frame`): the stance flag changes sign, the time does not
 MIRROR = {"stance_leg": ((0,), (-1,)), "since_touchdown": ((0,), (1,))}
 
 

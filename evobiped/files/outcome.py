@@ -1,6 +1,6 @@
 """What a walker did in an episode, and whether a replay elsewhere did the same within declared tolerances.
 
-Bit-identity is promised only within one numerical environment (:mod:`evobiped.provenance`).  Across
+Bit-identity is promised only within one numerical environment (:mod:`evobiped.core.provenance`).  Across
 environments a long walk amplifies last-bit differences, so a replay there checks the *outcome* instead: whether
 each presentation fell, how far and in which direction the walker went, and how close it ended to its target
 (a steering walker's sound source).  :data:`TOLERANCE` declares how close is close enough.
@@ -12,8 +12,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .episode_result import EpisodeResult
-from .tasks.walk import displacement_heading
+from ..episode.result import EpisodeResult
+from ..tasks.walk import displacement_heading
 
 
 @dataclass(frozen=True)

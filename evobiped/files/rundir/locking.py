@@ -7,8 +7,8 @@ import fcntl
 import os
 from pathlib import Path
 
-from ..errors import UserError
-from ..fileio import WriteError
+from ...core.errors import UserError
+from ...core.fileio import WriteError
 from .layout import LOCK
 
 _held: dict[Path, list] = {}  # resolved run directory -> [fd, count] (re-entrant within a process)

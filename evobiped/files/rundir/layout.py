@@ -1,10 +1,10 @@
-"""The run directory's file names and paths (what each file holds: :mod:`evobiped.rundir`)."""
+"""The run directory's file names and paths (what each file holds: :mod:`evobiped.files.rundir`)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from ..fileio import WriteError
+from ...core.fileio import WriteError
 
 CONFIG = "config.json"
 START = "start.json"
@@ -66,7 +66,7 @@ def robustness_stem(label: str) -> str:
 
 
 def remove_stale_temporaries(directory: Path) -> list[Path]:
-    """Delete the ``.NAME.*.tmp`` files a killed :func:`~evobiped.fileio.atomic_write` left; returns them."""
+    """Delete the ``.NAME.*.tmp`` files a killed :func:`~evobiped.core.fileio.atomic_write` left; returns them."""
     found = [p for d in (Path(directory), Path(directory) / GENERATIONS) if d.is_dir() for p in d.glob(".*.tmp")]
     for p in found:
         p.unlink(missing_ok=True)

@@ -40,13 +40,13 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from .episode import Context, EpisodeConfig
-from .errors import ConfigError
-from .evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
-from .evolution.ga import GA, GAOptions
-from .progress import Progress
+from ..episode import Context, EpisodeConfig
+from ..core.errors import ConfigError
+from ..evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
+from ..evolution.ga import GA, GAOptions
+from ..core.progress import Progress
 
-#: the disturbances of measurement (e), per presentation (see evobiped.perturb)
+#: the disturbances of measurement (e), per presentation (see evobiped.physics.perturb)
 PERTURBED = dict(pushes=1, push_force=5.0, push_after=1.0, target_noise=0.01, pose_noise=0.01)
 
 #: ``bench(..., **QUICK)``: a run of well under 30 s

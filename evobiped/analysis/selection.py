@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .episode import EpisodeConfig
+from ..episode import EpisodeConfig
 
 
 def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndarray, long_seconds: float) -> list[dict]:
@@ -65,7 +65,7 @@ def forward_walker(config: EpisodeConfig, genome: np.ndarray, *, seconds: float 
     """One genome alone in ``config``'s nominal episode for ``seconds`` s: ``up`` (no fall), ``end_time`` (s),
     ``distance`` (m) and ``heading_deg`` of its displacement at ``window`` s (or its fall, if sooner), and ``walker``:
     up, at least ``min_distance`` m, within ``heading_limit`` degrees of its initial facing."""
-    from .tasks.walk import displacement_heading
+    from ..tasks.walk import displacement_heading
 
     episode = config.nominal().build()
     state = episode.start(np.asarray(genome, float)[None], seconds=seconds)

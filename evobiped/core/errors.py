@@ -97,7 +97,7 @@ def last_line(message: str) -> None:
 
 @contextlib.contextmanager
 def signals_deferred():
-    """Hold Ctrl-C (and SIGTERM/SIGHUP where they stop the command, see :func:`~evobiped.errors.stop_on_signals`)
+    """Hold Ctrl-C (and SIGTERM/SIGHUP where they stop the command, see :func:`~evobiped.core.errors.stop_on_signals`)
     back for the duration and raise it right after (main thread only).
 
     A Python-level handler, not a signal mask: the signal may be delivered to

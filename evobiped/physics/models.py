@@ -6,11 +6,11 @@ from pathlib import Path
 
 import mujoco
 
-from .errors import UserError
+from ..core.errors import UserError
 
-_HERE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parent.parent  # evobiped/
 # an installed wheel carries models/ inside the package; a checkout has it beside it
-_CANDIDATES = (_HERE / "models", _HERE.parent / "models")
+_CANDIDATES = (_PACKAGE / "models", _PACKAGE.parent / "models")
 
 
 def models_dir() -> Path:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import UserError
+from ..core.errors import UserError
 
 
 @dataclass
