@@ -4,7 +4,7 @@ Data flows one way: genome -> controller params -> episode (body + controller
 + task) -> fitness -> GA.  See README.md for the commands.
 """
 
-from .glbackend import choose as _choose_gl
+from .core.glbackend import choose as _choose_gl
 
 _choose_gl()  # before anything imports mujoco: MuJoCo reads MUJOCO_GL once, at its import
 

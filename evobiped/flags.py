@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-from .errors import UserError
+from .core.errors import UserError
 from .tasks.steer import with_sources
 
 
@@ -50,7 +50,7 @@ def choices_text(kind: str) -> str:
     elif kind == "backend":
         from .evolution.evaluate import BACKENDS as reg
     elif kind == "preset":
-        from .presets import names as preset_names
+        from .files.presets import names as preset_names
 
         reg = preset_names()
     else:
@@ -104,10 +104,10 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
     from .evolution.run_config import RunConfig, check_tables
-    from .fileio import read_toml
+    from .core.fileio import read_toml
     from .tasks import TASKS
 
-    from .presets import merge, path, split_declarations
+    from .files.presets import merge, path, split_declarations
 
     d, declared = split_declarations(preset, read_toml(path(preset))) if preset else ({}, {})
     if config:

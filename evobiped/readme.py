@@ -24,8 +24,8 @@ from .evolution.es import ESOptions
 from .evolution.map_elites import MapElitesOptions
 from .evolution.run_config import NormaliseOptions
 from .evolution.ga import GAOptions
-from .options import markdown_table
-from .perturb import PerturbationOptions
+from .core.options import markdown_table
+from .physics.perturb import PerturbationOptions
 from .tasks import TASKS
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -56,7 +56,7 @@ SENSOR_TEXT = {
                      "heading frame)",
     "com_velocity": "centre-of-mass velocity: forward, left (m/s, heading frame)",
     "stance_leg": "which leg stands: +1 left, −1 right; it changes at the other foot's touchdown after ≥ 0.06 s "
-                  "in the air (`evobiped/gait.py`)",
+                  "in the air (`evobiped/physics/gait.py`)",
     "since_touchdown": "seconds since the stance leg's touchdown, capped at 2 s",
     "link_angles": "inertial angles of right thigh, right shank, left thigh, left shank (rad from the horizontal)",
     "link_velocities": "their rates (rad/s), same order",
@@ -111,8 +111,8 @@ def environments_table() -> str:
 def presets_table() -> str:
     """The shipped presets: controller, optimizer and population, generations and episodes, and the preset's own line."""
     from .evolution.run_config import RunConfig
-    from .fileio import read_toml
-    from .presets import describe, names, path, split_declarations
+    from .core.fileio import read_toml
+    from .files.presets import describe, names, path, split_declarations
 
     rows = ["| preset | controller | optimizer, population | generations × episode | what it is |", "|---|---|---|---|---|"]
     for name in names():
@@ -132,7 +132,7 @@ def presets_table() -> str:
 
 def progress_example() -> str:
     """The progress lines the commands print, made by the code that prints them (numbers of an example)."""
-    from .progress import generation_note, line_text
+    from .core.progress import generation_note, line_text
 
     evolve = line_text("evolve", 62, 150, "generations", generation_note(
         best=21.012, best_fell=False, this=19.407, this_fell=True, mean=8.311, worst=1.022, evals_per_second=3.1,

@@ -8,7 +8,7 @@ Each seed is one ``evobiped evolve --preset P --seed S --backend serial`` run (`
 going at ``--deadline`` s is stopped with SIGTERM (it checkpoints: resume it later with ``evobiped evolve --resume``).
 Then every ``--every``-th generation file up to the first forward walker, and the last, whose walker stayed up in
 training is tested alone,
-nominally, by :func:`evobiped.selection.forward_walker`: no fall in 200 s, >= 20 m in its first 50 s within +-30
+nominally, by :func:`evobiped.analysis.selection.forward_walker`: no fall in 200 s, >= 20 m in its first 50 s within +-30
 degrees of its initial facing.  ``study.json`` records per seed the wall time, the generations run, the first
 generation with a forward walker and what it cost (genomes evaluated, episodes, wall seconds of evolution), and the fittest forward
 walker found (its file).  ``--figure`` draws the fraction of seeds with a walker against generations.
@@ -66,9 +66,9 @@ def evolve_all(preset: str, seed_list: list[int], out: Path, jobs: int, generati
 
 def check_run(args: tuple[Path, int]) -> dict:
     """Test a run's generation files for forward walkers (see the module docstring)."""
-    from evobiped import rundir
-    from evobiped.genome_file import load_genome
-    from evobiped.selection import forward_walker
+    from evobiped.files import rundir
+    from evobiped.files.genome_file import load_genome
+    from evobiped.analysis.selection import forward_walker
 
     run, every = args
     hist = rundir.read_history(run / rundir.HISTORY) if (run / rundir.HISTORY).is_file() else {"generation": np.zeros(0)}

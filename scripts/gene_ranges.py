@@ -15,9 +15,9 @@ import argparse
 import dataclasses
 import sys
 
-from evobiped.errors import UserError
-from evobiped.genome_file import load_genome, save_genome
-from evobiped.options import given
+from evobiped.core.errors import UserError
+from evobiped.files.genome_file import load_genome, save_genome
+from evobiped.core.options import given
 
 
 def with_ranges(path: str, ranges: dict[str, tuple[float, float]]):

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from evobiped.envs import ReilBipedVectorEnv, TagaBipedVectorEnv
-from evobiped.sim import Sims
+from evobiped.physics.sim import Sims
 
 ENVS = {"reil": (ReilBipedVectorEnv, dict(fall_height=1e-6, fall_tilt=np.pi)), "taga": (TagaBipedVectorEnv, dict(fall_height=1e-9))}
 

@@ -6,7 +6,7 @@ does not offer a heading): for a source at distance D and a small bearing theta 
 s ~ 2 e theta / D (ears at +-e = 0.25 m), so with s normalised by the scale sigma_s = 2 e sigma_h / D_ref, the
 input weights of s = minus those of the heading make the walker turn towards a source D_ref m away as it turned back
 to its initial facing (the heading error of a source on the left is negative).  Every other gene and input
-normalisation is the walker's (:func:`evobiped.remap.remap_inputs`)::
+normalisation is the walker's (:func:`evobiped.episode.remap.remap_inputs`)::
 
     python scripts/hearing_start.py OUT.json [--walker FILE] [--reference-distance 4] [--neurons-only]
 """
@@ -20,11 +20,11 @@ import tomllib
 from pathlib import Path
 
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import UserError
-from evobiped.genome_file import load_genome, save_genome
-from evobiped.options import given
-from evobiped.presets import path as preset_path
-from evobiped.remap import remap_inputs, remap_norm
+from evobiped.core.errors import UserError
+from evobiped.files.genome_file import load_genome, save_genome
+from evobiped.core.options import given
+from evobiped.files.presets import path as preset_path
+from evobiped.episode.remap import remap_inputs, remap_norm
 
 EAR = 0.25  # m, the Reil ears either side of the pelvis centre
 
@@ -51,7 +51,7 @@ def hearing_genome(walker: Path, reference: float = 4.0, direct: bool = True):
 
 
 def _offset(episode, name: str) -> int:
-    from evobiped.remap import input_widths as _widths
+    from evobiped.episode.remap import input_widths as _widths
 
     at = 0
     for n, w in zip(episode.parts()[1].input_names, _widths(episode)):

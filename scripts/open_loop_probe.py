@@ -39,10 +39,10 @@ from pathlib import Path
 import numpy as np
 
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import UserError
+from evobiped.core.errors import UserError
 from evobiped.evolution.cma import CMAES, CMAOptions
-from evobiped.genome_file import save_genome
-from evobiped.models import model_path
+from evobiped.files.genome_file import save_genome
+from evobiped.physics.models import model_path
 
 
 def planar_model() -> str:

@@ -4,8 +4,8 @@
     python scripts/refresh_walkers.py --write          # and rewrite each file's fitness, outcome and environment
     python scripts/refresh_walkers.py FILE.json ...    # other genome files
 
-A genome file records the numerical environment its results were made in (evobiped.provenance) and, for a
-shipped walker, its outcome (evobiped.outcome): what a replay elsewhere checks.  After a deliberate version change
+A genome file records the numerical environment its results were made in (evobiped.core.provenance) and, for a
+shipped walker, its outcome (evobiped.files.outcome): what a replay elsewhere checks.  After a deliberate version change
 (constraints.txt), run this, read the drift, and --write only when every outcome still holds.  The stored
 fitness is rewritten only for files whose episode is nominal (a run under perturbations stored the aggregate over
 its perturbed presentations, which a nominal replay does not reproduce); the outcome is always the nominal
@@ -18,9 +18,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from evobiped.genome_file import load_genome, save_genome
-from evobiped.outcome import compare, outcome
-from evobiped.provenance import differences
+from evobiped.files.genome_file import load_genome, save_genome
+from evobiped.files.outcome import compare, outcome
+from evobiped.core.provenance import differences
 
 ROOT = Path(__file__).resolve().parent.parent
 #: genome-file metadata the writer sets itself

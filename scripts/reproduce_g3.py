@@ -20,7 +20,7 @@ from evobiped.experiments.g3 import network as g3net
 from evobiped.experiments.g3 import gaits
 from evobiped.experiments.g3 import simulation as g3sim
 from evobiped.experiments.g3.g3_figures import run_figure, sweep_figures
-from evobiped.fileio import atomic_write
+from evobiped.core.fileio import atomic_write
 
 
 def ranges(levels, labels):

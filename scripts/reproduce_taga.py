@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from evobiped.experiments.taga import walking as tx
-from evobiped.fileio import atomic_write
-from evobiped.progress import Progress
+from evobiped.experiments.taga import generator, protocols
+from evobiped.core.fileio import atomic_write
+from evobiped.core.progress import Progress
 from evobiped.experiments.taga import taga_figures as fig
 from evobiped.experiments.taga.stride import contact_onsets
 
@@ -72,7 +72,7 @@ def main() -> None:
     # ---- claims 1, 2: walking at 5.5, running from Appendix E; u0 scan from the initial state
     log("claims 1-2: walking and running from Appendix E")
     scan = np.round(np.arange(3.0, 10.0 + 1e-9, step), 2)
-    w, rows = tx.steady(scan, seconds=20.0, window=10.0, progress=progress("claims 1-2", 20.0))
+    w, rows = protocols.steady(scan, seconds=20.0, window=10.0, progress=progress("claims 1-2", 20.0))
     R["from_initial_state"] = rows
     md += ["## Every u0 from Appendix E's initial condition (20 s, metrics over the last 10 s)\n", fmt(rows, METRIC_KEYS)]
     tr = w.trace.arrays()
@@ -86,12 +86,12 @@ def main() -> None:
 
     # ---- claim 7: isolated generator vs walking rhythm; Fig. 6
     log("claim 7: isolated rhythm generator")
-    walking = tx.walking_hip_period(w, t_start=10.0, p=iw)
-    iso = {f"{u:g}": tx.isolated_period(u) for u in (4.0, 5.5, 7.5)}
+    walking = generator.walking_hip_period(w, t_start=10.0, p=iw)
+    iso = {f"{u:g}": generator.isolated_period(u) for u in (4.0, 5.5, 7.5)}
     R["isolated"] = {"walking_hip_period_u5.5": walking, "isolated_hip_period": iso}
     md += [f"## Isolated generator (Feed = 0)\n\nhip-oscillator period walking at u0 = 5.5: {walking:.3f} s; "
            f"isolated: " + ", ".join(f"u0 = {k}: {v:.3f} s" for k, v in iso.items()) + "\n"]
-    ti_t, ti_u = tx.isolated_activity(5.5, seconds=12.0)
+    ti_t, ti_u = generator.isolated_activity(5.5, seconds=12.0)
     order = np.r_[0:6, 6:12]
     sel_w = (tr["t"] >= 16) & (tr["t"] <= 20)
     sel_i = (ti_t >= 8) & (ti_t <= 12)
@@ -103,8 +103,8 @@ def main() -> None:
     log("claim 3: u0 sweeps up and down")
     up_vals = list(np.round(np.arange(5.5, 9.0 + 1e-9, step), 2))
     down_vals = list(np.round(np.arange(7.75 if not args.quick else 7.5, 3.0 - 1e-9, -step), 2))
-    up = tx.u0_sweep(up_vals, progress=progress("sweep up", 20.0 + 8.0 * (len(up_vals) - 1)))
-    down = tx.u0_sweep(down_vals, progress=progress("sweep down", 20.0 + 8.0 * (len(down_vals) - 1)))
+    up = protocols.u0_sweep(up_vals, progress=progress("sweep up", 20.0 + 8.0 * (len(up_vals) - 1)))
+    down = protocols.u0_sweep(down_vals, progress=progress("sweep down", 20.0 + 8.0 * (len(down_vals) - 1)))
     R["sweep_up"], R["sweep_down"] = up, down
     md += ["## u0 swept up from walking (each step continues from the previous state; 8 s per step, last 4 s)\n", fmt(up, METRIC_KEYS),
            "## u0 swept down from running\n", fmt(down, METRIC_KEYS)]
@@ -114,7 +114,7 @@ def main() -> None:
     log("claim 4: pushes")
     delays = np.arange(0.0, 1.12, 0.2 if args.quick else 0.1)
     for target, force in (("right_shank", 200.0), ("hip", 288.0)):
-        wp, prow = tx.push(target, force, delays, before=10.0, after=8.0, progress=progress(f"push {target}", 21.3))
+        wp, prow = protocols.push(target, force, delays, before=10.0, after=8.0, progress=progress(f"push {target}", 21.3))
         R[f"push_{target}"] = prow
         keys = ["delay", "t_push", "fell", "fell_at", "stride_length_before", "strides_to_recover"]
         for r in prow:
@@ -130,7 +130,7 @@ def main() -> None:
     slopes = [2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10] if not args.quick else [4, 6, 8, -2, -6]
     srows = []
     for s in slopes:
-        ws, (m,) = tx.steady(5.5, seconds=25.0, window=10.0, slope=s / 100, slope_start=5.0, progress=progress(f"slope {s} %", 25.0))
+        ws, (m,) = protocols.steady(5.5, seconds=25.0, window=10.0, slope=s / 100, slope_start=5.0, progress=progress(f"slope {s} %", 25.0))
         m["slope_pct"] = s
         m["distance"] = float(ws.trace.arrays()["hip"][-1, 0, 0])
         srows.append(m)
@@ -153,7 +153,7 @@ def main() -> None:
     for dt, sel in ground_steps:
         grid = [(kg, bg) for bg in sel for kg in kgs]
         kg_, bg_ = np.array(grid).T
-        _, rows_ = tx.steady(np.full(len(grid), 5.5), seconds=20.0, window=10.0, kg=kg_, bg=bg_, timestep=dt, record_every=int(round(0.002 / dt)),
+        _, rows_ = protocols.steady(np.full(len(grid), 5.5), seconds=20.0, window=10.0, kg=kg_, bg=bg_, timestep=dt, record_every=int(round(0.002 / dt)),
                              progress=progress(f"ground, step {dt * 1000:g} ms", 20.0))
         for (kg, bg), m in zip(grid, rows_):
             m.update(kg=kg, bg=bg, timestep=dt)
@@ -166,7 +166,7 @@ def main() -> None:
     for dt, sel in ground_steps:
         grid = [(kg, bg) for bg in sel for kg in kgs]
         kg_, bg_ = np.array(grid).T
-        rows_ = tx.ground_switch(kg_, bg_, timestep=dt, record_every=int(round(0.002 / dt)),
+        rows_ = protocols.ground_switch(kg_, bg_, timestep=dt, record_every=int(round(0.002 / dt)),
                                  progress=progress(f"switched ground, step {dt * 1000:g} ms", 25.0))
         for m in rows_:
             m["timestep"] = dt
@@ -180,7 +180,7 @@ def main() -> None:
     log("convergence: halving the physics step" + (" (skipped with --quick)" if args.quick else ""))
     conv = []
     for dt in () if args.quick else (0.0005, 0.00025):
-        _, rows_ = tx.steady([5.5, 7.5], seconds=20.0, window=10.0, timestep=dt, record_every=int(round(0.002 / dt)),
+        _, rows_ = protocols.steady([5.5, 7.5], seconds=20.0, window=10.0, timestep=dt, record_every=int(round(0.002 / dt)),
                              progress=progress(f"convergence, step {dt * 1000:g} ms", 20.0))
         for m in rows_:
             m["timestep"] = dt

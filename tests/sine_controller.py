@@ -12,10 +12,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from evobiped.contract import Needs
+from evobiped.interface.contract import Needs
 from evobiped.controllers.base import Controller, ControllerOptions
-from evobiped.genome import GeneBlock, GenomeLayout
-from evobiped.options import option
+from evobiped.interface.genome import GeneBlock, GenomeLayout
+from evobiped.core.options import option
 
 
 @dataclass(frozen=True, kw_only=True)

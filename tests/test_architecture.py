@@ -3,40 +3,43 @@
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
 
 #: bottom to top; a unit may import its own modules and units of lower layers only
 LAYERS: list[set[str]] = [
-    {"glbackend"},
-    {"errors", "__version__"},
-    {"validate", "fileio", "net", "progress", "models", "sim", "genome", "presets", "mapping", "provenance", "frame", "normaliser"},
-    {"schedule"},
-    {"contract", "options", "gait"},
-    {"perturb"},
+    {"core.glbackend"},
+    {"core.errors", "__version__"},
+    {"core.validate", "core.fileio", "core.net", "core.progress", "core.provenance", "physics.models", "physics.sim",
+     "interface.genome", "interface.mapping", "interface.frame", "interface.normaliser", "files.presets"},
+    {"core.schedule"},
+    {"core.options", "interface.contract", "physics.gait"},
+    {"physics.perturb"},
     {"bodies", "controllers", "tasks"},
-    {"episode_result"},
     {"episode"},
-    {"envs", "genome_file", "outcome", "selection", "remap"},
-    {"rundir"},
-    {"robustness", "distill"},
+    {"envs", "files.genome_file", "files.outcome", "analysis.selection"},
+    {"files.rundir"},
+    {"analysis.robustness", "distill"},
     {"record"},
     {"evolution"},
     {"repertoire"},
     {"usecases"},
-    {"bench", "readme", "flags"},
+    {"analysis.bench", "readme", "flags"},
     {"experiments", "experiments.reil", "experiments.taga", "experiments.g3"},
     {"cli"},
     {"__main__"},
 ]
+#: folders whose modules are units of their own (each in its layer above); any other folder is one unit
+LAYERED_FOLDERS = ("core", "physics", "interface", "files", "analysis", "experiments")
 #: imports allowed inside one layer (importer -> imported)
 SIDEWAYS = {("tasks", "bodies")}
 
 
 def _unit(module: str) -> str:
     parts = module.split(".")
-    return ".".join(parts[:2]) if parts[0] == "experiments" and len(parts) > 1 else parts[0]
+    return ".".join(parts[:2]) if parts[0] in LAYERED_FOLDERS and len(parts) > 1 else parts[0]
 
 
 def _imports(path: Path, root: Path = PACKAGE) -> set[str]:
@@ -49,7 +52,9 @@ def _imports(path: Path, root: Path = PACKAGE) -> set[str]:
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom) and node.level:
             base = package[: len(package) - (node.level - 1)]
-            if node.module:
+            if node.module in LAYERED_FOLDERS and not base:  # from ..core import errors, options
+                found.update(f"{node.module}.{a.name}" for a in node.names)
+            elif node.module:
                 found.add(_unit(".".join([*base, node.module])))
             elif base:
                 found.add(_unit(".".join(base)))
@@ -90,7 +95,7 @@ def test_the_check_catches_upward_and_sideways_imports(tmp_path):
     root = tmp_path / "evobiped"
     (root / "controllers").mkdir(parents=True)
     (root / "episode.py").write_text("from .cli import main\nfrom .controllers import CONTROLLERS\n")
-    (root / "controllers" / "sine.py").write_text("from ..bodies.reil import ReilBiped\nfrom ..genome import GenomeLayout\n")
+    (root / "controllers" / "sine.py").write_text("from ..bodies.reil import ReilBiped\nfrom ..interface.genome import GenomeLayout\n")
     (root / "tasks.py").write_text("from evobiped.bodies import BODIES\n")
     assert violations(root) == ["evobiped/controllers/sine.py imports bodies", "evobiped/episode.py imports cli"]
 
@@ -125,3 +130,23 @@ def test_each_experiment_registers_its_own_subcommand_and_command_modules_stay_s
     assert not any(name in cli_text for name in ("experiments.reil", "experiments.taga", "experiments.g3"))
     for path in [*(PACKAGE / "cli").glob("*.py"), *PACKAGE.glob("experiments/*/*_cmd.py"), PACKAGE / "flags.py"]:
         assert len(path.read_text().splitlines()) <= 300, path
+
+
+def test_every_module_is_at_most_300_lines():
+    big = [f"{p.relative_to(PACKAGE.parent)}: {n} lines" for p in sorted(PACKAGE.rglob("*.py"))
+           if (n := len(p.read_text().splitlines())) > 300]
+    assert not big, "\n".join(big)
+
+
+def map_names(contributing: str) -> set[str]:
+    """The folders (``name/``) and root modules (``name.py``) CONTRIBUTING.md's map names: the first words of each
+    line of its code block that starts two spaces in."""
+    block = contributing.split("## The map", 1)[1].split("```", 2)[1]
+    return {w for line in block.splitlines() if re.match(r"^  \S", line) for w in re.split(r"\s{2,}", line.strip())[0].split()}
+
+
+def test_contributing_map_names_exactly_the_package_folders_and_root_modules():
+    named = map_names((PACKAGE.parent / "CONTRIBUTING.md").read_text())
+    folders = {f"{p.name}/" for p in PACKAGE.iterdir() if (p / "__init__.py").is_file()}
+    root = {p.name for p in PACKAGE.glob("*.py")} - {"__init__.py", "__main__.py"}
+    assert named == folders | root, f"named but absent: {sorted(named - folders - root)}; absent from the map: {sorted((folders | root) - named)}"

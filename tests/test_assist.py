@@ -11,9 +11,9 @@ from evobiped.evolution.cma import CMAOptions
 from evobiped.evolution.evaluate import make_evaluator
 from evobiped.evolution.run import Run
 from evobiped.evolution.run_config import RunConfig
-from evobiped.genome_file import load_genome
+from evobiped.files.genome_file import load_genome
 from evobiped.episode.disturbances import assist_torque
-from evobiped.perturb import PerturbationOptions, Trials
+from evobiped.physics.perturb import PerturbationOptions, Trials
 
 from .conftest import WALKERS
 from .test_evolve import fitness_history, whole_and_resumed

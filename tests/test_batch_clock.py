@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from evobiped import progress
+from evobiped.core import progress
 
 
 def test_time_before_the_first_batch_does_not_inflate_the_estimate(monkeypatch):

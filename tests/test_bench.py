@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from evobiped.bench import bench
+from evobiped.analysis.bench import bench
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 

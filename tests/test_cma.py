@@ -7,11 +7,11 @@ import pytest
 
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import ConfigError, UserError
+from evobiped.core.errors import ConfigError, UserError
 from evobiped.evolution import Run, RunConfig, make_evaluator
 from evobiped.evolution.cma import CMAES, CMAOptions
 from evobiped.evolution.individuals import Individuals
-from evobiped.genome import GeneBlock, GenomeLayout
+from evobiped.interface.genome import GeneBlock, GenomeLayout
 
 from .test_evolve import fitness_history
 

@@ -7,7 +7,7 @@ import pytest
 
 from evobiped.cli import build_parser
 from evobiped.episode import EpisodeConfig
-from evobiped.genome_file import save_genome
+from evobiped.files.genome_file import save_genome
 
 from .conftest import cli
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from evobiped.controllers import CTRNN
-from evobiped.errors import ConfigError, GenomeError
+from evobiped.core.errors import ConfigError, GenomeError
 
 
 def genome(net, W, tau, alpha, V=None):

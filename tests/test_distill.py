@@ -8,9 +8,9 @@ import pytest
 
 from evobiped.distill import DistillOptions, Fitter, collect, student_config
 from evobiped.episode import EpisodeConfig
-from evobiped.genome_file import load_genome
-from evobiped.options import given
-from evobiped.mapping import to_action
+from evobiped.files.genome_file import load_genome
+from evobiped.core.options import given
+from evobiped.interface.mapping import to_action
 
 from .conftest import WALKERS
 
@@ -58,7 +58,7 @@ def test_rollouts_label_the_student_s_states_with_the_teacher_s_executed_actions
 
 
 def test_a_bad_student_is_one_line():
-    from evobiped.errors import ConfigError
+    from evobiped.core.errors import ConfigError
 
     _, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed3.json")
     with pytest.raises(ConfigError, match="n_neurons must be > 0"):

@@ -28,7 +28,7 @@ def test_generated_parts_agree_with_the_code(page, ids):
 
 
 def test_every_preset_is_in_the_presets_table():
-    from evobiped.presets import names
+    from evobiped.files.presets import names
 
     table = readme.generated()["presets"]
     assert [line.split("`")[1] for line in table.splitlines()[2:]] == names()
@@ -49,9 +49,9 @@ def test_the_environment_docstrings_give_the_observation_the_environment_returns
     import numpy as np
 
     pytest.importorskip("gymnasium")
-    from evobiped.envs import walkers
+    from evobiped.envs import biped
 
-    cls = getattr(walkers, name)
+    cls = getattr(biped, name)
     shape = re.search(r"Observation ``\((\d+),\)``", cls.__doc__)
     assert shape, cls.__doc__
     size = sum(readme.observation(cls.body_name).values())

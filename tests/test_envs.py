@@ -12,7 +12,7 @@ import pytest
 gymnasium = pytest.importorskip("gymnasium")
 
 from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402  (importing registers the environments)
-from evobiped.errors import ConfigError  # noqa: E402
+from evobiped.core.errors import ConfigError  # noqa: E402
 
 IDS = ["evobiped/ReilBiped-v0", "evobiped/TagaBiped-v0"]
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -98,6 +98,26 @@ def test_the_vector_env_gives_the_trajectories_of_single_envs(single, vector, st
         assert np.array_equal(g, w.astype(g.dtype))
     ends = got[2] | got[3]
     assert (ends.sum(axis=0) >= 1).all()  # every walker's episode ended (a fall or the time limit) and restarted
+
+
+def test_the_episode_state_holds_the_environment_s_episode_a_restored_copy_replays_it():
+    """The reward baseline, each row's reset-noise generator and which rows wait for a reset are the episode
+    state's: a copy taken mid-episode, put back, replays the same actions (autoresets included) exactly."""
+    venv = ReilBipedVectorEnv(3, seconds=0.2, reset_noise_scale=0.05)  # 10 control ticks: every row resets below
+    rng = np.random.default_rng(2)
+    lo, hi = venv.single_action_space.low, venv.single_action_space.high
+    actions = rng.uniform(lo, hi, size=(30, 3, len(lo)))
+    venv.reset(seed=4)
+    for a in actions[:6]:
+        venv.step(a)
+    saved = venv.walkers.state.copy()
+    runs = []
+    for _ in range(2):
+        steps = [venv.step(a) for a in actions[6:]]
+        runs.append([np.concatenate([s[0].ravel(), s[1], s[2], s[3]]) for s in steps])
+        venv.walkers.state = saved.copy()
+    assert np.array_equal(np.array(runs[0]), np.array(runs[1]))
+    assert np.concatenate([s[2] | s[3] for s in steps]).sum() >= 3 and np.abs(np.array([s[1] for s in steps])).sum() > 0
 
 
 def test_rewards_are_the_increments_of_the_task_fitness_and_info_carries_its_terms():

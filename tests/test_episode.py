@@ -11,8 +11,8 @@ from evobiped.cli import main
 from evobiped.bodies import ReilBiped
 from evobiped.controllers.base import Controller
 from evobiped.episode import Episode, EpisodeConfig, build_episode
-from evobiped.errors import GenomeError
-from evobiped.genome import GeneBlock, GenomeLayout
+from evobiped.core.errors import GenomeError
+from evobiped.interface.genome import GeneBlock, GenomeLayout
 from evobiped.tasks import WalkTask
 
 from .conftest import WALKERS
@@ -128,7 +128,7 @@ def test_fitness_is_eq4_from_an_independent_loop():
 def test_an_episode_continued_in_pieces_is_the_whole_episode_and_can_change_course():
     """start + advance(1.3 s) + advance(rest) under perturbed presentations (pushes, noise) gives the
     whole run bit for bit; an experiment's change between pieces acts from then on only."""
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     g, cfg, _ = load_genome(WALKERS / "simbicon_seed1.json")
     ep = dataclasses.replace(cfg, perturbations=dict(presentations=2, pushes=2, push_force=10.0, target_noise=0.01)).build()

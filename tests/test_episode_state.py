@@ -11,7 +11,7 @@ from evobiped.bodies import BODIES
 from evobiped.episode import Episode, EpisodeConfig
 from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.experiments.taga.walking import set_push
-from evobiped.genome_file import load_genome
+from evobiped.files.genome_file import load_genome
 from evobiped.tasks import TASKS
 
 from .conftest import WALKERS, random_genomes

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import ConfigError
+from evobiped.core.errors import ConfigError
 from evobiped.evolution import Run, RunConfig, make_evaluator
 from evobiped.evolution.es import ESOptions, EvolutionStrategy, centred_ranks
-from evobiped.genome import GeneBlock, GenomeLayout
-from evobiped.normaliser import Normaliser, SenseSums
-from evobiped.sim import Sims
+from evobiped.interface.genome import GeneBlock, GenomeLayout
+from evobiped.interface.normaliser import Normaliser, SenseSums
+from evobiped.physics.sim import Sims
 
 from .conftest import cli
 
@@ -185,7 +185,7 @@ def test_a_genome_file_freezes_its_normaliser_and_replays_its_fitness(tmp_path, 
     norm = best["episode"]["controller_options"]["input_norm"]
     assert len(norm["mean"]) == config.episode.parts()[1].n_inputs and norm["count"] > 0
     assert best["episode"]["task_options"]["weights"] in config.curriculum.phases
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
     genome, cfg, meta = load_genome(run.dir / "best.json")
     trials = cfg.perturbations.draw((1, best["generation"]), seconds=0.6, n_actuators=6)
     fit = cfg.build().run(genome, trials=trials).fitness[0]
@@ -226,7 +226,7 @@ def test_the_ga_and_cma_es_run_in_the_stance_frame_with_a_running_normaliser(tmp
 def test_a_ctrnn_with_a_direct_path_contains_the_linear_policy():
     """With its network at rest (zero weights, centre-crossing biases: every O = 1/2) a CTRNN's direct path gives the
     linear policy's targets: direct genes = linear genes / (2 g max|range|) per joint, under motor = "full"."""
-    from evobiped.mapping import to_action
+    from evobiped.interface.mapping import to_action
 
     common = dict(body="reil", task="walk", seconds=1.0, task_options={"heading_sense": True})
     lin = EpisodeConfig(controller="linear", **common).build()

@@ -7,8 +7,8 @@ import numpy as np
 
 from evobiped.evolution import RunConfig
 from evobiped.evolution.run_context import RunContext
-from evobiped.genome_file import load_genome
-from evobiped.presets import path as preset_path
+from evobiped.files.genome_file import load_genome
+from evobiped.files.presets import path as preset_path
 
 from .conftest import WALKERS
 
@@ -79,7 +79,7 @@ def test_the_shipped_robust_walker_reaches_its_documented_random_phase_battery()
     after 12.5 s): its recorded figures, one trial per family allowed to tip; the targets it meets, met."""
     import json
 
-    from evobiped.robustness import battery, summarise
+    from evobiped.analysis.robustness import battery, summarise
 
     documented = json.loads((WALKERS / "ctrnn_es_robust_seed0_phases2_robustness.json").read_text())
     genome, cfg, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0.json")
@@ -150,7 +150,7 @@ TIGHT = ["--block", "weights", -2, 2, "--block", "biases", -1, 1, "--block", "in
 def test_a_walker_declared_with_tight_ranges_is_the_same_walker_and_the_battery_noise_is_smaller(tmp_path):
     """ctrnn_es_robust_seed0_tight is scripts/gene_ranges.py's output: the shipped genes, the same episode, ranges 8 (recurrent
     weights) to 5 (direct) times narrower; the battery's 1 % gene noise draws on the paper's ranges fell it in all 8."""
-    from evobiped.robustness import GENE_NOISE, GENE_NOISE_DRAWS, GENE_NOISE_SEED
+    from evobiped.analysis.robustness import GENE_NOISE, GENE_NOISE_DRAWS, GENE_NOISE_SEED
 
     robust = WALKERS / "ctrnn_es_robust_seed0.json"
     out = tmp_path / "t.json"

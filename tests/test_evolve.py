@@ -19,7 +19,7 @@ import pytest
 
 from evobiped.episode import EpisodeConfig
 from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
-from evobiped.rundir import HISTORY_COLUMNS
+from evobiped.files.rundir import HISTORY_COLUMNS
 from evobiped.evolution.run_context import HISTORY_EXTRA
 
 from .conftest import cli
@@ -203,7 +203,7 @@ def test_individuals_jsonl_records_every_row_with_its_lineage(tmp_path):
     the same outcome, its children bred from the fittest rows before them (the truncation selection, recomputed
     here from the previous lines); each generation's fittest line is its generation file's walker; rows not yet
     evaluated are null in the checkpoint, never zeros."""
-    from evobiped.rundir import read_individuals
+    from evobiped.files.rundir import read_individuals
 
     run = Run.create(tmp_path / "r", SMALL)
     with make_evaluator(SMALL.episode, "serial") as ev:
@@ -263,7 +263,7 @@ def test_what_a_resume_keeps_of_individuals_jsonl(tmp_path):
     """The committed generations' whole lines in order are kept, from wherever the file starts (a run made before
     the file was kept starts it when resumed); a line cut short, a gap or a generation not committed ends what is
     kept; a resume that finds committed generations missing says so."""
-    from evobiped.rundir import committed_size, individuals_text
+    from evobiped.files.rundir import committed_size, individuals_text
 
     rows = lambda g, n: [{"generation": g, "row": i, "evaluated": True, "previous": None, "parents": None, "fitness": 1.0,  # noqa: E731
                           "fell": False, "unstable": False, "end_time": 1.0, "terms": {}} for i in range(n)]
@@ -365,7 +365,7 @@ def test_existing_run_directory_is_left_untouched(finished_run, capsys):
 def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_checked(finished_run, tmp_path, monkeypatch, capsys):
     """The evolve use case checks everything, creates or resumes the run, and only then starts the evaluator (the
     process pool); an evaluator that cannot start removes the new run again."""
-    from evobiped.errors import UserError
+    from evobiped.core.errors import UserError
     from evobiped.evolution import evaluate
 
     started = []

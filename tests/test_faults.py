@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evobiped.rundir import HISTORY_COLUMNS
+from evobiped.files.rundir import HISTORY_COLUMNS
 
 from .conftest import cli
 
@@ -251,7 +251,7 @@ def test_a_dead_worker_is_replaced_and_its_batch_evaluated_again(tmp_path, refer
 
 def test_workers_that_keep_dying_stop_the_generation_after_the_last_retry(tmp_path, monkeypatch):
     from evobiped.episode import EpisodeConfig
-    from evobiped.errors import UserError
+    from evobiped.core.errors import UserError
     from evobiped.evolution.evaluate import MAX_RETRIES, ProcessPoolEvaluator
 
     marker = tmp_path / "kill-one-worker"
@@ -452,7 +452,7 @@ def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkey
     """Ctrl-C, SIGTERM or SIGHUP between writing checkpoint.json and history.csv stops the run only after both are
     written (KeyboardInterrupt; Interrupted carrying the signal for the other two)."""
     import evobiped.evolution.checkpoint as commit_point
-    from evobiped.errors import stop_on_signals
+    from evobiped.core.errors import stop_on_signals
     from evobiped.evolution.evaluate import make_evaluator
     from evobiped.evolution.run import Run
     from evobiped.evolution.run_config import RunConfig
@@ -523,7 +523,7 @@ def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, bac
 def test_full_disk_at_the_lock_is_one_line_and_leaves_no_empty_lock(tmp_path, capsys, monkeypatch, reference):
     import errno
 
-    from evobiped.rundir import locking
+    from evobiped.files.rundir import locking
 
     def full(fd, data, offset):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
@@ -629,7 +629,7 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
     from types import SimpleNamespace
 
     from evobiped.episode import EpisodeConfig
-    from evobiped.errors import UserError
+    from evobiped.core.errors import UserError
     from evobiped.evolution.ray_backend import RayEvaluator
 
     if how == "node died error":  # the result of a task on the lost node
@@ -649,7 +649,7 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
 def test_a_generation_lost_to_the_evaluator_keeps_the_run_resumable(tmp_path, capsys, monkeypatch, reference):
     """The UserError of a lost Ray node in the middle of a run: exit 2, one line, and --resume completes the run
     as if nothing had happened."""
-    from evobiped.errors import UserError
+    from evobiped.core.errors import UserError
     from evobiped.evolution import evaluate
 
     real = evaluate.make_evaluator

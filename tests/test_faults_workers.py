@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import UserError
+from evobiped.core.errors import UserError
 from evobiped.evolution.evaluate import MAX_RETRIES, ProcessPoolEvaluator, SerialEvaluator, ThreadEvaluator
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evobiped.genome_file import load_genome
+from evobiped.files.genome_file import load_genome
 from evobiped.record import figures
 from evobiped.record.trajectory import record
 
@@ -75,7 +75,7 @@ def test_the_stick_figure_times_are_readable(walk, captured):
 
 def test_survivors_sit_in_a_column_without_a_time_scale(captured):
     from evobiped.record.robustness_figure import robustness_figure
-    from evobiped.robustness import Trial
+    from evobiped.analysis.robustness import Trial
 
     trials = [Trial("push 5 N", f"d{i}", i % 2 == 0, 30.0 if i % 2 == 0 else 5.0 + i, 1.0 + i, 1.0 + i) for i in range(8)]
     robustness_figure(trials, "r.png", title="t", seconds=30.0)

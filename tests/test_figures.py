@@ -99,7 +99,7 @@ def test_the_fitness_graph_ends_on_a_tick_at_the_last_generation(captured):
 def test_the_motion_sequence_is_one_steady_stride_in_one_window(captured):
     """A walker that steps: the frames span one stride after 10 s, exactly evenly spaced (the spacing in the
     title), every panel the same x window."""
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
     from pathlib import Path
 
     genome, cfg, _ = load_genome(Path(__file__).resolve().parent.parent / "docs" / "walkers" / "simbicon_cma_seed5.json")
@@ -129,7 +129,7 @@ def test_stick_figures_are_spaced_apart(long_walk, captured):
 
 def test_the_robustness_figure_decodes_its_markers_and_spreads_the_survivors(captured):
     from evobiped.record.robustness_figure import robustness_figure
-    from evobiped.robustness import Trial
+    from evobiped.analysis.robustness import Trial
 
     trials = [Trial("push 5 N", f"p{i}", True, 30.0, 10.0, 10.0) for i in range(20)]
     trials += [Trial("push 5 N", "down", False, 12.0, 3.0, 3.0), Trial("friction", "mu = 0.5", True, 30.0, 9.0, 9.0),

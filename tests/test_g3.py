@@ -6,7 +6,7 @@ import pytest
 from evobiped.experiments.g3 import network as g3net
 from evobiped.experiments.g3 import gaits
 from evobiped.experiments.g3 import simulation as g3sim
-from evobiped.errors import ConfigError, UserError
+from evobiped.core.errors import ConfigError, UserError
 
 
 def test_inhibition_matrix_layout():

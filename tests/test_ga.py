@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from evobiped.controllers import CTRNN
-from evobiped.errors import ConfigError
-from evobiped.episode_result import EpisodeResult
+from evobiped.core.errors import ConfigError
+from evobiped.episode.result import EpisodeResult
 from evobiped.evolution.ga import GA, GAOptions
 from evobiped.evolution.individuals import Individuals
-from evobiped.genome import GeneBlock, GenomeLayout
+from evobiped.interface.genome import GeneBlock, GenomeLayout
 
 LAYOUT = CTRNN(n_outputs=6).layout
 
@@ -177,7 +177,7 @@ def test_table_iii_numbers_are_config_values(tmp_path):
 )
 def test_bad_gene_overrides(genes, words):
     from evobiped.episode import EpisodeConfig
-    from evobiped.errors import ConfigError
+    from evobiped.core.errors import ConfigError
 
     with pytest.raises(ConfigError, match=f"^episode.controller_options.genes.*{words}"):
         EpisodeConfig(controller_options={"genes": genes}).layout()

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evobiped.progress import GenerationClock
+from evobiped.core.progress import GenerationClock
 
 RUNS = json.loads((Path(__file__).with_name("quickstart_clock.json")).read_text())
 

@@ -9,11 +9,11 @@ import pytest
 pytest.importorskip("ribs")
 
 from evobiped.episode import EpisodeConfig  # noqa: E402
-from evobiped.errors import UserError  # noqa: E402
+from evobiped.core.errors import UserError  # noqa: E402
 from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
 from evobiped.evolution.archive_file import read_archive  # noqa: E402
 from evobiped.evolution.map_elites import MapElites, MapElitesOptions  # noqa: E402
-from evobiped.genome_file import load_genome  # noqa: E402
+from evobiped.files.genome_file import load_genome  # noqa: E402
 
 from .conftest import WALKERS, cli  # noqa: E402
 

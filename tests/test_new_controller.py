@@ -8,7 +8,7 @@ import pytest
 
 from evobiped.bodies import BODIES
 from evobiped.controllers import CONTROLLERS
-from evobiped.genome_file import load_genome
+from evobiped.files.genome_file import load_genome
 
 from .conftest import cli
 from .sine_controller import Sine

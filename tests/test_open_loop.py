@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import ConfigError
-from evobiped.genome_file import load_genome
-from evobiped.options import given
+from evobiped.core.errors import ConfigError
+from evobiped.files.genome_file import load_genome
+from evobiped.core.options import given
 
 from .conftest import cli
 

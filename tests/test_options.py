@@ -7,9 +7,9 @@ import pytest
 from evobiped.bodies import BODIES
 from evobiped.controllers import CONTROLLERS
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import ConfigError
+from evobiped.core.errors import ConfigError
 from evobiped.evolution.run_config import RunConfig
-from evobiped.options import markdown_table, option, parse
+from evobiped.core.options import markdown_table, option, parse
 from evobiped.readme import USAGE, render, sections, tables
 from evobiped.tasks import TASKS
 
@@ -80,7 +80,7 @@ def test_bad_run_settings_name_their_path(table, words):
 def test_a_config_parses_each_table_once_and_writes_back_what_it_was_given(monkeypatch):
     """EpisodeConfig parses its tables into frozen Options when it is made; building the episode (body,
     controller, task, perturbations) parses nothing again, and to_dict gives back the tables as given."""
-    import evobiped.options as options
+    import evobiped.core.options as options
     from evobiped.bodies.reil import ReilOptions
     from evobiped.controllers.ctrnn import CTRNNOptions
 

@@ -1,7 +1,7 @@
-"""evobiped.outcome and evobiped.provenance: what a replay in another numerical environment compares."""
+"""evobiped.files.outcome and evobiped.core.provenance: what a replay in another numerical environment compares."""
 
-from evobiped import provenance
-from evobiped.outcome import Tolerance, compare
+from evobiped.core import provenance
+from evobiped.files.outcome import Tolerance, compare
 
 
 def row(**kw):

@@ -7,11 +7,11 @@ import pytest
 
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import ConfigError
-from evobiped.genome_file import load_genome
-from evobiped.models import model_path
-from evobiped.perturb import PerturbationOptions, Trials
-from evobiped.schedule import Schedule
+from evobiped.core.errors import ConfigError
+from evobiped.files.genome_file import load_genome
+from evobiped.physics.models import model_path
+from evobiped.physics.perturb import PerturbationOptions, Trials
+from evobiped.core.schedule import Schedule
 
 from .conftest import WALKERS
 

@@ -289,14 +289,14 @@ def test_importing_the_package_does_not_import_rerun_or_matplotlib():
     assert out.strip() == "[]"
 
 
-def test_the_targets_a_task_names_are_recorded(tmp_path):
+def test_the_targets_a_task_names_are_recorded(tmp_path, monkeypatch):
     """A task naming its presentations' targets (``Task.targets``, a steering walker's sources): all of
     them, and this walker's own (presentation 0 here) at every tick."""
     from evobiped.record.figures import ground_trajectory
 
     ep = EpisodeConfig(seconds=0.5).build()
     sources = np.array([[-3.0, -10.0], [3.0, -10.0]])
-    ep.task.targets = lambda: sources
+    monkeypatch.setattr(ep.task, "targets", lambda: sources)  # the task is shared by every episode of this config
     result, traj = write_recording(ep, random_genome(ep.controller.layout, 4), tmp_path / "s.rrd")
     np.testing.assert_array_equal(traj.sources, sources)
     assert traj.source.shape == (traj.n_ticks, 2) and (traj.source == sources[0]).all()

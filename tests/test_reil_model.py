@@ -6,7 +6,7 @@ import pytest
 
 from evobiped.bodies import ReilBiped
 from evobiped.bodies.reil import ACTUATORS, TABLE_II
-from evobiped.models import model_path
+from evobiped.physics.models import model_path
 
 
 @pytest.fixture(scope="module")
@@ -119,7 +119,7 @@ def test_karma_inertia_reading():
 
 
 def test_unknown_inertia_reading_is_refused():
-    from evobiped.errors import ConfigError
+    from evobiped.core.errors import ConfigError
 
     with pytest.raises(ConfigError, match="inertia: must be one of geoms, karma, got 'ode'"):
         ReilBiped(inertia="ode")

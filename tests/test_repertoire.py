@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("ribs")
 
 from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
-from evobiped.genome_file import load_genome  # noqa: E402
+from evobiped.files.genome_file import load_genome  # noqa: E402
 from evobiped.repertoire.damage import damaged_episode, parse_damage  # noqa: E402
 from evobiped.repertoire.elites import load_repertoire as load  # noqa: E402
 from evobiped.repertoire.speed import follow  # noqa: E402

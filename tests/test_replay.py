@@ -13,7 +13,7 @@ import pytest
 
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
-from evobiped.genome_file import save_genome
+from evobiped.files.genome_file import save_genome
 
 from .conftest import random_genomes
 
@@ -106,13 +106,13 @@ def test_a_different_stored_fitness_is_reported_and_fails(tmp_path, capsys):
 
 def _walker_file(path, *, environment=None, outcome_change=None, fitness_change=0.0):
     """A shipped walker copied to ``path`` with its recorded environment, outcome and fitness altered."""
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     from .conftest import WALKERS
 
     g, cfg, meta = load_genome(WALKERS / "simbicon_cma_seed5.json")
     r = cfg.build().run(g)
-    from evobiped.outcome import outcome
+    from evobiped.files.outcome import outcome
 
     done = outcome(r)
     if outcome_change:
@@ -143,7 +143,7 @@ def test_a_replay_in_another_numerical_environment_reports_the_drift_and_checks_
 
 def test_every_written_file_records_its_numerical_environment(run_dir):
     """config.json and every genome file of a run: versions, numpy's SIMD kernels, the machine."""
-    from evobiped import provenance
+    from evobiped.core import provenance
 
     here = provenance.current()
     for path in [run_dir / "config.json", run_dir / "best.json", *sorted((run_dir / "generations").glob("*.json"))]:

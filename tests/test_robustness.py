@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from evobiped.cli import main
-from evobiped.errors import UserError
+from evobiped.core.errors import UserError
 from evobiped.experiments.taga.parameters import preset_genome
-from evobiped.genome_file import load_genome, save_genome
-from evobiped.perturb import Trials
-from evobiped.robustness import battery, score, summarise
+from evobiped.files.genome_file import load_genome, save_genome
+from evobiped.physics.perturb import Trials
+from evobiped.analysis.robustness import battery, score, summarise
 
 from .conftest import WALKERS
 
@@ -120,7 +120,7 @@ def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):
 def test_pushes_at_random_phases_fall_where_their_seed_says_and_each_equals_its_push_alone():
     """--phase-seed: each push trial at its own phase of the stride, drawn from the seed; a trial equals that push run alone,
     the same seed gives the same phases, another seed other ones, and the fixed phases are still i/4."""
-    from evobiped.robustness import DIRECTIONS, PHASES, push_phases, stride, unit
+    from evobiped.analysis.robustness import DIRECTIONS, PHASES, push_phases, stride, unit
 
     g, cfg, _ = load_genome(WALKER)
     ep = cfg.nominal().build()

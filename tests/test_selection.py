@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from evobiped.cli import main
-from evobiped.selection import best_candidate
+from evobiped.analysis.selection import best_candidate
 
 from .conftest import WALKERS
 
@@ -43,7 +43,7 @@ def test_select_keeps_the_start_walker_unless_a_candidate_beats_it(tmp_path, cap
     chosen = json.loads((run / "selected.json").read_text())
     rows = json.loads((run / "selected_candidates.json").read_text())["candidates"]
     assert len(rows) == 3 and rows[0]["candidate"].startswith("start")
-    # the selected walker is the best candidate by the ranking of evobiped.selection
+    # the selected walker is the best candidate by the ranking of evobiped.analysis.selection
     assert chosen["selected_from"] == rows[best_candidate(rows)]["candidate"]
     start = json.loads(open(walker).read())["genome"]
     if chosen["selected_from"].startswith("start"):

@@ -10,8 +10,8 @@ import pytest
 from evobiped.bodies import ReilBiped
 from evobiped.controllers import CTRNN
 from evobiped.episode import EpisodeConfig
-from evobiped.errors import ConfigError
-from evobiped.mapping import to_action
+from evobiped.core.errors import ConfigError
+from evobiped.interface.mapping import to_action
 
 from .test_ctrnn import genome
 

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from evobiped.bodies import ReilBiped, TagaBiped
-from evobiped.contract import Offer, problem
+from evobiped.interface.contract import Offer, problem
 from evobiped.controllers.simbicon import RANGES, SENSORS, Simbicon
 from evobiped.episode import Episode, EpisodeConfig, build_episode
-from evobiped.errors import ConfigError
-from evobiped.sim import Sims
+from evobiped.core.errors import ConfigError
+from evobiped.physics.sim import Sims
 from evobiped.tasks import WalkTask
 
 #: the Reil body's sensors wired to simbicon's inputs, as the episode wires them
@@ -196,7 +196,7 @@ def test_bad_pairings_are_one_clear_error():
 
 def test_simbicon_finds_its_joints_by_role_not_by_column():
     """The same walker with the body's actuators declared in another order: the same targets, permuted."""
-    from evobiped.contract import index
+    from evobiped.interface.contract import index
 
     mirrored = ReilBiped.actuators[3:] + ReilBiped.actuators[:3]  # right leg first
     a = Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators)
@@ -223,7 +223,7 @@ def test_the_evolved_walker_in_docs_walks_50_s_and_10_m():
     with steps: the feet take turns on the ground."""
     from pathlib import Path
 
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     genome, cfg, meta = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "simbicon_seed1.json")
     ep = cfg.build()
@@ -314,7 +314,7 @@ def test_a_deaf_walker_steers_exactly_as_it_walks():
     import dataclasses
     from pathlib import Path
 
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     genome, cfg, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "simbicon_seed1.json")
     walk = cfg.build().run(genome, seconds=4.0)

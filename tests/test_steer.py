@@ -105,7 +105,7 @@ def test_a_fall_anywhere_scores_below_any_walker_that_stays_up():
 def test_arrive_fitness_of_real_episodes_follows_the_formula():
     """The six-source walker (up) and random balance controllers (they fall) for 3 s: each genome's fitness is
     the formula of its rows' ends, and the distances are the paper fitness's."""
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     cfg = EpisodeConfig(controller="simbicon", task="steer", seconds=3.0,
                         task_options={"sources": [[6, 2], [5, -4], [9, 0]], "fitness": "arrive", "fall_time_cost": 2.0})
@@ -225,7 +225,7 @@ def test_evolve_takes_its_sources_from_the_command_line(hearing_walker):
 
 
 def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys):
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
     from evobiped.tasks.steer import with_sources
 
     sources = [[6.0, 0.0], [12.0, 5.0], [3.0, -6.0]]

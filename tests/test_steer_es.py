@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.genome_file import load_genome
-from evobiped.options import given
-from evobiped.presets import path as preset_path
-from evobiped.remap import remap_inputs, remap_norm
+from evobiped.files.genome_file import load_genome
+from evobiped.core.options import given
+from evobiped.files.presets import path as preset_path
+from evobiped.episode.remap import remap_inputs, remap_norm
 from evobiped.tasks.steer import SteerTask
 
 from .conftest import WALKERS, cli

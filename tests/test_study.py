@@ -118,7 +118,7 @@ def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     (resumed,) = run_study(out, cfg, backend="serial")
     assert (d / "generations" / "gen_0000.json").stat().st_mtime_ns == first  # generation 0 was not redone
     assert {k: v for k, v in resumed.items() if k != "wall_seconds"} == {k: v for k, v in ref[0].items() if k != "wall_seconds"}
-    from evobiped.rundir import read_history
+    from evobiped.files.rundir import read_history
 
     whole = read_history(run_dir(tmp_path / "whole", "plain", 0, cfg) / "history.csv")
     cut = read_history(d / "history.csv")

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from evobiped.experiments.taga import stride
-from evobiped.experiments.taga import walking as tx
+from evobiped.experiments.taga import generator, protocols, walking
 from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.bodies.taga import TagaBiped
 from evobiped.cli import main
 from evobiped.controllers.matsuoka import Matsuoka, taga_feedback
-from evobiped.errors import UserError
-from evobiped.sim import Sims
+from evobiped.core.errors import UserError
+from evobiped.physics.sim import Sims
 
 
 # ---------------------------------------------------------------- structure
@@ -188,7 +188,7 @@ def test_metrics_mixed_and_too_short():
 @pytest.fixture(scope="module")
 def walk_and_run():
     """u0 = 5.5 (walking) and 7.5 (running, the lowest u0 that runs from Appendix E), 20 s."""
-    return tx.steady([5.5, 7.5], seconds=20.0, window=10.0)
+    return protocols.steady([5.5, 7.5], seconds=20.0, window=10.0)
 
 
 def test_claim1_walks_20s_with_double_support_and_no_flight(walk_and_run):
@@ -211,15 +211,15 @@ def test_claim2_larger_u0_runs(walk_and_run):
 
 def test_claim7_isolated_generator_is_slower_than_walking(walk_and_run):
     w, (m, _) = walk_and_run
-    walking = tx.walking_hip_period(w, t_start=10.0)
-    assert walking == pytest.approx(m["cycle_duration"], abs=0.01)  # the generator is entrained to the stride
-    isolated = tx.isolated_period(5.5)
-    assert np.isfinite(isolated) and isolated > 1.5 * walking
+    entrained = generator.walking_hip_period(w, t_start=10.0)
+    assert entrained == pytest.approx(m["cycle_duration"], abs=0.01)  # the generator is entrained to the stride
+    isolated = generator.isolated_period(5.5)
+    assert np.isfinite(isolated) and isolated > 1.5 * entrained
 
 
 @pytest.mark.parametrize("target,force,delay", [("right_shank", 200.0, 0.05), ("hip", 288.0, 0.3)])
 def test_claim4_push_recovery(target, force, delay):
-    _, (r,) = tx.push(target, force, [delay], before=6.0, after=6.0)
+    _, (r,) = protocols.push(target, force, [delay], before=6.0, after=6.0)
     assert not r["fell"]
     dev = max(abs(L / r["stride_length_before"] - 1) for L, _ in r["strides_after"][:3])
     assert dev > 0.05  # the push did disturb the strides
@@ -228,7 +228,7 @@ def test_claim4_push_recovery(target, force, delay):
 
 def test_a_push_that_fells_every_walker_ends_and_reports_the_fall():
     # an all-down batch stops its clock: the push loop must not wait for a time that never comes
-    _, (r,) = tx.push("hip", 5000.0, [0.0], before=2.0, after=0.5)
+    _, (r,) = protocols.push("hip", 5000.0, [0.0], before=2.0, after=0.5)
     assert r["fell"] and r["t_push"] < r["fell_at"] < r["t_push"] + 0.7 and r["strides_to_recover"] is None
 
 
@@ -264,7 +264,7 @@ def test_cli_bad_arguments(argv, needle, capsys):
 def test_cli_json_and_genome_file_replays_the_same_walk(capsys, tmp_path):
     import json
 
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     f = tmp_path / "taga.json"
     assert main(["taga", "--u0", "5.5", "--seconds", "4", "--window", "3", "--json", "--save-genome", str(f)]) == 0
@@ -273,7 +273,7 @@ def test_cli_json_and_genome_file_replays_the_same_walk(capsys, tmp_path):
     assert w["u0"] == 5.5 and not w["fell"] and w["strides"] >= 2 and w["flight"] == 0.0
     genome, cfg, _ = load_genome(f)
     r = cfg.build().run(genome)
-    walker = tx.TagaWalker(5.5)
+    walker = walking.TagaWalker(5.5)
     walker.advance(4.0)
     assert r.end_position[0, 0] == walker.body.planar_position(walker.sims)[0, 0]
 
@@ -283,12 +283,12 @@ def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
     """Every registered body with every registered controller: a pair whose declarations agree runs and gives
     finite fitness; a pair they refuse is one ConfigError before anything is compiled."""
     from evobiped.bodies import BODIES
-    from evobiped.contract import Offer, problem
+    from evobiped.interface.contract import Offer, problem
     from evobiped.controllers import CONTROLLERS
     from evobiped.episode import EpisodeConfig
-    from evobiped.errors import ConfigError
-    from evobiped.mapping import MAPS
-    from evobiped.options import parse
+    from evobiped.core.errors import ConfigError
+    from evobiped.interface.mapping import MAPS
+    from evobiped.core.options import parse
 
     rng = np.random.default_rng(0)
     ran = []
@@ -349,7 +349,7 @@ def test_replay_records_the_taga_stick_figure(tmp_path, capsys):
     import rerun as rr
 
     from evobiped.episode import EpisodeConfig
-    from evobiped.genome_file import save_genome
+    from evobiped.files.genome_file import save_genome
 
     cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=0.5, controller_options={"u0": 5.5})
     ep = cfg.build()
@@ -376,11 +376,11 @@ def test_a_push_acts_at_the_hip_and_at_a_shank_s_centre():
         centre = 0.5 * (k["knee"][:, leg] + k["ankle"][:, leg])
         assert np.allclose(sims.xipos[:, m.body(name).id][:, [0, 2]], centre, atol=1e-12)
     assert np.allclose(sims.xipos[:, m.body("hip").id][:, [0, 2]], k["hip"], atol=1e-12)
-    tx.set_push(sims, np.array([1]), "right_shank", 200.0)
+    walking.set_push(sims, np.array([1]), "right_shank", 200.0)
     assert sims.xfrc_applied[1, m.body("right_shank").id, 0] == 200.0 and not sims.xfrc_applied[0].any()
-    tx.set_push(sims, np.array([1]), "hip", 288.0)
+    walking.set_push(sims, np.array([1]), "hip", 288.0)
     assert sims.xfrc_applied[1, m.body("hip").id, 0] == 288.0 and np.count_nonzero(sims.xfrc_applied[1]) == 1
-    tx.set_push(sims, np.array([1]), "none", 0.0)
+    walking.set_push(sims, np.array([1]), "none", 0.0)
     assert not sims.xfrc_applied.any()
     with pytest.raises(UserError, match="push target"):
-        tx.set_push(sims, np.array([0]), "knee", 1.0)
+        walking.set_push(sims, np.array([0]), "knee", 1.0)

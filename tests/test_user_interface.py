@@ -6,10 +6,10 @@ import re
 import numpy as np
 import pytest
 
-from evobiped import progress
+from evobiped.core import progress
 from evobiped.cli import build_parser, main
 from evobiped.episode import EpisodeConfig
-from evobiped.genome_file import save_genome
+from evobiped.files.genome_file import save_genome
 
 
 @pytest.fixture
@@ -125,7 +125,7 @@ def test_every_long_command_reports_in_one_line_shape(capsys):
 
 
 def test_the_robustness_table_has_one_header_per_column_and_names_its_statistics():
-    from evobiped.robustness import table
+    from evobiped.analysis.robustness import table
 
     rows = [{"family": "push 5 N", "trials": 32, "survived": 30, "survival": 30 / 32, "forward_m": 12.345, "median_fall_s": 14.5},
             {"family": "slope", "trials": 2, "survived": 2, "survival": 1.0, "forward_m": -1.0, "median_fall_s": None}]

@@ -13,10 +13,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from evobiped.errors import UserError
-from evobiped.genome_file import load_genome
-from evobiped.glbackend import pick
-from evobiped.models import model_path
+from evobiped.core.errors import UserError
+from evobiped.files.genome_file import load_genome
+from evobiped.core.glbackend import pick
+from evobiped.physics.models import model_path
 
 from .conftest import cli
 
@@ -40,7 +40,7 @@ def _python(args: list[str], **env) -> subprocess.CompletedProcess:
     ({}, set(), None),
 ])
 def test_the_backend_is_a_displays_glfw_else_egl_else_osmesa(environ, libs, want):
-    from evobiped.glbackend import LIBRARIES
+    from evobiped.core.glbackend import LIBRARIES
 
     loadable = lambda names: any(names == LIBRARIES[b] for b in libs)  # noqa: E731
     assert pick(environ, "linux", loadable) == want

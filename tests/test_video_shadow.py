@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evobiped.genome_file import load_genome
+from evobiped.files.genome_file import load_genome
 
 WALKER = Path(__file__).resolve().parent.parent / "docs" / "walkers" / "simbicon_cma_seed5.json"
 

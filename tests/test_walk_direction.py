@@ -56,7 +56,7 @@ def test_run_summary_states_distance_and_direction_of_the_best(tmp_path, capsys)
     assert "from the initial facing" in capsys.readouterr().out
     walk = json.loads((out / "summary.json").read_text())["best_walk"]
     best = json.loads((out / "best.json").read_text())
-    from evobiped.genome_file import load_genome
+    from evobiped.files.genome_file import load_genome
 
     genome, cfg, _ = load_genome(out / "best.json")
     again = cfg.build().run(genome)

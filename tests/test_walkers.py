@@ -2,7 +2,7 @@
 
 These tests assert behaviour (stays up, walks forward, reaches its sources, survives the battery's trials within
 one per family), never a stored fitness: the last bits of a 50 s walk depend on the numerical environment
-(evobiped.provenance), and the files were stored in one environment.  Bit-identity is tested between runs made on
+(evobiped.core.provenance), and the files were stored in one environment.  Bit-identity is tested between runs made on
 the machine running the tests (tests/test_evolve.py, tests/test_replay.py), and here in a subprocess whose numpy
 uses the other family of SIMD kernels.
 """
@@ -13,9 +13,9 @@ import re
 
 import pytest
 
-from evobiped.genome_file import load_genome
-from evobiped.options import given
-from evobiped.robustness import battery, summarise
+from evobiped.files.genome_file import load_genome
+from evobiped.core.options import given
+from evobiped.analysis.robustness import battery, summarise
 
 from .conftest import ROOT, WALKERS
 
@@ -119,10 +119,10 @@ def test_a_shipped_walker_replays_under_either_family_of_numpy_kernels(disable, 
 
     env = {**os.environ, "NPY_DISABLE_CPU_FEATURES": disable, "PYTHONPATH": str(ROOT)}
     walker = WALKERS / "steer_simbicon_seed0.json"
-    probe = "import json, evobiped.provenance as p; print(json.dumps(p.current()))"
+    probe = "import json, evobiped.core.provenance as p; print(json.dumps(p.current()))"
     here = json.loads(subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True).stdout)
     _, _, meta = load_genome(walker)
-    from evobiped.provenance import differences
+    from evobiped.core.provenance import differences
 
     same = not differences(meta["environment"], here)
     run = subprocess.run([sys.executable, "-m", "evobiped", "replay", str(walker), "--quiet", "--out", str(tmp_path / "r.rrd")],

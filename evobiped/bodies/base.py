@@ -8,17 +8,18 @@ batch and return ``(P, ...)`` arrays; ``ids`` selects the simulations to touch.
 
 from __future__ import annotations
 
+import copy
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar, Literal
 
 import mujoco
 import numpy as np
 
-from ..contract import Actuator
-from ..errors import ConfigError
-from ..models import load_model, model_path
-from ..sim import Sims
-from ..options import option, taken
+from ..interface.contract import Actuator
+from ..core.errors import ConfigError
+from ..physics.models import load_model, model_path
+from ..physics.sim import Sims
+from ..core.options import option, taken
 
 
 def model_file_option(stem: str):
@@ -56,12 +57,12 @@ class Body(ABC):
     #: how a controller that normalises its inputs reads each sensor: name -> (standing values, scales), one per
     #: component, in the sensor's units; the controller sees (reading - standing value) / scale
     sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {}
-    #: a bilateral body's left/right mirror (:mod:`evobiped.frame`): sensor name -> (column permutation, sign
+    #: a bilateral body's left/right mirror (:mod:`evobiped.interface.frame`): sensor name -> (column permutation, sign
     #: per column) giving the mirrored body's reading, and the same over the action vector (None: not bilateral)
     mirror: ClassVar[dict[str, tuple[tuple[int, ...], tuple[float, ...]]]] = {}
     actuator_mirror: ClassVar[tuple[tuple[int, ...], tuple[float, ...]] | None] = None
 
-    #: the body's options (a dataclass of :func:`evobiped.options.option` fields, each with a
+    #: the body's options (a dataclass of :func:`evobiped.core.options.option` fields, each with a
     #: ``timestep`` and a ``model_file``); constructed as ``cls(options)`` (or ``cls(**settings)``)
     Options: ClassVar[type]
 
@@ -71,11 +72,15 @@ class Body(ABC):
         self.model_file = self.options.model_file or str(model_path(self.model_name))
 
     def build_model(self) -> mujoco.MjModel:
-        """Compile the MJCF once (per worker); the timestep is this body's."""
-        model = load_model(self.model_file)
-        model.opt.timestep = self.timestep
-        self.bind_model(model)
-        return model
+        """A model of this body, the timestep this body's: the MJCF compiled once per body (so once per process and
+        body options, :mod:`evobiped.episode.parts`), each caller given its own copy (an episode's, which it may change)."""
+        model = self.__dict__.get("_model")
+        if model is None:
+            model = load_model(self.model_file)
+            model.opt.timestep = self.timestep
+            self.bind_model(model)
+            self._model = model
+        return copy.deepcopy(model)
 
     def bind_model(self, model: mujoco.MjModel) -> None:
         """Look up names and ids in the compiled model (UserError if one is missing)."""

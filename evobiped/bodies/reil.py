@@ -34,11 +34,11 @@ from typing import ClassVar
 import mujoco
 import numpy as np
 
-from ..contract import Actuator
-from ..errors import UserError
-from ..sim import Sims
-from ..options import option
-from .. import gait
+from ..interface.contract import Actuator
+from ..core.errors import UserError
+from ..physics.sim import Sims
+from ..core.options import option
+from ..physics import gait
 from .base import Body, model_file_option
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
@@ -194,7 +194,7 @@ class ReilBiped(Body):
         * ``pelvis_tilt_rate`` ``(P, 2)``: their rates (rad/s);
         * ``com_from_feet`` ``(P, 4)``: centre of mass minus left foot (forward, left), minus right foot (m);
         * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s);
-        * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.gait`; left = +1).
+        * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.physics.gait`; left = +1).
         """
         R = sims.xmat[:, self._pelvis].reshape(-1, 3, 3)
         fwd = self.heading(sims)

@@ -38,10 +38,10 @@ from typing import ClassVar
 import mujoco
 import numpy as np
 
-from ..contract import Actuator
-from ..errors import ConfigError, UserError
-from ..sim import Sims
-from ..options import option
+from ..interface.contract import Actuator
+from ..core.errors import ConfigError, UserError
+from ..physics.sim import Sims
+from ..core.options import option
 from .base import Body, model_file_option
 
 #: actions in this order (N m); T_r1, T_r3, T_r5 (right) and T_r2, T_r4, T_r6 (left)
@@ -158,6 +158,13 @@ class TagaBiped(Body):
             )
         return st
 
+    def set_ground(self, sims: Sims, kg, bg) -> None:
+        """From now on the ground under the simulations of ``sims`` has stiffness ``kg`` (N/m) and damping ``bg``
+        (N s/m), each one value or one per simulation ``(n,)`` (until then: the body's ``kg`` and ``bg`` options);
+        kept in ``sims.extra``, so a forked episode state keeps its ground."""
+        st = self._ground(sims)
+        st["kg"], st["bg"] = np.asarray(kg, float), np.asarray(bg, float)
+
     def reset(self, sims: Sims, ids: np.ndarray | None = None) -> None:
         """Appendix E: hip at (0, 1.09) m, straight legs at 0.45 pi (right) and 0.57 pi (left), at rest;
         simulations ``ids`` (default all), their ground contacts and applied forces cleared."""
@@ -217,8 +224,9 @@ class TagaBiped(Body):
         rest[..., 1] = np.where(touch, self.terrain(ax), rest[..., 1])
         st["rest"][ids] = rest
         st["contact"][ids] = below
-        kg = p["kg"][ids, None] if p["kg"].ndim else p["kg"]
-        bg = p["bg"][ids, None] if p["bg"].ndim else p["bg"]
+        kg, bg = st.get("kg", p["kg"]), st.get("bg", p["bg"])  # the ground under each simulation, else the body's
+        kg = kg[ids, None] if kg.ndim else kg
+        bg = bg[ids, None] if bg.ndim else bg
         fx = np.where(below, -kg * (ax - rest[..., 0]) - bg * vx, 0.0)
         fy = np.where(below, -kg * (ay - rest[..., 1]) + bg * np.maximum(-vy, 0.0), 0.0)
         st["force"][ids] = np.stack([fx[:, 0], fy[:, 0], fx[:, 1], fy[:, 1]], 1)

@@ -4,7 +4,7 @@ One module per subcommand, ``<name>_cmd.py``, with ``add_<name>(subparsers)`` (i
 ``run_<name>_cmd(args)`` (the handler) and ``SUBCOMMANDS`` (the ``add_`` functions it registers): the
 core's in this package (:data:`CORE`), and each experiment's own, which it registers by providing
 ``evobiped/experiments/<experiment>/<name>_cmd.py`` (found by :func:`experiment_commands`).  What
-the commands share is :mod:`evobiped.flags`.  A :class:`~evobiped.errors.UserError` (or a bad
+the commands share is :mod:`evobiped.flags`.  A :class:`~evobiped.core.errors.UserError` (or a bad
 argument) becomes one line on stderr and exit status 2.
 """
 
@@ -19,7 +19,7 @@ import sys
 from types import ModuleType
 
 from .. import __version__
-from ..errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, last_line, stop_on_signals
+from ..core.errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, last_line, stop_on_signals
 
 #: how every refusal begins, a bad argument's and a UserError's alike
 ERROR = "evobiped: error: "

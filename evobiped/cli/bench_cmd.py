@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from ..flags import check_workers, choices_text, positive_float, positive_int
-from ..progress import Progress
+from ..core.progress import Progress
 
 
 def add_bench(sub) -> None:
@@ -27,7 +27,7 @@ def add_bench(sub) -> None:
 
 
 def run_bench_cmd(args) -> int:
-    from ..bench import QUICK, bench, format_bench
+    from ..analysis.bench import QUICK, bench, format_bench
     from ..episode import EpisodeConfig
 
     size = dict(QUICK) if args.quick else dict(population=50, seconds=50.0, repeats=5)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..errors import UserError
+from ..core.errors import UserError
 from ..flags import positive_float, positive_int, walk_line
-from ..progress import Progress
+from ..core.progress import Progress
 
 
 def add_distill(sub) -> None:
@@ -27,9 +27,9 @@ def run_distill_cmd(args) -> int:
     from pathlib import Path
 
     from ..distill import distill, parse_options, student_config
-    from ..fileio import read_toml, write_json
-    from ..genome_file import save_genome
-    from ..outcome import outcome
+    from ..core.fileio import read_toml, write_json
+    from ..files.genome_file import save_genome
+    from ..files.outcome import outcome
     from ..record.source import resolve
 
     source = resolve(args.teacher, args.generation)

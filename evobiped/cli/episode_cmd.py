@@ -26,7 +26,7 @@ def add_episode(sub) -> None:
 
 def run_episode_cmd(args) -> int:
     from ..episode import EpisodeConfig
-    from ..genome_file import load_genome
+    from ..files.genome_file import load_genome
 
     if args.genome:
         if args.body or args.controller:

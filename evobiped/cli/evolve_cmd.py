@@ -5,9 +5,9 @@ from __future__ import annotations
 import contextlib
 import sys
 
-from ..errors import UserError, exit_status, last_line
+from ..core.errors import UserError, exit_status, last_line
 from ..flags import RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config, walk_line
-from ..progress import Progress, hms
+from ..core.progress import Progress, hms
 
 
 def add_evolve(sub) -> None:
@@ -104,7 +104,7 @@ def _evolve(run, evaluator, backend: str, args) -> int:
 
 
 def _generations(run, evaluator, c, say, args) -> int:
-    from ..progress import GenerationClock, generation_note
+    from ..core.progress import GenerationClock, generation_note
 
     with evaluator, contextlib.ExitStack() as stack:
         log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
@@ -136,7 +136,7 @@ def _generations(run, evaluator, c, say, args) -> int:
 
 def _stopped(run) -> str:
     """What a stop signal left: the generations committed and whether the run is complete."""
-    from ..rundir import HISTORY, SUMMARY
+    from ..files.rundir import HISTORY, SUMMARY
 
     g = run.optimizer.generation
     if not run.done:
@@ -167,7 +167,7 @@ def _viewer_log(run, rerun: str):
     """A live viewer of the run's fitness (a new one, or the one at ADDR), started with the history so far
     (the run's own evolution.rrd is written either way, after every generation)."""
     from ..record.evolution_log import EvolutionLog
-    from ..rundir import history_columns
+    from ..files.rundir import history_columns
 
     log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))
     if run.history:

@@ -10,7 +10,7 @@ def add_presets(sub) -> None:
 
 
 def run_presets_cmd(args) -> int:
-    from ..presets import describe, names
+    from ..files.presets import describe, names
 
     width = max(map(len, names()))
     for name in names():

@@ -17,7 +17,7 @@ def run_repertoire_cmd(args) -> int:
     from ..record.archive_figures import archive_figure, progress_figure
     from ..record.figures import fitness_label
     from ..repertoire.elites import WALK_SPEED, load_repertoire
-    from ..rundir import figures_dir
+    from ..files.rundir import figures_dir
 
     rep = load_repertoire(args.run)
     a, walk = rep.archive, rep.walking()

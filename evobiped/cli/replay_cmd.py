@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..flags import add_source_flag, positive_float, positive_int, refuse, walk_line
-from ..progress import Progress
+from ..core.progress import Progress
 
 
 def add_replay(sub) -> None:
@@ -35,7 +35,7 @@ def run_replay_cmd(args) -> int:
 
     from ..usecases.replaying import replay
     from ..record.source import resolve
-    from ..rundir import figures_dir
+    from ..files.rundir import figures_dir
 
     video_flags = args.video_window is not None or args.video_size != [480, 360] or args.video_fps != 25.0
     if args.video is None and video_flags:

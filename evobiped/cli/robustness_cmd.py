@@ -5,9 +5,9 @@ from __future__ import annotations
 import dataclasses
 import json
 
-from ..errors import UserError
+from ..core.errors import UserError
 from ..flags import positive_float
-from ..progress import Progress
+from ..core.progress import Progress
 from ..tasks.steer import with_sources
 
 
@@ -31,11 +31,11 @@ def add_robustness(sub) -> None:
 def run_robustness_cmd(args) -> int:
     from pathlib import Path
 
-    from ..fileio import write_json
+    from ..core.fileio import write_json
     from ..record.robustness_figure import robustness_figure
     from ..record.source import resolve
-    from ..robustness import battery, score, summarise, table
-    from ..rundir import robustness_stem
+    from ..analysis.robustness import battery, score, summarise, table
+    from ..files.rundir import robustness_stem
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")

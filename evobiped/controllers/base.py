@@ -14,11 +14,11 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from ..contract import Needs
-from ..errors import ConfigError
-from ..frame import FRAMES
-from ..genome import GenomeLayout
-from ..options import option, taken
+from ..interface.contract import Needs
+from ..core.errors import ConfigError
+from ..interface.frame import FRAMES
+from ..interface.genome import GenomeLayout
+from ..core.options import option, taken
 
 #: the longest control latency, in control ticks
 MAX_LATENCY = 100
@@ -61,7 +61,7 @@ class Controller(ABC):
     """Base class; subclasses are registered in :data:`evobiped.controllers.CONTROLLERS`."""
 
     name: ClassVar[str]
-    #: how :func:`evobiped.mapping.to_action` reads the outputs: "unit": in [0, 1] spanning the joint's range;
+    #: how :func:`evobiped.interface.mapping.to_action` reads the outputs: "unit": in [0, 1] spanning the joint's range;
     #: "centred": in [0, 1] with 0.5 at 0 rad; "signed": real-valued, centred on 0; "angle": joint targets in rad
     output_kind: ClassVar[Literal["unit", "centred", "centred_full", "signed", "angle"]]
 
@@ -75,16 +75,16 @@ class Controller(ABC):
     #: ``(centre (k,), scale (k,))`` set by the episode; None: raw readings
     normalises_inputs: bool = False
     input_norm: tuple | None = None
-    #: the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.frame`; None: the body's)
+    #: the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.interface.frame`; None: the body's)
     frame: Any = None
 
-    #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.options.option` fields)
+    #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.core.options.option` fields)
     Options: ClassVar[type] = ControllerOptions
 
     @classmethod
     def needs(cls, options) -> Needs:
         """What this controller, with these options (its parsed ``Options``), needs of its body and task (see
-        :mod:`evobiped.contract`); the episode checks it once and constructs the controller with the wiring:
+        :mod:`evobiped.interface.contract`); the episode checks it once and constructs the controller with the wiring:
         ``cls(options, n_outputs=..., inputs={sensor: width}, actuators=body.actuators)``."""
         return Needs()
 

@@ -62,10 +62,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Needs
-from ..errors import ConfigError
-from ..genome import GeneBlock, GenomeLayout
-from ..options import option
+from ..interface.contract import Needs
+from ..core.errors import ConfigError
+from ..interface.genome import GeneBlock, GenomeLayout
+from ..core.options import option
 from .base import Controller, ControllerOptions
 
 #: Table III (init mean, init sigma, mutation sigma) and the ranges of Sect. II-C1
@@ -74,7 +74,7 @@ TAU = dict(low=0.5, high=5.0, init_mean=2.75, init_sigma=1.5, mutation_sigma=1.5
 BIAS = dict(low=-4.0, high=4.0, init_mean=0.0, init_sigma=3.0, mutation_sigma=3.0)
 
 
-#: motor map name -> output kind (see evobiped.mapping)
+#: motor map name -> output kind (see evobiped.interface.mapping)
 MOTOR_MAPS = {"range": "unit", "centred": "centred", "full": "centred_full"}
 
 

@@ -32,11 +32,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Needs
-from ..errors import ConfigError
+from ..interface.contract import Needs
+from ..core.errors import ConfigError
 from .g3_network import CELLS, rk4_step
-from ..genome import GeneBlock, GenomeLayout
-from ..options import option
+from ..interface.genome import GeneBlock, GenomeLayout
+from ..core.options import option
 from .base import Controller, ControllerOptions
 
 SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1)

@@ -6,7 +6,7 @@ With every gene at zero the targets are zero: the body's standing posture
 (straight legs for the Reil body).  ``output = "angle"`` (default) sends y to a
 position body as PD targets in rad, clipped to each joint's range;
 ``output = "signed"`` sends it as torques (N m, clipped) or, on a position
-body, squashed into the range (:mod:`evobiped.mapping`), so the policy drives
+body, squashed into the range (:mod:`evobiped.interface.mapping`), so the policy drives
 any body.
 
 The inputs are always normalised: by the body's declared standing values and
@@ -26,9 +26,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Needs
-from ..genome import GeneBlock, GenomeLayout
-from ..options import option
+from ..interface.contract import Needs
+from ..interface.genome import GeneBlock, GenomeLayout
+from ..core.options import option
 from .base import Controller, ControllerOptions
 
 OUTPUT_KINDS = {"angle": "angle", "signed": "signed"}

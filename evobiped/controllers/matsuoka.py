@@ -38,10 +38,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Actuator, Needs, Offer, index, legs, problem
-from ..errors import ConfigError
-from ..genome import GeneBlock, GenomeLayout
-from ..options import option
+from ..interface.contract import Actuator, Needs, Offer, index, legs, problem
+from ..core.errors import ConfigError
+from ..interface.genome import GeneBlock, GenomeLayout
+from ..core.options import option
 from .base import Controller, ControllerOptions
 
 #: sensors the Appendix C feedback needs (provided by the Taga body), with their widths

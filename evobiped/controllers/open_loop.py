@@ -29,9 +29,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Actuator, Needs, index
-from ..genome import GeneBlock, GenomeLayout
-from ..options import option
+from ..interface.contract import Actuator, Needs, index
+from ..interface.genome import GeneBlock, GenomeLayout
+from ..core.options import option
 from .base import Controller, ControllerOptions
 
 #: the sine form's genes: name -> (low, high); units Hz, rad, rad, rad, rad, rad (phase), rad, rad, rad (phase)
@@ -52,7 +52,7 @@ FOURIER_HZ = (0.3, 2.5)
 FOURIER_TERMS = ("offset", "sin1", "cos1", "sin2", "cos2")
 #: the joints of each leg the sine form drives, found by role in the body's actuators
 JOINTS = ("hip_pitch", "hip_roll", "knee")
-#: form -> output kind (see evobiped.mapping)
+#: form -> output kind (see evobiped.interface.mapping)
 FORMS = {"sine": "angle", "fourier": "unit"}
 
 

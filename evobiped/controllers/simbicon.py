@@ -48,10 +48,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..contract import Actuator, Needs, index
-from ..errors import ConfigError
-from ..genome import GeneBlock, GenomeLayout
-from ..options import option
+from ..interface.contract import Actuator, Needs, index
+from ..core.errors import ConfigError
+from ..interface.genome import GeneBlock, GenomeLayout
+from ..core.options import option
 from .base import Controller, ControllerOptions
 
 #: body sensors read by name, with the widths their meaning fixes: joint angles in action order (one per

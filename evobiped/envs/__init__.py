@@ -15,16 +15,17 @@ gives 64 stepped as one MuJoCo batch.
 try:
     import gymnasium
 except ImportError:  # pragma: no cover - depends on the installation
-    from ..errors import UserError
+    from ..core.errors import UserError
 
     raise UserError("the Gymnasium environments need gymnasium: pip install 'evobiped[gym]'") from None
 
-from .walkers import BipedEnv, BipedVectorEnv, ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv, Walkers
+from .biped import BipedEnv, BipedVectorEnv, ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv
+from .walkers import Walkers
 
 __all__ = ["BipedEnv", "BipedVectorEnv", "ReilBipedEnv", "ReilBipedVectorEnv", "TagaBipedEnv", "TagaBipedVectorEnv", "Walkers"]
 
 for _name, _env, _vec in (("ReilBiped", ReilBipedEnv, ReilBipedVectorEnv), ("TagaBiped", TagaBipedEnv, TagaBipedVectorEnv)):
     _id = f"evobiped/{_name}-v0"
     if _id not in gymnasium.registry:
-        gymnasium.register(id=_id, entry_point=f"evobiped.envs.walkers:{_env.__name__}",
-                           vector_entry_point=f"evobiped.envs.walkers:{_vec.__name__}")
+        gymnasium.register(id=_id, entry_point=f"evobiped.envs.biped:{_env.__name__}",
+                           vector_entry_point=f"evobiped.envs.biped:{_vec.__name__}")

@@ -7,7 +7,8 @@ Taga ground) get them before every physics step.  A walker's episode ends at
 Row p of every result depends only on genome p: the same genome gives the
 bit-identical fitness alone or inside any batch.
 
-The package's modules, one concept each: :mod:`.config` (what to simulate, built once), :mod:`.state` (an
+The package's modules, one concept each: :mod:`.config` (what to simulate, the one way to build it), :mod:`.parts`
+(its parsed tables, body, task and wired controller, built once per process), :mod:`.state` (an
 episode in progress as a value, a run's per-generation context, listeners), :mod:`.loop` (the one loop,
 :class:`Episode`), :mod:`.disturbances` (what a trial applies while it runs), :mod:`.senses` (what a controller reads each tick).
 """

@@ -1,5 +1,5 @@
 """What to simulate (:class:`EpisodeConfig`): registry names, their options parsed once, the episode's length and
-timing checked; the one path every episode is built by (:meth:`EpisodeConfig.build`)."""
+timing checked; the one path every episode is built by (:meth:`EpisodeConfig.build`, its parts from :mod:`.parts`)."""
 
 from __future__ import annotations
 
@@ -8,22 +8,19 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from ..bodies import BODIES
 from ..bodies.base import Body
-from ..contract import Offer, normaliser, wire
 from ..controllers import CONTROLLERS
-from ..controllers.base import Controller
-from ..errors import ConfigError
-from ..frame import StanceFrame
-from ..genome import GenomeLayout
-from ..mapping import MAPS
-from ..options import given, parse, refuse_unknown
-from ..perturb import PerturbationOptions
+from ..controllers.base import Controller, ControllerOptions
+from ..core.errors import ConfigError
+from ..interface.genome import GenomeLayout
+from ..interface.mapping import MAPS
+from ..core.options import given, refuse_unknown
+from ..physics.perturb import PerturbationOptions
 from ..tasks import TASKS
 from ..tasks.base import Task
-from ..validate import number
+from ..core.validate import number
+from .parts import body_part, controller_part, parsed, task_part
 
 if TYPE_CHECKING:
     from .loop import Episode
@@ -66,17 +63,20 @@ def check_timing(body: Body, controller: Controller | None, seconds: float, *,
 
 @dataclass(frozen=True, kw_only=True)
 class EpisodeConfig:
-    """What to simulate: registry names, their options, and the episode length (s).
+    """What to simulate: registry names, their options, and the episode length (s); the one way every episode is
+    built (evolution, replays, the Gymnasium environments, the Taga experiments, distillation).
 
     The options are given as tables (a config file's, keyword settings) or as parsed objects; each table
-    is parsed once, here, into its component's frozen ``Options`` (``body_options``: the body's,
-    ``controller_options``: the controller's, with the options every controller takes, ``task_options``:
+    is parsed once per process (:func:`.parts.parsed`) into its component's frozen ``Options`` (``body_options``: the
+    body's, ``controller_options``: the controller's, with the options every controller takes, ``task_options``:
     the task's, ``perturbations``: :class:`PerturbationOptions`), which the parts are built from.
-    :meth:`to_dict` writes back the settings the tables gave.
+    :meth:`to_dict` writes back the settings the tables gave.  ``controller`` None: the actions come from outside
+    (:meth:`Episode.step <evobiped.episode.Episode.step>`, the Gymnasium environments), one every ``control_dt`` s.
     """
 
     body: str = "reil"
-    controller: str = "ctrnn"
+    #: the controller's registry name; None: none (the actions come from outside, every ``control_dt`` s)
+    controller: str | None = "ctrnn"
     task: str = "walk"
     seconds: float = 50.0
     #: end a walker's episode when it falls (False: run to the end; only blow-ups stop, e.g. for benchmarks)
@@ -84,25 +84,43 @@ class EpisodeConfig:
     body_options: Any = field(default_factory=dict)
     controller_options: Any = field(default_factory=dict)
     task_options: Any = field(default_factory=dict)
-    #: how an evolutionary run perturbs each generation (see evobiped.perturb); {} = none
+    #: how an evolutionary run perturbs each generation (see evobiped.physics.perturb); {} = none
     perturbations: Any = field(default_factory=dict)
+    #: s: the control period of an episode without a controller (a multiple of the body's physics step); a
+    #: controller's period is its own (its ``dt`` option, else the physics step)
+    control_dt: float | None = None
 
     def __post_init__(self):
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
-            if name not in reg:
+            if name not in reg and not (kind == "controller" and name is None):
                 raise ConfigError(f"episode.{kind}: unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
         number(self.seconds, "episode.seconds:", above=0, unit="s")
         if not isinstance(self.stop_on_fall, bool):
             raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
-        for name, cls in (("body_options", BODIES[self.body].Options), ("controller_options", CONTROLLERS[self.controller].Options),
+        if self.controller is None:
+            if self.controller_options not in ({}, None) and not isinstance(self.controller_options, ControllerOptions):
+                raise ConfigError("episode.controller_options: an episode without a controller takes none")
+            if self.control_dt is None:
+                raise ConfigError("an episode without a controller needs its control period (control_dt)")
+            number(self.control_dt, "episode.control_dt:", above=0, unit="s")
+        elif self.control_dt is not None:
+            raise ConfigError(f"episode.control_dt: only an episode without a controller takes one; controller "
+                              f"{self.controller!r} steps at its own period (its dt option)")
+        if self.controller is None and self.controller_options is None:
+            object.__setattr__(self, "controller_options", {})
+        ctrl_cls = ControllerOptions if self.controller is None else CONTROLLERS[self.controller].Options
+        for name, cls in (("body_options", BODIES[self.body].Options), ("controller_options", ctrl_cls),
                           ("task_options", TASKS[self.task].Options), ("perturbations", PerturbationOptions)):
-            object.__setattr__(self, name, parse(cls, getattr(self, name), f"episode.{name}"))
+            object.__setattr__(self, name, parsed(cls, getattr(self, name), f"episode.{name}"))
 
     def to_dict(self) -> dict:
-        """The config as a table (config.json, genome files): every option table as its settings were given."""
+        """The config as a table (config.json, genome files): every option table as its settings were given
+        (``control_dt`` only where it is set)."""
         d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         for name in ("body_options", "controller_options", "task_options", "perturbations"):
             d[name] = copy.deepcopy(given(d[name]))
+        if d["control_dt"] is None:
+            del d["control_dt"]
         return d
 
     @property
@@ -119,11 +137,12 @@ class EpisodeConfig:
         """The same episode without perturbations (replays, the robustness battery)."""
         return dataclasses.replace(self, perturbations={})
 
-    def parts(self) -> tuple[Body, Controller, Task]:
-        """The body, controller and task, the controller wired to the sensors it needs: the controller
-        contract checked (one ConfigError line on a mismatch); no model is compiled.  Built once per config
-        and shared by :meth:`layout` and every :meth:`build` (parts keep no episode state: that is the
-        :class:`EpisodeState`'s, and an episode binds its own copy of the controller)."""
+    def parts(self) -> tuple[Body, Controller | None, Task]:
+        """The body, controller (None: none) and task, the controller wired to the sensors it needs: the controller
+        contract, the output mapping and the episode's length checked (one ConfigError line on a mismatch); no model is
+        compiled.  Built once per process for the same tables (:mod:`.parts`) and shared by :meth:`layout` and every
+        :meth:`build` (parts keep no episode state: that is the :class:`EpisodeState`'s, and an episode binds its own
+        copy of the controller)."""
         cached = self.__dict__.get("_parts")
         if cached is None:
             cached = self._make_parts()
@@ -134,40 +153,19 @@ class EpisodeConfig:
         """Pickled and copied without the built parts (a worker builds its own)."""
         return {k: v for k, v in self.__dict__.items() if k != "_parts"}
 
-    def _make_parts(self) -> tuple[Body, Controller, Task]:
-        body = BODIES[self.body](self.body_options)
-        task = TASKS[self.task](self.task_options)
-        cls, opts = CONTROLLERS[self.controller], self.controller_options
-        added = task.sensor_widths()
-        offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()})
-        inputs = wire(cls.needs(opts), offer, chosen=opts.inputs,
-                      what=f"controller {self.controller!r} (body {self.body!r}, task {self.task!r})")
-        controller = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
-        where = "episode.controller_options"
-        if controller.normalises_inputs:
-            controller.input_norm = normaliser(inputs, offer.norms)
-        if opts.input_norm is not None:
-            width = sum(inputs.values())
-            if not controller.normalises_inputs:
-                raise ConfigError(f"{where}.input_norm: controller {self.controller!r} reads raw senses here (it does not normalise its inputs)")
-            if len(opts.input_norm["mean"]) != width:
-                raise ConfigError(f"{where}.input_norm: normalises {len(opts.input_norm['mean'])} inputs; the controller reads "
-                                  f"{width} ({', '.join(f'{n} {w}' for n, w in inputs.items())})")
-            controller.input_norm = (np.array(opts.input_norm["mean"], float), np.array(opts.input_norm["std"], float))
-        if opts.frame == "stance":
-            if body.actuator_mirror is None or body.contact_sensor is None:
-                raise ConfigError(f"{where}.frame: 'stance' needs a bilateral body with foot contacts; body {self.body!r} "
-                                  "declares no left/right mirror")
-            controller.frame = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror,
-                                           what=f"{where}.frame")
-        if "genes" in given(opts):
-            try:
-                controller.override_genes(opts.genes)
-            except ConfigError as exc:
-                raise ConfigError(f"episode.controller_options.{exc}") from None
-        check_timing(body, controller, float(self.seconds))
+    def _make_parts(self) -> tuple[Body, Controller | None, Task]:
+        body, body_key = body_part(self.body, self.body_options)
+        task, task_key = task_part(self.task, self.task_options, body_key)
+        if self.controller is None:
+            controller = None
+            if task.reads_neurons():
+                raise ConfigError(f"episode.task_options: these {self.task} task options read a controller's neurons, "
+                                  "which an episode without a controller has not (its actions come from outside)")
+        else:
+            controller = controller_part(self.controller, self.controller_options, body, task, (body_key, task_key))
+        check_timing(body, controller, float(self.seconds), control_dt=self.control_dt)
         if body.action_kind != "position":  # offsets and noise are PD-target angles: a body of torques has none
-            from ..options import scheduled
+            from ..core.options import scheduled
 
             for name in ("target_offset", "target_noise"):
                 s = scheduled(self.perturbations, name)
@@ -184,16 +182,21 @@ class EpisodeConfig:
 
     def layout(self) -> GenomeLayout:
         """The genome layout of this episode's controller, from the declarations alone (no simulation)."""
-        return self.parts()[1].layout
+        controller = self.parts()[1]
+        if controller is None:
+            raise ConfigError("an episode without a controller has no genome")
+        return controller.layout
 
-    def build(self) -> "Episode":
-        """The episode, its model compiled once."""
+    def build(self, controller: Controller | None = None) -> "Episode":
+        """The episode, its model compiled once per process.  ``controller``: drives it in place of the config's,
+        without the config's latency (it delays what it must itself): distillation's blend of a teacher and a
+        student, controllers built and checked by their own configs of this body and task."""
         from .loop import Episode
 
-        body, controller, task = self.parts()
-        return Episode(body, controller, task, seconds=float(self.seconds), stop_on_fall=bool(self.stop_on_fall),
-                       perturbations=self.perturbations if self.perturbations.active else None, latency=self.latency)
-
+        body, own, task = self.parts()
+        return Episode(body, own if controller is None else controller, task, seconds=float(self.seconds),
+                       stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations if self.perturbations.active else None,
+                       latency=self.latency if controller is None else 0, control_dt=self.control_dt)
 
 
 def build_episode(**config: Any) -> "Episode":

@@ -1,4 +1,4 @@
-"""The disturbances a trial applies to a batch while it runs (evobiped.perturb draws them): noise and offsets on
+"""The disturbances a trial applies to a batch while it runs (evobiped.physics.perturb draws them): noise and offsets on
 the actions, pushes on the trunk, and the pelvis assistance's torque before every physics step."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bodies.base import Body
-from ..sim import Sims
+from ..physics.sim import Sims
 from .state import EpisodeState
 
 

@@ -8,14 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from .. import gait
+from ..physics import gait
 from ..bodies.base import Body
 from ..controllers.base import Controller
-from ..episode_result import EpisodeResult
-from ..errors import ConfigError
-from ..mapping import to_action
-from ..perturb import PerturbationOptions, Trials
-from ..sim import Sims
+from .result import EpisodeResult
+from ..core.errors import ConfigError
+from ..interface.mapping import to_action
+from ..physics.perturb import PerturbationOptions, Trials
+from ..physics.sim import Sims
 from ..tasks.base import Task
 from .config import check_timing
 from .disturbances import assisted_physics, disturb
@@ -243,18 +243,19 @@ class Episode:
         return ids
 
     def result(self, state: EpisodeState) -> EpisodeResult:
-        """The outcome of ``state`` so far, one entry per genome (see :meth:`run`)."""
+        """The outcome of ``state`` so far, one entry per genome (see :meth:`run`): copies, which nothing done to the
+        state later changes."""
         task, S = self.task, self.task.presentations
         tstate = state.task
         result = EpisodeResult(
-            fitness=task.fitness(tstate),
+            fitness=np.array(task.fitness(tstate)),
             fell=state.fell.copy(),
             unstable=state.unstable.copy(),
             end_time=state.end_time.copy(),
             start_position=state.start_position.copy(),  # copies: a later restart writes into the state's
             end_position=task.end_position(self.body, state.sims, tstate).copy(),
             start_facing=state.start_facing.copy(),
-            terms=task.terms(tstate),
+            terms={k: np.array(v) for k, v in task.terms(tstate).items()},
             senses=None if state.senses is None else dict(zip(("count", "total", "squares"), (a.copy() for a in state.senses))),
         )
         trials = state.trials

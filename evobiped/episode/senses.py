@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import gait
+from ..physics import gait
 from ..bodies.base import Body
 from ..controllers.base import Controller
-from ..frame import flips
+from ..interface.frame import flips
 from ..tasks.base import Task
 from .state import EpisodeState
 

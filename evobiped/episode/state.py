@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Any, Callable, Protocol
 
 import numpy as np
 
-from ..episode_result import EpisodeResult
-from ..normaliser import SenseSums
-from ..perturb import Trials
-from ..sim import Sims
+from .result import EpisodeResult
+from ..interface.normaliser import SenseSums
+from ..physics.perturb import Trials
+from ..physics.sim import Sims
 
 if TYPE_CHECKING:
     from .loop import Episode
@@ -91,13 +91,19 @@ class EpisodeState:
     pending: list = field(default_factory=list)
     #: the tick at which each row began ``(n,)`` (0; later for a row :meth:`Episode.restart` began anew)
     born: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    #: N m/rad: each row's pelvis assistance ``(n,)`` (None: none; see :mod:`evobiped.perturb`)
+    #: N m/rad: each row's pelvis assistance ``(n,)`` (None: none; see :mod:`evobiped.physics.perturb`)
     assist: np.ndarray | None = None
     #: ``(centre (k,), scale (k,))`` the controller's inputs are normalised with in this episode (None: the controller's)
     norm: tuple | None = None
     #: per row: control ticks, sums and sums of squares of the inputs it sensed ``(n,)``, ``(n, k)``, ``(n, k)``
-    #: (None: not collected; :mod:`evobiped.normaliser`)
+    #: (None: not collected; :mod:`evobiped.interface.normaliser`)
     senses: tuple | None = None
+    #: what an episode stepped by outside actions (a Gymnasium environment's) keeps per row ``(n,)``, None otherwise:
+    #: the task's fitness when the row last stepped or began (the reward baseline: a reward is its increment), the
+    #: generator of the row's reset noise, and whether its episode ended and waits for a reset
+    fitness: np.ndarray | None = None
+    rngs: list | None = None
+    ended: np.ndarray | None = None
 
     @property
     def time(self) -> float:

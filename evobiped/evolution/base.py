@@ -2,7 +2,7 @@
 
 An optimizer holds ``population`` ``(P, G)`` and ``fitness`` ``(P,)`` (NaN: not yet
 evaluated).  ``ask()`` gives the population and the rows to evaluate; ``tell(result)``
-takes their :class:`~evobiped.episode_result.EpisodeResult` (or their fitness alone);
+takes their :class:`~evobiped.episode.result.EpisodeResult` (or their fitness alone);
 ``next_generation()`` moves the fitness along with the individuals it keeps and
 returns, for each new row, the previous row it is (-1: a new individual), so that the
 run carries each individual's outcome (:mod:`evobiped.evolution.individuals`) and
@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ..errors import UserError
+from ..core.errors import UserError
 
 
 def frozen_array(values: Any) -> np.ndarray:

@@ -2,7 +2,7 @@
 bringing every derived file (history.csv, best.json, evolution.rrd, summary.json, individuals.jsonl, the
 generation files) back to what it says.
 
-The formats are :mod:`evobiped.rundir`'s; :class:`~.run.Run` calls these at creation, after each generation and
+The formats are :mod:`evobiped.files.rundir`'s; :class:`~.run.Run` calls these at creation, after each generation and
 on a resume.
 """
 
@@ -12,10 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__, rundir
-from ..errors import UserError, signals_deferred
-from ..fileio import atomic_write, json_text, read_json, write_json
-from ..genome_file import genome_text, load_genome
+from .. import __version__
+from ..files import rundir
+from ..core.errors import UserError, signals_deferred
+from ..core.fileio import atomic_write, json_text, read_json, write_json
+from ..files.genome_file import genome_text, load_genome
 from . import fingerprint
 from .individuals import Individuals
 from .run_config import RunConfig, make_optimizer

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UserError
+from ..core.errors import UserError
 
 #: the modules whose classes a stored strategy may hold
 MODULE = "cma"

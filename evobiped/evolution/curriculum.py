@@ -24,9 +24,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..episode_result import EpisodeResult
-from ..errors import ConfigError, UserError
-from ..options import check_fields, option
+from ..episode.result import EpisodeResult
+from ..core.errors import ConfigError, UserError
+from ..core.options import check_fields, option
 
 
 def _phases(v) -> None:

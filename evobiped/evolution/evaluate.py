@@ -19,8 +19,8 @@ import dataclasses
 import numpy as np
 
 from ..episode import Context, Episode, EpisodeConfig
-from ..episode_result import EpisodeResult
-from ..errors import ConfigError, UserError
+from ..episode.result import EpisodeResult
+from ..core.errors import ConfigError, UserError
 from .pool import spawn_pool, stop_pool
 
 BACKENDS = ("serial", "process", "thread", "ray")

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..errors import ConfigError, UserError
-from ..fileio import json_text
+from ..core.errors import ConfigError, UserError
+from ..core.fileio import json_text
 from .run_config import RunConfig
 
 #: settings that say where the episodes run, not what they compute (a resume may change them with flags)
@@ -31,7 +31,7 @@ def settings(config: RunConfig, environment: Any = None) -> dict:
     return out
 
 
-#: the key of the numerical environment the run started in (config.json's, :func:`evobiped.provenance.current`)
+#: the key of the numerical environment the run started in (config.json's, :func:`evobiped.core.provenance.current`)
 ENVIRONMENT = "environment"
 
 

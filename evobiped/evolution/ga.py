@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError, UserError
-from ..genome import GenomeLayout
-from ..options import check_fields, option
+from ..core.errors import ConfigError, UserError
+from ..interface.genome import GenomeLayout
+from ..core.options import check_fields, option
 from .base import Optimizer, OptimizerState, frozen_array
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..rundir import HISTORY_COLUMNS
+from ..files.rundir import HISTORY_COLUMNS
 
 
 @dataclass

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..episode_result import walk_summary
-from ..errors import UserError
+from ..episode.result import walk_summary
+from ..core.errors import UserError
 
 #: the outcome of an individual beside its fitness: name -> value before it is known
 OUTCOME = {"fell": False, "unstable": False, "end_time": np.nan}
@@ -40,7 +40,7 @@ class Individuals:
     parents: np.ndarray | None = None
 
     def told(self, unknown: np.ndarray, result) -> None:
-        """The :class:`~evobiped.episode_result.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in order."""
+        """The :class:`~evobiped.episode.result.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in order."""
         n = len(unknown)
         rows = np.flatnonzero(unknown)
         displacement, heading = result.displacements()
@@ -75,7 +75,7 @@ class Individuals:
         self.parents = None if parents is None else np.asarray(parents, int)
 
     def records(self, generation: int, fitness: np.ndarray, evaluated: np.ndarray) -> list[dict]:
-        """One table per row for individuals.jsonl (:mod:`evobiped.rundir.individuals_file`): ``fitness`` ``(P,)``
+        """One table per row for individuals.jsonl (:mod:`evobiped.files.rundir.individuals_file`): ``fitness`` ``(P,)``
         the optimizer's, ``evaluated`` ``(P,)`` bool the rows evaluated in ``generation``; unknown: None."""
         row = lambda a, i: None if a is None or a[i] < 0 else int(a[i])  # noqa: E731
         out = []
@@ -120,7 +120,7 @@ class Individuals:
 
     @classmethod
     def from_dict(cls, d: dict, P: int) -> "Individuals":
-        """Restore :meth:`to_dict` (types checked by :func:`evobiped.rundir.validate_checkpoint`); UserError unless
+        """Restore :meth:`to_dict` (types checked by :func:`evobiped.files.rundir.validate_checkpoint`); UserError unless
         each list has one entry per individual.  A checkpoint written before terms were kept has none."""
         lists = {k: v for k, v in d.items() if k in OUTCOME}
         rows = {k: d[k] for k in ("previous", "parents") if k in d}

@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError, UserError
-from ..genome import GenomeLayout
-from ..options import check_fields, option
+from ..core.errors import ConfigError, UserError
+from ..interface.genome import GenomeLayout
+from ..core.options import check_fields, option
 from .archive_file import ARCHIVE, archive_text
 from .base import Optimizer, OptimizerState, frozen_array
 from .ga import MAX_POPULATION, generation_rng

@@ -9,8 +9,8 @@ import threading
 import numpy as np
 
 from ..episode import EpisodeConfig
-from ..errors import STOP_SIGNALS, UserError
-from ..net import connect_error
+from ..core.errors import STOP_SIGNALS, UserError
+from ..core.net import connect_error
 from .evaluate import MAX_RETRIES, Evaluator, _evaluate, _fault_point, chunks, concat
 from .pool import silenced_stderr
 

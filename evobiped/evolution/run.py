@@ -1,7 +1,7 @@
 """An evolutionary run: a run directory and the optimizer that lives in it, generation by generation (its settings:
 :mod:`.run_config`; its commit point and derived files: :mod:`.checkpoint`).
 
-The run directory's files, names and columns are :mod:`evobiped.rundir`'s;
+The run directory's files, names and columns are :mod:`evobiped.files.rundir`'s;
 every file is written atomically, individuals.jsonl appended.  ``resume``
 continues from checkpoint.json and yields exactly the files an uninterrupted
 run with the same config writes (wall times aside).
@@ -17,10 +17,12 @@ from typing import Callable
 
 import numpy as np
 
-from .. import __version__, provenance, rundir
-from ..errors import UserError
-from ..fileio import WriteError, json_text, write_json
-from ..genome_file import save_genome
+from .. import __version__
+from ..core import provenance
+from ..files import rundir
+from ..core.errors import UserError
+from ..core.fileio import WriteError, json_text, write_json
+from ..files.genome_file import save_genome
 from . import checkpoint as commit_point
 from .evaluate import Evaluator
 from .base import Optimizer
@@ -148,7 +150,7 @@ class Run:
     def step(self, evaluator: Evaluator) -> GenerationStats:
         """Evaluate the unknown individuals of this generation and write its generation file (not yet committed).
         The run's best is the fittest individual so far; while the perturbations' schedules still change (before
-        :attr:`~evobiped.perturb.PerturbationOptions.settled_from`) or the pelvis assistance is on, generations are not
+        :attr:`~evobiped.physics.perturb.PerturbationOptions.settled_from`) or the pelvis assistance is on, generations are not
         comparable, so the run's best is the latest generation's, then the fittest since."""
         opt = self.optimizer
         pop, unknown = opt.ask()

@@ -9,10 +9,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import rundir
+from ..files import rundir
 from ..episode import EpisodeConfig
-from ..errors import ConfigError, UserError
-from ..options import check_fields, option, parse, refuse_unknown
+from ..core.errors import ConfigError, UserError
+from ..core.options import check_fields, option, parse, refuse_unknown
 from .base import Optimizer
 from .cma import CMAES, CMAOptions
 from .curriculum import Curriculum, CurriculumOptions
@@ -106,7 +106,7 @@ def _floors(v) -> None:
 
 @dataclass(frozen=True, kw_only=True)
 class NormaliseOptions:
-    """The running observation normaliser (``[normalise]``; :mod:`evobiped.normaliser`)."""
+    """The running observation normaliser (``[normalise]``; :mod:`evobiped.interface.normaliser`)."""
 
     running: bool = option(False, "normalise the controller's inputs by the running mean and std of the senses the evaluation "
                            "walkers visited (frozen into every genome file)")
@@ -201,7 +201,7 @@ def population_of(config: RunConfig) -> int:
 
 def start_genome(config: RunConfig) -> np.ndarray | None:
     """The genome ``(G,)`` that ``config.initial`` names (None: the run has none).  Read once, when the run is
-    created: the run directory keeps it (:data:`evobiped.rundir.START`), and a resume never reads the source again."""
+    created: the run directory keeps it (:data:`evobiped.files.rundir.START`), and a resume never reads the source again."""
     if not config.initial:
         return None
     return initial_genome(config.initial, config.episode, config.episode.layout())

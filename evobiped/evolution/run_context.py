@@ -1,7 +1,7 @@
 """What a run sets for each generation beyond its config: the running observation normaliser and the curriculum's phase.
 
 Generation g's episodes are normalised by the statistics of the senses the
-evaluation walkers visited in generations 0 .. g-1 (:mod:`evobiped.normaliser`)
+evaluation walkers visited in generations 0 .. g-1 (:mod:`evobiped.interface.normaliser`)
 and scored with the current phase's weights (:mod:`.curriculum`); both are
 frozen into the genome file of each generation's best (its controller's
 ``input_norm``, its task's ``weights``), so a walker replays, is tested and is
@@ -25,11 +25,11 @@ import dataclasses
 import numpy as np
 
 from ..episode import Context, EpisodeConfig, sense_sums
-from ..episode_result import EpisodeResult
-from ..errors import UserError
-from ..remap import input_widths
-from ..normaliser import Normaliser, frozen_table
-from ..options import given
+from ..episode.result import EpisodeResult
+from ..core.errors import UserError
+from ..episode.remap import input_widths
+from ..interface.normaliser import Normaliser, frozen_table
+from ..core.options import given
 from .curriculum import Curriculum
 
 

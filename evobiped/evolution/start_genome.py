@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import rundir
-from ..errors import UserError
-from ..genome_file import load_genome, save_genome
+from ..files import rundir
+from ..core.errors import UserError
+from ..files.genome_file import load_genome, save_genome
 from .run_config import RunConfig
 
 

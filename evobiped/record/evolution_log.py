@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write
-from ..rundir import TERM_PREFIX
+from ..core.fileio import atomic_write
+from ..files.rundir import TERM_PREFIX
 from .viewer import connect_url, flush, require_viewer
 
 TIMELINE = "generation"
@@ -40,7 +40,7 @@ def declare_series(rec) -> None:
 
 
 def log_history(rec, history: dict[str, np.ndarray]) -> None:
-    """A whole ``history.csv`` (see :func:`evobiped.rundir.read_history`) in one go."""
+    """A whole ``history.csv`` (see :func:`evobiped.files.rundir.read_history`) in one go."""
     import rerun as rr
 
     declare_series(rec)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write
+from ..core.fileio import atomic_write
 from .geometry import shapes
 from .motor_labels import _motor_label, _motor_quantity, motor_file
 from .side_view import _draw_walker, _side_axis, _side_key, _side_points, steady_stride
@@ -77,14 +77,12 @@ def _title(what: str, who: str, traj: Trajectory | None = None) -> str:
 
 def fitness_label(config) -> str:
     """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit (``Task.fitness_label``)."""
-    from ..tasks import TASKS
-
-    return TASKS[config.task](config.task_options).fitness_label()
+    return config.parts()[2].fitness_label()
 
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",
                   ylabel: str = "fitness: distance from the start (m)", who: str = "") -> Path:
-    """Each generation's best (black; "this generation's" in the progress lines) and mean (grey) fitness, as in Fig. 6; ``history`` from :func:`evobiped.rundir.read_history`;
+    """Each generation's best (black; "this generation's" in the progress lines) and mean (grey) fitness, as in Fig. 6; ``history`` from :func:`evobiped.files.rundir.read_history`;
     ``ylabel`` from :func:`fitness_label`.  The last tick is the last generation."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))

@@ -8,7 +8,7 @@ from __future__ import annotations
 import uuid
 from pathlib import Path
 
-from ..fileio import atomic_write
+from ..core.fileio import atomic_write
 from .rerun_recorder import RerunRecorder, blueprint, log_presentations
 from .trajectory import Trajectory
 

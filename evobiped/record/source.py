@@ -1,6 +1,6 @@
 """What ``evobiped replay SOURCE`` reads: a run directory or a genome file (which one:
-:func:`evobiped.rundir.resolve_genome`), with what a replay, a recording and the robustness battery ask of it
-(its stored outcome, where its outputs go, its name).  Every problem is a :class:`~evobiped.errors.UserError`
+:func:`evobiped.files.rundir.resolve_genome`), with what a replay, a recording and the robustness battery ask of it
+(its stored outcome, where its outputs go, its name).  Every problem is a :class:`~evobiped.core.errors.UserError`
 raised before anything is written.
 """
 
@@ -10,9 +10,9 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import UserError
-from ..fileio import read_json
-from .. import rundir
+from ..core.errors import UserError
+from ..core.fileio import read_json
+from ..files import rundir
 
 
 @dataclass
@@ -21,13 +21,13 @@ class Source(rundir.GenomeSource):
 
     @property
     def environment(self) -> dict | None:
-        """The numerical environment the genome's stored results were made in (:mod:`evobiped.provenance`);
+        """The numerical environment the genome's stored results were made in (:mod:`evobiped.core.provenance`);
         None for files written before it was recorded."""
         env = self.meta.get("environment")
         return env if isinstance(env, dict) else None
 
     def stored_outcome(self) -> dict | None:
-        """What the walker did when it was stored, as :func:`evobiped.outcome.compare` reads it: the file's
+        """What the walker did when it was stored, as :func:`evobiped.files.outcome.compare` reads it: the file's
         ``outcome`` (always of the nominal episode), else, for a run without perturbations, its ``fell`` and
         ``end_time`` with, for a run's best, the distance and direction in the run's summary.json; None when the
         file says nothing of it."""

@@ -1,7 +1,7 @@
 """Video of walkers without a display: MuJoCo's offscreen renderer, written as MP4 or GIF and logged to Rerun.
 
 Frames are rendered on the CPU by ``mujoco.Renderer`` through whichever OpenGL
-backend :mod:`evobiped.glbackend` chose (EGL or OSMesa headless).  Each frame
+backend :mod:`evobiped.core.glbackend` chose (EGL or OSMesa headless).  Each frame
 re-poses the model from a recorded :class:`~.trajectory.Trajectory` (its
 ``qpos`` rows), so the video shows exactly the replayed episode.  A camera of
 type ``mjCAMERA_TRACKING`` follows the walker's trunk (the pelvis) in a raised
@@ -18,7 +18,7 @@ last pose, marked "fell".
 
 The file format follows the suffix: ``.mp4`` (H.264 through imageio-ffmpeg,
 whose wheel ships an ffmpeg binary) or ``.gif`` (Pillow).  The file is written
-whole or not at all (:func:`~evobiped.fileio.atomic_write`).
+whole or not at all (:func:`~evobiped.core.fileio.atomic_write`).
 """
 
 from __future__ import annotations
@@ -32,9 +32,9 @@ import mujoco
 import numpy as np
 
 from ..bodies import BODIES
-from ..errors import UserError
-from ..fileio import atomic_write
-from ..glbackend import no_backend_message
+from ..core.errors import UserError
+from ..core.fileio import atomic_write
+from ..core.glbackend import no_backend_message
 from .trajectory import Trajectory
 
 #: frames per second of simulated time (the videos play in real time)
@@ -119,7 +119,7 @@ def render_frames(trajs: list[Trajectory], names: list[str], *, fps: float = FPS
                   renderer: FrameRenderer | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Frames of the trajectories side by side -> ``(frames (F, H, W, 3) uint8, times (F,) s)``, each panel
     ``size`` = (width, height) pixels, at most :data:`COLUMNS` panels per row (empty panels grey).
-    ``progress`` (optional, a :class:`~evobiped.progress.Progress`) hears the frames done (restarted here with their number);
+    ``progress`` (optional, a :class:`~evobiped.core.progress.Progress`) hears the frames done (restarted here with their number);
     ``renderer`` (optional, of that size): one opened earlier (the caller closes it), else one opened and closed here."""
     times = frame_times(trajs, fps, window)
     if progress is not None:

@@ -2,15 +2,15 @@
 
 Rerun's gRPC sink retries silently and its flush waits forever when no
 viewer listens, so we check the address first and flush with a time limit;
-both failures are a :class:`~evobiped.errors.UserError` (one line, exit 2).
+both failures are a :class:`~evobiped.core.errors.UserError` (one line, exit 2).
 """
 
 from __future__ import annotations
 
 from urllib.parse import urlparse
 
-from ..errors import UserError
-from ..net import connect_error
+from ..core.errors import UserError
+from ..core.net import connect_error
 
 DEFAULT_ADDR = "127.0.0.1:9876"
 #: seconds to wait for a viewer to take the data

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..episode import EpisodeConfig
-from ..errors import UserError
+from ..core.errors import UserError
 
 KINDS = ("weak", "locked", "short")
 #: rad: half the range a locked joint keeps

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import rundir
+from ..files import rundir
 from ..episode import EpisodeConfig
-from ..errors import UserError
+from ..core.errors import UserError
 from ..evolution.archive_file import Archive, read_archive
-from ..genome_file import load_genome
+from ..files.genome_file import load_genome
 from ..record.source import Source
 
 #: m/s: the least mean forward speed of a walking elite

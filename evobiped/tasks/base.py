@@ -20,16 +20,16 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..bodies.base import Body
-from ..errors import ConfigError
-from ..options import NoOptions, taken
-from ..sim import Sims
+from ..core.errors import ConfigError
+from ..core.options import NoOptions, taken
+from ..physics.sim import Sims
 
 
 class Task:
     """Base class: no sensors, no bookkeeping; subclasses define fitness."""
 
     name = "task"
-    #: the task's options (a dataclass of :func:`evobiped.options.option` fields); constructed as ``cls(options)``
+    #: the task's options (a dataclass of :func:`evobiped.core.options.option` fields); constructed as ``cls(options)``
     Options: ClassVar[type] = NoOptions
     #: full episodes per genome, each from the initial state (e.g. one per sound source)
     presentations: int = 1
@@ -67,7 +67,7 @@ class Task:
         return {}
 
     def sensor_mirror(self) -> dict[str, tuple[tuple[int, ...], tuple[float, ...]]]:
-        """How each sensor the task adds reads on the left/right mirrored body (:mod:`evobiped.frame`): name ->
+        """How each sensor the task adds reads on the left/right mirrored body (:mod:`evobiped.interface.frame`): name ->
         (column permutation, sign per column); default none."""
         return {}
 

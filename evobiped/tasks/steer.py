@@ -78,8 +78,8 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from ..errors import ConfigError
-from ..options import given, option
+from ..core.errors import ConfigError
+from ..core.options import given, option
 from .base import Task
 
 #: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
@@ -130,7 +130,7 @@ def with_sources(config, sources):
     episode of another task."""
     import dataclasses
 
-    from ..errors import UserError
+    from ..core.errors import UserError
 
     if sources is None:
         return config
@@ -193,7 +193,7 @@ class SteerOptions:
     loudness: bool = option(False, "offer the distance cue `loudness` = min(1, 1 m^2 / D^2), D the ears' distance (m) to the source")
 
     def __post_init__(self):
-        from ..options import check_fields
+        from ..core.options import check_fields
 
         check_fields(self, "episode.task_options")
         if self.random_sources:

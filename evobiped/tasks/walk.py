@@ -35,7 +35,7 @@ Weighted terms (``fitness = "weighted"``, beyond the paper): F = sum_k w_k term_
 over the terms named in ``weights`` (e.g. forward m, time up s, steps), the
 weights a run's curriculum may change from one phase to the next
 (:mod:`evobiped.evolution.curriculum`).  ``steps`` counts the walker's stance
-switches (a touchdown of the swing foot, :mod:`evobiped.gait`): paying for
+switches (a touchdown of the swing foot, :mod:`evobiped.physics.gait`): paying for
 steps teaches a policy on point feet to step, the only way it stays up.
 
 Gait measures (``gait_measures = true``): the terms ``speed``, the mean forward
@@ -56,9 +56,9 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from .. import gait
-from ..errors import ConfigError
-from ..options import option
+from ..physics import gait
+from ..core.errors import ConfigError
+from ..core.options import option
 from .base import Task
 
 

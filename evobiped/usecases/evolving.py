@@ -13,12 +13,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .. import rundir
+from ..files import rundir
 from ..evolution import evaluate
 from ..evolution.evaluate import Evaluator
 from ..evolution.run import Run
 from ..evolution.run_config import RunConfig, check_run
-from ..fileio import read_json
+from ..core.fileio import read_json
 
 
 @dataclass

@@ -3,10 +3,10 @@
 The replay is the same episode the GA ran (``EpisodeConfig(**stored).build()``
 with the genome alone; batch size does not change results) with its recording
 (:class:`~evobiped.record.replay_recording.ReplayRecording`) listening, so in the numerical environment
-the genome was stored in (:mod:`evobiped.provenance`) the replayed fitness
+the genome was stored in (:mod:`evobiped.core.provenance`) the replayed fitness
 equals the stored one to the last bit; in another, the report says what differs
-and how far the outcome drifted (:mod:`evobiped.outcome`).  The ``.rrd`` is made in memory and
-written whole by :func:`~evobiped.fileio.atomic_write` at the end: a failed
+and how far the outcome drifted (:mod:`evobiped.files.outcome`).  The ``.rrd`` is made in memory and
+written whole by :func:`~evobiped.core.fileio.atomic_write` at the end: a failed
 replay leaves nothing half-written.
 """
 
@@ -16,9 +16,9 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import rundir
-from ..outcome import compare, outcome
-from ..provenance import differences
+from ..files import rundir
+from ..files.outcome import compare, outcome
+from ..core.provenance import differences
 from ..record.source import Source
 from ..record.trajectory import Trajectory, TrajectoryRecorder
 from ..tasks.steer import with_sources
@@ -38,12 +38,12 @@ class ReplayReport:
     recording: Path | None
     figures: list[Path]
     trajectory: Trajectory
-    #: what the walker did (:func:`evobiped.outcome.outcome`)
+    #: what the walker did (:func:`evobiped.files.outcome.outcome`)
     outcome: dict
-    #: how this process's numerical environment differs from the recorded one (:func:`evobiped.provenance.differences`);
+    #: how this process's numerical environment differs from the recorded one (:func:`evobiped.core.provenance.differences`);
     #: empty: the replay must be bit-identical
     environment_differences: list[str]
-    #: how far the outcome drifted from the stored one, and what lies outside the tolerance (:func:`evobiped.outcome.compare`)
+    #: how far the outcome drifted from the stored one, and what lies outside the tolerance (:func:`evobiped.files.outcome.compare`)
     drift: list[str]
     outcome_failures: list[str]
     video: Path | None = None
@@ -62,7 +62,7 @@ class ReplayReport:
     @property
     def reproduced(self) -> bool:
         """What the reproducibility contract promises holds: bit for bit in the recorded numerical environment,
-        the same outcome within :data:`evobiped.outcome.TOLERANCE` in another (True when nothing is compared)."""
+        the same outcome within :data:`evobiped.files.outcome.TOLERANCE` in another (True when nothing is compared)."""
         bits = self.matches or not self.compared or self.stored_fitness is None or bool(self.environment_differences)
         return bits and not (self.outcome_checked and self.outcome_failures)
 
@@ -90,7 +90,7 @@ def replay(
     video_options: dict | None = None,
 ) -> ReplayReport:
     """Re-simulate ``source``; record to ``out`` (default :func:`default_out`, ``_video`` with ``video``) or a viewer (``spawn``/``connect``).
-    ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.progress.Progress.listener`;
+    ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.core.progress.Progress.listener`;
     ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources;
     ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the recording
     (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``)."""

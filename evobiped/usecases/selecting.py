@@ -1,5 +1,5 @@
 """The select use case: a run's walker chosen by simulating its fittest generation bests (and its start genome)
-for longer than their evaluation did (:mod:`evobiped.selection`); written as ``RUN/selected.json``."""
+for longer than their evaluation did (:mod:`evobiped.analysis.selection`); written as ``RUN/selected.json``."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import rundir
-from ..errors import UserError
+from ..files import rundir
+from ..core.errors import UserError
 from ..evolution.run_config import RunConfig, initial_genome
-from ..fileio import read_json, write_json
-from ..genome_file import load_genome, save_genome
-from ..outcome import outcome
-from ..selection import best_candidate, try_candidates
+from ..core.fileio import read_json, write_json
+from ..files.genome_file import load_genome, save_genome
+from ..files.outcome import outcome
+from ..analysis.selection import best_candidate, try_candidates
 
 #: what select writes into the run directory: the chosen walker, and every candidate's row
 SELECTED, CANDIDATES = "selected.json", "selected_candidates.json"
@@ -22,7 +22,7 @@ SELECTED, CANDIDATES = "selected.json", "selected_candidates.json"
 
 @dataclass
 class Selection:
-    """What :func:`select_walker` found: one label and row (:func:`~evobiped.selection.try_candidates`) per candidate,
+    """What :func:`select_walker` found: one label and row (:func:`~evobiped.analysis.selection.try_candidates`) per candidate,
     the chosen one's index, and the file it was written to."""
 
     labels: list[str]

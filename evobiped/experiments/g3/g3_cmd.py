@@ -32,7 +32,7 @@ def add_g3(sub) -> None:
 def run_g3_cmd(args) -> int:
     from . import network as g3
     from .simulation import go_sweep
-    from ...errors import ConfigError
+    from ...core.errors import ConfigError
 
     pre = g3.preset(args.preset)
     if args.switch_at is not None and args.from_go is None:

@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...core.errors import ConfigError
 
 THRESHOLD = 0.33
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...controllers.g3_network import CELLS, Shunting
-from ...errors import ConfigError
+from ...core.errors import ConfigError
 
 #: quadruped channel names, in channel order
 LIMBS = ("LF", "RF", "LH", "RH")

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...controllers.g3_network import rk4_step
-from ...errors import ConfigError
+from ...core.errors import ConfigError
 from .gaits import analyse_gait
 from .network import G3Network, Preset
 

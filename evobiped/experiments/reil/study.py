@@ -35,9 +35,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from ... import __version__, rundir
-from ...errors import ConfigError, UserError
-from ...options import given
+from ... import __version__
+from ...files import rundir
+from ...core.errors import ConfigError, UserError
+from ...core.options import given
 from ...evolution.evaluate import SerialEvaluator
 from ...evolution.ray_backend import init_ray
 from ...evolution.pool import spawn_pool, stop_pool
@@ -45,9 +46,9 @@ from ...controllers import CONTROLLERS
 from ...tasks import TASKS
 from ...evolution.run import Run
 from ...evolution.run_config import OPTIMIZERS, RunConfig
-from ...fileio import read_json, write_json
-from ...genome_file import load_genome
-from ...progress import Progress
+from ...core.fileio import read_json, write_json
+from ...files.genome_file import load_genome
+from ...core.progress import Progress
 
 #: the fitness terms a study needs of the run's task (besides the criteria its conditions name, ``Task.criteria``)
 TERMS = ("distance",)

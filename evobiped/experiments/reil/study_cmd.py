@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from ...errors import exit_status
+from ...core.errors import exit_status
 from ...flags import check_workers, choices_text, positive_float, positive_int, run_config
 
 

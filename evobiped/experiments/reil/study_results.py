@@ -8,8 +8,9 @@ import csv
 import io
 from pathlib import Path
 
-from ... import __version__, rundir
-from ...fileio import atomic_write, write_json
+from ... import __version__
+from ...files import rundir
+from ...core.fileio import atomic_write, write_json
 from .stats import histogram_edges, mean_std, wilson_interval
 from .study import StudyConfig, run_dir
 

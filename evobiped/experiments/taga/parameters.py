@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...controllers.matsuoka import Matsuoka
-from ...errors import ConfigError
+from ...core.errors import ConfigError
 
 #: Appendix D, by joint role within a leg (hip, knee, ankle): tau, tau' (s), p_e, p_f (N m)
 TAGA_ROLE = {

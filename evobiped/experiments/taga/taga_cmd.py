@@ -6,9 +6,9 @@ import json
 
 import numpy as np
 
-from ...errors import UserError
+from ...core.errors import UserError
 from ...flags import positive_float, refuse
-from ...progress import Progress
+from ...core.progress import Progress
 
 
 def add_taga(sub) -> None:
@@ -41,12 +41,13 @@ def _nan_to_null(row: dict) -> dict:
 def run_taga_cmd(args) -> int:
     from ...bodies import TagaBiped
     from ...controllers.matsuoka import MatsuokaOptions
-    from . import walking as tx
-    from ...options import check_value, option_bounds
-    from ...validate import number
+    from . import protocols
+    from .parameters import PRESETS, preset_genome
+    from ...core.options import check_value, option_bounds
+    from ...core.validate import number
 
-    if args.preset not in tx.PRESETS:
-        raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(tx.PRESETS)})")
+    if args.preset not in PRESETS:
+        raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(PRESETS)})")
     for u in args.u0:
         check_value(MatsuokaOptions, "u0", u, "--u0")
     low, high = option_bounds(TagaBiped.Options, "slope")  # the body's declared limit, in % here
@@ -68,18 +69,18 @@ def run_taga_cmd(args) -> int:
     progress = Progress("taga", total, "s simulated", quiet=args.quiet or args.json)
     if args.save_genome:
         from ...episode import EpisodeConfig
-        from ...genome_file import save_genome
+        from ...files.genome_file import save_genome
 
         body = {k: v for k, v in opts.items() if k != "preset"}
         cfg = EpisodeConfig(body="taga", controller="matsuoka", seconds=seconds, body_options=body, controller_options={"u0": args.u0[0]})
-        save_genome(args.save_genome, tx.preset_genome(cfg.build().controller, args.preset), cfg, preset=args.preset)
+        save_genome(args.save_genome, preset_genome(cfg.build().controller, args.preset), cfg, preset=args.preset)
     if args.push:
         if len(args.u0) != 1:
             raise UserError("--push takes one --u0 value")
         force = args.push_force if args.push_force is not None else (200.0 if args.push == "leg" else 288.0)
         target = "right_shank" if args.push == "leg" else "hip"
         delay = 0.05 if args.push_delay is None else args.push_delay
-        _, (s,) = tx.push(target, force, [delay], u0=args.u0[0], progress=progress.update, **opts)
+        _, (s,) = protocols.push(target, force, [delay], u0=args.u0[0], progress=progress.update, **opts)
         progress.finish()
         if args.json:
             print(json.dumps(_nan_to_null(s), allow_nan=False))
@@ -93,7 +94,7 @@ def run_taga_cmd(args) -> int:
         for i, (L, D) in enumerate(s["strides_after"]):
             print(f"  stride {i + 1:2d} after: {L:.3f} m  {D:.3f} s")
         return 0
-    _, rows = tx.steady(args.u0, seconds=seconds, window=window, progress=progress.update, **opts)
+    _, rows = protocols.steady(args.u0, seconds=seconds, window=window, progress=progress.update, **opts)
     progress.finish()
     if args.json:
         settings = {**{k: v for k, v in vars(args).items() if k != "func"}, "seconds": seconds, "window": window}

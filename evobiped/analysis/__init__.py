@@ -1,0 +1,1 @@
+"""What is asked of walkers once evolved: the robustness battery, choosing a walker, benchmarks."""

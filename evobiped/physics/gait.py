@@ -1,0 +1,81 @@
+"""Senses that carry a gait's structure: which leg stands, and for how long.
+
+A balance law keeps a phase (stance or swing, switched by foot contact and a
+timer) and gates its outputs by it; a network fed only instantaneous senses
+must build that memory itself.  These two senses hand it over, from any body
+that declares its foot-contact sensor (``Body.contact_sensor``):
+
+* ``stance_leg`` ``(n, 1)``: +1 while the first leg of the contact sensor (the
+  Reil body's left) is the stance leg, -1 while the second is.  The stance leg
+  changes at a touchdown of the other foot, and a touchdown counts only after
+  that foot has been off the ground for at least ``MIN_AIRBORNE`` s (hysteresis:
+  a foot chattering on contact does not flip it).  At the start it is the leg
+  on the ground (the first if both are).
+* ``since_touchdown`` ``(n, 1)``: seconds since the stance leg's touchdown
+  (since the start before the first), capped at ``CAP`` s.
+
+The tracker's state lives beside MuJoCo's in ``sims.extra["gait"]`` (copied
+with the batch), created on the first read, so bodies whose controllers never
+read these senses pay nothing; :func:`update` runs after every control tick.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .sim import Sims
+
+#: s a foot must have been airborne for its touchdown to change the stance leg
+MIN_AIRBORNE = 0.06
+#: s: ``since_touchdown`` saturates here (a walker standing still)
+CAP = 2.0
+NAMES = ("stance_leg", "since_touchdown")
+WIDTHS = {"stance_leg": 1, "since_touchdown": 1}
+#: standing values and scales for a controller that normalises its inputs
+NORMS = {"stance_leg": ((0.0,), (1.0,)), "since_touchdown": ((0.2,), (0.2,))}
+#: their left/right mirror (:mod:`evobiped.interface.frame`): the stance flag changes sign, the time does not
+MIRROR = {"stance_leg": ((0,), (-1,)), "since_touchdown": ((0,), (1,))}
+
+
+def _start(contact: np.ndarray, time: np.ndarray) -> dict[str, np.ndarray]:
+    """A tracker for rows with contacts ``(n, 2)`` at ``time`` ``(n,)`` s."""
+    return {
+        "stance": np.where(contact[:, 0] | ~contact[:, 1], 0, 1),
+        "touchdown": time.copy(),
+        "lifted": np.where(contact, np.inf, time[:, None]),  # when each foot left the ground (inf: on it)
+    }
+
+
+def read(contact: np.ndarray, sims: Sims) -> dict[str, np.ndarray]:
+    """The two senses for every row; ``contact`` ``(n, 2)`` bool, the body's contact sensor now."""
+    table = sims.extra.get("gait")
+    if table is None:
+        table = sims.extra["gait"] = _start(contact, sims.time.copy())
+    since = np.minimum(sims.time - table["touchdown"], CAP)
+    return {"stance_leg": np.where(table["stance"] == 0, 1.0, -1.0)[:, None], "since_touchdown": since[:, None]}
+
+
+def update(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:
+    """Advance the tracker of rows ``ids`` to now (after a control tick); ``contact`` ``(len(ids), 2)`` bool.
+    Nothing when no controller has read the senses."""
+    table = sims.extra.get("gait")
+    if table is None or len(ids) == 0:
+        return
+    t = sims.time[ids]
+    lifted = table["lifted"][ids]
+    other = 1 - table["stance"][ids]
+    landed = contact[np.arange(len(ids)), other] & (t - lifted[np.arange(len(ids)), other] >= MIN_AIRBORNE)
+    table["stance"][ids] = np.where(landed, other, table["stance"][ids])
+    table["touchdown"][ids] = np.where(landed, t, table["touchdown"][ids])
+    # a foot on the ground: inf; a foot that just left it: now; a foot in the air keeps its lift-off time
+    table["lifted"][ids] = np.where(contact, np.inf, np.minimum(lifted, t[:, None]))
+
+
+def restart(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:
+    """Rows ``ids`` begin anew (contacts ``(len(ids), 2)`` bool at their reset state)."""
+    table = sims.extra.get("gait")
+    if table is None:
+        return
+    fresh = _start(contact, sims.time[ids])
+    for k, v in fresh.items():
+        table[k][ids] = v
