@@ -172,7 +172,7 @@ class MapElites(Optimizer):
         self.fitness = np.full(len(self.population), np.nan)
 
     def tell(self, result) -> None:
-        """Fitness and terms (an :class:`~evobiped.episode_result.EpisodeResult`) of the batch; each genome with finite
+        """Fitness and terms (an :class:`~evobiped.episode.result.EpisodeResult`) of the batch; each genome with finite
         fitness and measures goes to its cell if it beats the elite there."""
         unknown = np.isnan(self.fitness)
         super().tell(result)
