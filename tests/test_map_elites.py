@@ -103,6 +103,23 @@ def test_a_map_elites_run_resumes_bit_identically_and_derives_its_archive(tmp_pa
     assert arch.genome.tolist() == a["optimizer"]["genome"]
 
 
+def test_the_run_recording_holds_the_archive_growth(tmp_path):
+    """evolution.rrd records the archive's cells, coverage and QD score per generation, as archive.json counts them."""
+    from evobiped.record.evolution_log import recording_series
+
+    config = RunConfig.from_dict(dict(TINY, generations=3))
+    run = Run.create(tmp_path / "run", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        run.evolve(ev)
+    progress = read_archive(run.dir).progress
+    series = {name: recording_series(run.dir / "evolution.rrd", f"/evolution/optimizer/{name}")
+              for name in ("evaluations", "cells", "coverage", "qd_score")}
+    assert series["qd_score"] == dict(enumerate(progress[:, 2].tolist())) and len(progress) == 3
+    assert series["evaluations"] == {0: 6.0, 1: 12.0, 2: 18.0}
+    assert series["coverage"] == {g: c / 20 for g, c in enumerate(progress[:, 1].tolist())}  # a 5 x 4 grid
+    assert series["cells"][2] == len(read_archive(run.dir).cell) > 0
+
+
 def test_an_archive_is_seeded_from_a_genome_file(tmp_path):
     """--from: the first batch is the start genome itself and its mutants."""
     config = RunConfig.from_dict({**TINY, "generations": 1, "initial": str(WALKERS / "simbicon_cma_seed5.json")})

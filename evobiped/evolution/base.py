@@ -108,6 +108,11 @@ class Optimizer:
         written at each commit and rebuilt on a resume; default none.  ``generation_committed``: a generation is."""
         return {}
 
+    def series(self) -> dict[str, np.ndarray]:
+        """This optimizer's own numbers per committed generation (name -> ``(generations,)``), recorded in the run's
+        evolution.rrd beside the history (``evolution/optimizer/<name>``); default none."""
+        return {}
+
     def ranking(self) -> np.ndarray:
         """Indices best first; ties keep population order (stable)."""
         return np.argsort(-self.fitness, kind="stable")

@@ -154,7 +154,7 @@ def derive(run, *, repair: bool = False) -> None:
         if recording_matches(rec, columns):
             return
         run.repairs.append(f"{rundir.RECORDING} rebuilt from the checkpoint")
-    write_recording(rec, columns, run.recording_id)
+    write_recording(rec, columns, run.recording_id, run.optimizer.series())
 
 
 def _best_text(run) -> str | None:

@@ -206,6 +206,13 @@ class MapElites(Optimizer):
         e, c = self.elites(), self.config
         return {ARCHIVE: archive_text(c.measures, c.low, c.high, c.resolution, self.cells(e["index"]), e, self.progress)}
 
+    def series(self) -> dict[str, np.ndarray]:
+        """The archive's growth per generation: evaluations so far, cells filled, coverage (fraction of the grid's cells)
+        and QD score (the sum of the elites' objectives)."""
+        p = np.array(self.progress, float).reshape(-1, 3)
+        return {"evaluations": p[:, 0], "cells": p[:, 1], "coverage": p[:, 1] / np.prod(self.config.resolution),
+                "qd_score": p[:, 2]}
+
     # ---- its state as a value
     def state(self) -> MapElitesState:
         e = self.elites()

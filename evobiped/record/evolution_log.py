@@ -10,8 +10,10 @@ viewer gets each generation as it ends through :class:`EvolutionLog`::
     log.close()
 
 Entities: ``evolution/best``, ``evolution/mean``, ``evolution/median``,
-``evolution/worst`` (fitness) and ``evolution/counts/<name>`` for any extra
-numbers (evaluations, falls, wall seconds).
+``evolution/worst`` (fitness), ``evolution/counts/<name>`` for any extra
+numbers (evaluations, falls, wall seconds), and ``evolution/optimizer/<name>``
+for an optimizer's own series (MAP-Elites: the archive's cells, coverage and
+QD score per generation).
 """
 
 from __future__ import annotations
@@ -52,36 +54,46 @@ def log_history(rec, history: dict[str, np.ndarray]) -> None:
         rec.send_columns(path, indexes=idx, columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
 
 
-def _blueprint():
+def log_series(rec, series: dict[str, np.ndarray]) -> None:
+    """An optimizer's own series (name -> ``(generations,)``, generation 0 first) under ``evolution/optimizer``."""
+    import rerun as rr
+
+    for name, vals in series.items():
+        idx = [rr.TimeColumn(TIMELINE, sequence=np.arange(len(vals), dtype=np.int64))]
+        rec.send_columns(f"evolution/optimizer/{name}", indexes=idx, columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
+
+
+def _blueprint(optimizer_series: bool = False):
     import rerun.blueprint as rrb
 
-    return rrb.Blueprint(
-        rrb.Vertical(
-            rrb.TimeSeriesView(origin="evolution", contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"], name="fitness per generation"),
-            rrb.TimeSeriesView(origin="evolution/terms", name="the best individual's terms"),
-            rrb.TimeSeriesView(origin="evolution/counts", name="evaluations, falls, time"),
-            row_shares=[3, 1, 1],
-        ),
-        collapse_panels=True,
-    )
+    views = [rrb.TimeSeriesView(origin="evolution", contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"], name="fitness per generation"),
+             rrb.TimeSeriesView(origin="evolution/terms", name="the best individual's terms"),
+             rrb.TimeSeriesView(origin="evolution/counts", name="evaluations, falls, time")]
+    if optimizer_series:
+        views.append(rrb.TimeSeriesView(origin="evolution/optimizer", name="the optimizer's own (MAP-Elites: the archive's growth)"))
+    return rrb.Blueprint(rrb.Vertical(*views, row_shares=[3, 1, 1, 2][: len(views)]), collapse_panels=True)
 
 
-def recording_bytes(history: dict[str, np.ndarray], recording_id: str, application_id: str = "evobiped_evolve") -> bytes:
-    """A complete ``.rrd`` (footer included) of a whole history, made in memory."""
+def recording_bytes(history: dict[str, np.ndarray], recording_id: str, series: dict[str, np.ndarray] | None = None,
+                    application_id: str = "evobiped_evolve") -> bytes:
+    """A complete ``.rrd`` (footer included) of a whole history, and an optimizer's own ``series``, made in memory."""
     import rerun as rr
 
     rec = rr.RecordingStream(application_id, recording_id=recording_id)
     stream = rec.binary_stream()
-    rec.send_blueprint(_blueprint())
+    rec.send_blueprint(_blueprint(bool(series)))
     log_history(rec, history)
+    log_series(rec, series or {})
     data = stream.read(flush=True) or b""
     rec.disconnect()
     return data
 
 
-def write_recording(path: str | Path, history: dict[str, np.ndarray], recording_id: str) -> None:
-    """(Re)write ``path`` from a whole history, atomically (WriteError: which file, which error)."""
-    atomic_write(path, recording_bytes(history, recording_id))
+def write_recording(path: str | Path, history: dict[str, np.ndarray], recording_id: str,
+                    series: dict[str, np.ndarray] | None = None) -> None:
+    """(Re)write ``path`` from a whole history and an optimizer's own series, atomically (WriteError: which file, which
+    error)."""
+    atomic_write(path, recording_bytes(history, recording_id, series))
 
 
 def recording_series(path: str | Path, entity: str = "/evolution/best") -> dict[int, float]:
