@@ -11,7 +11,7 @@ from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
 from evobiped.files.genome_file import load_genome  # noqa: E402
 from evobiped.repertoire.damage import damaged_episode, parse_damage  # noqa: E402
 from evobiped.repertoire.elites import load_repertoire as load  # noqa: E402
-from evobiped.repertoire.speed import follow  # noqa: E402
+from evobiped.repertoire.speed import Stretch, follow, hysteresis  # noqa: E402
 from evobiped.repertoire.trial_error import TrialAndError, matern52, posterior, prior_distance  # noqa: E402
 
 from .conftest import WALKERS, cli  # noqa: E402
@@ -158,3 +158,12 @@ def test_the_knob_switches_to_the_gait_most_like_the_current_one():
     rep = Repertoire(Path("."), arch, EpisodeConfig(seconds=20.0))
     assert rep.nearest(0.5, 0.0) == 0 and rep.nearest(0.5, 0.0, like=3) == 2
     assert rep.nearest(0.3, 0.0, like=1) == 3  # the only gait within 5 %
+
+
+def test_hysteresis_pairs_each_command_held_on_the_way_up_with_the_same_command_on_the_way_down():
+    """0.2 -> 0.4 -> 0.6 -> 0.4 -> 0.2 and a repeat of the peak: the pairs are (0.2: 1st, 5th) and (0.4: 2nd, 4th);
+    the peak and a speed held only once are no pair."""
+    s = [Stretch(v, elite, v, measured, True) for v, elite, measured in
+         ((0.2, 1, 0.21), (0.4, 2, 0.41), (0.6, 3, 0.6), (0.6, 4, 0.61), (0.4, 5, 0.45), (0.2, 6, 0.25), (0.3, 7, 0.3))]
+    got = [(v, up.elite, down.elite, down.measured - up.measured) for v, up, down in hysteresis(s)]
+    assert got == [(0.2, 1, 6, pytest.approx(0.04)), (0.4, 2, 5, pytest.approx(0.04))]

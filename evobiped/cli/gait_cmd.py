@@ -21,7 +21,7 @@ def run_gait_cmd(args) -> int:
     import math
 
     from ..repertoire.elites import load_repertoire
-    from ..repertoire.speed import follow, tracking
+    from ..repertoire.speed import follow, hysteresis, tracking
 
     try:
         speeds = [float(v) for v in args.speed.split(",")]
@@ -42,6 +42,10 @@ def run_gait_cmd(args) -> int:
     error, down = tracking(stretches)
     print(f"mean tracking error {100 * error:.1f} % over {len(stretches)} stretches of {args.hold:g} s; "
           + ("no fall" if not down else f"down in {down} stretch(es)"))
+    for v, up, dn in hysteresis(stretches):
+        cells = [f"{a.cell[s.elite, 0]},{a.cell[s.elite, 1]}" for s in (up, dn)]
+        print(f"hysteresis at {v:.3f} m/s: rising {up.measured:.3f} m/s (cell {cells[0]}), falling {dn.measured:.3f} m/s "
+              f"(cell {cells[1]})" + ("" if up.up and dn.up else "; down on the way"))
     return 0
 
 

@@ -68,3 +68,14 @@ def follow(rep: Repertoire, speeds: list[float], hold: float, turning: float = 0
 def tracking(stretches: list[Stretch]) -> tuple[float, int]:
     """The mean relative tracking error over the stretches and the number of stretches that ended down."""
     return float(np.mean([s.error for s in stretches])), sum(not s.up for s in stretches)
+
+
+def hysteresis(stretches: list[Stretch]) -> list[tuple[float, Stretch, Stretch]]:
+    """The commanded speeds held both while the schedule rises to its highest speed and while it falls from it, as
+    Taga measured his walker's gait against a rising and a falling drive: (speed, the stretch on the way up, the
+    stretch on the way down), slowest first.  A gait that depends on the way the knob came shows as different
+    elites or measured speeds at the same command."""
+    peak = int(np.argmax([s.commanded for s in stretches]))
+    up = {s.commanded: s for s in stretches[:peak]}
+    down = {s.commanded: s for s in stretches[peak + 1:]}
+    return [(v, up[v], down[v]) for v in sorted(up) if v in down]
