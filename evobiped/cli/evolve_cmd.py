@@ -11,7 +11,7 @@ from ..core.progress import Progress, hms
 
 
 def add_evolve(sub) -> None:
-    what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings) or CMA-ES (--optimizer cma)"
+    what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings), CMA-ES, evolution strategies or MAP-Elites (--optimizer)"
     p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
