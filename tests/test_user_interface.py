@@ -182,3 +182,24 @@ def test_a_closed_output_pipe_ends_quietly():
     proc.stdout.close()  # before the child has imported anything, so its first write meets a closed pipe
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 141 and err == b""
+
+
+def test_a_stop_signal_python_cannot_raise_is_no_traceback_other_errors_still_are(capsys, monkeypatch):
+    """A second Ctrl-C while the pool is torn down strikes inside a weakref callback: Python would print
+    'Exception ignored ... KeyboardInterrupt' after the command's last line; the command's hook drops only that."""
+    import sys
+
+    from evobiped.cli import quiet_interrupts
+
+    class Raises:  # Python cannot raise from __del__: it hands the exception to sys.unraisablehook
+        def __init__(self, exc):
+            self.exc = exc
+
+        def __del__(self):
+            raise self.exc
+
+    monkeypatch.setattr(sys, "unraisablehook", quiet_interrupts)
+    Raises(KeyboardInterrupt())
+    assert capsys.readouterr().err == ""
+    Raises(ValueError("a real fault"))
+    assert "a real fault" in capsys.readouterr().err

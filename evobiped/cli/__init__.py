@@ -55,8 +55,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def quiet_interrupts(unraisable) -> None:
+    """``sys.unraisablehook`` of the command's own process: a stop signal that strikes where Python cannot raise it
+    (a callback of the pool being torn down after the command's last line, a second Ctrl-C) is not a traceback;
+    anything else is reported as Python does."""
+    if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+        sys.__unraisablehook__(unraisable)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if argv is None:
+        sys.unraisablehook = quiet_interrupts
     keep_stderr()  # the last line reaches the user whatever a pool's thread does with descriptor 2 at that instant
     restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
     try:
