@@ -36,6 +36,8 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+from tests.test_faults import children, files  # noqa: E402  (the fault tests' process-tree and file snapshots)
 RUN = ["--population", "8", "--generations", "6", "--episode-seconds", "2", "--seed", "5", "--quiet"]
 PROCESS = [*RUN, "--backend", "process", "--workers", "2"]
 LIMIT = 180.0  # s: a case that takes longer hangs
@@ -71,18 +73,6 @@ def start(d: Path) -> subprocess.Popen:
 
     return subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *PROCESS, "--out", str(d)], text=True, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=defaults)
-
-
-def children(pid: int) -> list[int]:
-    out = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except (OSError, IndexError):
-            continue
-        if int(fields[1]) == pid and fields[0] != "Z":
-            out.append(int(stat.parent.name))
-    return out
 
 
 def is_tracker(pid: int) -> bool:
@@ -140,6 +130,7 @@ def finish(p: subprocess.Popen) -> tuple[int | None, str]:
 # ---- comparing runs
 def contents(d: Path) -> dict:
     """Every file of a run directory, wall-clock times left out (the recording as its fitness series)."""
+    from evobiped.files.rundir import HISTORY_COLUMNS
     from evobiped.record.evolution_log import recording_series
 
     out = {}
@@ -150,7 +141,8 @@ def contents(d: Path) -> dict:
         if name == "evolution.rrd":
             out[name] = [recording_series(p, f"/evolution/{s}") for s in ("best", "mean", "worst")]
         elif name == "history.csv":
-            out[name] = [r[:8] + r[9:] for r in csv.reader(p.read_text().splitlines())]
+            wall = HISTORY_COLUMNS.index("wall_seconds")
+            out[name] = [r[:wall] + r[wall + 1:] for r in csv.reader(p.read_text().splitlines())]
         elif name in ("checkpoint.json", "summary.json"):
             obj = json.loads(p.read_text())
             obj.pop("wall_seconds")
@@ -160,10 +152,6 @@ def contents(d: Path) -> dict:
         else:
             out[name] = p.read_bytes()
     return out
-
-
-def files(d: Path) -> dict:
-    return {p: p.read_bytes() for p in d.rglob("*") if p.is_file() and p.name != ".lock"}
 
 
 #: a note a run prints as it goes on, not an error
