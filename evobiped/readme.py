@@ -25,6 +25,7 @@ from .evolution.map_elites import MapElitesOptions
 from .evolution.run_config import NormaliseOptions
 from .evolution.ga import GAOptions
 from .core.options import markdown_table
+from .physics import gait
 from .physics.perturb import PerturbationOptions
 from .tasks import TASKS
 
@@ -58,6 +59,7 @@ SENSOR_TEXT = {
     "stance_leg": "which leg stands: +1 left, −1 right; it changes at the other foot's touchdown after ≥ 0.06 s "
                   "in the air (`evobiped/physics/gait.py`)",
     "since_touchdown": "seconds since the stance leg's touchdown, capped at 2 s",
+    "stance_side": "`stance_leg`'s value, not mirrored in the stance frame: a stance-frame network's way to turn",
     "link_angles": "inertial angles of right thigh, right shank, left thigh, left shank (rad from the horizontal)",
     "link_velocities": "their rates (rad/s), same order",
     "ground_contact": "ground contacts: right, left (0 or 1)",
@@ -85,8 +87,10 @@ def tables() -> dict[str, str]:
 
 
 def observation(body: str, task: str = "walk") -> dict[str, int]:
-    """The parts of an environment's observation in order (name -> width): the body's sensors, then the task's."""
-    return {**BODIES[body].sensor_widths, **TASKS[task]().sensor_widths()}
+    """The parts of an environment's observation in order (name -> width): the body's sensors, then the task's
+    (those read only on request left out, as the environment does)."""
+    offered = {**BODIES[body].sensor_widths, **TASKS[task]().sensor_widths()}
+    return {k: w for k, w in offered.items() if k not in gait.ON_REQUEST}
 
 
 def observation_table(body: str) -> str:

@@ -20,6 +20,7 @@ from gymnasium import spaces
 
 from ..episode import EpisodeConfig, EpisodeState
 from ..episode.parts import parsed
+from ..physics import gait
 from ..core.options import option
 from ..tasks import TASKS
 
@@ -80,7 +81,9 @@ class Walkers:
         self.low, self.high = self.episode.low, self.episode.high
         m = self.model
         self._hinges = m.jnt_qposadr[m.jnt_type == _HINGE]  # reset noise goes on these joint angles
-        self.sensor_widths = {**self.body.sensor_widths, **self.episode.task.sensor_widths()}
+        offered = {**self.body.sensor_widths, **self.episode.task.sensor_widths()}
+        #: the observation's senses (those read only on request, gait.ON_REQUEST, left out)
+        self.sensor_widths = {k: w for k, w in offered.items() if k not in gait.ON_REQUEST}
         #: the episode in progress (None before the first reset)
         self.state: EpisodeState | None = None
 

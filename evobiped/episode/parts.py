@@ -24,6 +24,7 @@ from ..controllers import CONTROLLERS
 from ..controllers.base import Controller
 from ..core.errors import ConfigError
 from ..interface.frame import StanceFrame
+from ..physics import gait
 from ..core.options import given, parse
 from ..tasks import TASKS
 from ..tasks.base import Task
@@ -104,7 +105,8 @@ def controller_part(name: str, options: Any, body: Body, task: Task, keys: tuple
 def _wired(name: str, opts: Any, body: Body, task: Task) -> Controller:
     cls = CONTROLLERS[name]
     added = task.sensor_widths()
-    offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()})
+    offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()},
+                  named_only=gait.ON_REQUEST)
     inputs = wire(cls.needs(opts), offer, chosen=opts.inputs, what=f"controller {name!r} (body {body.name!r}, task {task.name!r})")
     ctrl = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
     where = "episode.controller_options"

@@ -76,6 +76,8 @@ class Offer:
     task_sensors: tuple[str, ...] = ()
     #: sensor name -> (standing values, scales), for a controller that normalises its inputs
     norms: Mapping[str, tuple] = field(default_factory=dict)
+    #: sensors read only when an ``inputs`` list names them, never by default (e.g. ``stance_side``)
+    named_only: tuple[str, ...] = ()
 
 
 def problem(needs: Needs, offer: Offer) -> str | None:
@@ -118,7 +120,7 @@ def wire(needs: Needs, offer: Offer, *, chosen: list[str] | None = None, what: s
     if chosen is None:
         names = list(offer.task_sensors) if needs.task_sensors or needs.all_sensors else []
         if needs.all_sensors:
-            names += [n for n in offer.sensors if n not in names]
+            names += [n for n in offer.sensors if n not in names and n not in offer.named_only]
         names += [n for n in needs.sensors if n not in names]
         if needs.optional is not None and problem(needs.optional, offer) is None:
             names += [n for n in needs.optional.sensors if n not in names]

@@ -13,6 +13,12 @@ that declares its foot-contact sensor (``Body.contact_sensor``):
   on the ground (the first if both are).
 * ``since_touchdown`` ``(n, 1)``: seconds since the stance leg's touchdown
   (since the start before the first), capped at ``CAP`` s.
+* ``stance_side`` ``(n, 1)``: ``stance_leg``'s value, declared as a sense that
+  does *not* change under the left/right mirror.  In the body frame the two are
+  the same; a controller in the mirrored stance frame reads ``stance_leg`` as a
+  constant +1 but ``stance_side`` as +1/-1 by which side stands, so its weights on
+  ``stance_side`` make its gait asymmetric (it turns): zero weights leave the
+  symmetric walker as it was.
 
 The tracker's state lives beside MuJoCo's in ``sims.extra["gait"]`` (copied
 with the batch), created on the first read, so bodies whose controllers never
@@ -29,12 +35,16 @@ from .sim import Sims
 MIN_AIRBORNE = 0.06
 #: s: ``since_touchdown`` saturates here (a walker standing still)
 CAP = 2.0
-NAMES = ("stance_leg", "since_touchdown")
-WIDTHS = {"stance_leg": 1, "since_touchdown": 1}
+NAMES = ("stance_leg", "since_touchdown", "stance_side")
+WIDTHS = {"stance_leg": 1, "since_touchdown": 1, "stance_side": 1}
+#: senses read only when a controller's ``inputs`` name them: they repeat another outside the stance frame, so a
+#: controller's default inputs and the Gym observation leave them out
+ON_REQUEST = ("stance_side",)
 #: standing values and scales for a controller that normalises its inputs
-NORMS = {"stance_leg": ((0.0,), (1.0,)), "since_touchdown": ((0.2,), (0.2,))}
-#: their left/right mirror (:mod:`evobiped.interface.frame`): the stance flag changes sign, the time does not
-MIRROR = {"stance_leg": ((0,), (-1,)), "since_touchdown": ((0,), (1,))}
+NORMS = {"stance_leg": ((0.0,), (1.0,)), "since_touchdown": ((0.2,), (0.2,)), "stance_side": ((0.0,), (1.0,))}
+#: their left/right mirror (:mod:`evobiped.interface.frame`): the stance flag changes sign; the time, and the side
+#: (deliberately: it breaks the stance frame's symmetry), do not
+MIRROR = {"stance_leg": ((0,), (-1,)), "since_touchdown": ((0,), (1,)), "stance_side": ((0,), (1,))}
 
 
 def _start(contact: np.ndarray, time: np.ndarray) -> dict[str, np.ndarray]:
@@ -52,7 +62,8 @@ def read(contact: np.ndarray, sims: Sims) -> dict[str, np.ndarray]:
     if table is None:
         table = sims.extra["gait"] = _start(contact, sims.time.copy())
     since = np.minimum(sims.time - table["touchdown"], CAP)
-    return {"stance_leg": np.where(table["stance"] == 0, 1.0, -1.0)[:, None], "since_touchdown": since[:, None]}
+    leg = np.where(table["stance"] == 0, 1.0, -1.0)[:, None]
+    return {"stance_leg": leg, "since_touchdown": since[:, None], "stance_side": leg.copy()}
 
 
 def update(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:
