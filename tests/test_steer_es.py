@@ -163,3 +163,58 @@ def test_a_hearing_walker_given_the_distance_cue_with_zero_weights_walks_as_befo
     w[rows] = np.where(np.arange(rows.stop - rows.start) // 6 == 1, 0.5, moved[rows])  # loudness (input 1) to six motors
     c = new.nominal().build().run(w, seconds=4.0)
     assert not np.allclose(c.end_position, b.end_position, atol=1e-3)
+
+
+def test_the_rewired_start_walks_as_before_with_zero_side_weights_and_turns_both_ways_with_them(tmp_path):
+    """scripts/rewire_inputs.py adds stance_side to the from-scratch walker with zero rows: with its heading sense kept
+    it walks exactly as before.  Without the heading sense (which steers it back to its first facing), +-0.2 on the
+    side's direct weights to the two hip-roll motors turns it: the two signs turn it opposite ways, each more than
+    5 deg/s from the symmetric network's own drift, and both walk the whole 20 s."""
+    import runpy
+    import sys
+
+    def rewire(out, *flags):
+        argv, sys.argv = sys.argv, ["rewire_inputs.py", str(out), "--walker", str(SEED), *flags]
+        try:
+            with pytest.raises(SystemExit) as done:
+                runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / "rewire_inputs.py"), run_name="__main__")
+        finally:
+            sys.argv = argv
+        assert done.value.code == 0
+        return load_genome(out)
+
+    g, old, _ = load_genome(SEED)
+    kept, cfg, _ = rewire(tmp_path / "kept.json", "--drop", "since_touchdown", "--add", "since_touchdown", "--add", "stance_side")
+    assert cfg.controller_options.inputs[-2:] == ["since_touchdown", "stance_side"]
+    a, b = old.nominal().build().run(g, seconds=4.0), cfg.nominal().build().run(kept, seconds=4.0)
+    assert np.array_equal(a.end_position, b.end_position) and np.array_equal(a.end_time, b.end_time)
+
+    side, cfg, _ = rewire(tmp_path / "side.json")
+    assert "heading_error" not in cfg.controller_options.inputs and cfg.controller_options.inputs[-1] == "stance_side"
+    cfg = dataclasses.replace(cfg, task_options={**given(cfg.task_options), "gait_measures": True})
+    c = cfg.parts()[1]
+    block = c.layout.slices()["direct_weights"]
+    genomes = np.tile(side, (3, 1))
+    for row, w in ((1, 0.2), (2, -0.2)):
+        rows = genomes[row, block].reshape(c.n_inputs, -1)
+        rows[-1] = w * np.array([0, 1, 0, 0, -1, 0])  # left and right hip roll
+        genomes[row, block] = rows.ravel()
+    r = cfg.nominal().build().run(genomes)
+    turning = r.terms["turning"]
+    assert not r.fell.any() and (r.end_time == 20.0).all()
+    assert (turning[1] - turning[0]) * (turning[2] - turning[0]) < 0
+    assert min(abs(turning[1] - turning[0]), abs(turning[2] - turning[0])) > 5.0
+
+
+def test_stance_side_is_read_only_when_named_and_the_stance_frame_leaves_its_sign():
+    """A stance-frame controller's default inputs leave stance_side out; named, it reads +1 on the left stance row and
+    -1 on the right one (normalised by 1), while stance_leg reads +1 on both (the frame mirrors it)."""
+    base = dict(body="reil", controller="linear", task="walk", seconds=1.0, task_options={"fitness": "weighted"})
+    default = EpisodeConfig(**base, controller_options={"frame": "stance"}).build().controller
+    assert "stance_leg" in default.input_names and "stance_side" not in default.input_names
+    ep = EpisodeConfig(**base, controller_options={"frame": "stance", "inputs": ["stance_leg", "stance_side"]}).build()
+    state = ep.start(np.zeros((2, ep.controller.layout.size)))
+    state.sims.extra["gait"] = {"stance": np.array([0, 1]), "touchdown": np.zeros(2), "lifted": np.full((2, 2), np.inf)}
+    inputs, flip = ep._inputs(state, 2)
+    assert flip.tolist() == [False, True]
+    assert inputs.tolist() == [[1.0, 1.0], [1.0, -1.0]]
