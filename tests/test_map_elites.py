@@ -204,3 +204,21 @@ def _result(fitness, fell, speed):
     r.fitness, r.fell, r.end_time = np.asarray(fitness, float), np.asarray(fell, float), np.full(len(fitness), 2.0)
     r.terms = {"speed": np.asarray(speed, float), "turning": np.zeros(len(fitness))}
     return r
+
+
+@pytest.mark.parametrize("backend", ["thread", "ray"])
+def test_the_archive_is_the_same_on_threads_and_on_ray_actors(tmp_path, backend):
+    """The same short repertoire run evaluated serially, on two threads and on two Ray actors: archive.json and the
+    checkpoint's elites are identical (the batch's rows are evaluated wherever, and their results come back in order)."""
+    if backend == "ray":
+        pytest.importorskip("ray")
+    config = RunConfig.from_dict({**TINY, "generations": 2})
+    dirs = []
+    for name, workers in (("serial", None), (backend, 2)):
+        run = Run.create(tmp_path / name, config)
+        with make_evaluator(config.episode, name, workers=workers) as ev:
+            run.evolve(ev)
+        run.close()
+        dirs.append(run.dir)
+    a, b = (d / "archive.json" for d in dirs)
+    assert a.read_text() == b.read_text() and len(read_archive(dirs[0]).cell) >= 3
