@@ -191,6 +191,11 @@ def test_the_rewired_start_walks_as_before_with_zero_side_weights_and_turns_both
 
     side, cfg, _ = rewire(tmp_path / "side.json")
     assert "heading_error" not in cfg.controller_options.inputs and cfg.controller_options.inputs[-1] == "stance_side"
+    shipped = WALKERS.parent / "repertoire"
+    start, start_cfg, _ = load_genome(shipped / "es_turning_start.json")
+    assert np.array_equal(start, side) and start_cfg == cfg
+    table = tomllib.loads((shipped / "es_turning.toml").read_text())["episode"]["controller_options"]
+    assert table["inputs"] == cfg.controller_options.inputs and table["input_norm"] == cfg.controller_options.input_norm
     cfg = dataclasses.replace(cfg, task_options={**given(cfg.task_options), "gait_measures": True})
     c = cfg.parts()[1]
     block = c.layout.slices()["direct_weights"]
