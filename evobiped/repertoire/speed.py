@@ -57,10 +57,10 @@ RAMP, RAMP_DOWN = 0.1, 0.2
 def follow(rep: Repertoire, speeds: list[float], hold: float, turning: float = 0.0, *, ramp: float = RAMP,
            ramp_down: float = RAMP_DOWN, step: float = 1.0, correction: float = CORRECTION,
            overshoot: float = OVERSHOOT) -> list[Stretch]:
-    """Walk the schedule ``speeds`` (m/s, ``hold`` s each) switching elites on the fly every ``step`` s, the knob moving
-    by at most ``ramp`` m/s per s up and ``ramp_down`` down (0: at once) towards the speed the distance loop asks for (``correction`` s to make
-    up a deficit, 0: no loop; within ``overshoot`` of the command); every commanded speed is checked against the
-    archive's range (UserError) before anything is simulated."""
+    """Walk the schedule ``speeds`` (m/s, ``hold`` s each) switching elites on the fly every ``step`` s.  The knob moves
+    by at most ``ramp`` m/s per s up and ``ramp_down`` down (0: at once) towards the speed the distance loop asks for
+    (``correction`` s to make up a deficit, 0: no loop; within ``overshoot`` of the command).  Every commanded speed
+    is checked against the archive's range (UserError) before anything is simulated."""
     for v in speeds:
         rep.nearest(v, turning)
     walking = rep.measure("speed")[rep.walking()]
@@ -75,20 +75,20 @@ def follow(rep: Repertoire, speeds: list[float], hold: float, turning: float = 0
         return float(ep.task.terms(state.task)["speed"][0] * state.end_time[0])
 
     ticks = max(1, int(round(hold / step)))
+    dt = hold / ticks  # s between switches
     out = []
     for v in speeds:
         start = path()
         for k in range(ticks):
             want = v
             if correction:
-                deficit = v * k * hold / ticks - (path() - start)  # m behind the command so far in this stretch
+                deficit = v * k * dt - (path() - start)  # m behind the command so far in this stretch
                 want = float(np.clip(v + deficit / correction, v * (1 - overshoot), v * (1 + overshoot)))
                 want = float(np.clip(want, slowest, fastest))
-            dt = hold / ticks
             knob = float(np.clip(want, knob - ramp_down * dt if ramp_down else -np.inf, knob + ramp * dt if ramp else np.inf))
             elite = rep.nearest(knob, turning, like=elite)
             state.params = ep.controller.decode(genome[elite][None])
-            ep.advance(state, hold / ticks)
+            ep.advance(state, dt)
         out.append(Stretch(v, elite, float(rep.measure("speed")[elite]), (path() - start) / hold, bool(state.alive[0])))
     return out
 
