@@ -183,3 +183,18 @@ def test_hysteresis_pairs_each_command_held_on_the_way_up_with_the_same_command_
          ((0.2, 1, 0.21), (0.4, 2, 0.41), (0.6, 3, 0.6), (0.6, 4, 0.61), (0.4, 5, 0.45), (0.2, 6, 0.25), (0.3, 7, 0.3))]
     got = [(v, up.elite, down.elite, down.measured - up.measured) for v, up, down in hysteresis(s)]
     assert got == [(0.2, 1, 6, pytest.approx(0.04)), (0.4, 2, 5, pytest.approx(0.04))]
+
+
+def test_a_shipped_archive_is_never_written_into(tmp_path, monkeypatch, capsys):
+    """docs/repertoire is an archive without a run of its own (no config.json): its figures and an elite's replay go to
+    runs/repertoire/ under the current directory, and nothing is added to or changed in the shipped folder."""
+    shipped = WALKERS.parent / "repertoire"
+    before = {p.name: p.stat().st_mtime_ns for p in shipped.iterdir()}
+    monkeypatch.chdir(tmp_path)
+    assert cli("repertoire", shipped) == 0
+    assert cli("replay", shipped, "--cell", "20,29", "--quiet") == 0
+    assert "the replay equals it bit for bit" in capsys.readouterr().out
+    assert {p.name: p.stat().st_mtime_ns for p in shipped.iterdir()} == before
+    made = sorted(str(p.relative_to(tmp_path)) for p in (tmp_path / "runs").rglob("*.*"))
+    assert made == ["runs/repertoire/figures_archive/archive.png", "runs/repertoire/figures_archive/archive_progress.png",
+                    "runs/repertoire/replay_cell_20_29.rrd"]

@@ -6,7 +6,8 @@ from __future__ import annotations
 def add_repertoire(sub) -> None:
     p = sub.add_parser("repertoire", help="summarise and draw a map-elites run's gait repertoire (its archive.json)")
     p.add_argument("run", metavar="RUN", help="a map-elites run directory")
-    p.add_argument("--figures", metavar="DIR", help="where the figures go (default RUN/figures_archive)")
+    p.add_argument("--figures", metavar="DIR", help="where the figures go (default RUN/figures_archive; for an archive not in "
+                   "a run directory of its own, e.g. docs/repertoire, runs/<its name>/figures_archive)")
     p.add_argument("--list", action="store_true", help="also list every walking elite: cell, measures, objective")
     p.set_defaults(func=run_repertoire_cmd)
 
@@ -28,7 +29,7 @@ def run_repertoire_cmd(args) -> int:
     for k, m in enumerate(names):
         if walk.any():
             print(f"walking gaits' {m}: {a.values[walk, k].min():.3g} to {a.values[walk, k].max():.3g}")
-    out = Path(args.figures) if args.figures else figures_dir(rep.run_dir, "archive")
+    out = Path(args.figures) if args.figures else figures_dir(rep.outputs, "archive")
     out.mkdir(parents=True, exist_ok=True)
     who = f"{rep.run_dir.name}: {rep.episode.body}/{rep.episode.controller}, {rep.episode.seconds:g} s episodes"
     for f in (archive_figure(out / "archive.png", cells=a.cell, objective=a.objective, walking=walk, names=names, low=a.low, high=a.high,

@@ -46,14 +46,23 @@ class Repertoire:
         ok = ~a.fell & (a.end_time >= self.episode.seconds - 1e-9)
         return ok & (self.measure("speed") >= WALK_SPEED) if "speed" in a.measures else ok
 
+    @property
+    def outputs(self) -> Path:
+        """Where commands write about this repertoire when not told: the run directory of a run evobiped made (it holds
+        config.json); for an archive copied elsewhere (``docs/repertoire``, which may sit in a repository),
+        ``runs/<its folder's name>`` under the current directory."""
+        if (self.run_dir / rundir.CONFIG).is_file():
+            return self.run_dir
+        return rundir.GENOME_OUTPUTS / self.run_dir.resolve().name
+
     def source(self, cell: tuple[int, int]) -> Source:
         """The elite of grid cell ``cell`` as a genome to replay (its stored fitness: the archive's objective)."""
         k = self.archive.find(cell)
         a = self.archive
         meta = {"fitness": float(a.objective[k]), "fell": bool(a.fell[k]), "end_time": float(a.end_time[k]),
                 **({"environment": self.environment} if self.environment else {})}
-        path = self.run_dir / f"cell_{cell[0]}_{cell[1]}.json"  # no such file: names what replay writes
-        return Source(genome=a.genome[k].copy(), config=self.episode, meta=meta, genome_path=path, run_dir=self.run_dir)
+        path = self.outputs / f"cell_{cell[0]}_{cell[1]}.json"  # no such file: names what replay writes
+        return Source(genome=a.genome[k].copy(), config=self.episode, meta=meta, genome_path=path, run_dir=self.outputs)
 
     def nearest(self, speed: float, turning: float = 0.0, like: int | None = None) -> int:
         """The walking elite whose (speed, turning) is nearest the commanded one, in cell widths; with ``like`` (an elite's
