@@ -2,6 +2,7 @@
 grid arithmetic, a resume bit-identical to an uninterrupted run, archive.json, and bad settings refused."""
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from evobiped.core.errors import UserError  # noqa: E402
 from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
 from evobiped.evolution.archive_file import read_archive  # noqa: E402
 from evobiped.evolution.map_elites import MapElites, MapElitesOptions  # noqa: E402
+from evobiped.core.fileio import packed_floats, unpacked_floats  # noqa: E402
 from evobiped.files.genome_file import load_genome  # noqa: E402
 
 from .conftest import WALKERS, cli  # noqa: E402
@@ -100,7 +102,27 @@ def test_a_map_elites_run_resumes_bit_identically_and_derives_its_archive(tmp_pa
     arch = read_archive(whole.dir)
     assert len(arch.cell) == len(a["optimizer"]["index"]) >= 3
     assert arch.progress[:, 0].tolist() == [6, 12, 18, 24] and arch.progress[-1, 1] == len(arch.cell)
-    assert arch.genome.tolist() == a["optimizer"]["genome"]
+    assert np.array_equal(arch.genome, unpacked_floats(a["optimizer"]["genome"], "genome"))
+
+
+def test_the_elites_genomes_are_packed_exactly_and_a_checkpoint_of_rows_still_resumes(tmp_path):
+    """The checkpoint holds the elites' genomes as float64 bytes (compact, exact); a checkpoint from before, with a row
+    of numbers per elite, resumes to the same run."""
+    from .test_evolve import whole_and_resumed
+
+    config = RunConfig.from_dict(TINY)
+    whole, cut_dir = whole_and_resumed(tmp_path, config, stop_after=1)
+    table = json.loads((whole.dir / "checkpoint.json").read_text())["optimizer"]["genome"]
+    assert set(table) == {"float64_base64", "shape"} and table["shape"][1] == config.episode.layout().size
+    assert np.array_equal(unpacked_floats(table, "g"), read_archive(whole.dir).genome)
+    # the cut run's checkpoint rewritten with rows of numbers, as before, then run on: the same archive
+    run2 = tmp_path / "rows"
+    shutil.copytree(cut_dir, run2)
+    ck = json.loads((run2 / "checkpoint.json").read_text())
+    ck["optimizer"]["genome"] = unpacked_floats(ck["optimizer"]["genome"], "g").tolist()
+    (run2 / "checkpoint.json").write_text(json.dumps(ck))
+    assert cli("evolve", "--resume", run2, "--quiet") == 0
+    assert (run2 / "archive.json").read_text() == (whole.dir / "archive.json").read_text()
 
 
 def test_the_run_recording_holds_the_archive_growth(tmp_path):
@@ -158,6 +180,9 @@ def test_without_pyribs_one_line(monkeypatch):
 
 @pytest.mark.parametrize("field, value, words", [
     ("genome", "x", "map-elites.genome must be a list of finite numbers (a row each)"),
+    ("genome", {"float64_base64": "AAAA", "shape": [1, 13]}, "map-elites.genome: 3 bytes do not hold 1 x 13 float64 numbers"),
+    ("genome", {"float64_base64": "not base64!", "shape": [0, 13]}, "map-elites.genome: float64_base64 is not base64"),
+    ("genome", {"rows": []}, "map-elites.genome must be a list of numbers or {float64_base64, shape}"),
     ("index", 999, "map-elites.index must be different cells 0 to 19"),
     ("measures", [[5.0, 0.0]], "map-elites.measures do not lie in the cells map-elites.index names"),
 ])
@@ -170,11 +195,15 @@ def test_a_damaged_archive_in_the_checkpoint_is_refused_in_one_line(tmp_path, ca
     path = tmp_path / "run" / "checkpoint.json"
     ck = json.loads(path.read_text())
     table = ck["optimizer"]
+    rows = unpacked_floats(table["genome"], "genome")
     if field == "measures":  # one elite whose measures lie in another cell
-        table["index"], table["genome"], table["objective"] = table["index"][:1], table["genome"][:1], table["objective"][:1]
+        table["index"], table["genome"], table["objective"] = table["index"][:1], packed_floats(rows[:1]), table["objective"][:1]
         table["fell"], table["end_time"] = table["fell"][:1], table["end_time"][:1]
         table["index"][0] = 0
-    table[field] = value if field == "measures" else [value] + table[field][1:]
+    if field == "genome":
+        table[field] = value if isinstance(value, dict) else [value] + rows[1:].tolist()
+    else:
+        table[field] = value if field == "measures" else [value] + table[field][1:]
     path.write_text(json.dumps(ck))
     assert cli("evolve", "--resume", tmp_path / "run") == 2
     err = capsys.readouterr().err.strip()

@@ -13,6 +13,8 @@ kill a run between every pair of writes this way).
 
 from __future__ import annotations
 
+import base64
+import binascii
 import json
 import os
 import signal
@@ -21,6 +23,8 @@ import tempfile
 import tomllib
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from .errors import ConfigError, UserError
 
@@ -149,3 +153,27 @@ def read_json(path: str | Path, *, what: str = "file", file_format: str | None =
 
 def read_toml(path: str | Path, *, what: str = "config file") -> dict:
     return _parse_file(path, what, tomllib.loads, (tomllib.TOMLDecodeError,), "TOML", ConfigError)
+
+
+def packed_floats(a: np.ndarray) -> dict:
+    """A float array as a compact, exact JSON value: ``{"float64_base64": its little-endian float64 bytes in base64,
+    "shape": [...]}``, which :func:`unpacked_floats` reads back bit for bit.  A large state (a map-elites archive of
+    network genomes: millions of numbers) written as JSON numbers costs about 0.4 us a number at every commit; this
+    costs a twentieth of that, and two thirds of the bytes."""
+    a = np.asarray(a, float)
+    return {"float64_base64": base64.b64encode(np.ascontiguousarray(a, "<f8").tobytes()).decode("ascii"), "shape": list(a.shape)}
+
+
+def unpacked_floats(value: Any, what: str) -> np.ndarray:
+    """The array :func:`packed_floats` wrote; UserError (one line naming ``what``) for anything else."""
+    shape = value.get("shape") if isinstance(value, dict) else None
+    if not (isinstance(value, dict) and set(value) == {"float64_base64", "shape"} and isinstance(shape, list)
+            and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)):
+        raise UserError(f"{what} must be a list of numbers or {{float64_base64, shape}}")
+    try:
+        raw = base64.b64decode(value["float64_base64"], validate=True)
+    except (binascii.Error, TypeError, ValueError):
+        raise UserError(f"{what}: float64_base64 is not base64") from None
+    if len(raw) != 8 * int(np.prod(shape)):
+        raise UserError(f"{what}: {len(raw)} bytes do not hold {' x '.join(map(str, shape)) or 'one'} float64 numbers")
+    return np.frombuffer(raw, "<f8").astype(float).reshape(shape)

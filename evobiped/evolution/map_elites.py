@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import ConfigError, UserError
+from ..core.fileio import packed_floats, unpacked_floats
 from ..interface.genome import GenomeLayout
 from ..core.options import check_fields, option
 from .archive_file import ARCHIVE, archive_text
@@ -104,8 +105,8 @@ class MapElitesState(OptimizerState):
     def to_dict(self) -> dict:
         plain = lambda a: np.where(np.isfinite(a), a, None).tolist() if a.size else a.tolist()  # noqa: E731
         return {"name": self.name, "generation": self.generation, "fitness": plain(self.fitness),
-                "index": [int(i) for i in self.index], **{k: getattr(self, k).tolist() for k in
-                                                         ("genome", "objective", "measures", "fell", "end_time", "progress")}}
+                "index": [int(i) for i in self.index], "genome": packed_floats(self.genome),
+                **{k: getattr(self, k).tolist() for k in ("objective", "measures", "fell", "end_time", "progress")}}
 
 
 def ribs_archives():
@@ -248,7 +249,10 @@ class MapElites(Optimizer):
         for k in ("fitness", "index", "genome", "objective", "measures", "fell", "end_time", "progress"):
             vals = table.get(k)
             try:
-                a = np.array([np.nan if x is None and k == "fitness" else x for x in vals], float)
+                if k == "genome" and isinstance(vals, dict):  # packed (a list of rows in checkpoints before it was)
+                    a = unpacked_floats(vals, "checkpoint: map-elites.genome")
+                else:
+                    a = np.array([np.nan if x is None and k == "fitness" else x for x in vals], float)
             except (TypeError, ValueError):
                 a = None
             if a is None or (k != "fitness" and not np.isfinite(a).all()) or (k in ("genome", "measures", "progress") and a.ndim != 2 and len(a)):
