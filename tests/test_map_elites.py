@@ -113,7 +113,7 @@ def test_the_elites_genomes_are_packed_exactly_and_a_checkpoint_of_rows_still_re
     config = RunConfig.from_dict(TINY)
     whole, cut_dir = whole_and_resumed(tmp_path, config, stop_after=1)
     table = json.loads((whole.dir / "checkpoint.json").read_text())["optimizer"]["genome"]
-    assert set(table) == {"float64_base64", "shape"} and table["shape"][1] == config.episode.layout().size
+    assert set(table) == {"dtype", "shape", "b64"} and table["shape"][1] == config.episode.layout().size
     assert np.array_equal(unpacked_floats(table, "g"), read_archive(whole.dir).genome)
     # the cut run's checkpoint rewritten with rows of numbers, as before, then run on: the same archive
     run2 = tmp_path / "rows"
@@ -180,9 +180,9 @@ def test_without_pyribs_one_line(monkeypatch):
 
 @pytest.mark.parametrize("field, value, words", [
     ("genome", "x", "map-elites.genome must be a list of finite numbers (a row each)"),
-    ("genome", {"float64_base64": "AAAA", "shape": [1, 13]}, "map-elites.genome: 3 bytes do not hold 1 x 13 float64 numbers"),
-    ("genome", {"float64_base64": "not base64!", "shape": [0, 13]}, "map-elites.genome: float64_base64 is not base64"),
-    ("genome", {"rows": []}, "map-elites.genome must be a list of numbers or {float64_base64, shape}"),
+    ("genome", {"dtype": "<f8", "b64": "AAAA", "shape": [1, 13]}, "map-elites.genome: 3 bytes do not hold 1 x 13 float64 numbers"),
+    ("genome", {"dtype": "<f8", "b64": "not base64!", "shape": [0, 13]}, "map-elites.genome: b64 is not base64"),
+    ("genome", {"dtype": "<f4", "b64": "", "shape": [0, 13]}, 'map-elites.genome must be a list of numbers or {dtype: "<f8", shape, b64}'),
     ("index", 999, "map-elites.index must be different cells 0 to 19"),
     ("measures", [[5.0, 0.0]], "map-elites.measures do not lie in the cells map-elites.index names"),
 ])
