@@ -23,6 +23,20 @@ RANDOM = {"fitness": "arrive", "random_sources": 3, "source_distance": [5.0, 15.
           "sources": [[10, 3], [10, -3], [6, 0]]}
 
 
+def run_script(name: str, *argv) -> int:
+    """Run ``scripts/<name>`` as ``python scripts/<name> ARGV...`` in this process; its exit status."""
+    import runpy
+    import sys
+
+    saved, sys.argv = sys.argv, [name, *map(str, argv)]
+    try:
+        with pytest.raises(SystemExit) as done:
+            runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / name), run_name="__main__")
+    finally:
+        sys.argv = saved
+    return done.value.code
+
+
 def test_a_generation_draws_its_sources_from_the_declared_distribution_and_every_genome_hears_them():
     """The sources of generation (seed, g) lie in the declared ranges, are the same for every call, differ between
     generations; a genome's episode under them equals the same genome with those sources fixed."""
@@ -79,17 +93,8 @@ def test_a_walker_moved_onto_reordered_inputs_walks_exactly_as_before():
 def test_the_hearing_start_replaces_the_heading_by_the_ear_signal(tmp_path):
     """scripts/hearing_start.py: the sound rows are minus the heading rows, every other gene the walker's; the steer-es
     preset's episode takes the genome."""
-    import runpy
-    import sys
-
     out = tmp_path / "h.json"
-    argv, sys.argv = sys.argv, ["hearing_start.py", str(out), "--walker", str(SEED)]
-    try:
-        with pytest.raises(SystemExit) as done:
-            runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / "hearing_start.py"), run_name="__main__")
-    finally:
-        sys.argv = argv
-    assert done.value.code == 0
+    assert run_script("hearing_start.py", out, "--walker", SEED) == 0
     g, cfg, _ = load_genome(out)
     old_g, old, _ = load_genome(SEED)
     c, c_old = cfg.build().controller, old.build().controller
@@ -170,17 +175,8 @@ def test_the_rewired_start_walks_as_before_with_zero_side_weights_and_turns_both
     it walks exactly as before.  Without the heading sense (which steers it back to its first facing), +-0.2 on the
     side's direct weights to the two hip-roll motors turns it: the two signs turn it opposite ways, each more than
     5 deg/s from the symmetric network's own drift, and both walk the whole 20 s."""
-    import runpy
-    import sys
-
     def rewire(out, *flags):
-        argv, sys.argv = sys.argv, ["rewire_inputs.py", str(out), "--walker", str(SEED), *flags]
-        try:
-            with pytest.raises(SystemExit) as done:
-                runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / "rewire_inputs.py"), run_name="__main__")
-        finally:
-            sys.argv = argv
-        assert done.value.code == 0
+        assert run_script("rewire_inputs.py", out, "--walker", SEED, *flags) == 0
         return load_genome(out)
 
     g, old, _ = load_genome(SEED)
