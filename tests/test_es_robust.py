@@ -10,7 +10,7 @@ from evobiped.evolution.run_context import RunContext
 from evobiped.files.genome_file import load_genome
 from evobiped.files.presets import path as preset_path
 
-from .conftest import WALKERS
+from .conftest import WALKERS, run_script
 
 SEED = WALKERS / "ctrnn_es_seed5.json"
 
@@ -128,19 +128,7 @@ def test_a_run_from_a_walker_resumed_elsewhere_keeps_its_seeded_normaliser(tmp_p
 
 
 def _gene_ranges(*argv) -> int:
-    import runpy
-    import sys
-    from pathlib import Path
-
-    import pytest
-
-    old, sys.argv = sys.argv, ["gene_ranges.py", *map(str, argv)]
-    try:
-        with pytest.raises(SystemExit) as done:
-            runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / "gene_ranges.py"), run_name="__main__")
-    finally:
-        sys.argv = old
-    return done.value.code
+    return run_script("gene_ranges.py", *argv)
 
 
 TIGHT = ["--block", "weights", -2, 2, "--block", "biases", -1, 1, "--block", "input_weights", -1.5, 1.5,

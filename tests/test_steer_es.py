@@ -16,25 +16,11 @@ from evobiped.files.presets import path as preset_path
 from evobiped.episode.remap import remap_inputs, remap_norm
 from evobiped.tasks.steer import SteerTask
 
-from .conftest import WALKERS, cli
+from .conftest import WALKERS, cli, run_script
 
 SEED = WALKERS / "ctrnn_es_seed5.json"
 RANDOM = {"fitness": "arrive", "random_sources": 3, "source_distance": [5.0, 15.0], "source_bearing": [-60.0, 60.0],
           "sources": [[10, 3], [10, -3], [6, 0]]}
-
-
-def run_script(name: str, *argv) -> int:
-    """Run ``scripts/<name>`` as ``python scripts/<name> ARGV...`` in this process; its exit status."""
-    import runpy
-    import sys
-
-    saved, sys.argv = sys.argv, [name, *map(str, argv)]
-    try:
-        with pytest.raises(SystemExit) as done:
-            runpy.run_path(str(Path(__file__).resolve().parent.parent / "scripts" / name), run_name="__main__")
-    finally:
-        sys.argv = saved
-    return done.value.code
 
 
 def test_a_generation_draws_its_sources_from_the_declared_distribution_and_every_genome_hears_them():
