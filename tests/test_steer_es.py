@@ -4,7 +4,6 @@ genome), the reward for lingering at the source, moving a walker's genes onto ne
 import dataclasses
 import json
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
