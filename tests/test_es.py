@@ -306,3 +306,26 @@ def test_a_stance_frame_network_s_motor_neurons_are_labelled_by_leg_role():
     framed, plain = (SimpleNamespace(actuator_names=names, stance_frame=f) for f in (True, False))
     assert [_motor_label(framed, i) for i in (0, 2, 3, 5)] == ["stance hip_pitch", "stance knee", "swing hip_pitch", "swing knee"]
     assert _motor_label(plain, 3) == "right_hip_pitch" and _motor_label(framed, 7) == "output 8"
+
+
+@pytest.mark.parametrize("value, nulls, rows, words", [
+    (["x"], False, None, "es.theta must be a list of finite numbers"),
+    ([True], False, None, "es.theta must be a list of finite numbers"),
+    ([float("inf")], False, None, "es.theta must be a list of finite numbers"),
+    ([None], False, None, "es.theta must be a list of finite numbers"),
+    ("1, 2", True, None, "es.theta must be a list of finite numbers or nulls"),
+    ([[1.0, 2.0], [3.0]], False, 2, "es.theta must be a list of rows of 2 finite numbers"),
+])
+def test_a_checkpoint_list_that_is_not_numbers_is_one_line(value, nulls, rows, words):
+    """OptimizerState.numbers_of, which every optimizer's state reads its arrays with: strings, booleans, infinities,
+    nulls where none may be, and ragged rows are refused naming the optimizer and field; nulls, where allowed, read NaN."""
+    from evobiped.core.errors import UserError
+    from evobiped.evolution.es import ESState
+
+    with pytest.raises(UserError) as err:
+        ESState.numbers_of({"theta": value}, "theta", nulls=nulls, rows=rows)
+    assert str(err.value) == f"checkpoint: {words}"
+    got = ESState.numbers_of({"fitness": [1, None, 2.5]}, "fitness", nulls=True)
+    assert np.isnan(got[1]) and got[[0, 2]].tolist() == [1.0, 2.5]
+    assert ESState.numbers_of({"g": [[1, 2], [3, 4]]}, "g", rows=2).shape == (2, 2)
+    assert ESState.numbers_of({"g": []}, "g", rows=3).shape == (0, 3)

@@ -17,6 +17,7 @@ uninterrupted one.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -60,6 +61,28 @@ class OptimizerState:
         if isinstance(gen, bool) or not isinstance(gen, int) or gen < 0:
             raise UserError(f"checkpoint: {cls.name}.generation must be a whole number >= 0, got {gen!r}")
         return gen
+
+    @classmethod
+    def numbers_of(cls, table: dict, key: str, *, nulls: bool = False, rows: int | None = None) -> np.ndarray:
+        """``table[key]`` of a checkpoint as an array: a list of finite numbers ``(n,)`` (with ``nulls``, null reads
+        NaN: a value not yet known), or with ``rows`` = W a list of rows of W finite numbers ``(n, W)``; UserError,
+        one line naming ``<optimizer>.<key>``, for anything else."""
+        vals = table.get(key)
+
+        def number(x) -> bool:
+            return (x is None and nulls) or (isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x))
+
+        if rows is None:
+            ok = isinstance(vals, list) and all(map(number, vals))
+            wanted = "finite numbers" + (" or nulls" if nulls else "")
+        else:
+            ok = isinstance(vals, list) and all(isinstance(r, list) and len(r) == rows and all(map(number, r)) for r in vals)
+            wanted = f"rows of {rows} finite numbers"
+        if not ok:
+            raise UserError(f"checkpoint: {cls.name}.{key} must be a list of {wanted}")
+        if rows is None:
+            return np.array([np.nan if x is None else float(x) for x in vals])
+        return np.array([[np.nan if x is None else float(x) for x in r] for r in vals]).reshape(-1, rows)
 
 
 class Optimizer:

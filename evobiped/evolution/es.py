@@ -178,14 +178,7 @@ class EvolutionStrategy(Optimizer):
 
     def _state_from(self, table: dict) -> ESState:
         gen = ESState.generation_of(table)
-        out = {}
-        for k in ("theta", "m", "v", "fitness"):
-            vals = table.get(k)
-            ok = isinstance(vals, list) and all(
-                (x is None and k == "fitness") or (isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)) for x in vals)
-            if not ok:
-                raise UserError(f"checkpoint: es.{k} must be a list of finite numbers" + (" or nulls" if k == "fitness" else ""))
-            out[k] = np.array([np.nan if x is None else float(x) for x in vals])
+        out = {k: ESState.numbers_of(table, k, nulls=k == "fitness") for k in ("theta", "m", "v", "fitness")}
         if (out["v"] < 0).any():
             raise UserError("checkpoint: es.v must be >= 0")
         return ESState(generation=gen, **out)

@@ -245,18 +245,12 @@ class MapElites(Optimizer):
 
     def _state_from(self, table: dict) -> MapElitesState:
         gen = MapElitesState.generation_of(table)
-        out = {}
-        for k in ("fitness", "index", "genome", "objective", "measures", "fell", "end_time", "progress"):
-            vals = table.get(k)
-            try:
-                if k == "genome" and isinstance(vals, dict):  # packed (a list of rows in checkpoints before it was)
-                    a = unpacked_floats(vals, "checkpoint: map-elites.genome")
-                else:
-                    a = np.array([np.nan if x is None and k == "fitness" else x for x in vals], float)
-            except (TypeError, ValueError):
-                a = None
-            if a is None or (k != "fitness" and not np.isfinite(a).all()) or (k in ("genome", "measures", "progress") and a.ndim != 2 and len(a)):
-                raise UserError(f"checkpoint: map-elites.{k} must be a list of finite numbers" + (" or nulls" if k == "fitness" else "")
-                                + (" (a row each)" if k in ("genome", "measures", "progress") else ""))
-            out[k] = a.reshape(-1, {"genome": self.layout.size, "measures": 2, "progress": 3}[k]) if k in ("genome", "measures", "progress") else a
+        widths = {"genome": self.layout.size, "measures": 2, "progress": 3}
+        out = {k: MapElitesState.numbers_of(table, k, nulls=k == "fitness", rows=widths.get(k))
+               for k in ("fitness", "index", "objective", "measures", "fell", "end_time", "progress")}
+        packed = table.get("genome")  # packed; a list of rows in checkpoints written before packing
+        out["genome"] = (unpacked_floats(packed, "checkpoint: map-elites.genome") if isinstance(packed, dict)
+                         else MapElitesState.numbers_of(table, "genome", rows=widths["genome"]))
+        if not np.isfinite(out["genome"]).all():
+            raise UserError("checkpoint: map-elites.genome must hold finite numbers")
         return MapElitesState(generation=gen, **out)
