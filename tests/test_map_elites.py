@@ -180,6 +180,7 @@ def test_without_pyribs_one_line(monkeypatch):
 
 @pytest.mark.parametrize("field, value, words", [
     ("genome", "x", "map-elites.genome must be a list of rows of 13 finite numbers"),
+    ("genome", [0.5] * 5, "map-elites.genome must be a list of rows of 13 finite numbers"),  # a row of another length
     ("genome", {"dtype": "<f8", "b64": "AAAAAAAA+H8=", "shape": [1, 1]}, "map-elites.genome must hold finite numbers"),
     ("fitness", "x", "map-elites.fitness must be a list of finite numbers or nulls"),
     ("genome", {"dtype": "<f8", "b64": "AAAA", "shape": [1, 13]}, "map-elites.genome: 3 bytes do not hold 1 x 13 float64 numbers"),
