@@ -89,8 +89,7 @@ def tables() -> dict[str, str]:
 def observation(body: str, task: str = "walk") -> dict[str, int]:
     """The parts of an environment's observation in order (name -> width): the body's sensors, then the task's
     (those read only on request left out, as the environment does)."""
-    offered = {**BODIES[body].sensor_widths, **TASKS[task]().sensor_widths()}
-    return {k: w for k, w in offered.items() if k not in gait.ON_REQUEST}
+    return gait.by_default({**BODIES[body].sensor_widths, **TASKS[task]().sensor_widths()})
 
 
 def observation_table(body: str) -> str:

@@ -81,9 +81,8 @@ class Walkers:
         self.low, self.high = self.episode.low, self.episode.high
         m = self.model
         self._hinges = m.jnt_qposadr[m.jnt_type == _HINGE]  # reset noise goes on these joint angles
-        offered = {**self.body.sensor_widths, **self.episode.task.sensor_widths()}
-        #: the observation's senses (those read only on request, gait.ON_REQUEST, left out)
-        self.sensor_widths = {k: w for k, w in offered.items() if k not in gait.ON_REQUEST}
+        #: the observation's senses: the body's and the task's, less those read only on request
+        self.sensor_widths = gait.by_default({**self.body.sensor_widths, **self.episode.task.sensor_widths()})
         #: the episode in progress (None before the first reset)
         self.state: EpisodeState | None = None
 

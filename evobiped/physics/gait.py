@@ -47,6 +47,11 @@ NORMS = {"stance_leg": ((0.0,), (1.0,)), "since_touchdown": ((0.2,), (0.2,)), "s
 MIRROR = {"stance_leg": ((0,), (-1,)), "since_touchdown": ((0,), (1,)), "stance_side": ((0,), (1,))}
 
 
+def by_default(senses: dict) -> dict:
+    """``senses`` (name -> anything) without those read only on request: what an observation holds when not told."""
+    return {k: v for k, v in senses.items() if k not in ON_REQUEST}
+
+
 def _start(contact: np.ndarray, time: np.ndarray) -> dict[str, np.ndarray]:
     """A tracker for rows with contacts ``(n, 2)`` at ``time`` ``(n,)`` s."""
     return {
