@@ -11,8 +11,9 @@ observation noise ``noise``) learns from each trial on the damaged body
 
 and the next trial is the untried elite with the highest upper confidence bound mu + kappa s.  The search stops
 when a trial's performance reaches ``alpha`` times the best mu of any elite (Cully's stopping rule) and that
-trial is acceptable (here: it walked; a caller's test, by default any), or after ``trials`` trials.  A trial's performance: the distance from the start (m) times the fraction of the episode
-the walker stayed up (a fall costs what it did not walk).  Cully's values: alpha 0.9, kappa 0.05, noise 1e-3.
+trial is acceptable (here: it walked; a caller's test, by default any), or after ``trials`` trials.  A trial's
+performance: the distance from the start (m) times the fraction of the episode the walker stayed up (a fall costs
+what it did not walk).  Cully's values: alpha 0.9, kappa 0.05, noise 1e-3.
 """
 
 from __future__ import annotations
