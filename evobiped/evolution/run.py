@@ -27,7 +27,7 @@ from . import checkpoint as commit_point
 from .evaluate import Evaluator
 from .base import Optimizer
 from .individuals import Individuals
-from .run_config import RunConfig, make_optimizer, start_genome
+from .run_config import RunConfig, episodes_per_genome, make_optimizer, start_genome
 from .generation_stats import GenerationStats
 from .run_context import RunContext
 from .start_genome import keep_start, start_episode
@@ -130,7 +130,13 @@ class Run:
 
     @property
     def done(self) -> bool:
-        return self.optimizer.generation >= self.config.generations
+        """Every generation evolved, or the episodes evaluated reached the config's budget (if any)."""
+        budget = self.config.budget
+        return self.optimizer.generation >= self.config.generations or (budget is not None and self.episodes() >= budget)
+
+    def episodes(self) -> int:
+        """Episodes evaluated by the committed generations (history.csv's evaluations, each genome's presentations)."""
+        return int(sum(rundir.column(self.history, "evaluations"))) * episodes_per_genome(self.config)
 
     # ---- the loop
     def evolve(self, evaluator: Evaluator, on_generation: Callable[[GenerationStats], None] | None = None) -> dict:

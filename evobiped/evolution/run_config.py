@@ -49,6 +49,9 @@ class RunConfig:
     normalise: NormaliseOptions = field(default_factory=lambda: NormaliseOptions())
     curriculum: CurriculumOptions = field(default_factory=CurriculumOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
+    budget: int | None = option(None, "episodes to evaluate: the run stops at the first generation boundary where the episodes "
+                                "it evaluated (genomes x presentations each, episodes_per_genome) reach this (none: every generation)",
+                                low=1, integer=True)
     seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
     backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
     workers: int | None = option(None, "parallel workers (none: one per core)", low=1, integer=True)
@@ -77,6 +80,8 @@ class RunConfig:
             if d[name] == dataclasses.asdict(cls()) or (name in ("es", "map_elites") and self.optimizer != name.replace("_", "-")):
                 del d[name]
         d["frozen_blocks"] = list(self.frozen_blocks)
+        if d["budget"] is None:  # written only when set: other runs' config.json as before
+            del d["budget"]
         return d
 
     @classmethod
@@ -197,6 +202,12 @@ def population_of(config: RunConfig) -> int:
     layout = config.episode.layout()
     rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows, "map-elites": config.map_elites.batch}
     return rows.get(config.optimizer, config.ga.population)
+
+
+def episodes_per_genome(config: RunConfig) -> int:
+    """Episodes one genome's evaluation simulates: the task's presentations times the perturbed presentations."""
+    p = config.episode.perturbations
+    return int(config.episode.parts()[2].presentations) * (int(p.presentations) if p.active else 1)
 
 
 def start_genome(config: RunConfig) -> np.ndarray | None:
