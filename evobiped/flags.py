@@ -70,13 +70,17 @@ def refuse(flags: str, why: str) -> None:
 
 
 def check_workers(backend: str, workers: int | None, address: str | None) -> None:
-    """--workers and --address must apply to the backend; more local workers than cores earns a warning line."""
+    """--workers and --address must apply to the backend; more local workers than this machine runs
+    (:func:`~evobiped.evolution.evaluate.worker_limit`) are refused, more than its cores earn a warning line."""
     import os
 
     if address is not None and backend != "ray":
         refuse("--address", f"only a Ray backend connects to a cluster (use --backend ray; the backend here is {backend})")
     if workers is not None and backend == "serial":
         refuse("--workers", "the serial backend runs in this process (use --backend process, thread or ray for workers)")
+    from .evolution.evaluate import check_worker_count
+
+    check_worker_count(backend, workers, address, name="--workers")
     cores = os.cpu_count() or 1
     if workers is not None and workers > cores and address is None:
         print(f"evobiped: warning: --workers {workers} on {cores} cores: the extra workers share cores and do not run faster",

@@ -25,6 +25,30 @@ from .pool import spawn_pool, stop_pool
 
 BACKENDS = ("serial", "process", "thread", "ray")
 
+#: memory one local worker takes at most, in bytes (a process or Ray actor: Python, MuJoCo, an episode; a thread: an episode)
+WORKER_BYTES = {"process": 256 * 2**20, "ray": 512 * 2**20, "thread": 64 * 2**20}
+#: local workers per core beyond which more only cost memory (they share the cores)
+WORKERS_PER_CORE = 8
+
+
+def worker_limit(backend: str) -> int:
+    """The most local workers of ``backend`` this machine is given: :data:`WORKERS_PER_CORE` per core, and as many
+    as fit in half its memory at :data:`WORKER_BYTES` each."""
+    memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    return max(1, min(WORKERS_PER_CORE * (os.cpu_count() or 1), int(memory / 2 // WORKER_BYTES.get(backend, WORKER_BYTES["ray"]))))
+
+
+def check_worker_count(backend: str, workers: int | None, address: str | None = None, name: str = "workers") -> None:
+    """ConfigError (one line) when ``workers`` local workers of ``backend`` exceed :func:`worker_limit`, before any
+    starts (a cluster's, ``address`` given, are the cluster's to count: :class:`~.ray_backend.RayEvaluator`)."""
+    if workers is None or backend == "serial" or address is not None:
+        return
+    limit = worker_limit(backend)
+    if workers > limit:
+        memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        raise ConfigError(f"{name} {workers}: this machine ({os.cpu_count() or 1} cores, {memory / 2**30:.3g} GiB) runs at most "
+                          f"{limit} {backend} workers")
+
 
 def _evaluate(episode: Episode, genomes: np.ndarray, key: tuple[int, int] | None = None,
               context: Context | None = None) -> EpisodeResult:
@@ -144,10 +168,13 @@ class ProcessPoolEvaluator(Evaluator):
     genome's fate depends on that genome alone.
     """
 
+    backend = "process"
+
     def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None):
         super().__init__(episode)
         if workers < 1:
             raise ConfigError(f"workers must be >= 1, got {workers}")
+        check_worker_count(self.backend, workers)
         self.workers, self.chunk, self.on_retry = int(workers), chunk, on_retry
         self.pool = self._new_pool()
 
@@ -205,10 +232,13 @@ class ThreadEvaluator(Evaluator):
     evaluated again, at most :data:`MAX_RETRIES` times per generation (``on_retry`` as in the process pool).
     """
 
+    backend = "thread"
+
     def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None):
         super().__init__(episode)
         if workers < 1:
             raise ConfigError(f"workers must be >= 1, got {workers}")
+        check_worker_count(self.backend, workers)
         self.workers, self.chunk, self.on_retry = int(workers), chunk, on_retry
         self._episodes: queue.SimpleQueue[Episode] = queue.SimpleQueue()
         for _ in range(self.workers):
@@ -257,6 +287,7 @@ def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: in
         raise ConfigError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
     if workers is not None and workers < 1:
         raise ConfigError(f"workers must be >= 1, got {workers}")
+    check_worker_count(backend, workers, address)
     episode.check()  # here, once, whatever the backend: a worker never meets a bad value
     if backend == "serial":
         return SerialEvaluator(episode)

@@ -81,7 +81,12 @@ class RayEvaluator(Evaluator):
         ray, self._owns = init_ray(address, workers)
         self.ray = ray
         self.chunk = chunk
-        n = workers or int(ray.cluster_resources().get("CPU", 1))
+        cpus = int(ray.cluster_resources().get("CPU", 1))
+        if workers is not None and workers > cpus:  # an actor takes a CPU: the rest would wait for one forever
+            self.actors = []
+            self.close()
+            raise UserError(f"--workers {workers}: the Ray cluster has {cpus} CPUs (one per worker)")
+        n = workers or cpus
 
         # a worker that dies is restarted and its batch sent again (same result: fates depend on genomes alone)
         @ray.remote(num_cpus=1, max_restarts=MAX_RETRIES, max_task_retries=MAX_RETRIES)

@@ -1,0 +1,50 @@
+"""A hostile user's input: absurd worker counts, empty names, paths that are not UTF-8, signals while the command
+starts, unbounded lengths and sizes.  Each is one line on stderr and exit status 2 (or 130 for Ctrl-C), never a
+traceback, and leaves nothing behind; a case that would exhaust the machine on a regression runs in a child process
+under a memory limit and a timeout.
+"""
+
+import os
+import resource
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from .conftest import ROOT, cli
+from .test_faults import one_line_error
+
+TINY = ["--population", "4", "--generations", "2", "--seconds", "0.5", "--seed", "3", "--quiet"]
+
+
+def guarded(*args, timeout: float = 60, memory: int = 4 * 2**30, **kw) -> subprocess.CompletedProcess:
+    """``python -m evobiped ARGS`` in a child process that may take at most ``memory`` bytes and ``timeout`` s."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+        os.setsid()
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT), **kw.pop("env", {})}
+    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, text=True, env=env,
+                          timeout=timeout, preexec_fn=limit, **kw)
+
+
+# ---- worker counts beyond the machine
+@pytest.mark.parametrize("backend", ["thread", "process", "ray"])
+def test_a_worker_count_beyond_the_machine_is_one_line_before_anything_starts(tmp_path, backend):
+    r = guarded("evolve", *TINY, "--backend", backend, "--workers", "100000", "--out", tmp_path / "run", timeout=60)
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, "--workers 100000", "runs at most")
+    assert not (tmp_path / "run").exists()
+
+
+def test_the_use_case_refuses_a_worker_count_beyond_the_machine():
+    from evobiped.core.errors import ConfigError
+    from evobiped.episode import EpisodeConfig
+    from evobiped.evolution.evaluate import make_evaluator, worker_limit
+
+    with pytest.raises(ConfigError, match="runs at most"):
+        make_evaluator(EpisodeConfig(seconds=0.5), "process", 10**6).close()
+    assert 1 <= worker_limit("thread") <= 8 * (os.cpu_count() or 1)
