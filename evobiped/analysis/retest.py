@@ -1,0 +1,133 @@
+"""A policy tested again on fresh noise: K presentations it never met, a measure and a success criterion.
+
+A run's fitness is measured on the presentations it was selected on (its own best draw); a comparison of
+run configurations re-evaluates each run's policy on new draws instead.  The test presentations are
+drawn from a perturbations table (``[episode.perturbations]``'s options; :data:`DEFAULT_NOISE` unless
+given) with ``presentations = K`` and the key (run seed, :data:`FRESH_GENERATION`): a generation no run
+reaches (``generations`` is at most 10^6), so no run evaluated a genome on them, schedules are at their
+end (their final strengths) and the pelvis assistance is off.  Every configuration's run of one seed
+meets the same K presentations (common random numbers), and so does every checkpoint of that run.
+
+What is taken of each presentation:
+
+* the **measure**: the task's fitness (``fitness``) or one of its terms (``--measure TERM``, e.g.
+  ``distance``), of an episode of the configuration's own length; a run's measure is the median over
+  its K presentations;
+* the **success**: ``walker``, the forward-walker test of :func:`evobiped.analysis.selection.forward_walker`
+  (no fall in 200 s, at least 20 m in the first 50 s within 30 degrees of the initial facing; its
+  defaults, read from its signature) under the presentation's noise; or ``TERM>=X`` (``>``, ``<=``,
+  ``<`` too) on the measure episode's fitness or term.  A run succeeds when every one of its K
+  presentations does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import math
+import operator
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.errors import ConfigError, UserError
+from ..episode import EpisodeConfig
+from ..physics.perturb import PerturbationOptions
+from .selection import forward_walker
+
+#: the generation of the test presentations' key: beyond any run's generations (at most 10^6)
+FRESH_GENERATION = 10**7
+#: the test noise when none is given: each presentation's actuated joints start off the nominal pose by
+#: Gaussian noise of this standard deviation (rad); every body has actuated joints
+DEFAULT_NOISE = {"pose_noise": 0.02}
+#: the forward-walker test's thresholds: :func:`forward_walker`'s defaults
+WALKER = {name: p.default for name, p in inspect.signature(forward_walker).parameters.items()
+          if name in ("seconds", "window", "min_distance", "heading_limit")}
+_OPS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
+
+
+@dataclass(frozen=True)
+class Success:
+    """A success criterion: ``walker`` (``term`` None) or ``term op threshold``."""
+
+    term: str | None = None
+    op: str = ">="
+    threshold: float = 0.0
+
+    @property
+    def text(self) -> str:
+        return "walker" if self.term is None else f"{self.term}{self.op}{self.threshold:g}"
+
+
+def parse_success(text: str, terms: tuple[str, ...]) -> Success:
+    """``walker`` or ``TERM>=X`` (TERM ``fitness`` or one of the task's ``terms``); UserError otherwise."""
+    text = text.strip()
+    if text == "walker":
+        return Success()
+    m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(>=|<=|>|<)\s*([-+0-9.eE]+|[-+]?inf)\s*", text)
+    if not m:
+        raise UserError(f"--success {text!r}: give walker or TERM>=X (e.g. distance>=5; also >, <=, <)")
+    try:
+        x = float(m.group(3))
+    except ValueError:
+        raise UserError(f"--success {text!r}: {m.group(3)!r} is not a number") from None
+    return Success(check_measure(m.group(1), terms, "--success"), m.group(2), x)
+
+
+def check_measure(name: str, terms: tuple[str, ...], flag: str = "--measure") -> str:
+    """``name`` if it is ``fitness`` or one of the task's ``terms``; UserError otherwise."""
+    if name != "fitness" and name not in terms:
+        raise UserError(f"{flag}: {name!r} is not fitness nor a term of the task (its terms: {', '.join(terms) or 'none'})")
+    return name
+
+
+def fresh_noise(table: dict | None, trials: int) -> PerturbationOptions:
+    """The perturbations of the K = ``trials`` test presentations from ``table`` (None: :data:`DEFAULT_NOISE`);
+    one ConfigError line for a bad table."""
+    table = dict(DEFAULT_NOISE if table is None else table)
+    if "presentations" in table:
+        raise ConfigError("the test noise's presentations are --trials K, not a setting of its table")
+    return PerturbationOptions.from_dict({**table, "presentations": int(trials)})
+
+
+def retest(config: EpisodeConfig, genome, *, seed: int, noise: PerturbationOptions, measure: str, success: Success) -> dict:
+    """``genome`` ``(G,)`` of the episode ``config`` (its generation file's: the normaliser frozen as it was) on the
+    test presentations of run seed ``seed``: ``measure`` and ``passed`` (lists, one per presentation), the run's
+    ``value`` (their median) and ``success`` (every presentation passed)."""
+    test = dataclasses.replace(config, perturbations=noise)
+    episode = test.build()
+    genome = np.asarray(genome, float)[None]
+    trials = episode.trials_for((int(seed), FRESH_GENERATION))
+    S, R = episode.task.presentations, 1 if trials is None else trials.R
+    result = episode.run(genome, trials=trials)
+    rows = result.rows if result.rows is not None else result
+    by_trial = lambda a: np.asarray(a, float).reshape(R, S)  # noqa: E731  (row i: trial i // S, presentation i % S)
+    values = {"fitness": episode.task.combine(by_trial(rows.fitness))}
+    values.update({k: by_trial(v).mean(axis=1) for k, v in rows.terms.items()})
+    if success.term is None:
+        passed = _walkers(episode, genome, trials, R, S)
+    else:
+        passed = _OPS[success.op](values[success.term], success.threshold)
+    measured = [float(x) for x in values[measure]]
+    return {"measure": measured, "passed": [bool(p) for p in passed],
+            "value": float(np.median(measured)) if all(math.isfinite(x) for x in measured) else math.nan,
+            "success": bool(np.all(passed))}
+
+
+def _walkers(episode, genome, trials, R: int, S: int) -> np.ndarray:
+    """Per test presentation: each of its rows passed the forward-walker test (:data:`WALKER`) under its noise."""
+    from ..tasks.walk import displacement_heading
+
+    seconds, window = float(WALKER["seconds"]), float(WALKER["window"])
+    state = episode.start(genome, seconds=seconds, trials=trials)
+    episode.advance(state, min(window, seconds))
+    end = episode.body.planar_position(state.sims).copy()
+    start, facing = state.start_position.copy(), state.start_facing.copy()
+    distance = np.linalg.norm(end - start, axis=1)
+    heading = displacement_heading(start, end, facing)
+    if seconds > window:
+        episode.advance(state, seconds - window)
+    straight = np.isfinite(heading) & (np.abs(np.nan_to_num(heading, nan=180.0)) <= WALKER["heading_limit"])
+    ok = ~np.asarray(state.fell, bool) & (distance >= WALKER["min_distance"]) & straight
+    return ok.reshape(R, S).all(axis=1)
