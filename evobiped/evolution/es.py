@@ -7,20 +7,46 @@ run reports: its walkers are the "evaluation walkers"); all rows meet the same
 perturbed presentations (common random numbers).
 
 * ``method = "openai"``: the 2N fitness values become centred ranks in
-  [-0.5, 0.5]; g = sum_i (r+_i - r-_i) eps_i / (2N) - weight_decay theta, and
-  Adam (beta 0.9, 0.999) climbs g at ``learning_rate`` (as in Salimans et al.'s
-  evolution-strategies-starter).
+  [-0.5, 0.5] (tied values share their mean rank: ``ties``); g = sum_i (r+_i d+_i
+  + r-_i d-_i) / (2N) - weight_decay (theta - c), and Adam (beta 0.9, 0.999)
+  climbs g at ``learning_rate`` (as in Salimans et al.'s
+  evolution-strategies-starter).  d+-_i is the perturbation row +-i was
+  evaluated at, in units of sigma (+-eps_i unless clipped: ``credit``); c is
+  each gene block's centre (``weight_decay_to``).
 * ``method = "ars"``: the ``top`` directions by max(f+, f-) are kept and
-  theta += learning_rate / (top sigma_f) sum (f+ - f-) eps, sigma_f the std of
-  those 2 top fitness values (ARS V2-t, with the normaliser the run keeps).
+  theta += learning_rate / (top sigma_f) sum ((f+ - b) d+ + (f- - b) d-), b the
+  mean and sigma_f the std of those 2 top fitness values (= (f+ - f-) eps when
+  nothing is clipped: ARS V2-t, with the normaliser the run keeps).  An unstable
+  rollout (non-finite fitness) counts as the generation's worst finite one: a
+  stand-in far below it would be the only thing sigma_f measured and erase the
+  other pairs' information for that step.
 
-Everything is in gene units (``sigma``, ``learning_rate``); samples are
-clipped to the genes' bounds.  ``sigma`` may shrink each generation by
-``sigma_decay`` down to ``sigma_min``.  Why our own ~150 lines rather than a
-library: evosax (JAX) and evotorch (PyTorch) would bring a whole array
-framework into the core install for an update of a few NumPy lines, and a state
-that is a plain value of floats is what the checkpoint stores and a resume
-restores bit for bit.
+Bounds (``credit = "evaluated"``, the default).  Samples are clipped to the
+genes' bounds, and a sample's fitness is credited to the perturbation it was
+evaluated at, (clipped row - theta) / sigma, not to the eps it was drawn with:
+a sample clipped back onto theta (theta on a bound, eps pointing out) made no
+move and is credited with none.  Where theta sits on a bound after a step,
+Adam's momentum pointing out of it is dropped, so pressing on a bound builds no
+momentum that would hold theta there after the fitness turns.  ``credit =
+"drawn"`` is the update as first shipped (the unclipped eps credited, momentum
+kept), which the presets evolved before keep.
+
+Weight decay (``weight_decay_to = "centre"``, the default) pulls each gene
+towards its block's centre (low + high) / 2: 0 for the weights and biases,
+whose ranges are centred on 0 (with ``centre_crossing`` a bias gene 0 is the
+sigmoid's sensitive middle), the middle of any block whose range is not.  A
+block that declares ``decays = False`` (:class:`~evobiped.interface.genome.GeneBlock`:
+the CTRNN's time constants, tau or ln tau) is not pulled: no time constant is
+neutral, and a fitness that carries no information about tau would let the pull
+alone set it.  ``"zero"`` pulls every gene towards 0 (as first shipped: it
+drags ln tau towards 0, tau towards 1 s).
+
+Everything is in gene units (``sigma``, ``learning_rate``).  ``sigma`` may
+shrink each generation by ``sigma_decay`` down to ``sigma_min``.  Why our own
+~200 lines rather than a library: evosax (JAX) and evotorch (PyTorch) would
+bring a whole array framework into the core install for an update of a few
+NumPy lines, and a state that is a plain value of floats is what the checkpoint
+stores and a resume restores bit for bit.
 """
 
 from __future__ import annotations
@@ -52,8 +78,17 @@ class ESOptions:
     sigma_decay: float = option(1.0, "sigma times this each generation", above=0, high=1)
     sigma_min: float = option(0.0, "sigma never decays below this", unit="gene units", low=0)
     learning_rate: float = option(0.02, "Adam's (openai) or the step's (ars) learning rate", unit="gene units", above=0)
-    weight_decay: float = option(0.005, "L2 pull of theta towards 0 (openai)", low=0)
+    weight_decay: float = option(0.005, "L2 pull of theta towards `weight_decay_to` (openai)", low=0)
     top: int = option(0, "ARS: directions kept (0: all)", low=0, integer=True)
+    weight_decay_to: str = option("centre", "where weight decay pulls: `centre`: each gene block's centre (low + high) / 2, "
+                                  "blocks without a neutral value (a CTRNN's time constants) not at all; `zero`: every gene "
+                                  "towards 0 (as first shipped)", choices=("centre", "zero"))
+    credit: str = option("evaluated", "what a sample's fitness is credited to: `evaluated`: the perturbation its clipped row "
+                         "made (no momentum out of a bound theta sits on); `drawn`: the unclipped sigma eps (as first shipped)",
+                         choices=("evaluated", "drawn"))
+    ties: str = option("average", "openai's ranks of tied fitness values: `average`: their mean rank (a tied pair gives no "
+                       "step); `order`: in order of appearance (as first shipped: a tied pair steps along -eps)",
+                       choices=("average", "order"))
 
     def __post_init__(self):
         check_fields(self, "es")
@@ -80,10 +115,15 @@ class ESState(OptimizerState):
                 "v": plain(self.v), "fitness": plain(self.fitness)}
 
 
-def centred_ranks(f: np.ndarray) -> np.ndarray:
-    """Ranks of ``f`` scaled to [-0.5, 0.5] (ties in order of appearance)."""
+def centred_ranks(f: np.ndarray, ties: str = "average") -> np.ndarray:
+    """Ranks of ``f`` scaled to [-0.5, 0.5]; tied values share their mean rank (``ties = "average"``) or are ranked in
+    order of appearance (``"order"``)."""
+    f = np.asarray(f, float)
     r = np.empty(len(f))
     r[np.argsort(f, kind="stable")] = np.arange(len(f))
+    if ties == "average" and len(f):
+        _, group = np.unique(f, return_inverse=True)
+        r = (np.bincount(group, r) / np.bincount(group))[group]
     return r / max(len(f) - 1, 1) - 0.5
 
 
@@ -101,6 +141,8 @@ class EvolutionStrategy(Optimizer):
         if initial is not None:
             initial = layout.validate(initial, what="initial genome")[0]
         self.theta = np.clip(layout.init_mean if initial is None else initial, self.low, self.high).astype(float)
+        self.centre = layout.centre if config.weight_decay_to == "centre" else np.zeros(layout.size)
+        self.decays = layout.decays if config.weight_decay_to == "centre" else np.ones(layout.size, bool)
         self.m, self.v = np.zeros(layout.size), np.zeros(layout.size)
         self.generation = 0
         self._sample()
@@ -121,6 +163,18 @@ class EvolutionStrategy(Optimizer):
         self.population = np.clip(rows, self.low, self.high)
         self.fitness = np.full(len(self.population), np.nan)
 
+    def _evaluated(self, eps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The perturbations ``(N, G)`` the + and - rows were evaluated at, in units of sigma: +eps and -eps where their
+        rows were not clipped; (row - theta) / sigma where they were (``credit = "evaluated"``; ``"drawn"``: None, None,
+        the update credits +-eps)."""
+        if self.config.credit == "drawn":
+            return None, None
+        N, s = self.config.pairs, self.sigma
+        rows = self.population[: 2 * N]
+        drawn = np.concatenate([self.theta + s * eps, self.theta - s * eps])
+        d = np.where(rows == drawn, np.concatenate([eps, -eps]), (rows - self.theta) / s)
+        return d[:N], d[N:]
+
     def evaluation_rows(self) -> np.ndarray:
         """The rows of theta itself (the evaluation walkers)."""
         return np.arange(2 * self.config.pairs, len(self.population))
@@ -139,24 +193,33 @@ class EvolutionStrategy(Optimizer):
         c, N = self.config, self.config.pairs
         f = self.fitness[: 2 * N]
         finite = np.isfinite(f)
-        f = np.where(finite, f, (f[finite].min() if finite.any() else 0.0) - 1e6)  # unstable: below every finite one
-        plus, minus = f[:N], f[N:]
         eps = self._noise()
+        dp, dm = self._evaluated(eps)
         if c.method == "ars":
+            f = np.where(finite, f, f[finite].min() if finite.any() else 0.0)  # unstable: the generation's worst finite one
+            plus, minus = f[:N], f[N:]
             keep = np.argsort(-np.maximum(plus, minus), kind="stable")[: c.top or N]
-            spread = float(np.std(np.concatenate([plus[keep], minus[keep]])))
-            step = (plus[keep] - minus[keep]) @ eps[keep] * (c.learning_rate / (len(keep) * spread)) if spread > 0 else 0.0
+            kept = np.concatenate([plus[keep], minus[keep]])
+            spread, b = float(np.std(kept)), float(np.mean(kept))
+            if dp is None:
+                total = (plus[keep] - minus[keep]) @ eps[keep]
+            else:  # = (f+ - f-) eps where nothing is clipped
+                total = (plus[keep] - b) @ dp[keep] + (minus[keep] - b) @ dm[keep]
+            step = total * (c.learning_rate / (len(keep) * spread)) if spread > 0 else 0.0
             self.theta = self.theta + step * self.mutable
         else:
-            r = centred_ranks(f)
-            g = (r[:N] - r[N:]) @ eps / (2 * N) - c.weight_decay * self.theta
-            g = g * self.mutable
+            r = centred_ranks(np.where(finite, f, -np.inf), c.ties)  # unstable: below every finite one
+            rp, rm = r[:N], r[N:]
+            g = ((rp - rm) @ eps if dp is None else rp @ dp + rm @ dm) / (2 * N)  # the same where nothing is clipped
+            g = (g - c.weight_decay * (self.theta - self.centre) * self.decays) * self.mutable
             t = self.generation + 1
             self.m = BETA1 * self.m + (1 - BETA1) * g
             self.v = BETA2 * self.v + (1 - BETA2) * g * g
             a = c.learning_rate * math.sqrt(1 - BETA2**t) / (1 - BETA1**t)
             self.theta = self.theta + a * self.m / (np.sqrt(self.v) + EPS)
         self.theta = np.clip(self.theta, self.low, self.high)
+        if c.credit == "evaluated":  # no momentum out of a bound theta sits on
+            self.m = np.where(((self.theta >= self.high) & (self.m > 0)) | ((self.theta <= self.low) & (self.m < 0)), 0.0, self.m)
         self.generation += 1
         self._sample()
         return np.full(len(self.population), -1)

@@ -25,6 +25,9 @@ class GeneBlock:
     init_mean: float
     init_sigma: float
     mutation_sigma: float
+    #: whether an optimizer's weight decay (the ES's L2 pull) pulls this block towards its centre, (low + high) / 2;
+    #: False for genes without a neutral value (a CTRNN's time constants), whose pull would be a prior of no meaning
+    decays: bool = True
 
     def __post_init__(self):
         if self.size < 0 or not self.low <= self.high:
@@ -60,6 +63,16 @@ class GenomeLayout:
         return self._per_gene("high")
 
     @property
+    def centre(self) -> np.ndarray:
+        """Each gene's block centre, (low + high) / 2."""
+        return 0.5 * (self.low + self.high)
+
+    @property
+    def decays(self) -> np.ndarray:
+        """Per gene: whether weight decay pulls it (:attr:`GeneBlock.decays`)."""
+        return np.concatenate([np.full(b.size, b.decays, bool) for b in self.blocks])
+
+    @property
     def init_mean(self) -> np.ndarray:
         return self._per_gene("init_mean")
 
@@ -91,7 +104,7 @@ class GenomeLayout:
         if not isinstance(genes, dict):
             raise ConfigError("genes: must be a table of gene blocks")
         by_name = {b.name: b for b in self.blocks}
-        settable = [f.name for f in fields(GeneBlock) if f.name not in ("name", "size")]
+        settable = [f.name for f in fields(GeneBlock) if f.name not in ("name", "size", "decays")]
         new = dict(by_name)
         for name, values in genes.items():
             if name not in by_name:
