@@ -3,11 +3,21 @@
     tau_j dA_j/dt = -A_j + sum_i w_ij O_i (+ sum_k v_kj s_k)      (2)
     O_j = 1 / (1 + exp(alpha_j - A_j))                             (3)
 
-Forward Euler at the control period dt = 0.02 s (stable for dt < 2 tau_min =
-1 s, no overshoot for dt < tau_min = 0.5 s).  All activations are 0 at t = 0.
-At each tick the motor outputs are O(t) = sigma(A(t) - alpha); A then advances
-to t + dt.  Neurons 1..n_outputs are the motor neurons, in the body's actuator
-order.
+Integration (``integration``).  ``"euler"`` (the paper's, the default, what
+every stored genome was evolved and replays with): one forward Euler step per
+control period dt = 0.02 s.  Its guard, tau > dt / 2, covers the leak only: a
+neuron with self-weight w is stable only for (dt / tau)(1 - w / 4) < 2, so at
+tau = dt = 0.02 s a neuron with w <= -8 flips 0 <-> 1 at 25 Hz where the
+continuous network rests.  ``"exponential"`` (beyond the paper; for new
+configs): each control period is k equal substeps h = dt / k, each the exact
+step of the leak with the neurons' summed input held, A <- net + (A - net)
+exp(-h / tau); k is chosen per network from its own genes, the smallest with h
+rho <= 1, rho = max_j (1 + sum_i |w_ij| / 4) / tau_j (a bound on the Jacobian's
+eigenvalues, sigma' <= 1/4), so no substep overshoots, whatever the gene
+ranges (41 substeps at most for 10 neurons of |w| <= 16 at tau = dt).  All
+activations are 0 at t = 0.  At each tick the motor outputs are O(t) = sigma(A(t)
+- alpha); A then advances to t + dt.  Neurons 1..n_outputs are the motor
+neurons, in the body's actuator order.
 
 Motor map (``motor``).  ``"range"`` (the paper's, default): a motor output o in
 [0, 1] is the PD target low + o (high - low) in the joint's Table II range, so
@@ -119,6 +129,9 @@ class CTRNNOptions(ControllerOptions):
     centre_crossing: bool = option(False, "biases alpha_j = gene + sum_i w_ij / 2: a network of zero bias genes sits mid-sigmoid")
     direct: bool = option(False, "a linear path from the inputs to the motor outputs beside the network (o = O + g (c + D s))")
     direct_scale: float = option(1.0, "g: the direct path's gain, in motor output per unit of its genes", above=0)
+    integration: str = option("euler", "`euler`: one forward Euler step per control period (the paper's; unstable for "
+                              "strong self-inhibition at tau near dt); `exponential`: substeps of the exact leak step, as "
+                              "many as each network's weights and time constants need to be stable", choices=("euler", "exponential"))
 
     def __post_init__(self):
         _tau_block(self.time_constants, self.dt, self.tau_scale)
@@ -153,10 +166,11 @@ class CTRNN(Controller):
         self.input_names = tuple(inputs)
         self.n_inputs = int(sum(inputs.values()))
         self.dt = float(dt)
+        self.exponential = o.integration == "exponential"
         n, k = self.n, self.n_inputs
         blocks = [
             GeneBlock(name="weights", size=n * n, **WEIGHT),
-            GeneBlock(name="time_constants", size=n, **tau),
+            GeneBlock(name="time_constants", size=n, **tau, decays=False),  # no neutral tau: weight decay leaves it
             GeneBlock(name="biases", size=n, **BIAS),
         ]
         if k:
@@ -183,6 +197,9 @@ class CTRNN(Controller):
         tau = np.exp(p["time_constants"]) if self.log_tau else p["time_constants"]
         alpha = p["biases"] + 0.5 * W.sum(axis=1) if self.centre_crossing else p["biases"]
         out = {"W": W, "tau": tau, "alpha": alpha}
+        if self.exponential:  # substeps per network: h rho <= 1, rho = max_j (1 + sum_i |w_ij| / 4) / tau_j
+            rho = ((1 + 0.25 * np.abs(W).sum(axis=1)) / tau).max(axis=1)
+            out["substeps"] = np.maximum(np.ceil(self.dt * rho - 1e-9), 1).astype(int)
         out["V"] = p["input_weights"].reshape(P, self.n_inputs, n) if self.n_inputs else np.zeros((P, 0, n))
         if self.direct:
             g = self.direct_scale
@@ -200,14 +217,29 @@ class CTRNN(Controller):
         O = self.outputs_of(params, state)
         # per-individual sums in a fixed order: row p never depends on P
         net = (O[:, :, None] * params["W"]).sum(axis=1)
-        if self.n_inputs:
-            net = net + (inputs[:, :, None] * params["V"]).sum(axis=1)
-        A = state + (self.dt / params["tau"]) * (net - state)
+        external = (inputs[:, :, None] * params["V"]).sum(axis=1) if self.n_inputs else None
+        if self.exponential:
+            A = self._exponential(params, state, external)
+        else:
+            if external is not None:
+                net = net + external
+            A = state + (self.dt / params["tau"]) * (net - state)
         if self.outputs_after:
             O = self.outputs_of(params, A)
         if self.direct:
             return A, O[:, : self.n_outputs] + params["c"] + (inputs[:, :, None] * params["D"]).sum(axis=1)
         return A, O[:, : self.n_outputs]
+
+    def _exponential(self, params, A, external):
+        """A after one control period of ``substeps`` exact leak steps each (``external``: the inputs' sum, held over
+        the period); a network that needs fewer substeps than another in the batch stops early (rows stay independent)."""
+        k = params["substeps"]
+        decay = np.exp(-(self.dt / k)[:, None] / params["tau"])
+        for i in range(int(k.max())):
+            net = (self.outputs_of(params, A)[:, :, None] * params["W"]).sum(axis=1)
+            net = net if external is None else net + external
+            A = np.where((i < k)[:, None], net + (A - net) * decay, A)
+        return A
 
     def neuron_outputs(self, params, state):
         return self.outputs_of(params, state)
