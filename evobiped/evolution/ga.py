@@ -31,6 +31,11 @@ from .base import Optimizer, OptimizerState, frozen_array
 MAX_POPULATION = 10**7
 
 
+def _bool_or_none(v) -> None:
+    if v is not None and not isinstance(v, bool):
+        raise ConfigError(f"must be true or false, got {v!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class GAOptions:
     """GA settings, the paper's values by default."""
@@ -38,7 +43,10 @@ class GAOptions:
     population: int = option(50, "individuals per generation", low=2, high=MAX_POPULATION, integer=True)
     fittest_fraction: float = option(0.5, "truncation: the fraction that survives unchanged", above=0, below=1)
     mutations_per_genome: float = option(1.0, "mean mutations per genome (per-locus rate = this / genome length)", above=0)
-    reevaluate_survivors: bool = option(False, "evaluate the survivors again every generation (useless with deterministic tasks)")
+    reevaluate_survivors: bool | None = option(
+        None, "evaluate the survivors again every generation; none: exactly when the run scores each generation differently "
+        "(a running normaliser, a curriculum, disturbances or sources drawn per generation), so that survivors are not compared "
+        "by a fitness scored under an earlier generation's context", check=_bool_or_none, span="`true`, `false`, none")
 
     def __post_init__(self):
         check_fields(self, "ga")

@@ -12,7 +12,8 @@ import numpy as np
 from ..files import rundir
 from ..episode import EpisodeConfig
 from ..core.errors import ConfigError, UserError
-from ..core.options import check_fields, option, parse, refuse_unknown
+from ..core.options import check_fields, option, parse, refuse_unknown, scheduled
+from ..physics.perturb import STRENGTHS
 from .base import Optimizer
 from .cma import CMAES, CMAOptions
 from .curriculum import Curriculum, CurriculumOptions
@@ -185,7 +186,27 @@ def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimi
         return MapElites(layout, config.map_elites, seed=config.seed, initial=initial, mutable=mutable)
     if config.optimizer == "es":
         return EvolutionStrategy(layout, config.es, seed=config.seed, initial=initial, mutable=mutable)
-    return GA(layout, config.ga, seed=config.seed, initial=initial, mutable=mutable)
+    ga = config.ga
+    if ga.reevaluate_survivors is None:  # the survivors scored again when each generation is scored differently
+        ga = dataclasses.replace(ga, reevaluate_survivors=changing_context(config) is not None)
+    return GA(layout, ga, seed=config.seed, initial=initial, mutable=mutable)
+
+
+def changing_context(config: RunConfig) -> str | None:
+    """What scores one generation differently from another (None: nothing): the running normaliser, the curriculum,
+    disturbances drawn per generation (or scheduled, or an aggregate that changes), a task's sources drawn per
+    generation.  A fitness kept from an earlier generation (the GA's survivors) was scored under another context."""
+    p = config.episode.perturbations
+    strong = any(s.start > 0 or s.end > 0 for s in (scheduled(p, n) for n in STRENGTHS if n != "push_force"))
+    friction = scheduled(p, "friction")
+    task = config.episode.parts()[2]
+    for what, changes in (("normalise.running", config.normalise.running), ("curriculum", bool(config.curriculum.phases)),
+                          ("episode.perturbations", p.pushes > 0 or strong or bool(friction.start) or bool(friction.end)
+                           or p.assist > 0 or p.settled_from > 0),
+                          ("random sources", hasattr(task, "draw_sources") and task.draw_sources((config.seed, 0)) is not None)):
+        if changes:
+            return what
+    return None
 
 
 def check_run(config: RunConfig) -> None:
