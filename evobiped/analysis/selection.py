@@ -14,9 +14,10 @@ episode (``seconds``) and, when it is still up then, for ``long_seconds``;
 
 The first candidate wins a tie (give the one to keep when nothing beats it first).
 
-:func:`forward_walker` is the test every "forward walker" in the docs passed: no
-fall in ``seconds`` (200 s), at least ``min_distance`` (20 m) walked in its
-first ``window`` (50 s), within ``heading_limit`` (30 degrees) of its initial facing.
+:func:`forward_walker` tells a walker: no fall in ``seconds`` (200 s) and, over its first ``window`` (50 s), a walk
+(the gait lab's walking criteria: at least 0.3 m/s within 30 degrees of its initial facing, each foot standing at
+least half the time, no flight, symmetric feet that do not slide); ``forward`` is the older, gait-blind test (at
+least ``min_distance``, 20 m, in the window within ``heading_limit``, 30 degrees) that earlier forward walkers passed.
 """
 
 from __future__ import annotations
@@ -62,22 +63,22 @@ def best_candidate(rows: list[dict], heading_limit: float = 30.0) -> int:
 
 def forward_walker(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 200.0, window: float = 50.0,
                    min_distance: float = 20.0, heading_limit: float = 30.0) -> dict:
-    """One genome alone in ``config``'s nominal episode for ``seconds`` s: ``up`` (no fall), ``end_time`` (s),
-    ``distance`` (m) and ``heading_deg`` of its displacement at ``window`` s (or its fall, if sooner), and ``walker``:
-    up, at least ``min_distance`` m, within ``heading_limit`` degrees of its initial facing."""
-    from ..tasks.walk import displacement_heading
+    """One genome alone in ``config``'s nominal episode for ``seconds`` s, its gait measured over its first ``window``
+    s (:func:`evobiped.analysis.gait_report.gait_report`): ``up`` (no fall), ``end_time`` (s), ``distance`` (m) and
+    ``heading_deg`` of its displacement at ``window`` s (or its fall, if sooner); ``forward``: up, at least
+    ``min_distance`` m, within ``heading_limit`` degrees of its initial facing (the test every "forward walker" of
+    earlier docs passed, whatever its gait); ``walker``: a walk: up ``seconds`` s and every walking criterion
+    (:data:`~evobiped.analysis.gait_report.WALKING`: speed, direction, duty factors, flight, symmetry, slip) over the
+    ``window``; ``failed``: the criteria it missed; ``gait``: the gait's measures."""
+    from .gait_report import MEASURES, gait_report
 
-    episode = config.nominal().build()
-    state = episode.start(np.asarray(genome, float)[None], seconds=seconds)
-    episode.advance(state, min(window, seconds))
-    start, facing = state.start_position.copy(), state.start_facing.copy()
-    end = episode.body.planar_position(state.sims)[:1].copy()
-    distance = float(np.linalg.norm(end - start))
-    heading = float(displacement_heading(start, end, facing)[0])
-    if seconds > window:
-        episode.advance(state, seconds - window)
-    up = not bool(state.fell[0])
-    ok = np.isfinite(heading) and abs(heading) <= heading_limit
-    return {"up": up, "end_time": float(state.end_time[0]), "distance": distance,
-            "heading_deg": round(heading, 2) if np.isfinite(heading) else None,
-            "walker": bool(up and distance >= min_distance and ok)}
+    report = gait_report(config, genome, seconds=min(window, seconds), up_for=seconds)
+    heading = report["heading_deg"]
+    distance = float(np.hypot(*report["displacement"]))
+    ok = heading is not None and abs(heading) <= heading_limit
+    forward = bool(report["up"] and distance >= min_distance and ok)
+    failed = report["failed"]
+    gait = {k: report[k] for k in ("speed", *(f"duty_{f}" for f in report["feet"]), *MEASURES)}
+    return {"up": report["up"], "end_time": report.get("end_time", report["time_up"]), "distance": distance,
+            "heading_deg": None if heading is None else round(heading, 2), "forward": forward,
+            "walker": not failed, "failed": failed, "gait": gait}

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..interface.contract import Actuator
 from ..core.errors import ConfigError
+from ..physics.gait_lab import FootSample
 from ..physics.models import load_model, model_path
 from ..physics.sim import Sims
 from ..core.options import option, taken
@@ -139,3 +140,12 @@ class Body(ABC):
     def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
         """Named sensor arrays ``(P, k)`` a controller may take as inputs, k as :attr:`sensor_widths` declares."""
         return {}
+
+    def feet(self, sims: Sims) -> FootSample:
+        """The gait lab's sample of every row now (:mod:`evobiped.physics.gait_lab`): feet in the order of
+        :attr:`contact_sensor`; bodies without feet refuse (a gait measure needs them)."""
+        raise ConfigError(f"body {self.name!r} declares no feet: its gait cannot be measured")
+
+    def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
+        """The body's total mass (kg) and leg length (m, hip to the ground in the initial pose), from ``model``."""
+        raise ConfigError(f"body {self.name!r} declares no feet: its gait cannot be measured")

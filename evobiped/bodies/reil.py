@@ -39,6 +39,7 @@ from ..core.errors import UserError
 from ..physics.sim import Sims
 from ..core.options import option
 from ..physics import gait
+from ..physics.gait_lab import FootSample
 from .base import Body, model_file_option
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
@@ -160,6 +161,10 @@ class ReilBiped(Body):
         self._mass_share = m.body_mass[1:] / m.body_mass[1:].sum()  # links 1.., all in the pelvis's tree
         self._qadr = np.array([m.joint(a).qposadr[0] for a in ACTUATORS])
         self._dadr = np.array([m.joint(a).dofadr[0] for a in ACTUATORS])
+        self._foot_geoms = np.array([m.geom(f"{side}_foot").id for side in ("left", "right")])
+        self._foot_bodies = m.geom_bodyid[self._foot_geoms]
+        self._foot_radius = m.geom_size[self._foot_geoms, 0]
+        self._knees = self._qadr[[2, 5]]
         self._touch = np.concatenate(
             [np.arange(m.sensor(s).adr[0], m.sensor(s).adr[0] + 1) for s in ("left_foot_touch", "right_foot_touch")]
         )
@@ -218,6 +223,28 @@ class ReilBiped(Body):
 
     def contacts(self, sims: Sims) -> np.ndarray:
         return sims.sensordata[:, self._touch] > 0
+
+    def feet(self, sims: Sims) -> FootSample:
+        """The foot spheres against the floor plane (z = 0): a foot touches where MuJoCo makes a contact, at a
+        signed distance below the floor geom's margin (0); slip is the horizontal velocity of the sphere's material
+        point at the ground, v + w x (-r z)."""
+        centre = sims.geom_xpos[:, self._foot_geoms]  # (P, 2, 3)
+        height = centre[..., 2] - self._foot_radius
+        cvel = sims.cvel[:, self._foot_bodies]  # angular, then linear at the pelvis tree's centre of mass
+        w = cvel[..., :3]
+        r = centre - sims.subtree_com[:, self._pelvis, None]
+        r[..., 2] -= self._foot_radius
+        vx = cvel[..., 3] + w[..., 1] * r[..., 2] - w[..., 2] * r[..., 1]
+        vy = cvel[..., 4] + w[..., 2] * r[..., 0] - w[..., 0] * r[..., 2]
+        return FootSample(contact=height < 0.0, slip=np.hypot(vx, vy), height=height, knee=sims.qpos[:, self._knees],
+                          power=sims.actuator_force * sims.actuator_velocity)
+
+    def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        hip = data.xpos[model.body("left_thigh").id, 2]
+        foot = data.geom_xpos[model.geom("left_foot").id, 2] - model.geom_size[model.geom("left_foot").id, 0]
+        return float(model.body_mass.sum()), float(hip - foot)
 
     def _com_velocity(self, sims: Sims) -> np.ndarray:
         """``(P, 3)`` m/s: the mass-weighted velocity of the links' centres of mass.

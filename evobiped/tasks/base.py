@@ -82,6 +82,8 @@ class Task:
         for key, value in fresh.items():
             if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
                 state[key][ids] = value[ids]
+            elif hasattr(state[key], "restart"):  # a per-row record of its own (the gait lab's meter)
+                state[key].restart(ids)
             elif not isinstance(value, (int, float, str)):
                 raise ConfigError(f"{self.name} task: its state {key!r} is not kept per row, so rows cannot begin anew")
 

@@ -20,34 +20,33 @@ vanishes for a network that settles to a fixed point; it multiplies distance,
 so oscillating in place earns nothing.  ``cyclic_weight`` = 0 (default) is the
 paper's plain eq. 4; ``evobiped evolve --cyclic`` sets it to 1.
 
-Forward progress (``fitness = "forward"``, beyond the paper).  Eq. 4 pays a
-2-3 m lunge that falls more than a shuffle that stays up, and pays walking
-backwards as much as forwards.  The forward fitness is
+Forward progress (``fitness = "forward"``, beyond the paper).  Eq. 4 pays a 2-3 m lunge that falls more than a
+shuffle that stays up, and pays walking backwards as much as forwards.  The forward fitness is
 
     F = (d_fwd + survival_credit) * t_up / T
 
-with d_fwd the displacement (m) along the direction the walker faced at the
-start (negative when it walks backwards), t_up the time it stayed up and T
-the episode length (s).  Staying up is paid first (F grows with t_up even
-before the walker moves), then distance forward.
+with d_fwd the displacement (m) along the direction the walker faced at the start (negative when it walks
+backwards), t_up the time it stayed up and T the episode length (s).  Staying up is paid first (F grows with t_up
+even before the walker moves), then distance forward.
 
-Weighted terms (``fitness = "weighted"``, beyond the paper): F = sum_k w_k term_k
-over the terms named in ``weights`` (e.g. forward m, time up s, steps), the
-weights a run's curriculum may change from one phase to the next
-(:mod:`evobiped.evolution.curriculum`).  ``steps`` counts the walker's stance
-switches (a touchdown of the swing foot, :mod:`evobiped.physics.gait`): paying for
-steps teaches a policy on point feet to step, the only way it stays up.
+Weighted terms (``fitness = "weighted"``, beyond the paper): F = sum_k w_k term_k over the terms named in
+``weights`` (e.g. forward m, time up s, steps), the weights a run's curriculum may change from one phase to the next
+(:mod:`evobiped.evolution.curriculum`).  ``steps`` counts the walker's stance switches (a touchdown of the swing
+foot, :mod:`evobiped.physics.gait`): paying for steps teaches a policy on point feet to step, the only way it stays up.
 
-Gait measures (``gait_measures = true``): the terms ``speed``, the mean forward
-speed (m/s: the pelvis's path projected each tick on the direction it faces,
-over the time up, so a walker on a circle walks at its speed along it), and
-``turning``, the mean turning rate (deg/s: the facing's unwrapped change over
-the time up, + to the left): what a gait repertoire's cells are measured by.
+Gait measures (``gait_measures = true``): the terms ``speed``, the mean forward speed (m/s: the pelvis's path
+projected each tick on the direction it faces, over the time up, so a walker on a circle walks at its speed along
+it), and ``turning``, the mean turning rate (deg/s: the facing's unwrapped change over the time up, + to the left):
+what a gait repertoire's cells are measured by.
 
-Heading sense (``heading_sense = true``): the task adds the sensor
-``heading_error`` (rad, in (-pi, pi]): the angle from the direction the walker
-faced at the start to the direction it faces now, + turned to its left; fed to a
+Heading sense (``heading_sense = true``): the task adds the sensor ``heading_error`` (rad, in (-pi, pi]): the angle
+from the direction the walker faced at the start to the direction it faces now, + turned to its left; fed to a
 controller it keeps long walks straight.
+
+Pace (under the weighted fitness): the displacement forward, counted up to ``pace_cap`` (m/s) times the time up.
+
+Gait terms (``gait_terms = true``, or weights that name one): the gait lab's measures of each row over its time up
+(:mod:`evobiped.physics.gait_lab`: duty factors, time airborne, slip, work, ...), from the body's feet.
 """
 
 from __future__ import annotations
@@ -56,30 +55,11 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from ..physics import gait
+from ..physics import gait, gait_lab
 from ..core.errors import ConfigError
 from ..core.options import option
 from .base import Task
-
-
-def count_cycles(series: np.ndarray, lengths: np.ndarray, band: float) -> np.ndarray:
-    """Hysteresis cycles per row and channel.
-
-    ``series`` (T, P, n), ``lengths`` (P,) valid ticks per row -> counts (P, n).
-    """
-    T, P, n = series.shape
-    valid = np.arange(T)[:, None] < lengths[None, :]  # (T, P)
-    w = valid[:, :, None]
-    mean = (series * w).sum(0) / np.maximum(lengths, 1)[:, None]
-    low, high = mean - band, mean + band
-    below = np.zeros((P, n), bool)
-    count = np.zeros((P, n), int)
-    for t in range(T):
-        x, ok = series[t], w[t]
-        rise = below & (x > high) & ok
-        count += rise
-        below = np.where(ok & (x < low), True, np.where(rise, False, below))
-    return count
+from .cycles import count_cycles
 
 
 def displacement_heading(start_xy: np.ndarray, end_xy: np.ndarray, start_facing: np.ndarray) -> np.ndarray:
@@ -113,15 +93,18 @@ FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "
 TERMS = ("distance", "forward", "cyclicity", "time_up", "steps")
 #: the terms ``gait_measures`` adds: mean forward speed (m/s), mean turning rate (deg/s, + left)
 GAIT_TERMS = ("speed", "turning")
+#: the gait lab's terms (``gait_terms``): the duty factor of each foot, then the measures
+LAB_TERMS = ("duty_left", "duty_right") + tuple(gait_lab.MEASURES)
 
 
 def _weights(v) -> None:
     if not (isinstance(v, dict) and v and all(isinstance(k, str) for k in v)
             and all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in v.values())):
         raise ConfigError(f"must be a table of finite weights by term name, got {v!r}")
-    unknown = [k for k in v if k not in TERMS or k == "cyclicity"]
+    unknown = [k for k in v if k not in TERMS + LAB_TERMS + ("pace",) or k == "cyclicity"]
     if unknown:
-        raise ConfigError(f"names no term of the walk task: {', '.join(unknown)} (terms: distance, forward, time_up, steps)")
+        raise ConfigError(f"names no term of the walk task: {', '.join(unknown)} (terms: distance, forward, time_up, steps, pace, "
+                          f"and the gait terms {', '.join(LAB_TERMS)})")
 
 
 def weighted(terms: dict[str, np.ndarray], weights: dict[str, float]) -> np.ndarray:
@@ -147,6 +130,10 @@ class WalkOptions:
     gait_measures: bool = option(False, "add the terms speed (mean forward speed, m/s) and turning (mean turning rate, "
                                  "deg/s, + left)")
     heading_sense: bool = option(False, "add the sensor heading_error: the facing's angle from the initial facing (rad, + left)")
+    pace_cap: float = option(0.6, "the weighted fitness's term pace: the displacement forward, counted up to this speed "
+                             "times the time up (a walk is paid, a faster run is not)", unit="m/s", above=0)
+    gait_terms: bool = option(False, "add the gait lab's terms (duty factors, airborne, slip, power, ...; also on when "
+                              "the weights name one)")
 
     def __post_init__(self):
         if self.fitness != "distance" and self.cyclic_weight:
@@ -182,7 +169,10 @@ class WalkTask(Task):
         self.heading_sense = bool(o.heading_sense)
         self.counts_steps = self.weighs_terms = self.fitness_name == "weighted"
         # time_up and steps only under the weighted fitness: the other fitnesses' files keep their columns
-        self.term_names = (TERMS if self.counts_steps else TERMS[:3]) + (GAIT_TERMS if o.gait_measures else ())
+        self.gait_lab = o.gait_terms or (self.fitness_name == "weighted" and any(k in LAB_TERMS for k in self.weights))
+        self.term_names = ((TERMS if self.counts_steps else TERMS[:3]) + (GAIT_TERMS if o.gait_measures else ())
+                           + (LAB_TERMS if self.gait_lab else ()) + (("pace",) if "pace" in self.weights else ()))
+        self._lab_constants = None  # the body's mass and leg length, once known
 
     def sensor_widths(self):
         return {"heading_error": 1} if self.heading_sense else {}
@@ -211,6 +201,10 @@ class WalkTask(Task):
             gait.read(body.contacts(sims), sims)  # the episode keeps the gait tracker from now on
             state["stance"] = sims.extra["gait"]["stance"].copy()
             state["steps"] = np.zeros(sims.n)
+        if self.gait_lab:
+            self._lab_constants = self._lab_constants or body.gait_constants(sims.model)
+            feet = body.contact_sensor[1] if body.contact_sensor else ()
+            state["gait_lab"] = gait_lab.GaitMeter(sims.n, feet, *self._lab_constants, float(sims.time.max()))
         if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
             state["travel"], state["yaw"], state["facing_now"] = np.zeros(sims.n), np.zeros(sims.n), state["facing"].copy()
         return state
@@ -231,6 +225,8 @@ class WalkTask(Task):
             stance = sims.extra["gait"]["stance"][ok]
             state["steps"][ok] += stance != state["stance"][ok]
             state["stance"][ok] = stance
+        if self.gait_lab:
+            state["gait_lab"].tick(body.feet(sims), ok, sims.time[ok])
         if self.cyclic_weight:
             state["motor"].append(neurons[:, : state["n_motor"]].copy())
             state["ticks"][ok] += 1
@@ -254,9 +250,14 @@ class WalkTask(Task):
         out = {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
         if self.counts_steps:
             out["time_up"], out["steps"] = np.array(state["end_time"], float), state["steps"].copy()
+            if "pace" in self.weights:
+                out["pace"] = np.minimum(out["forward"], self.options.pace_cap * out["time_up"])
         if self.options.gait_measures:
             up = np.maximum(np.asarray(state["end_time"], float), 1e-9)
             out["speed"], out["turning"] = state["travel"] / up, np.degrees(state["yaw"]) / up
+        if self.gait_lab:
+            lab = state["gait_lab"].measure(self.forward(state))
+            out.update({k: lab[k] for k in LAB_TERMS})
         return out
 
     def end_position(self, body, sims, state):

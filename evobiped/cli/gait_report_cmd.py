@@ -1,0 +1,66 @@
+"""``evobiped gait-report``: a stored walker's gait measured as a gait lab would, and whether it walks."""
+
+from __future__ import annotations
+
+import json
+import math
+
+
+def add_gait_report(sub) -> None:
+    p = sub.add_parser("gait-report", help="a walker's gait: duty factors, flight, steps, slip, clearance, power, cost of "
+                       "transport, and whether it meets the walking criteria")
+    p.add_argument("source", metavar="GENOME|RUN", help="a run directory (its best.json) or a genome JSON file")
+    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    p.add_argument("--seconds", type=float, default=20.0, metavar="S", help="measure the first S s of the nominal "
+                   "episode (default 20)")
+    p.add_argument("--up-for", type=float, metavar="S", help="then let it walk on to S s: 'up' means it stood that long "
+                   "(the walking criteria's 200 s)")
+    p.add_argument("--figure", metavar="PNG", help="also draw its footfall diagram (stance bars per foot over time) here")
+    p.add_argument("--json", action="store_true", help="print the report as JSON (the stance episodes included)")
+    p.set_defaults(func=run_gait_report_cmd)
+
+
+def run_gait_report_cmd(args) -> int:
+    from pathlib import Path
+
+    from ..analysis.gait_report import WALKING, criteria_words, gait_report
+    from ..core.errors import UserError
+    from ..record.source import resolve
+
+    for flag, v in (("--seconds", args.seconds), ("--up-for", args.up_for)):
+        if v is not None and not (math.isfinite(v) and 0 < v <= 1e5):
+            raise UserError(f"{flag} must be a finite number of seconds in (0, 1e5], got {v:g}")
+    if args.up_for is not None and args.up_for < args.seconds:
+        raise UserError(f"--up-for ({args.up_for:g} s) must be at least --seconds ({args.seconds:g} s)")
+    if args.figure is not None and Path(args.figure).suffix.lower() != ".png":
+        raise UserError(f"--figure must name a .png file, got {args.figure}")
+    source = resolve(args.source, args.generation)
+    report = gait_report(source.config, source.genome, seconds=args.seconds, up_for=args.up_for)
+    report["source"] = str(source.genome_path)
+    if args.figure is not None:
+        from ..record.footfall_figure import footfall_figure
+
+        footfall_figure(report, Path(args.figure), title=source.label)
+    if args.json:
+        print(json.dumps(report, indent=1, default=lambda v: None))
+        return 0
+    feet = report["feet"]
+    rows = [("up", f"{report['up']} ({report.get('up_for', report['seconds']):g} s)"),
+            ("speed", f"{report['speed']:.3f} m/s over {report['time_up']:.1f} s, Froude {report['froude']:.3f}"),
+            ("direction", "did not move" if report["heading_deg"] is None else f"{report['heading_deg']:+.1f} deg"),
+            ("duty factor", " / ".join(f"{f} {report[f'duty_{f}']:.3f}" for f in feet)
+             + f" (asymmetry {report['duty_asymmetry']:.3f})"),
+            ("airborne", f"{100 * report['airborne']:.1f} % of the time (double support {100 * report['double_support']:.1f} %)"),
+            ("steps", f"{report['steps_per_s']:.2f} per s, {report['step_length']:.3f} m each"),
+            ("stance slip", f"median {report['slip']:.3f} m/s, {100 * report['slip_share']:.1f} % of the speed"),
+            ("swing", f"peak foot clearance {report['clearance']:.3f} m, knee excursion {report['knee_swing']:.2f} rad"),
+            ("power", f"{report['power']:.1f} W/kg positive, cost of transport {report['cost_of_transport']:.2f}")]
+    print(f"gait of {source.genome_path} (first {args.seconds:g} s of its nominal episode)")
+    for k, v in rows:
+        print(f"  {k:<12} {v}")
+    bounds = ", ".join(f"{k} {how.replace('abs', '|x| ')} {b:g}" for k, (how, b, _) in WALKING.items())
+    print(f"walks: {'yes' if report['walks'] else 'no: ' + criteria_words(report['failed'])}  (criteria: up, {bounds})")
+    return 0
+
+
+SUBCOMMANDS = (add_gait_report,)

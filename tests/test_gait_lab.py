@@ -1,0 +1,127 @@
+"""The gait lab against independent calculations: contacts as MuJoCo's contact list has them, slip as the Jacobian
+gives the contact point's velocity (a sliding body slips at its speed, a rolling one not at all), duty factors, flight
+and steps of a constructed stance schedule, and the walk task's gait terms equal to the report's."""
+
+import dataclasses
+
+import mujoco
+import numpy as np
+import pytest
+
+from evobiped.analysis.gait_report import failed_criteria, gait_report
+from evobiped.core.errors import ConfigError, UserError
+from evobiped.core.options import given
+from evobiped.episode import EpisodeConfig
+from evobiped.files.genome_file import load_genome
+from evobiped.physics.gait_lab import measure_one, stance_episodes
+
+from .conftest import WALKERS
+
+
+def _standing(v=(0.0, 0.0, 0.0), w=(0.0, 0.0, 0.0)):
+    """The Reil body in its initial pose, feet on the floor, its free joint moving at ``v`` (m/s) and ``w`` (rad/s)."""
+    ep = EpisodeConfig(body="reil", controller=None, task="walk", seconds=1.0, control_dt=0.02).build()
+    sims = ep.sims(1)
+    ep.body.reset(sims)
+    sims.qpos[0, 2] -= 0.002  # 2 mm into the floor: both feet in contact
+    sims.qvel[0, :3], sims.qvel[0, 3:6] = v, w
+    sims.forward()
+    return ep, sims
+
+
+def test_contacts_are_mujocos_contact_list_and_slip_the_contact_points_velocity():
+    g, cfg, _ = load_genome(WALKERS / "ctrnn_distilled_seed5.json")
+    ep = cfg.nominal().build()
+    st = ep.start(g[None], seconds=6.0)
+    m = st.sims.model
+    floor, feet = m.geom("floor").id, [m.geom("left_foot").id, m.geom("right_foot").id]
+    changes, seen = 0, set()
+    for _ in range(300):
+        ep.advance(st, ticks=1)
+        s, d = ep.body.feet(st.sims), st.sims.batch.get_data(0)
+        listed = [any({c.geom1, c.geom2} == {floor, f} for c in d.contact[: d.ncon]) for f in feet]
+        assert list(s.contact[0]) == listed
+        seen.add(tuple(listed))
+        for k, f in enumerate(feet):
+            p = d.geom_xpos[f] - [0, 0, m.geom_size[f, 0]]
+            jacp = np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jacp, None, p, m.geom_bodyid[f])
+            assert s.slip[0, k] == pytest.approx(np.hypot(*(jacp @ d.qvel)[:2]), abs=1e-9)
+    assert {(True, False), (False, True), (True, True)} <= seen  # single and double support both met
+
+
+def test_a_sliding_body_slips_at_its_speed_and_a_rolling_foot_does_not_slip():
+    _, sims = _standing(v=(0.3, 0.4, 0.0))
+    ep, _ = _standing()
+    s = ep.body.feet(sims)
+    assert s.contact.all() and s.slip[0] == pytest.approx([0.5, 0.5], abs=1e-12)
+    # a rigid rotation about the left foot's lowest point p: v(x) = w x (x - p); the left foot rolls, the right one
+    # (0.5 m to its right) is dragged sideways... by the rotation about the vertical, at w_z * 0.5 m/s
+    ep, sims = _standing()
+    p = sims.geom_xpos[0, sims.model.geom("left_foot").id] - [0, 0, 0.08]
+    w = np.array([0.0, 2.0, 0.5])
+    v = np.cross(w, sims.xpos[0, sims.model.body("pelvis").id] - p)
+    ep, sims = _standing(v=v, w=w)
+    s = ep.body.feet(sims)
+    centre_speed = np.hypot(*np.cross(w, [0, 0, 0.08])[:2])
+    assert centre_speed > 0.1 and s.slip[0, 0] == pytest.approx(0.0, abs=1e-12)
+    assert s.slip[0, 1] == pytest.approx(0.5 * 0.5, rel=1e-3)
+
+
+def test_a_known_stance_schedule_gives_its_duty_factors_flight_and_steps():
+    dt, T = 0.01, 400  # 4 s; a stride of 1 s: left stands [0, 0.6), right [0.5, 1.1): duty 0.6, double support 0.2
+    t = np.arange(T) * dt
+    phase = t % 1.0
+    left = phase < 0.6
+    right = (phase >= 0.5) | (phase < 0.1)
+    contact = np.stack([left, right], axis=1)
+    contact[250:252, 0] = False  # a 20 ms lift inside a stance is flight...
+    contact[70:73, 0] = True  # ...and a 30 ms tap in a swing is no stance (no longer than 40 ms)
+    sample = {"contact": contact, "slip": np.full((T, 2), 0.01), "height": np.where(contact, 0.0, 0.05),
+              "knee": np.zeros((T, 2)), "power": np.full((T, 6), 1.0)}
+    m = measure_one(sample, dt, forward=2.0, mass=2.0, leg_length=1.0, feet=("left", "right"))
+    left_stance = 0.6 - 0.02 / 4 - 0.0  # one 20 ms lift in 4 s
+    assert m["duty_left"] == pytest.approx(left_stance, abs=1e-9)
+    assert m["duty_right"] == pytest.approx(0.6, abs=1e-9)
+    assert m["double_support"] == pytest.approx(0.2 - 0.02 / 4, abs=1e-9)
+    assert m["airborne"] == 0.0  # the right foot stands during the left's lift
+    # left: 4 stances + 1 split by the lift; right: the first stance (0-0.1 s) and 4 more (the last cut at 4 s)
+    assert len(stance_episodes(contact[:, 0], dt)) == 5 and len(stance_episodes(contact[:, 1], dt)) == 5
+    assert m["steps_per_s"] == pytest.approx(10 / 4) and m["step_length"] == pytest.approx(0.2)
+    assert m["slip"] == pytest.approx(0.01) and m["slip_share"] == pytest.approx(0.02)
+    assert m["power"] == pytest.approx(3.0) and m["positive_work"] == pytest.approx(12.0)
+    assert m["cost_of_transport"] == pytest.approx(3.0 / (9.81 * 0.5)) and m["froude"] == pytest.approx(0.25 / 9.81)
+    assert m["clearance"] == pytest.approx(0.05)
+
+
+def test_the_walk_tasks_gait_terms_are_the_reports_measures():
+    g, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed5.json")
+    opts = dict(given(cfg.task_options), gait_terms=True)
+    run_cfg = dataclasses.replace(cfg.nominal(), task_options=opts, seconds=8.0)
+    terms = {k: float(v[0]) for k, v in run_cfg.build().run(g[None]).terms.items()}
+    report = gait_report(cfg, g, seconds=8.0)
+    for k in ("duty_left", "duty_right", "airborne", "slip", "steps_per_s", "power", "cost_of_transport", "sliding"):
+        assert terms[k] == pytest.approx(report[k], rel=1e-12), k
+    assert report["up"] and 0.5 < report["duty_left"] < 0.6 and report["steps_per_s"] > 5
+
+
+def test_a_skipping_walker_fails_the_walking_criteria_and_says_which():
+    g, cfg, _ = load_genome(WALKERS / "ctrnn_es_seed5.json")
+    report = gait_report(cfg, g, seconds=10.0)
+    assert report["up"] and report["speed"] > 0.8
+    assert {"duty_min", "airborne", "duty_asymmetry"} <= set(report["failed"]) and not report["walks"]
+    assert failed_criteria({**report, "duty_min": 0.55, "airborne": 0.0, "duty_asymmetry": 0.01, "slip_share": 0.04}) == []
+
+
+def test_gait_terms_refuse_a_body_without_feet_and_bad_weights():
+    ep = EpisodeConfig(body="taga", controller="matsuoka", task="walk", task_options={"gait_terms": True}, seconds=1.0).build()
+    with pytest.raises(ConfigError, match="declares no feet"):
+        ep.run(ep.controller.layout.centre[None])
+    with pytest.raises(ConfigError, match="finite"):
+        EpisodeConfig(task_options={"fitness": "weighted", "weights": {"airborne": float("nan")}})
+    with pytest.raises(ConfigError, match="names no term"):
+        EpisodeConfig(task_options={"fitness": "weighted", "weights": {"airbone": -1.0}})
+    g, cfg, _ = load_genome(WALKERS / "ctrnn_es_seed5.json")
+    for bad in (float("inf"), 0.0, -1.0):
+        with pytest.raises(UserError, match="--seconds"):
+            gait_report(cfg, g, seconds=bad)
