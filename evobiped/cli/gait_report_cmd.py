@@ -9,14 +9,17 @@ import math
 def add_gait_report(sub) -> None:
     p = sub.add_parser("gait-report", help="a walker's gait: duty factors, flight, steps, slip, clearance, power, cost of "
                        "transport, and whether it meets the walking criteria")
-    p.add_argument("source", metavar="GENOME|RUN", help="a run directory (its best.json) or a genome JSON file")
+    p.add_argument("source", metavar="GENOME|RUN", nargs="+", help="a run directory (its best.json) or a genome JSON "
+                   "file; several: one row each (with --table)")
     p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
     p.add_argument("--seconds", type=float, default=20.0, metavar="S", help="measure the first S s of the nominal "
                    "episode (default 20)")
     p.add_argument("--up-for", type=float, metavar="S", help="then let it walk on to S s: 'up' means it stood that long "
                    "(the walking criteria's 200 s)")
     p.add_argument("--figure", metavar="PNG", help="also draw its footfall diagram (stance bars per foot over time) here")
-    p.add_argument("--json", action="store_true", help="print the report as JSON (the stance episodes included)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON (the stance episodes included; a list "
+                   "for several sources)")
+    p.add_argument("--table", action="store_true", help="print one Markdown table row per source (the docs' gait table)")
     p.set_defaults(func=run_gait_report_cmd)
 
 
@@ -34,16 +37,29 @@ def run_gait_report_cmd(args) -> int:
         raise UserError(f"--up-for ({args.up_for:g} s) must be at least --seconds ({args.seconds:g} s)")
     if args.figure is not None and Path(args.figure).suffix.lower() != ".png":
         raise UserError(f"--figure must name a .png file, got {args.figure}")
-    source = resolve(args.source, args.generation)
-    report = gait_report(source.config, source.genome, seconds=args.seconds, up_for=args.up_for)
-    report["source"] = str(source.genome_path)
+    if len(args.source) > 1 and not (args.table or args.json):
+        raise UserError("several sources need --table or --json")
+    if len(args.source) > 1 and args.figure is not None:
+        raise UserError("--figure draws one walker: give one source")
+    sources = [resolve(s, args.generation) for s in args.source]  # every source checked before any runs
+    reports = []
+    if args.table:
+        print(TABLE_HEAD, flush=True)
+    for source in sources:
+        report = gait_report(source.config, source.genome, seconds=args.seconds, up_for=args.up_for)
+        report["source"] = str(source.genome_path)
+        reports.append(report)
+        if args.table:
+            print(table_row(source.label, report), flush=True)
     if args.figure is not None:
         from ..record.footfall_figure import footfall_figure
 
-        footfall_figure(report, Path(args.figure), title=source.label)
+        footfall_figure(reports[0], Path(args.figure), title=sources[0].label)
     if args.json:
-        print(json.dumps(report, indent=1, default=lambda v: None))
+        print(json.dumps(reports[0] if len(reports) == 1 else reports, indent=1, default=lambda v: None))
+    if args.json or args.table:
         return 0
+    report, source = reports[0], sources[0]
     feet = report["feet"]
     rows = [("up", f"{report['up']} ({report.get('up_for', report['seconds']):g} s)"),
             ("speed", f"{report['speed']:.3f} m/s over {report['time_up']:.1f} s, Froude {report['froude']:.3f}"),
@@ -61,6 +77,20 @@ def run_gait_report_cmd(args) -> int:
     bounds = ", ".join(f"{k} {how.replace('abs', '|x| ')} {b:g}" for k, (how, b, _) in WALKING.items())
     print(f"walks: {'yes' if report['walks'] else 'no: ' + criteria_words(report['failed'])}  (criteria: up, {bounds})")
     return 0
+
+
+#: the columns of :func:`table_row`
+TABLE_HEAD = ("| walker | up | speed (m/s) | duty L / R | airborne | steps/s | step (m) | slip (% of speed) | clearance (m) "
+              "| W/kg | CoT | walks? |\n|---|---|---|---|---|---|---|---|---|---|---|---|")
+
+
+def table_row(name: str, r: dict) -> str:
+    """One walker's gait as a row under :data:`TABLE_HEAD`."""
+    duty = " / ".join(f"{r[f'duty_{f}']:.2f}" for f in ("left", "right") if f"duty_{f}" in r)
+    verdict = "yes" if r["walks"] else "no: " + ", ".join(r["failed"])
+    return (f"| `{name}` | {r.get('up_for', r['seconds']):g} s {'up' if r['up'] else 'fell'} | {r['speed']:.2f} | {duty} "
+            f"| {100 * r['airborne']:.1f} % | {r['steps_per_s']:.1f} | {r['step_length']:.2f} | {100 * r['slip_share']:.0f} "
+            f"| {r['clearance']:.3f} | {r['power']:.0f} | {r['cost_of_transport']:.2f} | {verdict} |")
 
 
 SUBCOMMANDS = (add_gait_report,)
