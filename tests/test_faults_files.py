@@ -190,10 +190,15 @@ def test_a_nan_best_in_the_history_is_one_line(run, capsys):
 
 
 SELECT = {
-    "short genome": (lambda d: edit(d / "generations" / "gen_0000.json", lambda g: {**g, "genome": g["genome"][:7]}), "has 7 genes"),
+    "short genome": (lambda d: edit(d / "generations" / "gen_0000.json", lambda g: {**g, "genome": g["genome"][:7]}),
+                     "gen_0000.json is not the file its generation committed"),
     "start genome a number": (lambda d: edit(d / "config.json", lambda c: {**c, "initial": 5}), "initial: must be a non-empty string"),
-    "another episode": (lambda d: edit(d / "generations" / "gen_0001.json", lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}}),
-                        "of another episode than the run's"),
+    "another episode": (lambda d: edit(d / "generations" / "gen_0000.json", lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}}),
+                        "gen_0000.json is not the file its generation committed"),
+    # a checkpoint written before it kept the generation files' digests: their generation and fitness agree
+    "another episode, older checkpoint": (lambda d: (edit(d / "checkpoint.json", lambda ck: {k: v for k, v in ck.items() if k != "generation_digests"}),
+                                                     edit(d / "generations" / "gen_0001.json", lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}})),
+                                          "of another episode than the run's"),
 }
 
 

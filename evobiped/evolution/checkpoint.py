@@ -53,6 +53,7 @@ def load(directory: Path) -> dict:
         return {**parts, "history": [], "best": None, "wall": 0.0, "context": RunContext(config, start_episode(directory, config))}
     try:
         rundir.validate_checkpoint(ck, generations=config.generations, low=opt.low, high=opt.high)
+        rundir.generation_check.check_digests(ck)
     except UserError as exc:
         raise UserError(f"checkpoint {path} is malformed: {exc}") from None
     state, history, best = opt.state_from(rundir.optimizer_table(ck)), ck["history"], ck["best"]
@@ -63,7 +64,8 @@ def load(directory: Path) -> dict:
     context.restore(ck)
     return {**parts, "history": history, "best": best, "wall": float(ck["wall_seconds"]), "best_genome": ck.get("best_genome"),
             "individuals": Individuals.from_dict(ck.get("outcome", {}), len(opt.population)),
-            "history_terms": ck.get("history_terms", []), "best_walk": ck.get("best_walk"), "context": context}
+            "history_terms": ck.get("history_terms", []), "best_walk": ck.get("best_walk"), "context": context,
+            "generation_digests": ck.get(rundir.DIGESTS_KEY)}
 
 
 def committed_files(directory: Path) -> list[str]:
@@ -85,7 +87,7 @@ def commit(run) -> None:
             {rundir.SETTINGS_KEY: fingerprint.settings(run.config, run.started_in), rundir.START_KEY: run.start,
              "optimizer": run.optimizer.state().to_dict(), "history": run.history, "best": run.best, "best_genome": run.best_genome,
              "wall_seconds": run.wall, "outcome": run.individuals.to_dict(), "history_terms": run.history_terms,
-             "best_walk": run.best_walk, **run.context.to_dict()},
+             "best_walk": run.best_walk, rundir.DIGESTS_KEY: run.generation_digests, **run.context.to_dict()},
         )
         derive(run)
 
@@ -102,6 +104,8 @@ def rebuild(run) -> None:
             run.repairs.append(f"{p.relative_to(d)} removed (after the last checkpoint)")
     _cut_individuals(run)
     derive(run, repair=True)
+    run.repairs += rundir.check_generation_files(d, {"history": run.history, "best": run.best, "best_genome": run.best_genome,
+                                                     rundir.DIGESTS_KEY: run.generation_digests})
     if run.done:
         write_summary(run, repair=True)
     elif (d / rundir.SUMMARY).exists():

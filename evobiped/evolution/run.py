@@ -21,8 +21,8 @@ from .. import __version__
 from ..core import provenance
 from ..files import rundir
 from ..core.errors import UserError
-from ..core.fileio import WriteError, json_text, write_json
-from ..files.genome_file import save_genome
+from ..core.fileio import WriteError, atomic_write, json_text, write_json
+from ..files.genome_file import genome_text
 from . import checkpoint as commit_point
 from .evaluate import Evaluator
 from .base import Optimizer
@@ -45,7 +45,8 @@ class Run:
 
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
                  best_genome: list[float] | None = None, individuals: Individuals | None = None,
-                 history_terms: list[dict] | None = None, best_walk: dict | None = None, context: RunContext | None = None):
+                 history_terms: list[dict] | None = None, best_walk: dict | None = None, context: RunContext | None = None,
+                 generation_digests: list[str | None] | None = None):
         self.dir, self.config, self.optimizer = directory, config, optimizer
         self.history, self.best, self.wall = history, best, wall
         #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
@@ -54,6 +55,8 @@ class Run:
         self.individuals = individuals if individuals is not None else Individuals()
         #: the best individual's terms per generation (name -> mean over its presentations), history.csv's term columns
         self.history_terms = history_terms if history_terms is not None else []
+        #: each committed generation file's digest (None: a checkpoint written before they were kept)
+        self.generation_digests = generation_digests if generation_digests is not None else [None] * len(history)
         #: where the best walker went in its evaluation (``EpisodeResult.walk``; None: not known)
         self.best_walk = best_walk
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
@@ -188,7 +191,9 @@ class Run:
         meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
                     generation=g, terms=terms)
         episode = self.context.episode(context)
-        save_genome(rundir.generation_file(self.dir, g), pop[b], episode, **meta)
+        text = genome_text(pop[b], episode, **meta)
+        atomic_write(rundir.generation_file(self.dir, g), text)
+        self.generation_digests.append(rundir.digest(text))
         rundir.append_individuals(self.dir / rundir.INDIVIDUALS, self.individuals.records(g, f, unknown))
         # while schedules still change or the assistance holds the walker up, generations are not comparable (nor
         # the unassisted walker's): the run's best is the latest generation's until then, then the fittest since

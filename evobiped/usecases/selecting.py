@@ -37,6 +37,7 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     d = Path(run_dir)
     if not (d / rundir.CONFIG).is_file() or not (d / rundir.HISTORY).is_file():
         raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
+    rundir.check_generation_files(d)  # every committed generation file is the run's (rewritten, or one line naming it)
     best = rundir.read_history(d / rundir.HISTORY)["best"]
     chosen_generations = [int(g) for g in np.argsort(-best, kind="stable")[:top]]
     paths = [rundir.generation_file(d, g) for g in chosen_generations]

@@ -31,7 +31,8 @@ source of truth: ``history.csv``, ``best.json``, ``summary.json`` and
 ``evolution.rrd`` are derived from it and rebuilt from it on ``--resume``
 whenever they are missing, stale or damaged.  ``generations/gen_NNNN.json``
 is written just before the commit of generation NNNN (a resume deletes those
-beyond the last commit).
+beyond the last commit); the checkpoint keeps each one's digest, and resume, replay and select check every
+committed one against it (:mod:`.generation_check`).
 
 ``individuals.jsonl`` is appended before the commit of its generation and cut
 back to the committed generations' lines by a resume: no row of a committed
@@ -39,6 +40,7 @@ generation is duplicated or lost (:mod:`.individuals_file`).
 """
 
 from .checkpoint_check import OLD_OPTIMIZER_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, optimizer_table, validate_checkpoint
+from .generation_check import DIGESTS_KEY, check_generation_files, digest
 from .genome_source import GenomeSource, genome_path, resolve_genome
 from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, individuals_text, read_individuals
 from .history_file import HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history, write_history
@@ -48,7 +50,7 @@ from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HIST
 from .locking import lock, unlock
 
 __all__ = [
-    "BEST", "CHECKPOINT", "CONFIG", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
+    "BEST", "CHECKPOINT", "CONFIG", "DIGESTS_KEY", "check_generation_files", "digest", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
     "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY", "OPTIMIZER_KEY", "OUTCOME", "RECORDING", "SETTINGS_KEY", "START",
     "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",
     "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "genome_path",

@@ -15,6 +15,7 @@ import numpy as np
 from ...episode import EpisodeConfig
 from ...core.errors import UserError
 from ..genome_file import load_genome
+from .generation_check import check_generation_files
 from .layout import BEST, generation_file, generation_files
 
 
@@ -39,6 +40,7 @@ def genome_path(source: str | Path, generation: int | None = None) -> tuple[Path
         if generation is not None:
             raise UserError("--generation needs a run directory, not a genome file")
         return path, None
+    check_generation_files(path)  # the committed generation files are the run's, or one line naming the one that is not
     if generation is None:
         if not (path / BEST).is_file():
             raise UserError(f"{path} is not a run directory (it has no {BEST})")
