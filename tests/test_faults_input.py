@@ -48,3 +48,36 @@ def test_the_use_case_refuses_a_worker_count_beyond_the_machine():
     with pytest.raises(ConfigError, match="runs at most"):
         make_evaluator(EpisodeConfig(seconds=0.5), "process", 10**6).close()
     assert 1 <= worker_limit("thread") <= 8 * (os.cpu_count() or 1)
+
+
+# ---- an empty path or name is an error, not "not given"
+def _value_flags():
+    import argparse
+
+    from evobiped.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    for name, parser in sub.choices.items():
+        for action in parser._actions:
+            if action.nargs == 0 or isinstance(action, argparse._SubParsersAction) or action.nargs == argparse.PARSER:
+                continue
+            n = action.nargs if isinstance(action, int) or isinstance(action.nargs, int) else 1
+            if action.option_strings:
+                yield name, [action.option_strings[0], *[""] * n]
+            else:
+                yield name, [""]
+
+
+EMPTY = list(_value_flags())
+
+
+@pytest.mark.parametrize("command, args", EMPTY, ids=[f"{c} {' '.join(a) or 'POSITIONAL'}" for c, a in EMPTY])
+def test_an_empty_value_is_one_line(capsys, command, args):
+    assert cli(command, *args) == 2
+    one_line_error(capsys.readouterr().err, "must not be empty")
+
+
+def test_resume_of_an_empty_path_starts_nothing(capsys):
+    assert cli("evolve", "--resume", "") == 2
+    one_line_error(capsys.readouterr().err, "--resume: must not be empty")
+    assert not Path("runs").exists()

@@ -32,6 +32,11 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, exit 2, no usage dump; one prefix for every refusal (UserError's too)
         self.exit(2, f"{ERROR}{message}\n")
 
+    def _get_values(self, action, arg_strings):  # every flag's and argument's value, in groups too
+        if "" in arg_strings and action.nargs not in (argparse.PARSER, argparse.REMAINDER):  # an empty path or name: not "not given"
+            self.error(f"argument {'/'.join(action.option_strings) or action.metavar or action.dest}: must not be empty")
+        return super()._get_values(action, arg_strings)
+
 
 def experiment_commands() -> list[ModuleType]:
     """The experiments' subcommand modules, ``evobiped.experiments.<experiment>.<name>_cmd``, by experiment and name."""
