@@ -201,7 +201,7 @@ def test_a_damaged_archive_in_the_checkpoint_is_refused_in_one_line(tmp_path, ca
     rows = unpacked_floats(table["genome"], "genome")
     if field == "measures":  # one elite whose measures lie in another cell
         table["index"], table["genome"], table["objective"] = table["index"][:1], packed_floats(rows[:1]), table["objective"][:1]
-        table["fell"], table["end_time"] = table["fell"][:1], table["end_time"][:1]
+        table["fell"], table["end_time"], table["task_fitness"] = table["fell"][:1], table["end_time"][:1], table["task_fitness"][:1]
         table["index"][0] = 0
     if field == "genome":
         table[field] = value if isinstance(value, dict) else [value] + rows[1:].tolist()

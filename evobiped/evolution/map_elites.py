@@ -3,8 +3,13 @@
 The archive is pyribs' :class:`ribs.archives.GridArchive` (``pip install 'evobiped[qd]'``): each
 evaluated genome lands in the cell of its measures (two task terms, e.g. the walk task's ``speed``
 m/s and ``turning`` deg/s; values beyond the bounds fall in the edge cells) and stays there if its
-objective (the task's fitness) beats the cell's elite; of a batch's genomes in one cell the fittest,
-the first on a tie.  Each generation asks ``batch`` new genomes: a uniformly drawn elite plus
+objective beats the cell's elite; of a batch's genomes in one cell the best, the first on a tie.  The
+objective is the task's fitness plus ``objective_terms`` (task terms, weighted): a fitness that
+saturates (the time up of a walker that never falls) keeps a cell's first survivor for ever, where
+e.g. ``{distance = 0.05}`` keeps the one that went furthest.  Each elite keeps its task fitness beside
+(``task_fitness``, what archive.json calls its ``objective`` and a replay compares).  The QD score is
+the sum over the elites of (objective - ``qd_offset``) (pyribs' ``qd_score_offset``): it grows with
+every cell filled or improved only if ``qd_offset`` is at or below every objective the task can give.  Each generation asks ``batch`` new genomes: a uniformly drawn elite plus
 Gaussian noise of ``sigma`` times each gene's range (``parents = "up"``: an elite that did not fall), and with ``line_sigma`` > 0 a step along the
 line to a second drawn elite (Vassiliades & Mouret 2018's iso+line variation), clipped to the
 genes' bounds.  The first batch, while the archive is empty, is the start genome (``--from``: it
@@ -31,8 +36,8 @@ from .archive_file import ARCHIVE, archive_text
 from .base import Optimizer, OptimizerState, frozen_array
 from .ga import MAX_POPULATION, generation_rng
 
-#: what an elite keeps beside its genome, objective and measures (its outcome)
-OUTCOME = ("fell", "end_time")
+#: what an elite keeps beside its genome, objective and measures (its outcome, and the task's fitness)
+OUTCOME = ("fell", "end_time", "task_fitness")
 
 
 def _names(v) -> None:
@@ -53,6 +58,12 @@ def _bounds(v) -> None:
         raise ConfigError(f"must be two finite numbers, got {v!r}")
 
 
+def _weights(v) -> None:
+    if not (isinstance(v, dict) and all(isinstance(k, str) and isinstance(x, (int, float)) and not isinstance(x, bool)
+                                        and math.isfinite(x) for k, x in v.items())):
+        raise ConfigError(f"must be a table of finite weights by term name, got {v!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class MapElitesOptions:
     """MAP-Elites settings (``[map_elites]``): the grid over two task terms and the variation."""
@@ -67,6 +78,11 @@ class MapElitesOptions:
     line_sigma: float = option(0.0, "step along the line to a second elite (0: Gaussian only)", low=0, high=2)
     parents: str = option("all", "`all`: parents drawn among every elite (Mouret & Clune); `up`: among the elites that did not "
                           "fall, while any did not", choices=("all", "up"))
+    qd_offset: float = option(0.0, "the QD score sums each elite's objective minus this (at or below every objective the task "
+                              "gives, the score only grows)", unit="objective units")
+    objective_terms: dict = option({}, "task terms added, weighted, to the fitness as a cell's objective, {term = weight} "
+                                   "(e.g. {distance = 0.05}: where the fitness saturates, the walker that went furthest keeps "
+                                   "the cell; {}: the fitness alone)", check=_weights, span="a table of weights")
 
     def __post_init__(self):
         check_fields(self, "map_elites")
@@ -76,10 +92,11 @@ class MapElitesOptions:
 
     def check_terms(self, terms: tuple[str, ...], task: str) -> None:
         """ConfigError unless both measures are terms of the task (``terms``: its ``term_names``)."""
-        unknown = [m for m in self.measures if m not in terms]
-        if unknown:
-            raise ConfigError(f"map_elites.measures: {', '.join(unknown)} names no term of the {task} task "
-                              f"(its terms: {', '.join(terms)})")
+        for name, asked in (("measures", self.measures), ("objective_terms", list(self.objective_terms))):
+            unknown = [m for m in asked if m not in terms]
+            if unknown:
+                raise ConfigError(f"map_elites.{name}: {', '.join(unknown)} names no term of the {task} task "
+                                  f"(its terms: {', '.join(terms)})")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -87,7 +104,8 @@ class MapElitesState(OptimizerState):
     """MAP-Elites between generations: the elites in cell order (``index`` ``(E,)`` cell numbers, ``genome`` ``(E, G)``,
     ``objective`` ``(E,)``, ``measures`` ``(E, 2)``, ``fell`` ``(E,)`` 0/1, ``end_time`` ``(E,)`` s), the evaluations so
     far, ``progress`` ``(generations, 3)``: after each generation the evaluations so far, cells filled and QD score (the sum of
-    the elites' objectives); and the current batch's fitness (NaN: not yet evaluated)."""
+    the elites' objectives less ``qd_offset``); and the current batch's fitness (NaN: not yet evaluated).  ``task_fitness``
+    ``(E,)``: each elite's fitness (its objective but the ``objective_terms``; checkpoints written before it: the objective)."""
 
     name = "map-elites"
     index: np.ndarray
@@ -96,17 +114,18 @@ class MapElitesState(OptimizerState):
     measures: np.ndarray
     fell: np.ndarray
     end_time: np.ndarray
+    task_fitness: np.ndarray
     progress: np.ndarray
 
     def __post_init__(self):
-        for k in ("index", "genome", "objective", "measures", "fell", "end_time", "progress", "fitness"):
+        for k in ("index", "genome", "objective", "measures", "fell", "end_time", "task_fitness", "progress", "fitness"):
             object.__setattr__(self, k, frozen_array(getattr(self, k)))
 
     def to_dict(self) -> dict:
         plain = lambda a: np.where(np.isfinite(a), a, None).tolist() if a.size else a.tolist()  # noqa: E731
         return {"name": self.name, "generation": self.generation, "fitness": plain(self.fitness),
                 "index": [int(i) for i in self.index], "genome": packed_floats(self.genome),
-                **{k: getattr(self, k).tolist() for k in ("objective", "measures", "fell", "end_time", "progress")}}
+                **{k: getattr(self, k).tolist() for k in ("objective", "measures", "fell", "end_time", "task_fitness", "progress")}}
 
 
 def ribs_archives():
@@ -131,7 +150,7 @@ class MapElites(Optimizer):
         self.initial = None if initial is None else layout.validate(initial, what="initial genome")[0]
         c = config
         self.archive = ribs_archives().GridArchive(
-            solution_dim=layout.size, dims=c.resolution, ranges=list(zip(c.low, c.high)), seed=self.seed,
+            solution_dim=layout.size, dims=c.resolution, ranges=list(zip(c.low, c.high)), seed=self.seed, qd_score_offset=c.qd_offset,
             extra_fields={k: ((), np.float64) for k in OUTCOME})
         self.generation, self.evaluations, self.progress = 0, 0, []
         self._sample()
@@ -139,7 +158,7 @@ class MapElites(Optimizer):
     # ---- the archive
     def elites(self) -> dict[str, np.ndarray]:
         """The archive's elites in cell order: ``index`` ``(E,)``, ``genome`` ``(E, G)``, ``objective``, ``measures``
-        ``(E, 2)``, ``fell``, ``end_time``."""
+        ``(E, 2)``, ``fell``, ``end_time``, ``task_fitness``."""
         d = self.archive.data()
         order = np.argsort(d["index"], kind="stable")
         out = {"index": d["index"][order].astype(int), "genome": d["solution"][order], "objective": d["objective"][order],
@@ -178,19 +197,21 @@ class MapElites(Optimizer):
         unknown = np.isnan(self.fitness)
         super().tell(result)
         terms = getattr(result, "terms", {})
-        missing = [m for m in self.config.measures if m not in terms]
+        missing = [m for m in (*self.config.measures, *self.config.objective_terms) if m not in terms]
         if missing:
-            raise UserError(f"map-elites: the episodes give no term {', '.join(missing)} (a measure names no term of the task)")
+            raise UserError(f"map-elites: the episodes give no term {', '.join(missing)} (a measure or objective term names no "
+                            "term of the task)")
         per_genome = lambda a: np.asarray(a, float).reshape(len(self.fitness[unknown]), -1).mean(axis=1)  # noqa: E731
         measures = np.stack([per_genome(terms[m]) for m in self.config.measures], axis=1)
         f = self.fitness[unknown]
-        ok = np.isfinite(f) & np.isfinite(measures).all(axis=1)
+        objective = f + sum(w * per_genome(terms[t]) for t, w in self.config.objective_terms.items())
+        ok = np.isfinite(objective) & np.isfinite(measures).all(axis=1)
         if ok.any():
-            self.archive.add(self.population[unknown][ok], f[ok], measures[ok],
-                             fell=np.asarray(result.fell, float)[ok], end_time=np.asarray(result.end_time, float)[ok])
+            self.archive.add(self.population[unknown][ok], objective[ok], measures[ok], fell=np.asarray(result.fell, float)[ok],
+                             end_time=np.asarray(result.end_time, float)[ok], task_fitness=f[ok])
         self.evaluations += int(unknown.sum())
         objective = self.elites()["objective"]
-        self.progress.append([self.evaluations, len(objective), float(np.sum(objective))])
+        self.progress.append([self.evaluations, len(objective), float(np.sum(objective - self.config.qd_offset))])
 
     def next_generation(self) -> np.ndarray:
         """Ask the next batch; every row is new (all -1)."""
@@ -205,11 +226,12 @@ class MapElites(Optimizer):
         if not generation_committed:
             return {ARCHIVE: None}
         e, c = self.elites(), self.config
+        e["objective"] = e["task_fitness"]  # archive.json's objective: the task's fitness, what a replay of an elite compares
         return {ARCHIVE: archive_text(c.measures, c.low, c.high, c.resolution, self.cells(e["index"]), e, self.progress)}
 
     def series(self) -> dict[str, np.ndarray]:
         """The archive's growth per generation: evaluations so far, cells filled, coverage (fraction of the grid's cells)
-        and QD score (the sum of the elites' objectives)."""
+        and QD score (the sum of the elites' objectives less ``qd_offset``)."""
         p = np.array(self.progress, float).reshape(-1, 3)
         return {"evaluations": p[:, 0], "cells": p[:, 1], "coverage": p[:, 1] / np.prod(self.config.resolution),
                 "qd_score": p[:, 2]}
@@ -232,7 +254,8 @@ class MapElites(Optimizer):
             raise UserError(f"checkpoint: map-elites.progress must have a row per generation ({state.generation})")
         self.archive.clear()
         if E:
-            self.archive.add(state.genome, state.objective, state.measures, fell=state.fell, end_time=state.end_time)
+            self.archive.add(state.genome, state.objective, state.measures, fell=state.fell, end_time=state.end_time,
+                             task_fitness=state.task_fitness)
             if not np.array_equal(self.elites()["index"], state.index):
                 raise UserError("checkpoint: map-elites.measures do not lie in the cells map-elites.index names")
         self.generation = state.generation
@@ -248,6 +271,8 @@ class MapElites(Optimizer):
         widths = {"genome": self.layout.size, "measures": 2, "progress": 3}
         out = {k: MapElitesState.numbers_of(table, k, nulls=k == "fitness", rows=widths.get(k))
                for k in ("fitness", "index", "objective", "measures", "fell", "end_time", "progress")}
+        out["task_fitness"] = (MapElitesState.numbers_of(table, "task_fitness") if "task_fitness" in table
+                               else out["objective"].copy())  # written before it: the objective was the fitness
         packed = table.get("genome")  # packed; a list of rows in checkpoints written before packing
         out["genome"] = (unpacked_floats(packed, "checkpoint: map-elites.genome") if isinstance(packed, dict)
                          else MapElitesState.numbers_of(table, "genome", rows=widths["genome"]))
