@@ -114,8 +114,9 @@ def _floors(v) -> None:
 class NormaliseOptions:
     """The running observation normaliser (``[normalise]``; :mod:`evobiped.interface.normaliser`)."""
 
-    running: bool = option(False, "normalise the controller's inputs by the running mean and std of the senses the evaluation "
-                           "walkers visited (frozen into every genome file)")
+    running: bool = option(False, "normalise the controller's inputs by the running mean and std of the senses the run's "
+                           "walkers visited: ES's evaluation rows (theta); for the GA, CMA-ES and MAP-Elites every row "
+                           "evaluated (frozen into every genome file)")
     floor: float = option(0.2, "each input's std at least this fraction of its declared scale", above=0)
     floors: dict = option({"foot_contact": 0.5}, "absolute std floors by sensor name, in the sensor's units", check=_floors)
 

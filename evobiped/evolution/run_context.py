@@ -1,7 +1,9 @@
 """What a run sets for each generation beyond its config: the running observation normaliser and the curriculum's phase.
 
-Generation g's episodes are normalised by the statistics of the senses the
-evaluation walkers visited in generations 0 .. g-1 (:mod:`evobiped.interface.normaliser`)
+Generation g's episodes are normalised by the statistics of the senses
+visited in generations 0 .. g-1 (:mod:`evobiped.interface.normaliser`) by the
+evaluation walkers of an optimizer that has them (ES's theta), else by every
+walker evaluated (the GA, CMA-ES, MAP-Elites)
 and scored with the current phase's weights (:mod:`.curriculum`); both are
 frozen into the genome file of each generation's best (its controller's
 ``input_norm``, its task's ``weights``), so a walker replays, is tested and is

@@ -3,8 +3,10 @@
 Evolution strategies on raw senses meet inputs of very different scales (a
 contact flag of 0/1, a joint rate of several rad/s); a policy sees each input
 as (x - mean) / std over the states its walkers have visited so far (Salimans
-et al. 2017; Mania et al. 2018).  Each generation's evaluation rows add the sums
-of what they sensed (:class:`SenseSums`, collected by the episode); the
+et al. 2017; Mania et al. 2018).  Each generation's walkers add the sums of what
+they sensed (ES: its evaluation rows, theta itself; the GA, CMA-ES and
+MAP-Elites, which have no rows of their own for the generation: every row they
+evaluated) (:class:`SenseSums`, collected by the episode); the
 statistics are merged exactly (Chan, Golub & LeVeque's pairwise form of
 Welford's update), so the result does not depend on how the rows were split
 into batches, and the normaliser used by generation g is the one made from
