@@ -33,7 +33,8 @@ def add_compare(sub) -> None:
                    "or TERM>=X (also >, <=, <), e.g. distance>=5")
     p.add_argument("--workers", type=positive_int, help="runs at once, each in its own process (default: all cores)")
     p.add_argument("--out", metavar="DIR", help="comparison directory (default runs/compare_<names>)")
-    p.add_argument("--resume", metavar="DIR", help="continue the comparison in DIR (its configurations; any given must be the same)")
+    p.add_argument("--resume", metavar="DIR", help="continue the comparison in DIR (its configurations and settings; any "
+                   "given again must be the same)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_compare_cmd)
 
@@ -71,7 +72,7 @@ def _noise(path: str | None) -> dict | None:
     return table
 
 
-def default_out(names: tuple[str, ...]) -> str:
+def default_compare_dir(names: tuple[str, ...]) -> str:
     base = Path("runs") / ("compare_" + "_".join(names))
     path, i = base, 1
     while path.exists():
@@ -82,7 +83,7 @@ def default_out(names: tuple[str, ...]) -> str:
 
 def run_compare_cmd(args) -> int:
     from ..core.progress import Progress
-    from ..usecases.comparing import Comparison, compare
+    from ..usecases.comparing import Comparison, compare_configurations
 
     given = {"seeds": None if args.seeds is None else tuple(range(args.first_seed or 0, (args.first_seed or 0) + args.seeds)),
              "budget": args.budget, "trials": args.trials, "checkpoints": args.checkpoints, "noise": _noise(args.noise),
@@ -116,9 +117,10 @@ def run_compare_cmd(args) -> int:
         line.report(done, f"{r['name']} seed {r['seed']}: {r['episodes']} episodes in {r['generations']} generations, final "
                           f"{final['value']:.3f}, {sum(final['passed'])} of {len(final['passed'])} fresh presentations passed")
 
-    results_dir = args.resume or args.out or default_out(names)
+    results_dir = args.resume or args.out or default_compare_dir(names)
     kwargs = {"resume": args.resume} if args.resume else {"out": results_dir}
-    results = compare(comparison, given=given if args.resume else None, workers=args.workers, say=line.say, on_run=on_run, **kwargs)
+    results = compare_configurations(comparison, given=given if args.resume else None, workers=args.workers, say=line.say,
+                                     on_run=on_run, **kwargs)
     from ..usecases.compare_report import markdown
 
     print(markdown(results), end="")

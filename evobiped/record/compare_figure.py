@@ -9,7 +9,7 @@ from .figures import pyplot, save_figure
 
 
 def success_figure(results: dict, path: str | Path) -> Path:
-    """success.png of ``results`` (:func:`evobiped.usecases.compare_report.summarise`'s)."""
+    """success.png of ``results`` (:func:`evobiped.usecases.compare_report.comparison_results`'s)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.0, 4.2))
     for c in results["configurations"]:

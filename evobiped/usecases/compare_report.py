@@ -17,7 +17,7 @@ from ..core.fileio import atomic_write, write_json
 RESULTS_JSON, RESULTS_MD, FIGURE = "results.json", "results.md", "success.png"
 
 
-def summarise(comparison, retests: list[dict]) -> dict:
+def comparison_results(comparison, retests: list[dict]) -> dict:
     """The results of ``comparison`` from its runs' retests (any order)."""
     c = comparison
     by = {(r["name"], r["seed"]): r for r in retests}
@@ -38,7 +38,8 @@ def summarise(comparison, retests: list[dict]) -> dict:
                         "values": values, "success_by_seed": [bool(f["success"]) for f in final],
                         "presentations_passed": sum(sum(f["passed"]) for f in final),
                         "presentations": sum(len(f["passed"]) for f in final),
-                        "episodes": [r["episodes"] for r in runs], "generations": [r["generations"] for r in runs], "curve": curve})
+                        "episodes": [r["episodes"] for r in runs], "generations": [r["generations"] for r in runs],
+                        "curve": curve})
     pairs = [{"a": a["name"], "b": b["name"], "A": vargha_delaney(a["values"], b["values"]),
               "p": mann_whitney_p(a["values"], b["values"])} for a, b in combinations(configs, 2)]
     return {"budget": c.budget, "seeds": list(c.seeds), "trials": c.trials, "noise": c.noise, "measure": c.measure,
@@ -51,8 +52,8 @@ def _n(x: float, digits: int = 3) -> str:
 
 def criterion_text(success: str) -> str:
     if success == "walker":
-        return (f"the forward-walker test (no fall in {WALKER['seconds']:g} s, at least {WALKER['min_distance']:g} m in the first "
-                f"{WALKER['window']:g} s within {WALKER['heading_limit']:g} deg of the initial facing)")
+        return (f"the forward-walker test (no fall in {WALKER['seconds']:g} s, at least {WALKER['min_distance']:g} m in the "
+                f"first {WALKER['window']:g} s within {WALKER['heading_limit']:g} deg of the initial facing)")
     return success
 
 
@@ -61,8 +62,8 @@ def markdown(results: dict) -> str:
     r = results
     table = DEFAULT_NOISE if r["noise"] is None else r["noise"]
     noise = ", ".join(f"{k} = {v}" for k, v in table.items()) or "none"
-    lines = [f"Budget {r['budget']} episodes per run; seeds {r['seeds'][0]}..{r['seeds'][-1]}; each run's final policy on {r['trials']} "
-             f"fresh presentations (noise: {noise}); success: {criterion_text(r['success'])} in every presentation; "
+    lines = [f"Budget {r['budget']} episodes per run; seeds {r['seeds'][0]}..{r['seeds'][-1]}; each run's final policy on "
+             f"{r['trials']} fresh presentations (noise: {noise}); success: {criterion_text(r['success'])} in every presentation; "
              f"measure: {r['measure']} (the median over a run's presentations).", "",
              f"| configuration | runs | successes | success rate | Wilson 95 % | median {r['measure']} | IQR |",
              "|---|---|---|---|---|---|---|"]
@@ -76,11 +77,11 @@ def markdown(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_results(directory: Path, comparison, retests: list[dict]) -> dict:
+def write_comparison(directory: Path, comparison, retests: list[dict]) -> dict:
     """results.json, results.md and success.png in ``directory``; returns the results."""
     from ..record.compare_figure import success_figure
 
-    results = summarise(comparison, retests)
+    results = comparison_results(comparison, retests)
     write_json(directory / RESULTS_JSON, results)
     atomic_write(directory / RESULTS_MD, markdown(results))
     success_figure(results, directory / FIGURE)

@@ -64,7 +64,8 @@ class Comparison:
             raise UserError("--seeds: must be >= 1")
         tasks = {c.episode.task for c in self.configs}
         if len(tasks) > 1:
-            raise UserError(f"the configurations are of different tasks ({', '.join(f'{n}: {c.episode.task}' for n, c in zip(self.names, self.configs))}); "
+            which = ", ".join(f"{n}: {c.episode.task}" for n, c in zip(self.names, self.configs))
+            raise UserError(f"the configurations are of different tasks ({which}); "
                             "compare configurations of one task")
         for name, c in zip(self.names, self.configs):
             check_run(c)
@@ -87,7 +88,8 @@ class Comparison:
 
     def run_config(self, i: int, seed: int) -> RunConfig:
         """Configuration ``i``'s run of ``seed``."""
-        return dataclasses.replace(self.configs[i], seed=int(seed), budget=int(self.budget), generations=min(int(self.budget), 10**6),
+        return dataclasses.replace(self.configs[i], seed=int(seed), budget=int(self.budget),
+                                   generations=min(int(self.budget), 10**6),
                                    backend="serial", workers=None, address=None)
 
     def to_dict(self) -> dict:
@@ -100,14 +102,15 @@ class Comparison:
     def from_dict(cls, d: dict, where: str) -> "Comparison":
         try:
             cs = d["configurations"]
-            return cls(names=tuple(c["name"] for c in cs), configs=tuple(RunConfig.from_dict(c["config"], where=where) for c in cs),
+            return cls(names=tuple(c["name"] for c in cs),
+                       configs=tuple(RunConfig.from_dict(c["config"], where=where) for c in cs),
                        seeds=tuple(int(s) for s in d["seeds"]), budget=int(d["budget"]), trials=int(d["trials"]),
                        checkpoints=int(d["checkpoints"]), noise=d["noise"], measure=str(d["measure"]), success=str(d["success"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise UserError(f"{where} is not a comparison ({type(exc).__name__}: {exc})") from None
 
     def jobs(self, directory: Path) -> list[tuple]:
-        """One job per run, configuration by configuration, seed by seed: :func:`run_one`'s arguments."""
+        """One job per run, configuration by configuration, seed by seed: :func:`run_and_retest`'s arguments."""
         test = {"trials": self.trials, "checkpoints": self.checkpoints, "noise": self.noise, "measure": self.measure,
                 "success": self.success, "budget": self.budget}
         return [(str(run_path(directory, n, s)), self.run_config(i, s).to_dict(), str(retest_path(directory, n, s)), n, test)
@@ -136,7 +139,8 @@ def open_comparison(comparison: Comparison | None, *, out: str | Path | None = N
             raise UserError(f"{d / FILE} is not a comparison")
         old = Comparison.from_dict(stored, str(d / FILE))
         if old.to_dict()["fingerprint"] != stored.get("fingerprint"):
-            raise UserError(f"{d / FILE} was edited (its fingerprint does not match its settings); restore it or start a new comparison")
+            raise UserError(f"{d / FILE} was edited (its fingerprint does not match its settings); restore it or start a "
+                            "new comparison")
         new = dataclasses.replace(old, **(given or {}))
         if new.to_dict()["fingerprint"] != stored["fingerprint"]:
             changed = [k for k, v in new.to_dict().items() if k != "fingerprint" and stored.get(k) != v]
@@ -153,7 +157,7 @@ def open_comparison(comparison: Comparison | None, *, out: str | Path | None = N
     return d, comparison
 
 
-def run_one(directory: str, config: dict, retested: str, name: str, test: dict) -> dict:
+def run_and_retest(directory: str, config: dict, retested: str, name: str, test: dict) -> dict:
     """One run (in a worker process): create, resume or leave it as complete; then its checkpoints re-evaluated on
     fresh noise (kept in ``retested``; a run whose file exists is done)."""
     if Path(retested).is_file():
@@ -168,7 +172,8 @@ def run_one(directory: str, config: dict, retested: str, name: str, test: dict) 
         history = [int(x) for x in rundir.column(run.history, "evaluations")]
     per = episodes_per_genome(cfg)
     spent = [per * sum(history[:g + 1]) for g in range(len(history))]
-    noise, success = fresh_noise(test["noise"], test["trials"]), parse_success(test["success"], tuple(cfg.episode.parts()[2].term_names))
+    noise = fresh_noise(test["noise"], test["trials"])
+    success = parse_success(test["success"], tuple(cfg.episode.parts()[2].term_names))
     points, done = [], {}
     for i in range(1, test["checkpoints"] + 1):
         target = test["budget"] * i / test["checkpoints"]
@@ -183,14 +188,15 @@ def run_one(directory: str, config: dict, retested: str, name: str, test: dict) 
     return out
 
 
-def compare(comparison: Comparison | None = None, *, out: str | Path | None = None, resume: str | Path | None = None,
-            given: dict | None = None, workers: int | None = None, say: Callable[[str], None] | None = None,
-            on_run: Callable[[int, int, dict], None] | None = None) -> dict:
+def compare_configurations(comparison: Comparison | None = None, *, out: str | Path | None = None,
+                           resume: str | Path | None = None, given: dict | None = None, workers: int | None = None,
+                           say: Callable[[str], None] | None = None,
+                           on_run: Callable[[int, int, dict | None], None] | None = None) -> dict:
     """The whole use case: open (or resume) the comparison, run what is left (``workers`` runs at once, default one per
     core), write results.json, results.md and success.png; returns the results.  ``say(line)``: what it starts;
     ``on_run(done, total, retest)``: before the first run (0, None) and after each."""
     from ..evolution.pool import spawn_pool, stop_pool
-    from .compare_report import write_results
+    from .compare_report import write_comparison
 
     d, c = open_comparison(comparison, out=out, resume=resume, given=given)
     jobs = c.jobs(d)
@@ -203,7 +209,7 @@ def compare(comparison: Comparison | None = None, *, out: str | Path | None = No
     if todo:
         pool = spawn_pool(min(workers or os.cpu_count() or 1, len(todo)))
         try:
-            futures = [pool.submit(run_one, *j) for j in todo]
+            futures = [pool.submit(run_and_retest, *j) for j in todo]
             for n, f in enumerate(as_completed(futures), 1):
                 result = f.result()
                 if on_run:
@@ -211,4 +217,4 @@ def compare(comparison: Comparison | None = None, *, out: str | Path | None = No
         finally:
             stop_pool(pool)
     retests = [read_json(j[2], what="retest") for j in jobs]
-    return write_results(d, c, retests)
+    return write_comparison(d, c, retests)
