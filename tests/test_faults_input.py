@@ -27,7 +27,7 @@ def guarded(*args, timeout: float = 60, memory: int = 4 * 2**30, **kw) -> subpro
         os.setsid()
 
     env = {**os.environ, "PYTHONPATH": str(ROOT), **kw.pop("env", {})}
-    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, text=True, env=env,
+    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, encoding="utf-8", errors="replace", env=env,
                           timeout=timeout, preexec_fn=limit, **kw)
 
 
@@ -81,3 +81,23 @@ def test_resume_of_an_empty_path_starts_nothing(capsys):
     assert cli("evolve", "--resume", "") == 2
     one_line_error(capsys.readouterr().err, "--resume: must not be empty")
     assert not Path("runs").exists()
+
+
+# ---- paths that are not UTF-8
+@pytest.fixture(scope="module")
+def latin1_run(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("latin1") / os.fsdecode(b"run\xff")  # a byte no UTF-8 name holds
+    assert cli("evolve", *TINY, "--backend", "serial", "--out", d) == 0
+    return d
+
+
+@pytest.mark.parametrize("locale", ["C.UTF-8", "C"])
+def test_replay_of_a_path_that_is_not_utf8(latin1_run, locale):
+    r = guarded("replay", latin1_run, "--seconds", "0.5", "--figures", env={"LC_ALL": locale}, timeout=300)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert (latin1_run / "replay_best.rrd").is_file() and (latin1_run / "figures_best").is_dir()
+
+
+def test_resume_of_a_path_that_is_not_utf8_repairs_nothing(latin1_run):
+    r = guarded("evolve", "--resume", latin1_run, env={"LC_ALL": "C.UTF-8"})
+    assert r.returncode == 0 and "repaired" not in r.stderr and "Traceback" not in r.stderr, r.stderr

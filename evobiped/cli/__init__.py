@@ -72,6 +72,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if argv is None:
         sys.unraisablehook = quiet_interrupts
+        for stream in (sys.stdout, sys.stderr):  # a path's bytes that are not UTF-8 are printed as they are, as ls does
+            if hasattr(stream, "reconfigure"):
+                stream.reconfigure(errors="surrogateescape")
     keep_stderr()  # the last line reaches the user whatever a pool's thread does with descriptor 2 at that instant
     restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
     try:

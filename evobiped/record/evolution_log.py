@@ -18,6 +18,7 @@ QD score per generation).
 
 from __future__ import annotations
 
+import os
 import uuid
 from pathlib import Path
 
@@ -101,7 +102,18 @@ def recording_series(path: str | Path, entity: str = "/evolution/best") -> dict[
     import rerun as rr
 
     out: dict[int, float] = {}
-    for c in rr.chunk.RrdReader(Path(path)).stream():
+    try:
+        os.fsdecode(os.fsencode(path)).encode()
+        name, fd = Path(path), None
+    except UnicodeEncodeError:  # Rerun takes UTF-8 names only: the open file's own name on Linux
+        fd = os.open(path, os.O_RDONLY)
+        name = Path(f"/proc/self/fd/{fd}")
+    try:
+        chunks = list(rr.chunk.RrdReader(name).stream())
+    finally:
+        if fd is not None:
+            os.close(fd)
+    for c in chunks:
         if c.entity_path == entity and not c.is_static:
             rb = c.to_record_batch()
             out.update(zip(rb.column(TIMELINE).to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))

@@ -34,7 +34,7 @@ class ReplayRecording:
             self.rec.spawn()
         else:
             self.rec.connect_grpc(connect_url(connect))
-        self.rec.send_recording_name(name)
+        self.rec.send_recording_name(name.encode(errors="surrogateescape").decode(errors="replace"))  # a path's undecodable bytes
         #: the episode's listener: the walker's trajectory, logged as it goes
         self.recorder = RerunRecorder(self.rec)
 

@@ -67,7 +67,8 @@ class Source(rundir.GenomeSource):
     @property
     def name(self) -> str:
         """What a figure or video calls the walker: ``reil_simbicon_seed5 (best)``, or the genome file's stem."""
-        return f"{self.run_dir.name} ({self.label})" if self.run_dir is not None else self.genome_path.stem
+        name = f"{self.run_dir.name} ({self.label})" if self.run_dir is not None else self.genome_path.stem
+        return name.encode(errors="surrogateescape").decode(errors="replace")  # a path's undecodable bytes: shown as �
 
 
 def resolve(source: str | Path, generation: int | None = None) -> Source:
