@@ -211,6 +211,8 @@ def test_a_resumed_comparison_finishes_an_interrupted_run_and_gives_the_same_res
     assert cli("compare", "--resume", c, "--quiet") == 0
     for name in ("results.json", "results.md"):
         assert (where / "a" / name).read_bytes() == (c / name).read_bytes()
+    assert cli("compare", *configs, "--resume", c, "--seeds", "2", "--quiet") == 0  # the same ones named again: nothing to do
+    assert (where / "a" / "results.json").read_bytes() == (c / "results.json").read_bytes()
 
 
 def test_a_resumed_comparison_whose_configurations_changed_is_refused(compared, capsys):
@@ -235,9 +237,11 @@ def test_a_resumed_comparison_whose_configurations_changed_is_refused(compared, 
     (["--seeds", "2", "--budget", "12", "--measure", "speed"], "not fitness nor a term"),
     (["--seeds", "2", "--budget", "12", "--success", "distance=>3"], "give walker or TERM>=X"),
     (["--budget", "12"], "--seeds: required"),
+    (["--seeds", "2", "--budget", "12", "--noise", "{configs}/ga_tiny.toml"], "has no [episode.perturbations] table"),
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, argv, words):
     configs = _configs(tmp_path / "configs")
+    argv = [a.format(configs=tmp_path / "configs") for a in argv]
     assert cli("compare", *configs, *argv, "--out", tmp_path / "out") == 2
     err = capsys.readouterr().err
     assert err.startswith("evobiped: error: ") and err.count("\n") == 1 and words in err, err
