@@ -71,7 +71,7 @@ def test_run_directory_recording_holds_the_evolution_and_figures(run_dir, tmp_pa
     history = np.loadtxt(run_dir / "history.csv", delimiter=",", skiprows=1)
     assert best == {int(g): b for g, b in history[:, :2]}
     names = sorted(p.name for p in (tmp_path / "figs").iterdir())
-    assert names == ["fitness.png", "ground_trajectory.png", "motion_sequence.png", "motor_neurons.png", "stick_figure.png"]
+    assert names == ["fitness.png", "footfalls.png", "ground_trajectory.png", "motion_sequence.png", "motor_neurons.png", "stick_figure.png"]
 
 
 def test_replay_of_a_genome_file_writes_under_runs_not_beside_it(tmp_path, capsys):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..bodies.base import Body
 from ..core.errors import UserError
 from ..episode import EpisodeConfig
 from ..physics.gait_lab import MEASURES, measure_one
@@ -63,41 +64,57 @@ def gait_report(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 2
     (direction of its displacement from the initial facing; None: it did not move), every measure of
     :mod:`evobiped.physics.gait_lab` (``duty_<foot>`` per foot), ``feet``, ``stance`` (per foot the debounced stance
     episodes as ``[start s, end s]``), ``walks`` and ``failed`` (:func:`failed_criteria`)."""
-    from ..physics.gait_lab import stance_episodes
-    from ..tasks.walk import displacement_heading
-
     if not (isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0):
         raise UserError(f"--seconds must be a finite number above 0, got {seconds!r}")
     episode = config.nominal().build()
     body = episode.body
-    if body.contact_sensor is None:
+    if not has_feet(body):
         raise UserError(f"body {body.name!r} declares no feet: its gait cannot be measured")
     recorder = FootRecorder()
     total = max(seconds, up_for or 0.0)
     state = episode.start(np.asarray(genome, float)[None], seconds=total)
     recorder.start(episode, state.sims)
     episode.advance(state, seconds, listener=recorder)
-    start, facing = state.start_position[:1], state.start_facing[:1]
     end = body.planar_position(state.sims)[:1].copy()
-    forward = float(np.einsum("pi,pi->p", end - start, facing)[0])
-    heading = float(displacement_heading(start, end, facing)[0])
-    time_up = min(float(state.end_time[0]), float(seconds))
-    mass, leg = body.gait_constants(episode.model)
-    feet = tuple(body.contact_sensor[1])
-    series = recorder.series()
-    dt = episode.control_dt
-    report = {"up": not bool(state.fell[0]), "time_up": time_up, "end_time": time_up, "seconds": float(seconds), "forward": forward,
-              "speed": forward / time_up if time_up > 0 else 0.0, "heading_deg": heading if np.isfinite(heading) else None,
-              "displacement": [float(v) for v in (end - start)[0]], "mass": mass, "leg_length": leg, "control_dt": dt, "feet": list(feet)}
-    report.update(measure_one(series, dt, forward=forward, mass=mass, leg_length=leg, feet=feet))
-    report["stance"] = {f: [[a * dt, b * dt] for a, b in stance_episodes(series["contact"][:, i], dt)]
-                        for i, f in enumerate(feet)}
+    report = measured(recorder, episode, start=state.start_position[:1], end=end, facing=state.start_facing[:1],
+                      time_up=min(float(state.end_time[0]), float(seconds)), seconds=seconds, up=not bool(state.fell[0]))
     if up_for is not None and up_for > seconds:
         episode.advance(state, up_for - seconds)
         report["up"], report["up_for"], report["end_time"] = not bool(state.fell[0]), float(up_for), float(state.end_time[0])
     report["failed"] = (["up"] if not report["up"] else []) + failed_criteria(report)
     report["walks"] = not report["failed"]
     return report
+
+
+def measured(recorder: FootRecorder, episode, *, start: np.ndarray, end: np.ndarray, facing: np.ndarray, time_up: float,
+             seconds: float, up: bool) -> dict:
+    """The report of the walker ``recorder`` listened to (see :func:`gait_report`): it started at ``start`` ``(1, 2)``
+    m facing ``facing`` ``(1, 2)``, is at ``end`` ``(1, 2)`` m, stayed up ``time_up`` of ``seconds`` s (``up``: no fall)."""
+    from ..physics.gait_lab import stance_episodes
+    from ..tasks.walk import displacement_heading
+
+    body = episode.body
+    forward = float(np.einsum("pi,pi->p", end - start, facing)[0])
+    heading = float(displacement_heading(start, end, facing)[0])
+    mass, leg = body.gait_constants(episode.model)
+    feet = tuple(body.contact_sensor[1])
+    series = recorder.series()
+    dt = episode.control_dt
+    report = {"up": up, "time_up": time_up, "end_time": time_up, "seconds": float(seconds), "forward": forward,
+              "speed": forward / time_up if time_up > 0 else 0.0, "heading_deg": heading if np.isfinite(heading) else None,
+              "displacement": [float(v) for v in (end - start)[0]], "mass": mass, "leg_length": leg,
+              "control_dt": dt, "feet": list(feet)}
+    report.update(measure_one(series, dt, forward=forward, mass=mass, leg_length=leg, feet=feet))
+    report["stance"] = {f: [[a * dt, b * dt] for a, b in stance_episodes(series["contact"][:, i], dt)]
+                        for i, f in enumerate(feet)}
+    report["failed"] = (["up"] if not up else []) + failed_criteria(report)
+    report["walks"] = not report["failed"]
+    return report
+
+
+def has_feet(body) -> bool:
+    """Whether the gait lab can measure ``body`` (it declares its feet)."""
+    return body.contact_sensor is not None and type(body).feet is not Body.feet
 
 
 def failed_criteria(report: dict) -> list[str]:

@@ -67,6 +67,10 @@ def run_replay_cmd(args) -> int:
         frames.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
+    if r.gait is not None:
+        from ..analysis.gait_report import criteria_words, gait_line
+
+        print(f"gait: {gait_line(r.gait)}; {'walks' if r.gait['walks'] else 'does not walk: ' + criteria_words(r.gait['failed'])}")
     if not r.compared:
         why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
                if source.config.perturbed else "--source changed the sources" if args.sources and not args.seconds

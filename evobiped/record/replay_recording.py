@@ -38,10 +38,12 @@ class ReplayRecording:
         #: the episode's listener: the walker's trajectory, logged as it goes
         self.recorder = RerunRecorder(self.rec)
 
-    def finish(self, trajectories: list[Trajectory], *, history: dict | None = None, frames=None, times=None) -> None:
+    def finish(self, trajectories: list[Trajectory], *, history: dict | None = None, frames=None, times=None,
+               gait: dict | None = None) -> None:
         """Log the presentations (one trajectory each, when there are several), the run's fitness ``history``
-        (``{column: (n_generations,)}``, or None), the video's ``frames`` at ``times`` (or None) and the layout; then
-        write the file whole, or flush the stream."""
+        (``{column: (n_generations,)}``, or None), the video's ``frames`` at ``times`` (or None), the ``gait``
+        (:func:`evobiped.analysis.gait_report.measured`: each foot's debounced stance beside its contacts, the measures
+        as a text) and the layout; then write the file whole, or flush the stream."""
         from .evolution_log import log_history
         from .viewer import flush
 
@@ -50,6 +52,8 @@ class ReplayRecording:
             log_presentations(self.rec, trajectories)
         if history is not None:
             log_history(self.rec, history)
+        if gait is not None:
+            log_gait(self.rec, gait, traj)
         if frames is not None:
             from .video import log_frames
 
@@ -62,3 +66,22 @@ class ReplayRecording:
             data = self._stream.read(flush=True) or b""
             self.rec.disconnect()
             atomic_write(self.target, data)
+
+
+def log_gait(rec, gait: dict, traj: Trajectory) -> None:
+    """Each foot's debounced stance (0/1 at the trajectory's ticks) under ``contacts/stance_<foot>``, and the gait's
+    measures and verdict as the text ``gait``."""
+    import numpy as np
+    import rerun as rr
+
+    from ..analysis.gait_report import gait_line
+    from .rerun_recorder import TIMELINE
+
+    t = np.asarray(traj.tick_time, float)
+    for foot, episodes in gait["stance"].items():
+        on = np.zeros(len(t))
+        for a, b in episodes:
+            on[(t > a + 1e-9) & (t <= b + 1e-9)] = 1.0
+        rec.send_columns(f"contacts/stance_{foot}", indexes=[rr.TimeColumn(TIMELINE, duration=t)], columns=rr.Scalars.columns(scalars=on))
+    verdict = "walks" if gait["walks"] else "does not walk: " + ", ".join(gait["failed"])
+    rec.log("gait", rr.TextDocument(f"{verdict}\n\n{gait_line(gait)}"), static=True)

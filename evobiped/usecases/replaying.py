@@ -47,6 +47,8 @@ class ReplayReport:
     drift: list[str]
     outcome_failures: list[str]
     video: Path | None = None
+    #: the walker's gait (:func:`evobiped.analysis.gait_report.measured`); None for a body without feet
+    gait: dict | None = None
 
     @property
     def matches(self) -> bool:
@@ -122,6 +124,7 @@ def replay(
 
 
 def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options):
+    from ..analysis.gait_report import FootRecorder, has_feet, measured
     from ..episode import Listeners
     from ..record.figures import fitness_label, replay_figures
     from ..record.replay_recording import ReplayRecording
@@ -133,8 +136,12 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     recorder = recording.recorder
     # one walker per presentation when the task names each one's target (a steering walker's sound sources)
     others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)] if episode.task.targets() is not None else []
-    watchers = [recorder, *others] + ([listener] if listener is not None else [])
+    feet = FootRecorder() if has_feet(episode.body) else None
+    watchers = [recorder, *others] + ([feet] if feet is not None else []) + ([listener] if listener is not None else [])
     result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
+    gait = None if feet is None else measured(feet, episode, start=result.start_position[:1], end=result.end_position[:1],
+                                              facing=result.start_facing[:1], time_up=float(result.end_time[0]),
+                                              seconds=cfg.seconds, up=not bool(result.fell[0]))
     traj = recorder.trajectory
     trajs = [traj] + [o.trajectory for o in others]
     frames = times = None
@@ -143,7 +150,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
 
         names = [source.name] if not others else [f"{source.name}, source ({q[0]:g}, {q[1]:g}) m" for q in traj.sources]
         frames, times = render_frames(trajs, names, **video_options)
-    recording.finish(trajs, history=history, frames=frames, times=times)
+    recording.finish(trajs, history=history, frames=frames, times=times, gait=gait)
     if video is not None:
         from ..record.video import FPS, write_video
 
@@ -155,6 +162,11 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         figs = replay_figures(traj, figures_dir, history=history, fitness_ylabel=fitness_label(cfg), who=who)
         if others:
             figs += steering_figures(trajs, figures_dir, who=who)
+        if gait is not None:
+            from ..record.footfall_figure import footfall_figure
+
+            figs.append(Path(figures_dir) / "footfalls.png")
+            footfall_figure(gait, figs[-1], title=who)
     stored = source.meta.get("fitness")
     done = outcome(result, episode.task.targets())
     unchanged = cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options
@@ -175,6 +187,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         drift=drift,
         outcome_failures=failures,
         video=video,
+        gait=gait,
     )
 
 
