@@ -101,3 +101,52 @@ def test_replay_of_a_path_that_is_not_utf8(latin1_run, locale):
 def test_resume_of_a_path_that_is_not_utf8_repairs_nothing(latin1_run):
     r = guarded("evolve", "--resume", latin1_run, env={"LC_ALL": "C.UTF-8"})
     assert r.returncode == 0 and "repaired" not in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+# ---- Ctrl-C at any moment from the start: one line, never a traceback
+def _interrupt(args, delay: float, group: bool = False) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         env=env, start_new_session=True)
+    time.sleep(delay)
+    with pytest.raises(ProcessLookupError) if p.poll() is not None else _nothing():
+        (os.killpg if group else os.kill)(p.pid, signal.SIGINT)
+    out, err = p.communicate(timeout=120)
+    return subprocess.CompletedProcess(args, p.returncode, out.decode(errors="replace"), err.decode(errors="replace"))
+
+
+class _nothing:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return exc[0] is ProcessLookupError  # it ended meanwhile
+
+
+@pytest.mark.parametrize("command", ["-h", "evolve", "replay", "select"])
+def test_ctrl_c_while_a_command_starts_is_one_line(latin1_run, tmp_path, command):
+    run = tmp_path / "run"
+    args = {"-h": ["evolve", "-h"], "evolve": ["evolve", *TINY, "--backend", "serial", "--out", run],
+            "replay": ["replay", latin1_run, "--seconds", "0.5", "--out", tmp_path / "r.rrd"],
+            "select": ["select", latin1_run, "--seconds", "0.5"]}[command]
+    for delay in (0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5):
+        r = _interrupt(args, delay)
+        if _interpreters_own(r.stderr):
+            continue
+        assert "Traceback" not in r.stderr and r.stderr.count("\n") <= 1, (delay, r.stderr)
+        assert r.returncode in (0, 130), (delay, r.returncode, r.stderr)
+
+
+def _interpreters_own(err: str) -> bool:
+    """A Ctrl-C in Python's own start (its site module, runpy finding evobiped), before any of evobiped's code runs
+    (tens of ms; longer on a loaded machine)."""
+    frames = [line for line in err.splitlines() if line.strip().startswith("File ")]
+    return bool(frames) and not any("evobiped" in f or "site-packages" in f for f in frames) and \
+        any("<frozen site>" in f or "<frozen runpy>" in f for f in frames)
+
+
+@pytest.mark.parametrize("delay", [0.7, 0.85, 1.0, 1.15, 1.3])
+def test_ctrl_c_to_the_process_group_while_workers_start_is_one_line(tmp_path, delay):
+    r = _interrupt(["evolve", *TINY, "--backend", "process", "--workers", "2", "--out", tmp_path / "run"], delay, group=True)
+    assert "Traceback" not in r.stderr and r.stderr.count("\n") <= 1, r.stderr
+    assert r.returncode in (0, 130), r.stderr

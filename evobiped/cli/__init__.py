@@ -16,9 +16,10 @@ import os
 import pkgutil
 import signal
 import sys
+import threading
 from types import ModuleType
 
-from .. import __version__
+from .. import __version__, _interrupted_while_starting
 from ..core.errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, last_line, stop_on_signals
 
 #: how every refusal begins, a bad argument's and a UserError's alike
@@ -68,16 +69,30 @@ def quiet_interrupts(unraisable) -> None:
         sys.__unraisablehook__(unraisable)
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is among the causes of ``exc``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    if argv is None:
-        sys.unraisablehook = quiet_interrupts
-        for stream in (sys.stdout, sys.stderr):  # a path's bytes that are not UTF-8 are printed as they are, as ls does
-            if hasattr(stream, "reconfigure"):
-                stream.reconfigure(errors="surrogateescape")
-    keep_stderr()  # the last line reaches the user whatever a pool's thread does with descriptor 2 at that instant
-    restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
+    restore = lambda: None  # noqa: E731
     try:
+        args = build_parser().parse_args(argv)  # Ctrl-C while it imports the subcommands: evobiped's first handler
+        if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is _interrupted_while_starting:
+            signal.signal(signal.SIGINT, signal.default_int_handler)  # from here on: the "interrupted" line below
+        if argv is None:
+            sys.unraisablehook = quiet_interrupts
+            for stream in (sys.stdout, sys.stderr):  # a path's bytes that are not UTF-8 are printed as they are, as ls does
+                if hasattr(stream, "reconfigure"):
+                    stream.reconfigure(errors="surrogateescape")
+        keep_stderr()  # the last line reaches the user whatever a pool's thread does with descriptor 2 at that instant
+        restore = stop_on_signals()  # SIGTERM, SIGHUP: as Ctrl-C
         return int(args.func(args) or 0)
     except UserError as exc:
         last_line(f"{ERROR}{exc}")
@@ -98,6 +113,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as exc:
         last_line("evobiped: interrupted")
         return exit_status(exc)
+    except ImportError as exc:  # Ctrl-C inside an extension module's import (NumPy's, MuJoCo's) arrives as an ImportError
+        if not _interrupted(exc):
+            raise
+        last_line("evobiped: interrupted")
+        return 130
     finally:
         restore()
         if argv is None:  # the command's own process: its work is done and said; a stop signal now would only cut

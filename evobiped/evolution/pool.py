@@ -70,10 +70,16 @@ def _die_with(parent: int) -> None:
     threading.Thread(target=watch, name="evobiped-parent-watch", daemon=True).start()
 
 
+#: the signals a worker leaves to its parent (Ctrl-C and a closed terminal): blocked from its start (its imports)
+#: until it ignores them
+PARENTS_SIGNALS = {signal.SIGINT, signal.SIGHUP}
+
+
 def _start(parent: int, initializer: Callable | None, initargs: tuple) -> None:
     _die_with(parent)
-    for sig in (signal.SIGINT, signal.SIGHUP):  # Ctrl-C and a closed terminal are the parent's to handle
+    for sig in PARENTS_SIGNALS:  # Ctrl-C and a closed terminal are the parent's to handle
         signal.signal(sig, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, PARENTS_SIGNALS)  # one that came while it started is dropped now
     if initializer is not None:
         initializer(*initargs)
 
@@ -96,11 +102,23 @@ def _quiet_resource_tracker() -> None:
     tracker.ensure_running()
 
 
+class _Pool(ProcessPoolExecutor):
+    """A process pool whose workers start with :data:`PARENTS_SIGNALS` blocked (a mask survives the spawn), so a
+    Ctrl-C to the process group while a worker imports is not a KeyboardInterrupt traceback."""
+
+    def _spawn_process(self):
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, PARENTS_SIGNALS)
+        try:
+            super()._spawn_process()
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def spawn_pool(workers: int, initializer: Callable | None = None, initargs: tuple = ()) -> ProcessPoolExecutor:
-    """``workers`` fresh (spawned, not forked) processes that ignore SIGINT and SIGHUP and die with this process;
-    each runs ``initializer(*initargs)`` first."""
+    """``workers`` fresh (spawned, not forked) processes that ignore SIGINT and SIGHUP (from their start) and die
+    with this process; each runs ``initializer(*initargs)`` first."""
     _quiet_resource_tracker()
-    return ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_start,
+    return _Pool(workers, mp_context=mp.get_context("spawn"), initializer=_start,
                                initargs=(os.getpid(), initializer, initargs))
 
 
