@@ -126,7 +126,7 @@ def test_each_experiment_registers_its_own_subcommand_and_command_modules_stay_s
     assert found == {"evobiped.experiments.g3.g3_cmd": ["add_g3"], "evobiped.experiments.reil.study_cmd": ["add_study"],
                      "evobiped.experiments.taga.taga_cmd": ["add_taga"]}
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
-    assert list(sub.choices) == [c.removesuffix("_cmd") for c in CORE] + ["g3", "study", "taga"]
+    assert list(sub.choices) == [c.removesuffix("_cmd").replace("_", "-") for c in CORE] + ["g3", "study", "taga"]
     cli_text = "".join(p.read_text() for p in (PACKAGE / "cli").glob("*.py"))
     assert not any(name in cli_text for name in ("experiments.reil", "experiments.taga", "experiments.g3"))
     for path in [*(PACKAGE / "cli").glob("*.py"), *PACKAGE.glob("experiments/*/*_cmd.py"), PACKAGE / "flags.py"]:

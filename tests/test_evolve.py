@@ -20,7 +20,7 @@ import pytest
 from evobiped.episode import EpisodeConfig
 from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
 from evobiped.files.rundir import HISTORY_COLUMNS
-from evobiped.evolution.run_context import HISTORY_EXTRA
+from evobiped.evolution.run_context import HISTORY_EXTRA, STOP_COLUMN
 
 from .conftest import cli
 
@@ -32,7 +32,7 @@ def fitness_history(run_dir) -> list[list[str]]:
     with open(Path(run_dir) / "history.csv") as f:
         rows = list(csv.reader(f))
     assert rows[0][: len(HISTORY_COLUMNS)] == list(HISTORY_COLUMNS)
-    assert all(c.startswith("best_") or c in HISTORY_EXTRA for c in rows[0][len(HISTORY_COLUMNS) :])
+    assert all(c.startswith("best_") or c in HISTORY_EXTRA + (STOP_COLUMN,) for c in rows[0][len(HISTORY_COLUMNS) :])
     wall = HISTORY_COLUMNS.index("wall_seconds")
     return [r[:wall] + r[wall + 1 :] for r in rows[1:]]
 

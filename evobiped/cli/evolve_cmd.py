@@ -129,6 +129,10 @@ def _generations(run, evaluator, c, say, args) -> int:
     walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
     # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
     earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if args.resume else ""
+    if summary.get("stopped_early"):
+        rule = run.config.stop
+        what = "its evaluation walkers met the walking criteria" if rule.when == "walking" else f"its evaluation walkers' fitness reached {rule.above:g}"
+        print(f"stopped after generation {summary['generations'] - 1}: {what} for {rule.generations} generations running ([stop])")
     print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
           f"{summary['evaluations']} evaluations, elapsed {hms(line.elapsed)}{earlier}; results in {run.dir}")
     return 0

@@ -185,7 +185,7 @@ def _nominal_walk(run) -> dict | None:
 
 
 def _summary(run, best_walk: dict | None) -> dict:
-    return {
+    out = {
         "evobiped": __version__,
         "generations": run.optimizer.generation,
         "best": run.best,
@@ -194,6 +194,9 @@ def _summary(run, best_walk: dict | None) -> dict:
         "stable": run.best is not None and not run.best["fell"],
         "best_walk": best_walk,
     }
+    if run.config.stop.active:  # the stopping rule's verdict (only in runs that have one: other summaries as before)
+        out["stopped_early"] = run.context.stopped()
+    return out
 
 
 def write_summary(run, *, repair: bool = False) -> dict:

@@ -133,9 +133,11 @@ class Run:
 
     @property
     def done(self) -> bool:
-        """Every generation evolved, or the episodes evaluated reached the config's budget (if any)."""
+        """Every generation evolved, the episodes evaluated reached the config's budget (if any), or the stopping rule
+        held (:mod:`.stopping`)."""
         budget = self.config.budget
-        return self.optimizer.generation >= self.config.generations or (budget is not None and self.episodes() >= budget)
+        return (self.optimizer.generation >= self.config.generations or (budget is not None and self.episodes() >= budget)
+                or self.context.stopped())
 
     def episodes(self) -> int:
         """Episodes evaluated by the committed generations (history.csv's evaluations, each genome's presentations)."""

@@ -20,6 +20,7 @@ from .curriculum import Curriculum, CurriculumOptions
 from .es import ESOptions, EvolutionStrategy
 from .evaluate import BACKENDS
 from .ga import GA, GAOptions
+from .stopping import StopOptions
 from .map_elites import MapElites, MapElitesOptions
 
 #: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation) with state/restore
@@ -49,6 +50,7 @@ class RunConfig:
     map_elites: MapElitesOptions = field(default_factory=MapElitesOptions)
     normalise: NormaliseOptions = field(default_factory=lambda: NormaliseOptions())
     curriculum: CurriculumOptions = field(default_factory=CurriculumOptions)
+    stop: StopOptions = field(default_factory=StopOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
     budget: int | None = option(None, "episodes to evaluate: the run stops at the first generation boundary where the episodes "
                                 "it evaluated (genomes x presentations each, episodes_per_genome) reach this (none: every generation)",
@@ -71,12 +73,14 @@ class RunConfig:
             self.map_elites.check_terms(tuple(task.term_names), task.name)
         if self.curriculum.phases:
             Curriculum(self.curriculum).check(self.episode.parts()[2])
+        if self.stop.active:
+            self.stop.check(self.episode.parts()[2])
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
         d["episode"] = self.episode.to_dict()
         for name, cls in (("es", ESOptions), ("map_elites", MapElitesOptions), ("normalise", NormaliseOptions),
-                          ("curriculum", CurriculumOptions)):
+                          ("curriculum", CurriculumOptions), ("stop", StopOptions)):
             # written only when set (the ES's and MAP-Elites' only for their runs): other runs' config.json as before
             if d[name] == dataclasses.asdict(cls()) or (name in ("es", "map_elites") and self.optimizer != name.replace("_", "-")):
                 del d[name]
@@ -96,7 +100,7 @@ class RunConfig:
             ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
             extra = {name: parse(cls, d.pop(name, {}), name)
                      for name, cls in (("es", ESOptions), ("map_elites", MapElitesOptions), ("normalise", NormaliseOptions),
-                                       ("curriculum", CurriculumOptions))}
+                                       ("curriculum", CurriculumOptions), ("stop", StopOptions))}
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, ga=ga, cma=cma, **extra, **d)

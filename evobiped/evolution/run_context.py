@@ -33,10 +33,13 @@ from ..episode.remap import input_widths
 from ..interface.normaliser import Normaliser, frozen_table
 from ..core.options import given
 from .curriculum import Curriculum
+from .stopping import streak
 
 
 #: history.csv's columns of a run with a context (after the best's terms)
 HISTORY_EXTRA = ("phase", "evaluation_up", "evaluation_forward")
+#: and, in a run with a stopping rule (:mod:`.stopping`), whether this generation met it
+STOP_COLUMN = "stop_met"
 
 
 class RunContext:
@@ -61,7 +64,11 @@ class RunContext:
 
     @property
     def active(self) -> bool:
-        return self.running or self.curriculum.active or self.config.optimizer == "es"
+        return self.running or self.curriculum.active or self.config.optimizer == "es" or self.config.stop.active
+
+    def stopped(self) -> bool:
+        """The stopping rule (:mod:`.stopping`) held for its generations running."""
+        return self.config.stop.active and streak(self.history) >= self.config.stop.generations
 
     def _floors(self, controller) -> np.ndarray:
         o = self.config.normalise
@@ -98,8 +105,9 @@ class RunContext:
             return
         position = np.cumsum(unknown) - 1
         evaluated = np.flatnonzero(unknown)
-        rows = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.asarray(evaluation_rows)
-        rows = position[rows[unknown[rows]]]
+        chosen = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.asarray(evaluation_rows)
+        chosen = chosen[unknown[chosen]]
+        rows = position[chosen]
         phase = self.curriculum.phase
         if self.running and len(rows):
             self.stats = self.stats.add(sense_sums(result, rows if evaluation_rows is not None else np.arange(len(evaluated))))
@@ -109,6 +117,11 @@ class RunContext:
             self.curriculum.after(result, rows)
         values = (phase, up, None if not np.isfinite(forward) else forward)
         self.history.append(dict(zip(HISTORY_EXTRA, values)))
+        stop = self.config.stop
+        if stop.active:
+            last_phase = not self.curriculum.active or phase == len(self.curriculum.options.phases) - 1
+            terms = {k: np.asarray(v)[rows] for k, v in result.terms.items()}
+            self.history[-1][STOP_COLUMN] = bool(last_phase and stop.met(terms, result.fell[rows], fitness[chosen]))
 
     def early_phase(self, generation: int) -> bool:
         """Generation ``generation`` was (or, the next one, is) scored in a phase before the curriculum's last."""
