@@ -150,3 +150,34 @@ def test_ctrl_c_to_the_process_group_while_workers_start_is_one_line(tmp_path, d
     r = _interrupt(["evolve", *TINY, "--backend", "process", "--workers", "2", "--out", tmp_path / "run"], delay, group=True)
     assert "Traceback" not in r.stderr and r.stderr.count("\n") <= 1, r.stderr
     assert r.returncode in (0, 130), r.stderr
+
+
+# ---- lengths and sizes beyond the machine: refused before anything is simulated or written
+@pytest.fixture(scope="module")
+def plain_run(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("plain") / "run"
+    assert cli("evolve", *TINY, "--backend", "serial", "--out", d) == 0
+    return d
+
+
+def test_select_of_a_billion_seconds_is_one_line(plain_run):
+    r = guarded("select", plain_run, "--seconds", "1e9", timeout=60)
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, "--seconds 1e+09", "an episode needs 1 to 1e+07")
+    assert not (plain_run / "selected.json").exists()
+
+
+def test_a_video_of_a_billion_frames_per_second_is_one_line(plain_run, tmp_path):
+    r = guarded("replay", plain_run, "--video", tmp_path / "v.mp4", "--video-fps", "1e9", timeout=120)
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, "--video-fps 1e+09", "more than this machine can hold")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_a_video_window_after_the_episode_leaves_nothing(plain_run, tmp_path, capsys):
+    import shutil
+
+    shutil.copyfile(plain_run / "best.json", tmp_path / "g.json")  # a lone genome file: its outputs go to runs/g
+    assert cli("replay", tmp_path / "g.json", "--video", tmp_path / "v.mp4", "--video-window", "100", "200") == 2
+    one_line_error(capsys.readouterr().err, "--video-window", "the episode ends at")
+    assert not Path("runs").exists() and [p.name for p in tmp_path.iterdir()] == ["g.json"]

@@ -57,6 +57,13 @@ def run_replay_cmd(args) -> int:
         base = Path(args.out).parent if args.out else source.outputs
         figures = figures_dir(base, source.label)
     seconds = args.seconds or source.config.seconds
+    if args.video is not None:  # before anything is written: the longest the video can be
+        from ..record.video import check_frames
+
+        if args.video_window is not None and args.video_window[0] > seconds:
+            refuse("--video-window", f"{args.video_window[0]:g} {args.video_window[1]:g}: the episode ends at {seconds:g} s at the latest")
+        span = seconds if args.video_window is None else min(seconds, args.video_window[1]) - args.video_window[0]
+        check_frames(span, args.video_fps, args.video_size[0] * args.video_size[1] * 3)
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
     frames = Progress("replay video", 1.0, "frames rendered", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,

@@ -24,6 +24,7 @@ whole or not at all (:func:`~evobiped.core.fileio.atomic_write`).
 from __future__ import annotations
 
 import io
+import os
 import tempfile
 import warnings
 from pathlib import Path
@@ -63,14 +64,28 @@ def check_video_path(path: str | Path) -> Path:
     return path
 
 
-def frame_times(trajs: list[Trajectory], fps: float = FPS, window: tuple[float, float] | None = None) -> np.ndarray:
+def frame_times(trajs: list[Trajectory], fps: float = FPS, window: tuple[float, float] | None = None,
+                frame_bytes: int = 0) -> np.ndarray:
     """``(F,)`` simulated times (s) of the frames: every 1/``fps`` s over ``window`` (start, end) s, by default
-    the whole of the longest trajectory."""
+    the whole of the longest trajectory; UserError when ``F`` frames of ``frame_bytes`` each would not fit in a
+    quarter of this machine's memory."""
     end = max(float(t.state_time[-1]) for t in trajs)
     t0, t1 = (0.0, end) if window is None else (max(0.0, window[0]), min(end, window[1]))
     if t1 < t0:
         raise UserError(f"--video-window {window[0]:g} {window[1]:g}: the episode ends at {end:g} s")
-    return t0 + np.arange(int(np.floor((t1 - t0) * fps + 1e-9)) + 1) / fps
+    return t0 + np.arange(check_frames(t1 - t0, fps, frame_bytes)) / fps
+
+
+def check_frames(seconds: float, fps: float, frame_bytes: int) -> int:
+    """The number of frames of ``seconds`` s of video at ``fps``; UserError when they would not fit, at
+    ``frame_bytes`` each, in a quarter of this machine's memory."""
+    n = np.floor(seconds * fps + 1e-9) + 1
+    room = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 4
+    if n * max(frame_bytes, 8) > room:
+        raise UserError(f"--video-fps {fps:g}: {n:.3g} frames over {seconds:g} s would take {n * max(frame_bytes, 8) / 2**30:.3g} GiB, "
+                        f"more than this machine can hold ({room / 2**30:.3g} GiB): a lower --video-fps, a shorter "
+                        f"--video-window or a smaller --video-size")
+    return int(n)
 
 
 class FrameRenderer:
@@ -121,12 +136,12 @@ def render_frames(trajs: list[Trajectory], names: list[str], *, fps: float = FPS
     ``size`` = (width, height) pixels, at most :data:`COLUMNS` panels per row (empty panels grey).
     ``progress`` (optional, a :class:`~evobiped.core.progress.Progress`) hears the frames done (restarted here with their number);
     ``renderer`` (optional, of that size): one opened earlier (the caller closes it), else one opened and closed here."""
-    times = frame_times(trajs, fps, window)
-    if progress is not None:
-        progress.restart(len(times))
     width, height = size
     cols = min(COLUMNS, len(trajs))
     rows = -(-len(trajs) // cols)
+    times = frame_times(trajs, fps, window, frame_bytes=rows * height * cols * width * 3)
+    if progress is not None:
+        progress.restart(len(times))
     frames = np.full((len(times), rows * height, cols * width, 3), 128, np.uint8)
     fr = renderer or FrameRenderer(trajs[0].model, width, height)
     try:

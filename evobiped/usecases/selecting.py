@@ -3,6 +3,7 @@ for longer than their evaluation did (:mod:`evobiped.analysis.selection`); writt
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -48,6 +49,10 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     if not isinstance(cfg, dict):
         raise UserError(f"run config {d / rundir.CONFIG} is not a table of settings")
     run = RunConfig.from_dict({k: v for k, v in cfg.items() if k not in ("evobiped", "environment")}, where=str(d / rundir.CONFIG))
+    try:  # the long episode within what any episode may take (10^7 ticks), before any is simulated
+        dataclasses.replace(run.episode, seconds=seconds).check()
+    except UserError as exc:
+        raise UserError(f"--seconds {seconds:g}: {exc}") from None
     candidates = [load_genome(p) for p in paths]
     for p, (_, ep, _) in zip(paths, candidates):  # one experiment's walkers (what a generation froze in aside)
         if _experiment(ep, run) != _experiment(run.episode, run):
