@@ -12,11 +12,13 @@ turns them into the measures of :data:`MEASURES`, one value per row:
 * **duty factor** of a foot: the share of the time up that it stands; a walk has >= 0.5 on each foot;
 * **airborne**: the share of the time up with no foot standing (a walk has none; running and skipping do);
   **double support**: both standing;
-* **steps**: stance episodes of all feet; step frequency per second up, step length = forward travel / steps;
+* **steps**: stance episodes of all feet; step frequency per second up, step length = forward travel / steps (0
+  without a step);
 * **slip**: the median over stance ticks of the contact point's horizontal speed (m/s), and its share of the speed;
   **sliding**: the distance the standing feet slid per second up (m/s; finite for any gait: what a fitness can weigh);
 * **clearance**: the mean over swings of each swing's peak foot height (m); **knee swing**: the mean over swings of
-  the knee's excursion (rad, max - min) during the swing;
+  the knee's excursion (rad, max - min) during the swing (both 0 without a whole swing: every measure a fitness
+  may weigh is finite);
 * **power**: mean positive mechanical power sum_j max(tau_j omega_j, 0) per kg (W/kg); **cost of transport**: that
   power over (g v) (dimensionless: positive work per metre per body weight); **Froude number** v^2 / (g L).
 
@@ -109,9 +111,9 @@ def measure_one(sample: dict[str, np.ndarray], dt: float, *, forward: float, mas
     out.update(
         duty_min=float(duty.min()), duty_asymmetry=float(duty.max() - duty.min()),
         airborne=float((n_standing == 0).mean()), double_support=float((n_standing >= 2).mean()),
-        steps_per_s=steps / up, step_length=forward / steps if steps else np.nan,
+        steps_per_s=steps / up, step_length=forward / steps if steps else 0.0,
         slip=float(np.median(slips)) if len(slips) else np.nan, sliding=float(slips.sum() / T),
-        clearance=float(np.mean(clear)) if clear else np.nan, knee_swing=float(np.mean(knee)) if knee else np.nan,
+        clearance=float(np.mean(clear)) if clear else 0.0, knee_swing=float(np.mean(knee)) if knee else 0.0,
         power=float(positive), positive_work=float(positive * up),
         cost_of_transport=float(positive / (G * speed)) if speed > 1e-3 else np.inf,
         froude=float(speed * speed / (G * leg_length)),
