@@ -1,12 +1,14 @@
 """Tasks (fitness and the sensors they add) and their registry."""
 
 from .base import Task
+from .command import CommandTask
 from .steer import SteerTask
 from .walk import WalkTask
 
 TASKS: dict[str, type[Task]] = {
     WalkTask.name: WalkTask,
     SteerTask.name: SteerTask,
+    CommandTask.name: CommandTask,
 }
 
-__all__ = ["TASKS", "SteerTask", "Task", "WalkTask"]
+__all__ = ["TASKS", "CommandTask", "SteerTask", "Task", "WalkTask"]
