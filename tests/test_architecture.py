@@ -22,7 +22,7 @@ LAYERS: list[set[str]] = [
     {"analysis.gait_report"},
     {"envs", "files.genome_file", "files.outcome", "analysis.selection", "analysis.compare_stats"},
     {"files.rundir"},
-    {"analysis.robustness", "analysis.retest", "distill"},
+    {"analysis.robustness", "analysis.retest", "analysis.commanded", "distill"},
     {"record"},
     {"evolution"},
     {"repertoire"},

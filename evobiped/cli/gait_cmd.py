@@ -1,4 +1,5 @@
-"""``evobiped gait``: a speed knob over a map-elites run's gait repertoire (one commanded speed, or a schedule)."""
+"""``evobiped gait``: a speed knob over a map-elites run's gait repertoire (one commanded speed, or a schedule), or a
+commanded walker's genome (the command task) following commanded speeds and turning rates."""
 
 from __future__ import annotations
 
@@ -6,12 +7,20 @@ from ..flags import positive_float, refuse
 
 
 def add_gait(sub) -> None:
-    p = sub.add_parser("gait", help="walk at a commanded speed (or a schedule of speeds) with the nearest gaits of a map-elites run's archive")
-    p.add_argument("run", metavar="RUN", help="a map-elites run directory (its archive.json)")
-    p.add_argument("--speed", metavar="V[,V...]", required=True,
-                   help="commanded mean forward speed in m/s; several, comma-separated: a schedule, --hold s each, elites switched on the fly")
-    p.add_argument("--turning", type=float, default=0.0, metavar="W", help="commanded turning rate in deg/s, + left (default 0)")
-    p.add_argument("--hold", type=positive_float, default=10.0, metavar="S", help="seconds each speed is held (default 10)")
+    p = sub.add_parser("gait", help="walk at a commanded speed (or a schedule of speeds) with the nearest gaits of a map-elites "
+                       "run's archive, or with a commanded walker's genome")
+    p.add_argument("run", metavar="RUN|GENOME", help="a map-elites run directory (its archive.json), or a commanded walker "
+                   "(a genome file or run directory of the command task)")
+    p.add_argument("--speed", metavar="V[,V...]",
+                   help="commanded mean forward speed in m/s; several, comma-separated: a schedule, --hold s each (a "
+                   "repertoire: elites switched on the fly; a commanded walker: 0 is a stop; without it, its own nominal schedule)")
+    p.add_argument("--turning", default="0", metavar="W[,W...]", help="commanded turning rate in deg/s, + left (default 0); "
+                   "a commanded walker also takes a list, one per speed")
+    p.add_argument("--hold", "--stretch", dest="hold", type=positive_float, default=10.0, metavar="S",
+                   help="seconds each command is held (default 10)")
+    p.add_argument("--json", action="store_true", help="a commanded walker: print the report as JSON")
+    p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: the "
+                   "run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
     p.add_argument("--ramp", type=float, default=None, metavar="A", help="the knob speeds up by at most A m/s per s, "
                    "switching elites every second (default 0.1; 0: at once)")
     p.add_argument("--ramp-down", type=float, default=None, metavar="A", help="the knob slows down by at most A m/s per s "
@@ -23,18 +32,43 @@ def add_gait(sub) -> None:
     p.set_defaults(func=run_gait_cmd)
 
 
+def _numbers(flag: str, text: str | None) -> list[float] | None:
+    """A comma-separated list of finite numbers (None: not given); one line, exit 2, for anything else."""
+    import math
+
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(math.isfinite(v) for v in values):
+        refuse(flag, f"expected finite numbers, comma-separated, got {text!r}")
+    return values
+
+
 def run_gait_cmd(args) -> int:
+    from pathlib import Path
+
+    speeds, turnings = _numbers("--speed", args.speed), _numbers("--turning", args.turning)
+    if not (Path(args.run) / "archive.json").is_file():
+        return _run_commanded(args, speeds, turnings)
+    if args.json or args.out:
+        refuse("--json/--out", "apply to a commanded walker's genome, not to a repertoire")
+    return _run_repertoire(args, speeds, turnings)
+
+
+def _run_repertoire(args, speeds, turnings) -> int:
     import math
 
     from ..repertoire.elites import load_repertoire
     from ..repertoire.speed import CORRECTION, OVERSHOOT, RAMP, RAMP_DOWN, follow, hysteresis, tracking
 
-    try:
-        speeds = [float(v) for v in args.speed.split(",")]
-    except ValueError:
-        speeds = []
-    if not speeds or not all(math.isfinite(v) and v > 0 for v in speeds):
-        refuse("--speed", f"expected positive speeds in m/s, comma-separated, got {args.speed!r}")
+    if speeds is None or not all(v > 0 for v in speeds):
+        refuse("--speed", f"a repertoire needs positive speeds in m/s, comma-separated, got {args.speed!r}")
+    if len(turnings) != 1:
+        refuse("--turning", "a repertoire walks at one turning rate")
+    turning = turnings[0]
     ramp = RAMP if args.ramp is None else args.ramp
     ramp_down = RAMP_DOWN if args.ramp_down is None else args.ramp_down
     for flag, value in (("--ramp", ramp), ("--ramp-down", ramp_down)):
@@ -47,7 +81,7 @@ def run_gait_cmd(args) -> int:
     if not (math.isfinite(overshoot) and 0 <= overshoot < 1):
         refuse("--overshoot", f"must be a fraction in [0, 1), got {args.overshoot}")
     rep = load_repertoire(args.run)
-    stretches = follow(rep, speeds, args.hold, args.turning, ramp=ramp, ramp_down=ramp_down, step=min(1.0, args.hold),
+    stretches = follow(rep, speeds, args.hold, turning, ramp=ramp, ramp_down=ramp_down, step=min(1.0, args.hold),
                        correction=correction, overshoot=overshoot)
     a = rep.archive
     t = 0.0
@@ -62,6 +96,54 @@ def run_gait_cmd(args) -> int:
         cells = [f"{a.cell[s.elite, 0]},{a.cell[s.elite, 1]}" for s in (up, dn)]
         print(f"hysteresis at {v:.3f} m/s: rising {up.measured:.3f} m/s (cell {cells[0]}), falling {dn.measured:.3f} m/s "
               f"(cell {cells[1]})" + ("" if up.up and dn.up else "; down on the way"))
+    return 0
+
+
+def _run_commanded(args, speeds, turnings) -> int:
+    """A commanded walker's genome through the commands (``--speed`` m/s, ``--turning`` deg/s, ``--hold`` s each), or
+    its own nominal schedule: a line per stretch (or JSON), <stem>_command.json and <stem>_command.png."""
+    import json
+    import math
+    from pathlib import Path
+
+    from ..analysis.commanded import check_commanded, follow_commands, nominal_plan, plan, stretch_line
+    from ..core.fileio import write_json
+    from ..record.command_figure import command_figure
+    from ..record.source import resolve
+
+    for flag in ("ramp", "ramp_down", "correction", "overshoot"):
+        if getattr(args, flag) is not None:
+            refuse(f"--{flag.replace('_', '-')}", "applies to a repertoire's speed knob, not to a commanded walker")
+    source = resolve(args.run)
+    check_commanded(source.config, str(source.genome_path))
+    out = Path(args.out) if args.out else source.outputs
+    if out.exists() and not out.is_dir():
+        refuse("--out", f"{out} exists and is not a directory")
+    if speeds is None:
+        if turnings != [0.0]:
+            refuse("--turning", "needs --speed (without it the walker follows its own nominal schedule)")
+        times, speeds, turnings, seconds = nominal_plan(source.config, args.hold)
+        notes = [f"no --speed: the walker follows its own nominal schedule ({len(speeds)} stretches, {seconds:g} s)"]
+    else:
+        speeds, turnings, notes = plan(source.config, speeds, [math.radians(w) for w in turnings])
+        times, seconds = [i * args.hold for i in range(len(speeds))], args.hold * len(speeds)
+    report = follow_commands(source.config, source.genome, times, speeds, turnings, seconds)
+    report.update(source=str(source.genome_path), notes=notes)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"{source.genome_path.stem}_command" if source.run_dir is None else f"{source.label}_command"
+    write_json(out / f"{stem}.json", report)
+    png = command_figure(report, out / f"{stem}.png", title=f"{source.name}: commanded and walked speed and turning rate")
+    if args.json:
+        print(json.dumps({k: v for k, v in report.items() if k != "trace"}, default=lambda v: None))
+        return 0
+    for note in notes:
+        print(note)
+    for s in report["stretches"]:
+        print(stretch_line(s))
+    done = [s for s in report["stretches"] if s["speed_error_pct"] is not None and not s["down"]]
+    mean = f"mean speed error {sum(s['speed_error_pct'] for s in done) / len(done):.1f} % over {len(done)} walking stretches; " if done else ""
+    print(mean + ("no fall" if not report["fell"] else f"fell at {report['end_time']:.1f} s"))
+    print(f"results: {out / (stem + '.json')}\nfigure: {png}")
     return 0
 
 
