@@ -65,6 +65,8 @@ SENSOR_TEXT = {
     "ground_contact": "ground contacts: right, left (0 or 1)",
     "ground_force": "ground forces F_g1..F_g4 (N)",
     "sound": "the steer task's ear signal s (its sensor, after the body's)",
+    "command_speed": "the command task's commanded forward speed (m/s)",
+    "command_turning": "the command task's commanded turning rate (rad/s, + left; its sign changes in the stance frame's mirror)",
 }
 
 
