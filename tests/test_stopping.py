@@ -75,3 +75,17 @@ def test_bad_stopping_rules_are_one_line(tmp_path, capsys):
     assert cli("evolve", "--config", bad, "--out", tmp_path / "r", "--quiet") == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "gait terms" in err[0] and not (tmp_path / "r").exists()
+
+
+def test_the_walking_rule_reads_each_presentation_of_a_perturbed_es_run(tmp_path):
+    """ES's evaluation walkers under per-generation perturbations have terms per presentation ((genomes, R)): the rule
+    reads every presentation (it once raised a TypeError there)."""
+    config = RunConfig.from_dict({
+        "optimizer": "es", "es": {"pairs": 2}, "generations": 2, "seed": 1, "backend": "serial",
+        "stop": {"when": "walking", "generations": 1},
+        "episode": {"seconds": 0.5, "task_options": {"fitness": "weighted", "gait_terms": True,
+                                                     "weights": {"forward": 1.0, "airborne": -1.0}},
+                    "perturbations": {"presentations": 2, "pose_noise": 0.01}}})
+    run = _evolve(tmp_path / "es", config)
+    history = fitness_history(run.dir)
+    assert len(history) == 2 and json.loads((run.dir / "summary.json").read_text())["stopped_early"] is False

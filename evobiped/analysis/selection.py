@@ -6,6 +6,7 @@ or fall late.  :func:`try_candidates` runs every candidate alone, nominally, for
 episode (``seconds``) and, when it is still up then, for ``long_seconds``;
 :func:`best_candidate` ranks them by, in order:
 
+0. (when they were tried for it) a walk by the gait lab's walking criteria;
 1. up through the long run;
 2. up through the episode;
 3. walking within ``heading_limit`` degrees of its initial facing in the episode;
@@ -27,12 +28,15 @@ import numpy as np
 from ..episode import EpisodeConfig
 
 
-def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndarray, long_seconds: float) -> list[dict]:
+def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndarray, long_seconds: float, *,
+                   walking: bool = False) -> list[dict]:
     """Each genome ``(P, G)`` alone in ``config``'s nominal episode (or each in its own: a list of one config per
     genome, e.g. generation files that each froze their normaliser) and, if up, for ``long_seconds``: one dict per
-    genome with ``fell``, ``end_time`` (s), ``distance`` (m), ``heading_deg`` (None: did not move), ``up_long``."""
+    genome with ``fell``, ``end_time`` (s), ``distance`` (m), ``heading_deg`` (None: did not move), ``up_long``; with
+    ``walking``, also ``walks`` and ``failed``: the walking criteria over its first 50 s (:func:`forward_walker`'s
+    window), for a candidate up through the episode."""
     if isinstance(config, list):
-        return [try_candidates(c, np.asarray(g)[None], long_seconds)[0] for c, g in zip(config, genomes)]
+        return [try_candidates(c, np.asarray(g)[None], long_seconds, walking=walking)[0] for c, g in zip(config, genomes)]
     episode = config.nominal().build()
     short = episode.run(genomes)
     rows = []
@@ -45,14 +49,21 @@ def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndar
         long = episode.run(genomes[up], seconds=long_seconds)
         for j, i in enumerate(up):
             rows[i]["up_long"] = not bool(long.fell[j])
+    if walking:
+        from .gait_report import gait_report
+
+        for i, r in enumerate(rows):
+            report = gait_report(config, genomes[i], seconds=50.0) if not r["fell"] else {"walks": False, "failed": ["up"]}
+            r["walks"], r["failed"] = bool(report["walks"] and r.get("up_long", True)), report["failed"]
     return rows
 
 
 def rank_key(row: dict, heading_limit: float) -> tuple:
-    """What :func:`best_candidate` maximises for one candidate's row (see the module docstring)."""
+    """What :func:`best_candidate` maximises for one candidate's row (see the module docstring; a row that was tried
+    for the walking criteria ranks a walk first)."""
     h = row.get("heading_deg")
     h = 180.0 if h is None or not np.isfinite(h) else float(h)
-    return (bool(row.get("up_long", False)), not row["fell"], abs(h) <= heading_limit, row["distance"] * np.cos(np.radians(h)),
+    return (bool(row.get("walks", False)), bool(row.get("up_long", False)), not row["fell"], abs(h) <= heading_limit, row["distance"] * np.cos(np.radians(h)),
             row["end_time"])
 
 

@@ -14,19 +14,23 @@ def add_select(sub) -> None:
                    help="each candidate up through its episode runs S s alone (default 200)")
     p.add_argument("--heading-limit", type=positive_float, default=30.0, metavar="DEG",
                    help="prefer walkers within DEG of their initial facing (default 30)")
+    p.add_argument("--walking", action="store_true", help="prefer a walk: each candidate's gait over its first 50 s "
+                   "against the walking criteria (evobiped gait-report), first in the ranking")
     p.set_defaults(func=run_select_cmd)
 
 
 def run_select_cmd(args) -> int:
     from ..usecases.selecting import select_walker
 
-    s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit)
-    print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}")
+    s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit, walking=args.walking)
+    print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}"
+          + ("  walks" if args.walking else ""))
     for i, (label, r) in enumerate(zip(s.labels, s.rows)):
         ep = "fell %.1f s" % r["end_time"] if r["fell"] else "up"
         h = "-" if r["heading_deg"] is None else f"{r['heading_deg']:+.0f} deg"
         mark = "  <- selected" if i == s.chosen else ""
-        print(f"{label:<40}{ep:>14}{r['distance']:>14.2f}{h:>9}{'yes' if r.get('up_long') else 'no':>10}{mark}")
+        walks = "" if not args.walking else "  yes" if r["walks"] else "  no: " + ", ".join(r["failed"])
+        print(f"{label:<40}{ep:>14}{r['distance']:>14.2f}{h:>9}{'yes' if r.get('up_long') else 'no':>10}{walks}{mark}")
     print(f"selected: {s.labels[s.chosen]} -> {s.path}")
     return 0
 

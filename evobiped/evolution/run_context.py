@@ -105,7 +105,7 @@ class RunContext:
             return
         position = np.cumsum(unknown) - 1
         evaluated = np.flatnonzero(unknown)
-        chosen = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.asarray(evaluation_rows)
+        chosen = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.ravel(evaluation_rows)
         chosen = chosen[unknown[chosen]]
         rows = position[chosen]
         phase = self.curriculum.phase
@@ -120,8 +120,9 @@ class RunContext:
         stop = self.config.stop
         if stop.active:
             last_phase = not self.curriculum.active or phase == len(self.curriculum.options.phases) - 1
-            terms = {k: np.asarray(v)[rows] for k, v in result.terms.items()}
-            self.history[-1][STOP_COLUMN] = bool(last_phase and stop.met(terms, result.fell[rows], fitness[chosen]))
+            # each presentation of each evaluation walker (a term is (genomes,) or (genomes, presentations))
+            terms = {k: np.asarray(v)[rows].reshape(-1) for k, v in result.terms.items()}
+            self.history[-1][STOP_COLUMN] = bool(last_phase and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
 
     def early_phase(self, generation: int) -> bool:
         """Generation ``generation`` was (or, the next one, is) scored in a phase before the curriculum's last."""

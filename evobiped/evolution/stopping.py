@@ -49,16 +49,16 @@ class StopOptions:
                                   f"and fitness = 'weighted'); task {task.name!r} lacks {', '.join(missing)}")
 
     def met(self, terms: dict, fell: np.ndarray, fitness: np.ndarray) -> bool:
-        """Whether the evaluation walkers (their ``terms``, each ``(k,)``, their ``fell`` and ``fitness`` ``(k,)``) meet
-        the condition this generation."""
+        """Whether the evaluation walkers meet the condition this generation: ``terms`` (each ``(n,)``) and ``fell``
+        ``(n,)`` of each of their presentations, ``fitness`` ``(k,)`` of each walker."""
         if not len(fell):
             return False
         if self.when == "fitness":
             return bool(np.mean(fitness) >= self.above)
         from ..analysis.gait_report import failed_criteria
 
-        for i in range(len(fell)):
-            one = {k: float(np.asarray(v)[i]) for k, v in terms.items()}
+        for i in range(len(fell)):  # every presentation of every evaluation walker
+            one = {k: float(terms[k][i]) for k in WALKING_TERMS}
             one["speed"] = one["forward"] / one["time_up"] if one["time_up"] > 0 else 0.0
             one["heading_deg"] = 0.0  # not measured during a run (see the module docstring)
             if fell[i] or failed_criteria(one):

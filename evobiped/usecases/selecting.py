@@ -32,9 +32,11 @@ class Selection:
     path: Path
 
 
-def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, heading_limit: float = 30.0) -> Selection:
+def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, heading_limit: float = 30.0,
+                  walking: bool = False) -> Selection:
     """Simulate the bests of the ``top`` fittest generations of ``run_dir`` (and first its start genome, kept unless
-    one beats it) for ``seconds``; write the best as selected.json and every candidate's row beside it."""
+    one beats it) for ``seconds``; write the best as selected.json and every candidate's row beside it.  ``walking``:
+    a candidate that walks by the gait lab's criteria ranks first (:func:`~evobiped.analysis.selection.try_candidates`)."""
     d = Path(run_dir)
     if not (d / rundir.CONFIG).is_file() or not (d / rundir.HISTORY).is_file():
         raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
@@ -65,7 +67,7 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     configs = [c[1] for c in candidates]  # each its own: generation files may freeze their own normaliser
     same = all(c.to_dict() == configs[-1].to_dict() for c in configs)
     genomes = np.array([c[0] for c in candidates])
-    rows = try_candidates(configs[-1] if same else configs, genomes, seconds)
+    rows = try_candidates(configs[-1] if same else configs, genomes, seconds, walking=walking)
     k = best_candidate(rows, heading_limit)
     out = d / SELECTED
     genome, episode_config, meta = candidates[k]
