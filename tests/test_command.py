@@ -62,9 +62,10 @@ def test_drawn_commands_are_the_generations_for_every_genome_and_change_mid_epis
     assert not np.array_equal(other.speed, s.speed)  # another generation, other commands
     assert ((s.speed == 0) | ((s.speed >= 0.2) & (s.speed <= 0.8))).all() and (np.abs(s.turning) <= 0.35).all()
     state = ep.start(np.zeros((5, ep.controller.layout.size)), trials=ep.trials_for((7, 3)))
-    for _ in range(3):  # every genome of the generation is told the same
+    for k in range(3):  # every genome of the generation is told the same: the draw's stretch of the time
         senses = ep.task.sensors(ep.body, state.sims, state.task)
-        assert (senses["command_speed"] == senses["command_speed"][0]).all()
+        i = int(np.floor(2.5 * k / 2.0 + 1e-9))
+        assert (senses["command_speed"][:, 0] == s.speed[i]).all() and (senses["command_turning"][:, 0] == s.turning[i]).all()
         ep.advance(state, 2.5)
     assert ep.task.draw_sources(None) is None  # a nominal episode: the documented tour
     assert ep.task.nominal.speed.tolist() == [0.5, 0.8, 0.5, 0.5, 0.2, 0.0]
@@ -82,15 +83,15 @@ def test_the_same_key_draws_bit_identical_commands_in_another_process():
 
 
 def test_a_piecewise_schedule_switches_on_the_first_tick_at_or_after_each_time():
-    ep = standing(schedule="piecewise", times=[0.0, 0.1, 0.25], speed=[0.1, 0.2, 0.3], turning=[0.0, -0.1, 0.1])
+    ep = standing(schedule="piecewise", times=[0.0, 0.06, 0.25], speed=[0.1, 0.2, 0.3], turning=[0.0, -0.1, 0.1])
     state = ep.start(np.zeros((1, ep.controller.layout.size)))
     seen = []
     for _ in range(16):  # 0.02 s ticks
         senses = ep.task.sensors(ep.body, state.sims, state.task)
         seen.append((float(senses["command_speed"][0, 0]), float(senses["command_turning"][0, 0])))
         ep.advance(state, ticks=1)
-    assert seen[:5] == [(0.1, 0.0)] * 5  # ticks beginning at 0 .. 0.08 s
-    assert seen[5:13] == [(0.2, -0.1)] * 8  # 0.1 .. 0.24 s
+    assert seen[:3] == [(0.1, 0.0)] * 3  # ticks beginning at 0 .. 0.04 s
+    assert seen[3:13] == [(0.2, -0.1)] * 10  # 0.06 (the clock reads 0.0599...) .. 0.24 s
     assert seen[13:] == [(0.3, 0.1)] * 3  # from 0.26 s, the first tick at or after 0.25 s
 
 
@@ -183,7 +184,7 @@ def test_the_steering_rule():
     L = np.array([1 / 9, 1 / 4, 1 / 2, 1.0])  # 3 m, 2 m, 1.41 m, 1 m (the reach)
     s, _ = steering_command(np.zeros(4), L)
     assert s[0] == pytest.approx(0.6) and s[-1] == 0.0 and (np.diff(s) < 0).all()  # slower as it gets loud, 0 at reach
-    s, _ = steering_command(0.0, 1 / 1.5 ** 2, reach=1.5)
-    assert s == 0.0  # inside the reach radius
+    s, _ = steering_command(np.zeros(2), np.array([1 / 1.5 ** 2, 1 / 1.2 ** 2]), reach=1.5)
+    assert s.tolist() == [0.0, 0.0]  # at and inside the reach radius
     with pytest.raises(ConfigError):
         steering_command(0.0, 0.5, reach=4.0)
