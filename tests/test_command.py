@@ -188,3 +188,10 @@ def test_the_steering_rule():
     assert s.tolist() == [0.0, 0.0]  # at and inside the reach radius
     with pytest.raises(ConfigError):
         steering_command(0.0, 0.5, reach=4.0)
+
+
+def test_standing_needs_both_feet_down(monkeypatch):
+    ep = standing(schedule="constant", speed=0.0)
+    monkeypatch.setattr(type(ep.body), "contacts", lambda self, sims: np.tile([True, False], (sims.n, 1)))
+    r = ep.run(np.zeros((1, ep.controller.layout.size)))
+    assert r.terms["track_speed"][0] > 0.99 and r.terms["stand"][0] == 0.0  # still, but on one foot: not standing
