@@ -118,8 +118,8 @@ def follow_commands(config: EpisodeConfig, genome: np.ndarray, times: list[float
         first = a + min(settle, (b - a) / 2)
         ticks = (t[1:] > first + 1e-9) & (t[1:] <= b + 1e-9)
         span = float(dt[ticks].sum())
-        walked = float(along[ticks].sum() / span) if span > 0 else math.nan
-        turned = float(turn[ticks].sum() / span) if span > 0 else math.nan
+        walked = float(along[ticks].sum() / span) if span > 0 else None  # None: down before it settled
+        turned = float(turn[ticks].sum() / span) if span > 0 else None
         stretches.append({
             "start": a, "end": b, "measured_from": first, "commanded_speed": v, "commanded_turning": w, "walked_speed": walked,
             "walked_turning": turned, "speed_error_pct": 100 * abs(walked - v) / v if v > 0 and span > 0 else None,
@@ -138,7 +138,7 @@ def stretch_line(s: dict) -> str:
             f"{math.degrees(s['commanded_turning']):+6.1f} deg/s -> ")
     if s["down"]:
         return head + "down (fell before this stretch)"
-    if not math.isfinite(s["walked_speed"]):
+    if s["walked_speed"] is None:
         return head + "not measured (fell before it settled)" + (", FELL" if s["fell"] else "")
     err = [f"speed {s['speed_error_pct']:.1f} % off" if s["speed_error_pct"] is not None else f"speed {abs(s['walked_speed']):.3f} m/s off 0",
            f"turning {s['turning_error_pct']:.1f} % off" if s["turning_error_pct"] is not None
