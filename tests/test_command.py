@@ -195,3 +195,43 @@ def test_standing_needs_both_feet_down(monkeypatch):
     monkeypatch.setattr(type(ep.body), "contacts", lambda self, sims: np.tile([True, False], (sims.n, 1)))
     r = ep.run(np.zeros((1, ep.controller.layout.size)))
     assert r.terms["track_speed"][0] > 0.99 and r.terms["stand"][0] == 0.0  # still, but on one foot: not standing
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_a_run_on_drawn_commands_resumed_on_two_workers_is_bit_identical(tmp_path):
+    """The commands are drawn from (run seed, generation) alone: a run stopped after generation 1 and resumed on two
+    worker processes has the uninterrupted run's history (the tracking terms included) and θ."""
+    import csv
+
+    from evobiped.evolution import Run, RunConfig, make_evaluator
+
+    config = RunConfig.from_dict({
+        "optimizer": "es", "generations": 3, "seed": 4, "backend": "serial", "es": {"pairs": 2},
+        "episode": {**STANDS, "seconds": 0.6, "controller_options": {**STANDS["controller_options"], "frame": "stance"},
+                    "task_options": {"schedule": "drawn", "stretch": 0.2, "p_stop": 0.3},
+                    "perturbations": {"pose_noise": 0.01}}})
+    whole = Run.create(tmp_path / "whole", config)
+    with make_evaluator(config.episode, "serial") as ev:
+        whole.evolve(ev)
+    cut = Run.create(tmp_path / "cut", config)
+
+    def stop(stats):
+        if stats.generation == 1:
+            raise _Stop
+
+    with make_evaluator(config.episode, "serial") as ev, pytest.raises(_Stop):
+        cut.evolve(ev, stop)
+    with make_evaluator(config.episode, "process", 2) as ev:
+        Run.resume(cut.dir).evolve(ev)
+
+    def history(d):
+        rows = list(csv.reader(open(d / "history.csv")))
+        wall = rows[0].index("wall_seconds")
+        return [r[:wall] + r[wall + 1:] for r in rows]
+
+    assert history(whole.dir) == history(cut.dir) and "best_track_speed" in history(whole.dir)[0]
+    a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut.dir))
+    assert a["optimizer"] == b["optimizer"]
