@@ -126,11 +126,24 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     task_name = ep.get("task", EpisodeConfig.task) if isinstance(ep, dict) else None
     if cyclic and task_name in TASKS:  # the task's cyclic criterion (an unknown task is refused below)
         ep["task_options"] = {**ep.get("task_options", {}), **TASKS[task_name].criterion("cyclic", "--cyclic")}
-    if population is not None:  # the population of either optimizer
-        ga["population"] = population
-        d["cma"] = {**(d.get("cma") if isinstance(d.get("cma"), dict) else {}), "population": population}
-        d["es"] = {**(d.get("es") if isinstance(d.get("es"), dict) else {}), "pairs": max(1, population // 2)}
-        d["map_elites"] = {**(d.get("map_elites") if isinstance(d.get("map_elites"), dict) else {}), "batch": population}
+    if population is not None:  # the population of every optimizer; only the chosen one's refuses a value
+        from .core.errors import ConfigError
+        from .core.options import check_value
+        from .evolution.run_config import RunConfig
+
+        chosen = optimizer or d.get("optimizer", "ga")
+        for table, name, key, value in (("ga", "ga", "population", population), ("cma", "cma", "population", population),
+                                        ("es", "es", "pairs", max(1, population // 2)), ("map_elites", "map-elites", "batch", population)):
+            try:
+                check_value(RunConfig.__dataclass_fields__[table].default_factory, key, value, "--population")
+            except ConfigError:
+                if name == chosen:
+                    raise
+                continue
+            if table == "ga":
+                ga[key] = value
+            else:
+                d[table] = {**(d.get(table) if isinstance(d.get(table), dict) else {}), key: value}
     for key, value in (("optimizer", optimizer), ("generations", generations), ("seed", seed), ("backend", backend),
                        ("workers", workers), ("address", address), ("initial", initial)):
         if value is not None:

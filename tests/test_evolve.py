@@ -358,7 +358,7 @@ def test_flags_override_config_file(tmp_path):
 def test_existing_run_directory_is_left_untouched(finished_run, capsys):
     before = snapshot(finished_run)
     assert cli("evolve", "--generations", 1, "--out", finished_run, "--quiet") == 2
-    assert "exists and is not empty" in capsys.readouterr().err
+    assert "already holds a run (continue it with --resume" in capsys.readouterr().err
     assert snapshot(finished_run) == before
 
 
@@ -370,7 +370,7 @@ def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_chec
 
     started = []
     monkeypatch.setattr(evaluate, "make_evaluator", lambda *a, **k: started.append(a) or pytest.fail("a worker started"))
-    for flags, words in ((["--out", finished_run], "exists and is not empty"), (["--from", tmp_path / "gone.json", "--out", tmp_path / "x"],
+    for flags, words in ((["--out", finished_run], "already holds a run"), (["--from", tmp_path / "gone.json", "--out", tmp_path / "x"],
                                                                                "no such run directory or genome file")):
         assert cli("evolve", "--generations", 1, "--backend", "process", "--workers", 2, *flags, "--quiet") == 2
         assert words in capsys.readouterr().err and not started

@@ -203,7 +203,7 @@ def test_two_runs_into_one_directory_one_wins(tmp_path, reference):
     codes = sorted(rc for rc, _ in results)
     assert codes == [0, 2], results
     loser = next(err for rc, err in results if rc == 2)
-    assert ("is in use by process" in loser or "exists and is not empty" in loser) and loser.count("\n") == 1
+    assert ("is in use by process" in loser or "already holds a run" in loser) and loser.count("\n") == 1
     if json.loads((d / "config.json").read_text())["seed"] == 3:
         assert contents(d) == contents(reference)
     assert cli("evolve", "--resume", d) == 0  # a consistent run: nothing to repair

@@ -181,3 +181,73 @@ def test_a_video_window_after_the_episode_leaves_nothing(plain_run, tmp_path, ca
     assert cli("replay", tmp_path / "g.json", "--video", tmp_path / "v.mp4", "--video-window", "100", "200") == 2
     one_line_error(capsys.readouterr().err, "--video-window", "the episode ends at")
     assert not Path("runs").exists() and [p.name for p in tmp_path.iterdir()] == ["g.json"]
+
+
+# ---- the right words
+def test_an_interrupt_before_the_first_commit_claims_no_checkpoint(tmp_path):
+    from types import SimpleNamespace
+
+    from evobiped.cli.evolve_cmd import _stopped
+
+    line = _stopped(SimpleNamespace(optimizer=SimpleNamespace(generation=0), done=False, dir=tmp_path))
+    assert "generation -1" not in line and "checkpoint saved" not in line and "no checkpoint yet" in line
+
+
+@pytest.mark.parametrize("optimizer", ["cma", "es"])
+def test_population_one_is_not_the_gas_to_refuse(tmp_path, capsys, optimizer):
+    cli("evolve", "--optimizer", optimizer, "--population", 1, "--generations", 1, "--seconds", 0.5, "--backend", "serial",
+        "--quiet", "--out", tmp_path / "run")
+    assert "ga.population" not in capsys.readouterr().err
+
+
+def test_a_video_larger_than_the_framebuffer_names_the_framebuffer(plain_run, tmp_path, capsys):
+    assert cli("replay", plain_run, "--seconds", 0.5, "--video", tmp_path / "v.mp4", "--video-size", 1280, 720,
+               "--out", tmp_path / "r.rrd") == 2
+    err = capsys.readouterr().err
+    one_line_error(err, "--video-size 1280 720", "640 x 480")
+    assert "libegl" not in err and not list(tmp_path.iterdir())
+
+
+def test_a_config_that_is_a_directory_says_so(tmp_path, capsys):
+    assert cli("evolve", "--config", tmp_path, "--out", tmp_path / "run") == 2
+    one_line_error(capsys.readouterr().err, "is a directory")
+
+
+def test_a_settings_file_with_a_byte_order_mark_is_read(tmp_path):
+    (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbfseed = 4\n")
+    assert cli("evolve", "--config", tmp_path / "s.toml", *TINY[:-3], "--backend", "serial", "--quiet", "--out", tmp_path / "run") == 0
+    assert '"seed": 4' in (tmp_path / "run" / "config.json").read_text()
+
+
+def test_out_of_a_directory_of_other_files_suggests_no_resume_and_leaves_no_lock(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("mine")
+    assert cli("evolve", *TINY, "--backend", "serial", "--out", tmp_path) == 2
+    err = capsys.readouterr().err
+    one_line_error(err, "holds other files, not a run")
+    assert "--resume" not in err and [p.name for p in tmp_path.iterdir()] == ["notes.txt"]
+
+
+def test_out_of_a_run_suggests_resume_and_leaves_its_lock_alone(plain_run, capsys):
+    had = (plain_run / ".lock").exists()
+    assert cli("evolve", *TINY, "--backend", "serial", "--out", plain_run) == 2
+    one_line_error(capsys.readouterr().err, f"--resume {plain_run}")
+    assert (plain_run / ".lock").exists() == had
+
+
+# ---- presets that tune a given genome
+STARTED = ["repertoire-balance", "steer-generalist", "walker-simbicon-robust", "walker-simbicon-teacher", "walker-ctrnn-distilled"]
+
+
+@pytest.mark.parametrize("preset", STARTED)
+def test_a_preset_that_needs_from_refuses_to_start_without_it(tmp_path, capsys, preset):
+    assert cli("evolve", "--preset", preset, "--out", tmp_path / "run") == 2
+    one_line_error(capsys.readouterr().err, f"--preset {preset}", "--from")
+    assert not (tmp_path / "run").exists()
+
+
+def test_presets_marks_those_that_need_from(capsys):
+    assert cli("presets") == 0
+    listed = dict(line.split(None, 1) for line in capsys.readouterr().out.splitlines())
+    for preset in STARTED:
+        assert listed[preset].endswith("(needs --from)"), preset
+    assert not listed["walker"].endswith("(needs --from)") if "walker" in listed else True

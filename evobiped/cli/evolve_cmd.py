@@ -143,6 +143,9 @@ def _stopped(run) -> str:
     from ..files.rundir import HISTORY, SUMMARY
 
     g = run.optimizer.generation
+    if g == 0:
+        return (f"evobiped: interrupted before its first generation was committed (no checkpoint yet); "
+                f"evobiped evolve --resume {run.dir} starts it from the beginning")
     if not run.done:
         return (f"evobiped: interrupted after generation {g - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
                 f"continue with: evobiped evolve --resume {run.dir}")

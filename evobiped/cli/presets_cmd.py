@@ -10,11 +10,13 @@ def add_presets(sub) -> None:
 
 
 def run_presets_cmd(args) -> int:
-    from ..files.presets import describe, names
+    from ..core.fileio import read_toml
+    from ..files.presets import describe, names, path, split_declarations
 
     width = max(map(len, names()))
     for name in names():
-        print(f"{name:<{width}}  {describe(name)}")
+        needs = split_declarations(name, read_toml(path(name)))[1]["needs_start"]
+        print(f"{name:<{width}}  {describe(name)}{' (needs --from)' if needs else ''}")
     return 0
 
 

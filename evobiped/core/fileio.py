@@ -119,13 +119,15 @@ def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, er
     """``loads(text)`` of the file at ``path``; a missing, oversized, malformed or too deeply nested file is one
     line naming ``what`` (every file a command reads comes through here)."""
     path = Path(path)
+    if path.is_dir():
+        raise UserError(f"{what} {path} is a directory, not a file")
     if not path.is_file():
         raise UserError(f"{what} not found: {path}")
     try:
         size = path.stat().st_size
         if size > MAX_BYTES:
             raise error(f"{what} {path} is {size / 2**20:.0f} MiB; evobiped reads files of at most {MAX_BYTES // 2**20} MiB")
-        obj = loads(path.read_text())
+        obj = loads(path.read_text(encoding="utf-8-sig"))  # UTF-8, with or without a byte-order mark (Windows editors)
     except (*errors, UnicodeDecodeError) as exc:
         raise error(f"{what} {path} is not valid {form} ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
     except RecursionError:

@@ -33,6 +33,15 @@ from .run_context import RunContext
 from .start_genome import keep_start, start_episode
 
 
+def _check_unused(directory: Path) -> None:
+    """UserError unless ``directory`` holds no run and nothing else (:func:`~evobiped.files.rundir.is_unused`)."""
+    if rundir.is_unused(directory):
+        return
+    if (directory / rundir.CONFIG).is_file():
+        raise UserError(f"run directory {directory} already holds a run (continue it with --resume {directory}, or give another --out)")
+    raise UserError(f"run directory {directory} exists and holds other files, not a run: give a new or empty directory as --out")
+
+
 class Run:
     """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
 
@@ -78,14 +87,21 @@ class Run:
         start = start_genome(config)
         opt = make_optimizer(config, start)
         made = not directory.exists()
+        if not made:
+            _check_unused(directory)  # before the lock: a refused directory is left as it was (no .lock in it)
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise WriteError(directory, exc) from None
+        had_lock = (directory / rundir.LOCK).exists()
         rundir.lock(directory)
         try:
-            if not rundir.is_unused(directory):
-                raise UserError(f"run directory {directory} exists and is not empty (use --resume {directory} or another --out)")
+            try:
+                _check_unused(directory)  # again, locked: another process may have made a run there meanwhile
+            except UserError:
+                if not had_lock:
+                    (directory / rundir.LOCK).unlink(missing_ok=True)
+                raise
             try:
                 (directory / rundir.GENERATIONS).mkdir(exist_ok=True)
             except OSError as exc:

@@ -92,6 +92,10 @@ class FrameRenderer:
     """Renders panels of ``(height, width)`` pixels of trajectories of one model; call :meth:`close` when done."""
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int):
+        most = (int(model.vis.global_.offwidth), int(model.vis.global_.offheight))
+        if width > most[0] or height > most[1]:  # MuJoCo's offscreen framebuffer, the model's: not OpenGL's doing
+            raise UserError(f"--video-size {width} {height}: a panel may be at most {most[0]} x {most[1]} pixels "
+                            "(the model's offscreen framebuffer)")
         try:
             with warnings.catch_warnings():  # GLFW warns before it fails; the failure is the one line below
                 warnings.simplefilter("ignore")
