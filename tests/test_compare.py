@@ -84,24 +84,21 @@ def test_a_run_stops_at_the_first_generation_boundary_where_its_episodes_reach_t
     assert cli("evolve", "--resume", tmp_path / "b", "--quiet") == 0  # an ordinary run directory, complete
 
 
-def _forward(found: dict) -> bool:
-    """forward_walker's forward test from its fields: up, 20 m in the window, within 30 degrees."""
-    h = found["heading_deg"]
-    return bool(found["up"] and found["distance"] >= 20.0 and h is not None and abs(h) <= 30.0)
-
-
-def test_the_walker_test_without_noise_is_the_forward_walker_test():
+def test_the_walker_and_forward_tests_without_noise_are_forward_walkers():
+    """Without noise (one presentation), the two tests are ``forward_walker``'s verdicts: ``walker`` (the gait lab's
+    walk) and ``forward`` (the older, gait-blind test)."""
     from evobiped.analysis.selection import forward_walker
     from evobiped.files.genome_file import load_genome
 
     genome, config, _ = load_genome(Path(__file__).resolve().parent.parent / "docs" / "walkers" / "ctrnn_es_seed5.json")
-    config = dataclasses.replace(config, seconds=1.0)  # the measure's episode; the walker test's is 200 s whatever it is
+    config = dataclasses.replace(config, seconds=1.0)  # the measure's episode; the tests' is 200 s whatever it is
     none = fresh_noise({}, 1)
-    assert _forward(forward_walker(config, genome))
-    assert retest(config, genome, seed=0, noise=none, measure="fitness", success=Success())["success"]
     fallen = config.layout().sample(np.random.default_rng(0))  # falls within a second
-    assert not _forward(forward_walker(config, fallen))
-    assert not retest(config, fallen, seed=0, noise=none, measure="fitness", success=Success())["success"]
+    for g, forward, walker in ((genome, True, False), (fallen, False, False)):  # this one runs (it has a flight phase)
+        found = forward_walker(config, g)
+        assert (found["forward"], found["walker"]) == (forward, walker)
+        for test, expected in (("forward", forward), ("walker", walker)):
+            assert retest(config, g, seed=0, noise=none, measure="fitness", success=Success(test=test))["success"] == expected
 
 
 def test_fresh_presentations_are_new_draws_the_same_for_one_seed():
@@ -235,7 +232,7 @@ def test_a_resumed_comparison_whose_configurations_changed_is_refused(compared, 
     (["--seeds", "0", "--budget", "12"], "--seeds: must be > 0"),
     (["--seeds", "2", "--budget", "3"], "below one generation"),
     (["--seeds", "2", "--budget", "12", "--measure", "speed"], "not fitness nor a term"),
-    (["--seeds", "2", "--budget", "12", "--success", "distance=>3"], "give walker or TERM>=X"),
+    (["--seeds", "2", "--budget", "12", "--success", "distance=>3"], "give walker, forward or TERM>=X"),
     (["--budget", "12"], "--seeds: required"),
     (["--seeds", "2", "--budget", "12", "--noise", "{configs}/ga_tiny.toml"], "has no [episode.perturbations] table"),
 ])

@@ -13,11 +13,13 @@ What is taken of each presentation:
 * the **measure**: the task's fitness (``fitness``) or one of its terms (``--measure TERM``, e.g.
   ``distance``), of an episode of the configuration's own length; a run's measure is the median over
   its K presentations;
-* the **success**: ``walker``, the forward-walker test of :func:`evobiped.analysis.selection.forward_walker`
-  (no fall in 200 s, at least 20 m in the first 50 s within 30 degrees of the initial facing; its
-  defaults, read from its signature) under the presentation's noise; or ``TERM>=X`` (``>``, ``<=``,
-  ``<`` too) on the measure episode's fitness or term.  A run succeeds when every one of its K
-  presentations does.
+* the **success**: ``walker``, the walker test of :func:`evobiped.analysis.selection.forward_walker` under
+  the presentation's noise: no fall in 200 s and, over the first 50 s, a walk by the gait lab's criteria
+  (:data:`evobiped.analysis.gait_report.WALKING`: speed, direction, duty factors, no flight, symmetric feet
+  that do not slide); ``forward``, its older, gait-blind test (no fall in 200 s, at least 20 m in the
+  first 50 s within 30 degrees of the initial facing); the durations and thresholds are
+  ``forward_walker``'s defaults, read from its signature; or ``TERM>=X`` (``>``, ``<=``, ``<`` too) on
+  the measure episode's fitness or term.  A run succeeds when every one of its K presentations does.
 """
 
 from __future__ import annotations
@@ -49,25 +51,26 @@ _OPS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt
 
 @dataclass(frozen=True)
 class Success:
-    """A success criterion: ``walker`` (``term`` None) or ``term op threshold``."""
+    """A success criterion: ``walker`` or ``forward`` (``term`` None; ``test`` says which) or ``term op threshold``."""
 
     term: str | None = None
     op: str = ">="
     threshold: float = 0.0
+    test: str = "walker"
 
     @property
     def text(self) -> str:
-        return "walker" if self.term is None else f"{self.term}{self.op}{self.threshold:g}"
+        return self.test if self.term is None else f"{self.term}{self.op}{self.threshold:g}"
 
 
 def parse_success(text: str, terms: tuple[str, ...]) -> Success:
-    """``walker`` or ``TERM>=X`` (TERM ``fitness`` or one of the task's ``terms``); UserError otherwise."""
+    """``walker``, ``forward`` or ``TERM>=X`` (TERM ``fitness`` or one of the task's ``terms``); UserError otherwise."""
     text = text.strip()
-    if text == "walker":
-        return Success()
+    if text in ("walker", "forward"):
+        return Success(test=text)
     m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(>=|<=|>|<)\s*([-+0-9.eE]+|[-+]?inf)\s*", text)
     if not m:
-        raise UserError(f"--success {text!r}: give walker or TERM>=X (e.g. distance>=5; also >, <=, <)")
+        raise UserError(f"--success {text!r}: give walker, forward or TERM>=X (e.g. distance>=5; also >, <=, <)")
     try:
         x = float(m.group(3))
     except ValueError:
@@ -106,7 +109,7 @@ def retest(config: EpisodeConfig, genome, *, seed: int, noise: PerturbationOptio
     values = {"fitness": episode.task.combine(by_trial(rows.fitness))}
     values.update({k: by_trial(v).mean(axis=1) for k, v in rows.terms.items()})
     if success.term is None:
-        passed = _walkers(episode, genome, trials, R, S)
+        passed = _walkers(episode, genome, trials, R, S, gait=success.test == "walker")
     else:
         passed = _OPS[success.op](values[success.term], success.threshold)
     measured = [float(x) for x in values[measure]]
@@ -115,19 +118,62 @@ def retest(config: EpisodeConfig, genome, *, seed: int, noise: PerturbationOptio
             "success": bool(np.all(passed))}
 
 
-def _walkers(episode, genome, trials, R: int, S: int) -> np.ndarray:
-    """Per test presentation: each of its rows passed the forward-walker test (:data:`WALKER`) under its noise."""
+def check_walker_test(config: EpisodeConfig, success: Success) -> None:
+    """UserError when the ``walker`` test cannot measure ``config``'s body (it declares no feet for the gait lab)."""
+    from .gait_report import has_feet
+
+    if success.term is None and success.test == "walker" and not has_feet(config.parts()[0]):
+        raise UserError(f"--success walker: body {config.body!r} declares no feet, so its gait cannot be measured; "
+                        "give --success forward or TERM>=X")
+
+
+class _Rows:
+    """An episode listener filling one gait recorder per simulation row (the feet read once a tick for all rows)."""
+
+    def __init__(self, recorders):
+        self.recorders = recorders
+
+    def start(self, episode, sims) -> None:
+        for r in self.recorders:
+            r.start(episode, sims)
+
+    def tick(self, t, sims, ids, neurons, action, task_state) -> None:
+        feet, running = self.recorders[0].body.feet(sims), set(np.asarray(ids).tolist())
+        for r in self.recorders:
+            if r.row in running:
+                for k in r.samples:
+                    r.samples[k].append(np.array(getattr(feet, k)[r.row]))
+                r.times.append(float(t))
+
+    def end(self, result) -> None:
+        pass
+
+
+def _walkers(episode, genome, trials, R: int, S: int, *, gait: bool) -> np.ndarray:
+    """Per test presentation: each of its rows passed the walker test (``gait``: the gait lab's walk and no fall;
+    otherwise the forward test; :data:`WALKER`'s durations and thresholds) under its noise."""
     from ..tasks.walk import displacement_heading
+    from .gait_report import FootRecorder, measured
 
     seconds, window = float(WALKER["seconds"]), float(WALKER["window"])
     state = episode.start(genome, seconds=seconds, trials=trials)
-    episode.advance(state, min(window, seconds))
+    recorders = [FootRecorder(row) for row in range(R * S)] if gait else []
+    listener = _Rows(recorders) if gait else None
+    if listener is not None:
+        listener.start(episode, state.sims)
+    episode.advance(state, min(window, seconds), listener=listener)
     end = episode.body.planar_position(state.sims).copy()
     start, facing = state.start_position.copy(), state.start_facing.copy()
-    distance = np.linalg.norm(end - start, axis=1)
-    heading = displacement_heading(start, end, facing)
+    up_then, time_up = ~np.asarray(state.fell, bool), np.minimum(np.asarray(state.end_time, float), window)
+    if gait:
+        ok = np.array([measured(r, episode, start=start[i:i + 1], end=end[i:i + 1], facing=facing[i:i + 1],
+                                time_up=float(time_up[i]), seconds=min(window, seconds), up=bool(up_then[i]))["walks"]
+                       for i, r in enumerate(recorders)])
+    else:
+        distance = np.linalg.norm(end - start, axis=1)
+        heading = displacement_heading(start, end, facing)
+        straight = np.isfinite(heading) & (np.abs(np.nan_to_num(heading, nan=180.0)) <= WALKER["heading_limit"])
+        ok = (distance >= WALKER["min_distance"]) & straight
     if seconds > window:
         episode.advance(state, seconds - window)
-    straight = np.isfinite(heading) & (np.abs(np.nan_to_num(heading, nan=180.0)) <= WALKER["heading_limit"])
-    ok = ~np.asarray(state.fell, bool) & (distance >= WALKER["min_distance"]) & straight
-    return ok.reshape(R, S).all(axis=1)
+    return (ok & ~np.asarray(state.fell, bool)).reshape(R, S).all(axis=1)

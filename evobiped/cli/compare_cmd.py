@@ -29,7 +29,8 @@ def add_compare(sub) -> None:
     p.add_argument("--noise", metavar="FILE.toml", help="the fresh presentations' perturbations: the file's "
                    "[episode.perturbations] table (default: initial-pose noise of 0.02 rad)")
     p.add_argument("--measure", metavar="TERM", help="fitness (default) or a term of the task, e.g. distance")
-    p.add_argument("--success", metavar="CRITERION", help="walker (default: the forward-walker test under the fresh noise) "
+    p.add_argument("--success", metavar="CRITERION", help="walker (default: up 200 s and a walk by the gait lab's criteria "
+                   "over the first 50 s, under the fresh noise), forward (up 200 s, 20 m in the first 50 s within 30 deg) "
                    "or TERM>=X (also >, <=, <), e.g. distance>=5")
     p.add_argument("--workers", type=positive_int, help="runs at once, each in its own process (default: all cores)")
     p.add_argument("--out", metavar="DIR", help="comparison directory (default runs/compare_<names>)")

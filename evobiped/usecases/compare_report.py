@@ -51,7 +51,11 @@ def _n(x: float, digits: int = 3) -> str:
 
 
 def criterion_text(success: str) -> str:
+    """The success criterion in words."""
     if success == "walker":
+        return (f"the walker test (no fall in {WALKER['seconds']:g} s; a walk by the gait lab's criteria over the first "
+                f"{WALKER['window']:g} s)")
+    if success == "forward":
         return (f"the forward-walker test (no fall in {WALKER['seconds']:g} s, at least {WALKER['min_distance']:g} m in the "
                 f"first {WALKER['window']:g} s within {WALKER['heading_limit']:g} deg of the initial facing)")
     return success

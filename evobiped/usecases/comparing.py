@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Callable
 
 from .. import __version__
-from ..analysis.retest import Success, check_measure, fresh_noise, parse_success, retest
+from ..analysis.retest import Success, check_measure, check_walker_test, fresh_noise, parse_success, retest
 from ..core.errors import UserError
 from ..core.fileio import json_text, read_json, write_json
 from ..evolution.fingerprint import settings
@@ -74,9 +74,10 @@ class Comparison:
             if self.budget < first:
                 raise UserError(f"--budget {self.budget}: below one generation of {name} ({population_of(c)} genomes x "
                                 f"{episodes_per_genome(c)} episodes each = {first} episodes)")
-        terms = self.terms
-        check_measure(self.measure, terms)
-        self.criterion()
+        check_measure(self.measure, self.terms)
+        success = self.criterion()
+        for c in self.configs:
+            check_walker_test(c.episode, success)
         fresh_noise(self.noise, self.trials)
 
     @property
