@@ -125,3 +125,12 @@ def test_gait_terms_refuse_a_body_without_feet_and_bad_weights():
     for bad in (float("inf"), 0.0, -1.0):
         with pytest.raises(UserError, match="--seconds"):
             gait_report(cfg, g, seconds=bad)
+
+
+def test_a_walk_outranks_a_faster_mover_when_candidates_are_tried_for_walking():
+    from evobiped.analysis.selection import best_candidate
+
+    skipper = {"fell": False, "end_time": 20.0, "distance": 50.0, "heading_deg": 1.0, "up_long": True, "walks": False}
+    walker = {**skipper, "distance": 11.0, "walks": True}
+    assert best_candidate([skipper, walker]) == 1
+    assert best_candidate([{k: v for k, v in r.items() if k != "walks"} for r in (skipper, walker)]) == 0
