@@ -235,3 +235,10 @@ def test_a_run_on_drawn_commands_resumed_on_two_workers_is_bit_identical(tmp_pat
     assert history(whole.dir) == history(cut.dir) and "best_track_speed" in history(whole.dir)[0]
     a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut.dir))
     assert a["optimizer"] == b["optimizer"]
+
+
+def test_a_replay_of_a_commanded_walker_says_which_commands_it_follows(tmp_path, capsys):
+    commanded_genome(tmp_path / "tiny.json")
+    assert main(["replay", str(tmp_path / "tiny.json"), "--seconds", "0.2", "--out", str(tmp_path / "r.rrd"), "--quiet"]) == 0
+    lines = [x for x in capsys.readouterr().out.splitlines() if x.startswith("commands:")]
+    assert len(lines) == 1 and "the fixed tour of its drawn range (0.5 m/s +0 deg/s from 0 s, 0.8 m/s" in lines[0]

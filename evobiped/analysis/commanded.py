@@ -145,3 +145,11 @@ def stretch_line(s: dict) -> str:
            else f"turning {abs(math.degrees(s['walked_turning'])):.1f} deg/s off 0"]
     return (head + f"walked {s['walked_speed']:.3f} m/s, {math.degrees(s['walked_turning']):+6.1f} deg/s ({', '.join(err)})"
             + (", FELL" if s["fell"] else ""))
+
+
+def nominal_words(config: EpisodeConfig) -> str:
+    """One line: the commands a commanded walker's replay follows (its nominal schedule) and how to give others."""
+    s = schedule_of(config.task_options)
+    steps = ", ".join(f"{v:g} m/s {math.degrees(w):+.0f} deg/s from {t:g} s" for t, v, w in zip(s.times, s.speed, s.turning))
+    kind = "the fixed tour of its drawn range" if config.task_options.schedule == "drawn" else f"its {config.task_options.schedule} schedule"
+    return f"commands: {kind} ({steps}); evobiped gait SOURCE --speed ... --turning ... follows others"

@@ -74,6 +74,10 @@ def run_replay_cmd(args) -> int:
         frames.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
+    if source.config.task == "command":  # a commanded walker replays its nominal schedule: say which
+        from ..analysis.commanded import nominal_words
+
+        print(nominal_words(source.config))
     if r.gait is not None:
         from ..analysis.gait_report import criteria_words, gait_line
 
