@@ -251,3 +251,38 @@ def test_presets_marks_those_that_need_from(capsys):
     for preset in STARTED:
         assert listed[preset].endswith("(needs --from)"), preset
     assert not listed["walker"].endswith("(needs --from)") if "walker" in listed else True
+
+
+# ---- a command's outputs are one set: a kill between them never leaves a new file beside an old one
+def _killed_at(n: int, *args) -> subprocess.CompletedProcess:
+    return guarded(*args, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(n)}, timeout=300)
+
+
+def test_a_replay_killed_between_its_outputs_leaves_no_old_figure_beside_a_new_recording(plain_run, tmp_path):
+    import shutil
+
+    d = tmp_path / "run"
+    shutil.copytree(plain_run, d)
+    assert guarded("replay", d, "--seconds", "0.5", "--figures", "--quiet", timeout=300).returncode == 0
+    assert list((d / "figures_best").glob("*.png"))
+    r = _killed_at(3, "replay", d, "--seconds", "0.5", "--figures", "--quiet")  # the mark, the recording, then killed
+    assert r.returncode == -signal.SIGKILL
+    assert not list((d / "figures_best").glob("*.png")), "the previous replay's figures beside the new recording"
+    r = guarded("replay", d, "--seconds", "0.5", "--figures", "--quiet", timeout=300)
+    assert r.returncode == 0 and "the previous replay was cut short" in r.stderr, r.stderr
+    assert list((d / "figures_best").glob("*.png")) and not list(d.glob(".*incomplete"))
+    assert not [p for p in (d / "figures_best").iterdir() if p.name.endswith(".tmp")]
+
+
+def test_a_select_killed_between_its_two_files_leaves_no_old_candidates_beside_a_new_choice(plain_run, tmp_path):
+    import shutil
+
+    d = tmp_path / "run"
+    shutil.copytree(plain_run, d)
+    assert cli("select", d, "--seconds", "1") == 0
+    r = _killed_at(2, "select", d, "--seconds", "1")
+    assert r.returncode == -signal.SIGKILL
+    assert not ((d / "selected.json").exists() and (d / "selected_candidates.json").exists()), "one file of each select"
+    r = guarded("select", d, "--seconds", "1")
+    assert r.returncode == 0 and "the previous select was cut short" in r.stderr, r.stderr
+    assert (d / "selected.json").exists() and (d / "selected_candidates.json").exists() and not list(d.glob(".*incomplete"))

@@ -19,7 +19,7 @@ import sys
 import threading
 from types import ModuleType
 
-from .. import __version__, _interrupted_while_starting
+from .. import __version__
 from ..core.errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, last_line, stop_on_signals
 
 #: how every refusal begins, a bad argument's and a UserError's alike
@@ -84,7 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     restore = lambda: None  # noqa: E731
     try:
         args = build_parser().parse_args(argv)  # Ctrl-C while it imports the subcommands: evobiped's first handler
-        if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is _interrupted_while_starting:
+        starting = getattr(signal.getsignal(signal.SIGINT), "__qualname__", None) == "_interrupted_while_starting"  # evobiped's
+        if starting and threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, signal.default_int_handler)  # from here on: the "interrupted" line below
         if argv is None:
             sys.unraisablehook = quiet_interrupts

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 from ..flags import add_source_flag, positive_float, positive_int, refuse, walk_line
 from ..core.progress import Progress
 
@@ -68,7 +70,8 @@ def run_replay_cmd(args) -> int:
     frames = Progress("replay video", 1.0, "frames rendered", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
                listener=progress.listener(), sources=args.sources, video=args.video,
-               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window, progress=frames))
+               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window, progress=frames),
+               note=lambda line: print(f"evobiped: note: {line}", file=sys.stderr))
     progress.finish()
     if args.video:
         frames.finish()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import sys
 
 from ..core.errors import UserError
 from ..flags import positive_float
@@ -36,6 +37,7 @@ def run_robustness_cmd(args) -> int:
     from ..record.source import resolve
     from ..analysis.robustness import battery, score, summarise, table
     from ..files.rundir import robustness_stem
+    from ..files.rundir.output_set import output_set
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
@@ -59,12 +61,14 @@ def run_robustness_cmd(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after, "phase_seed": args.phase_seed,
               "score": total, "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
-    write_json(out / f"{stem}.json", report)
     seed = source.meta.get("seed")
     who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
-    png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
-                            title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s{'' if args.phase_seed is None else f', random phases, seed {args.phase_seed}'}): "
-                                  f"score {total:.3f} ({sum(t.survived for t in trials)} of {len(trials)} survived)\n{who}")
+    # the results and their figure are one set: the previous pair goes first; a cut-short one is said
+    with output_set("robustness", [out / f"{stem}.json", out / f"{stem}.png"], say=lambda line: print(f"evobiped: note: {line}", file=sys.stderr)):
+        write_json(out / f"{stem}.json", report)
+        png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
+                                title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s{'' if args.phase_seed is None else f', random phases, seed {args.phase_seed}'}): "
+                                      f"score {total:.3f} ({sum(t.survived for t in trials)} of {len(trials)} survived)\n{who}")
     if args.json:
         print(json.dumps({"score": total, "families": rows}))
     else:

@@ -22,7 +22,10 @@ def add_select(sub) -> None:
 def run_select_cmd(args) -> int:
     from ..usecases.selecting import select_walker
 
-    s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit, walking=args.walking)
+    import sys
+
+    s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit, walking=args.walking,
+                      note=lambda line: print(f"evobiped: note: {line}", file=sys.stderr))
     print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}"
           + ("  walks" if args.walking else ""))
     for i, (label, r) in enumerate(zip(s.labels, s.rows)):

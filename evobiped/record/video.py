@@ -166,20 +166,25 @@ def write_video(path: str | Path, frames: np.ndarray, fps: float = FPS) -> Path:
     import imageio.v2 as imageio
 
     path = check_video_path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
         buf = io.BytesIO()
         imageio.mimwrite(buf, list(frames), format="GIF", duration=1000.0 / fps, loop=0)
-        data = buf.getvalue()
-    else:
-        with tempfile.TemporaryDirectory() as tmp:  # ffmpeg writes to a file; the result is moved into place whole
-            f = Path(tmp) / "video.mp4"
-            with imageio.get_writer(f, format="FFMPEG", fps=fps, codec="libx264", macro_block_size=2,
-                                    ffmpeg_log_level="error", output_params=["-pix_fmt", "yuv420p"]) as w:
-                for frame in frames:
-                    w.append_data(frame)
-            data = f.read_bytes()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write(path, data)
+        atomic_write(path, buf.getvalue())
+        return path
+    # ffmpeg writes a file: a temporary one beside the video (a kill leaves it where the next replay removes it,
+    # not in the system's temporary folder), moved into place whole
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp.mp4")
+    os.close(fd)
+    try:
+        with imageio.get_writer(tmp, format="FFMPEG", fps=fps, codec="libx264", macro_block_size=2,
+                                ffmpeg_log_level="error", output_params=["-pix_fmt", "yuv420p"]) as w:
+            for frame in frames:
+                w.append_data(frame)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
     return path
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..files import rundir
 from ..files.outcome import compare, outcome
+from ..files.rundir.output_set import output_set
 from ..core.provenance import differences
 from ..record.source import Source
 from ..record.trajectory import Trajectory, TrajectoryRecorder
@@ -90,12 +91,15 @@ def replay(
     sources=None,
     video: str | Path | None = None,
     video_options: dict | None = None,
+    note=None,
 ) -> ReplayReport:
     """Re-simulate ``source``; record to ``out`` (default :func:`default_out`, ``_video`` with ``video``) or a viewer (``spawn``/``connect``).
     ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.core.progress.Progress.listener`;
     ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources;
     ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the recording
-    (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``)."""
+    (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``).
+    The recording, video and figures are one set (:func:`~evobiped.files.rundir.output_set.output_set`): ``note(line)``
+    hears that the previous replay there was cut short."""
     from ..record.viewer import require_display
 
     if spawn:
@@ -115,9 +119,13 @@ def replay(
         from ..record.video import SIZE, FrameRenderer
 
         opts["renderer"] = FrameRenderer(episode.model, *opts.get("size", SIZE))
-    try:
-        return _replay(source, cfg, episode, history, out=out, spawn=spawn, connect=connect, figures_dir=figures_dir,
-                       listener=listener, video=video, video_options=opts)
+    streaming = spawn or connect is not None
+    target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
+    owned = [Path(figures_dir)] if figures_dir is not None and Path(figures_dir).name.startswith("figures_") else []
+    try:  # one set: the previous replay's outputs go first, a cut-short one is said (``note``)
+        with output_set("replay", [p for p in (target, video) if p is not None], owned, say=note):
+            return _replay(source, cfg, episode, history, out=out, spawn=spawn, connect=connect, figures_dir=figures_dir,
+                           listener=listener, video=video, video_options=opts)
     finally:
         if video is not None:
             opts["renderer"].close()

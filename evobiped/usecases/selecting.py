@@ -15,6 +15,7 @@ from ..evolution.run_config import RunConfig, initial_genome
 from ..core.fileio import read_json, write_json
 from ..files.genome_file import load_genome, save_genome
 from ..files.outcome import outcome
+from ..files.rundir.output_set import output_set
 from ..analysis.selection import best_candidate, try_candidates
 
 #: what select writes into the run directory: the chosen walker, and every candidate's row
@@ -33,10 +34,11 @@ class Selection:
 
 
 def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, heading_limit: float = 30.0,
-                  walking: bool = False) -> Selection:
+                  walking: bool = False, note=None) -> Selection:
     """Simulate the bests of the ``top`` fittest generations of ``run_dir`` (and first its start genome, kept unless
     one beats it) for ``seconds``; write the best as selected.json and every candidate's row beside it.  ``walking``:
-    a candidate that walks by the gait lab's criteria ranks first (:func:`~evobiped.analysis.selection.try_candidates`)."""
+    a candidate that walks by the gait lab's criteria ranks first (:func:`~evobiped.analysis.selection.try_candidates`).
+    The two files are one set (``note(line)`` hears that the previous select was cut short between them)."""
     d = Path(run_dir)
     if not (d / rundir.CONFIG).is_file() or not (d / rundir.HISTORY).is_file():
         raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
@@ -73,10 +75,11 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     genome, episode_config, meta = candidates[k]
     episode = episode_config.nominal().build()
     done = episode.run(genome)
-    save_genome(out, genome, episode_config, **{**meta, "selected_from": labels[k], "up_long_seconds": seconds if rows[k].get("up_long") else None,
-                                               "outcome": outcome(done, episode.task.targets())})
-    write_json(d / CANDIDATES, {"seconds": seconds, "heading_limit": heading_limit,
-                                "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
+    with output_set("select", [out, d / CANDIDATES], say=note):  # one set: never a new selected.json beside old candidates
+        save_genome(out, genome, episode_config, **{**meta, "selected_from": labels[k], "up_long_seconds": seconds if rows[k].get("up_long") else None,
+                                                   "outcome": outcome(done, episode.task.targets())})
+        write_json(d / CANDIDATES, {"seconds": seconds, "heading_limit": heading_limit,
+                                    "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
     return Selection(labels=labels, rows=rows, chosen=k, path=out)
 
 
