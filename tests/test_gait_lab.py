@@ -113,10 +113,22 @@ def test_a_skipping_walker_fails_the_walking_criteria_and_says_which():
     assert failed_criteria({**report, "duty_min": 0.55, "airborne": 0.0, "duty_asymmetry": 0.01, "slip_share": 0.04}) == []
 
 
-def test_gait_terms_refuse_a_body_without_feet_and_bad_weights():
-    ep = EpisodeConfig(body="taga", controller="matsuoka", task="walk", task_options={"gait_terms": True}, seconds=1.0).build()
+def test_gait_terms_refuse_a_body_without_feet_and_bad_weights(monkeypatch):
+    from evobiped.bodies import BODIES
+    from evobiped.bodies.base import Body
+    from evobiped.bodies.reil import ReilBiped
+
+    class Footless(ReilBiped):  # the Reil body as a body that declares no feet
+        name = "footless"
+        feet, gait_constants = Body.feet, Body.gait_constants
+
+    monkeypatch.setitem(BODIES, "footless", Footless)
+    cfg = EpisodeConfig(body="footless", task="walk", task_options={"gait_terms": True}, seconds=1.0)
+    ep = cfg.build()
     with pytest.raises(ConfigError, match="declares no feet"):
         ep.run(ep.controller.layout.centre[None])
+    with pytest.raises(UserError, match="declares no feet"):
+        gait_report(cfg, ep.controller.layout.centre)
     with pytest.raises(ConfigError, match="finite"):
         EpisodeConfig(task_options={"fitness": "weighted", "weights": {"airborne": float("nan")}})
     with pytest.raises(ConfigError, match="names no term"):
@@ -134,3 +146,22 @@ def test_a_walk_outranks_a_faster_mover_when_candidates_are_tried_for_walking():
     walker = {**skipper, "distance": 11.0, "walks": True}
     assert best_candidate([skipper, walker]) == 1
     assert best_candidate([{k: v for k, v in r.items() if k != "walks"} for r in (skipper, walker)]) == 0
+
+
+def test_tagas_walker_on_its_spring_damper_ground_agrees_with_the_experiments_stride_analysis():
+    """The gait lab on the Taga body (feet: the ankles on the Appendix A ground) against the Taga experiment's own,
+    independent stride analysis (per-stride from contact onsets and foot positions) of the Appendix D walker."""
+    from evobiped.experiments.taga.parameters import preset_genome
+    from evobiped.experiments.taga.protocols import steady
+    from evobiped.experiments.taga.walking import walker_config
+
+    cfg = walker_config(5.5)
+    lab = gait_report(cfg, preset_genome(cfg.parts()[1], "taga"), seconds=20.0)
+    _, (strides,) = steady(5.5, seconds=20.0, window=10.0)
+    assert lab["up"] and strides["gait"] == "walk"
+    assert lab["speed"] == pytest.approx(strides["speed"], rel=0.01)
+    assert lab["steps_per_s"] == pytest.approx(2 / strides["cycle_duration"], rel=0.03)
+    assert lab["step_length"] == pytest.approx(strides["stride_length"] / 2, rel=0.03)
+    assert lab["double_support"] == pytest.approx(strides["double_support"], abs=0.01)
+    assert lab["airborne"] <= 0.002 and strides["flight"] == 0.0
+    assert 0.5 < lab["duty_left"] < 0.6 and lab["duty_asymmetry"] < 0.02 and lab["knee_swing"] > 0.8

@@ -1,33 +1,27 @@
 """The sagittal biped of Taga, Yamaguchi & Shimizu 1991 (``models/taga_biped.xml``).
 
-MuJoCo integrates the rigid links (hip point mass on slide x/z, hinge hips and
-knees, uniform rods); this module adds, before every physics step, the forces
-of Appendix A that MJCF cannot express, as generalized forces in
+MuJoCo integrates the rigid links (hip point mass on slide x/z, hinge hips and knees, uniform rods); this module
+adds, before every physics step, the forces of Appendix A that MJCF cannot express, as generalized forces in
 ``qfrc_applied`` computed for the whole batch at once:
 
-* the ground: a 2D spring-damper at each ankle, active while the ankle is below
-  the terrain y_g(x), whose rest point (x_r0, y_r0) is reset to the point where
-  the ankle first touches (Raibert 1984)::
+* the ground: a 2D spring-damper at each ankle, active while the ankle is below the terrain y_g(x), whose rest
+  point (x_r0, y_r0) is reset to the point where the ankle first touches (Raibert 1984)::
 
       F_x = -k_g (x_r - x_r0) - b_g dx_r/dt
       F_y = -k_g (y_r - y_r0) + b_g max(0, -dy_r/dt)
 
 * hip friction -b_1 |x_5 - pi/2| dx_5/dt on each thigh;
-* knee friction -(b_2 + b_k f(x_5 - x_11)) (dx_5/dt - dx_11/dt) and the knee's
-  elastic stop, read as the one-sided linear spring k_k max(0, x_5 - x_11)
-  (the literal k_k h(x_5 - x_11) is a constant 1e4 N m step, numerically
+* knee friction -(b_2 + b_k f(x_5 - x_11)) (dx_5/dt - dx_11/dt) and the knee's elastic stop, read as the one-sided
+  linear spring k_k max(0, x_5 - x_11) (the literal k_k h(x_5 - x_11) is a constant 1e4 N m step, numerically
   ill-posed);
-* the joint torques T_r1..T_r6 (actions, N m), the ankle torques only while
-  that ankle is in contact (h(F_g2), h(F_g4) with h(0) = 0).
+* the joint torques T_r1..T_r6 (actions, N m), the ankle torques only while that ankle is in contact (h(F_g2),
+  h(F_g4) with h(0) = 0).
 
-Other external forces (a perturbation's push, Fig. 7's) act through MuJoCo's
-``xfrc_applied``, as on any body.
+Other external forces (a perturbation's push, Fig. 7's) act through MuJoCo's ``xfrc_applied``, as on any body.
 
-Angles are Taga's inertial angles from the horizontal (pi/2 = vertical,
-increasing as the distal end swings backward): thigh x_5 = pi/2 + hip,
-shank x_11 = x_5 + knee.  The forces are explicit, so the physics step is
-small (0.5 ms; halving it changes the walking metrics by < 1 %, see
-docs/taga.md).
+Angles are Taga's inertial angles from the horizontal (pi/2 = vertical, increasing as the distal end swings
+backward): thigh x_5 = pi/2 + hip, shank x_11 = x_5 + knee.  The forces are explicit, so the physics step is small
+(0.5 ms; halving it changes the walking metrics by < 1 %, see docs/taga.md).
 """
 
 from __future__ import annotations
@@ -40,6 +34,7 @@ import numpy as np
 
 from ..interface.contract import Actuator
 from ..core.errors import ConfigError, UserError
+from ..physics.gait_lab import FootSample
 from ..physics.sim import Sims
 from ..core.options import option
 from .base import Body, model_file_option
@@ -103,11 +98,8 @@ class TagaBiped(Body):
     #: standing values and scales for a controller that normalises its inputs: about the mean and standard deviation
     #: of each reading over seconds 2-10 of the Appendix D walker's gait (the same for both legs)
     sensor_norms: ClassVar[dict] = {
-        "link_angles": ((1.39, 1.72, 1.39, 1.72), (0.3, 0.35, 0.3, 0.35)),
-        "link_velocities": ((0.0,) * 4, (2.2, 2.8, 2.2, 2.8)),
-        "ground_contact": ((0.5, 0.5), (0.5, 0.5)),
-        "ground_force": ((0.0, 335.0, 0.0, 335.0), (120.0, 345.0, 120.0, 345.0)),
-    }
+        "link_angles": ((1.39, 1.72, 1.39, 1.72), (0.3, 0.35, 0.3, 0.35)), "link_velocities": ((0.0,) * 4, (2.2, 2.8, 2.2, 2.8)),
+        "ground_contact": ((0.5, 0.5), (0.5, 0.5)), "ground_force": ((0.0, 335.0, 0.0, 335.0), (120.0, 345.0, 120.0, 345.0))}
     #: left/right mirror: a sagittal body's legs swap and nothing changes sign
     mirror: ClassVar[dict] = {"link_angles": ((2, 3, 0, 1), (1,) * 4), "link_velocities": ((2, 3, 0, 1), (1,) * 4),
                               "ground_contact": ((1, 0), (1, 1)), "ground_force": ((2, 3, 0, 1), (1,) * 4)}
@@ -172,10 +164,8 @@ class TagaBiped(Body):
         sims.reset(ids)
         q = sims.qpos
         q[rows, self._qadr[0]], q[rows, self._qadr[1]] = INITIAL_HIP
-        q[rows, self._qadr[2]] = INITIAL_ANGLES["right"] - np.pi / 2
-        q[rows, self._qadr[3]] = 0.0
-        q[rows, self._qadr[4]] = INITIAL_ANGLES["left"] - np.pi / 2
-        q[rows, self._qadr[5]] = 0.0
+        q[rows, self._qadr[2]], q[rows, self._qadr[4]] = INITIAL_ANGLES["right"] - np.pi / 2, INITIAL_ANGLES["left"] - np.pi / 2
+        q[rows, self._qadr[3]] = q[rows, self._qadr[5]] = 0.0
         sims.qvel[rows] = 0.0
         sims.qfrc_applied[rows] = 0.0
         sims.forward(ids)
@@ -191,8 +181,7 @@ class TagaBiped(Body):
         positions and ``dankle`` (P, 2, 2) velocities.
         """
         q, v = sims.qpos[:, self._qadr], sims.qvel[:, self._dadr]
-        l1, l2 = self.p["l1"], self.p["l2"]
-        hip, dhip = q[:, :2], v[:, :2]
+        (l1, l2), hip, dhip = (self.p["l1"], self.p["l2"]), q[:, :2], v[:, :2]
         thigh = np.pi / 2 + q[:, [2, 4]]
         shank = thigh + q[:, [3, 5]]
         dthigh = v[:, [2, 4]]
@@ -257,6 +246,18 @@ class TagaBiped(Body):
         qf[:, [3, 5]] = q_knee
         out = sims.qfrc_applied
         out[np.ix_(ids, self._dadr)] = qf
+
+    def feet(self, sims: Sims) -> FootSample:
+        """The ankles (point feet) on the spring-damper ground: a foot stands while the ground pushes it up; slip is
+        the ankle's speed along the ground, power each joint torque times its rate (the ankle's only in contact)."""
+        k, st = self.links(sims), self._ground(sims)
+        on, T, knee_rate = st["force"][:, [1, 3]] > 0, st["torque"], sims.qvel[:, self._dadr[[3, 5]]]
+        power = np.concatenate([T[:, [0, 3]] * k["dthigh"], -T[:, [1, 4]] * knee_rate, -T[:, [2, 5]] * on * k["dshank"]], axis=1)
+        return FootSample(contact=on, slip=np.abs(k["dankle"][..., 0]), height=k["ankle"][..., 1] - self.terrain(k["ankle"][..., 0]),
+                          knee=sims.qpos[:, self._qadr[[3, 5]]], power=power)
+
+    def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
+        return float(model.body_mass.sum()), self.p["l1"] + self.p["l2"]
 
     # ------------------------------------------------------------ observations
     def com(self, sims: Sims) -> np.ndarray:
