@@ -98,6 +98,11 @@ def test_replay_of_a_path_that_is_not_utf8(latin1_run, locale):
     assert (latin1_run / "replay_best.rrd").is_file() and (latin1_run / "figures_best").is_dir()
 
 
+def test_select_of_a_path_that_is_not_utf8(latin1_run):
+    r = guarded("select", latin1_run, "--seconds", "0.5", env={"LC_ALL": "C.UTF-8"}, timeout=300)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+
+
 def test_resume_of_a_path_that_is_not_utf8_repairs_nothing(latin1_run):
     r = guarded("evolve", "--resume", latin1_run, env={"LC_ALL": "C.UTF-8"})
     assert r.returncode == 0 and "repaired" not in r.stderr and "Traceback" not in r.stderr, r.stderr

@@ -10,6 +10,7 @@ run says the previous one was cut short and removes what it wrote.
 from __future__ import annotations
 
 import contextlib
+import os
 import shutil
 from pathlib import Path
 
@@ -56,7 +57,7 @@ def output_set(name: str, files: list[Path], folders: list[Path] = (), say=None)
             t.unlink(missing_ok=True)
     made = not marker.parent.exists()
     marker.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write(marker, "".join(f"{p}\n" for p in everything))
+    atomic_write(marker, b"".join(os.fsencode(p) + b"\n" for p in everything))  # a name's bytes, UTF-8 or not
     try:
         yield
     except BaseException:
