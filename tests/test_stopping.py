@@ -89,3 +89,14 @@ def test_the_walking_rule_reads_each_presentation_of_a_perturbed_es_run(tmp_path
     run = _evolve(tmp_path / "es", config)
     history = fitness_history(run.dir)
     assert len(history) == 2 and json.loads((run.dir / "summary.json").read_text())["stopped_early"] is False
+
+
+def test_a_run_stopped_by_its_rule_is_read_and_selected_like_any_other(tmp_path):
+    from evobiped.files.rundir import read_history
+
+    plain = _evolve(tmp_path / "plain", _config())
+    above = float(np.quantile([float(r[1]) for r in fitness_history(plain.dir)], 0.4))
+    run = _evolve(tmp_path / "stopped", _config(when="fitness", above=above, generations=2))
+    history = read_history(run.dir / "history.csv")  # stop_met is a number like every column
+    assert set(history["stop_met"]) <= {0.0, 1.0} and history["stop_met"][-1] == 1.0
+    assert cli("select", run.dir, "--top", 2, "--seconds", 3) == 0 and (run.dir / "selected.json").is_file()

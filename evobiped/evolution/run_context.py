@@ -122,7 +122,7 @@ class RunContext:
             last_phase = not self.curriculum.active or phase == len(self.curriculum.options.phases) - 1
             # each presentation of each evaluation walker (a term is (genomes,) or (genomes, presentations))
             terms = {k: np.asarray(v)[rows].reshape(-1) for k, v in result.terms.items()}
-            self.history[-1][STOP_COLUMN] = bool(last_phase and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
+            self.history[-1][STOP_COLUMN] = int(last_phase and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
 
     def early_phase(self, generation: int) -> bool:
         """Generation ``generation`` was (or, the next one, is) scored in a phase before the curriculum's last."""
@@ -148,7 +148,7 @@ class RunContext:
         extra = ck.get("history_extra", [])
         if not isinstance(extra, list) or not all(isinstance(t, dict) for t in extra):
             raise UserError("checkpoint: history_extra must be a list of tables")
-        self.history = extra
+        self.history = [{**t, STOP_COLUMN: int(t[STOP_COLUMN])} if isinstance(t.get(STOP_COLUMN), bool) else t for t in extra]
         if "curriculum" in ck:
             self.curriculum.restore(ck["curriculum"])
         if self.running and "normaliser" in ck:
