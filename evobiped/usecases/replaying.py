@@ -147,9 +147,10 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     feet = FootRecorder() if has_feet(episode.body) else None
     watchers = [recorder, *others] + ([feet] if feet is not None else []) + ([listener] if listener is not None else [])
     result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
-    gait = None if feet is None else measured(feet, episode, start=result.start_position[:1], end=result.end_position[:1],
-                                              facing=result.start_facing[:1], time_up=float(result.end_time[0]),
-                                              seconds=cfg.seconds, up=not bool(result.fell[0]))
+    first = result.rows if result.rows is not None else result  # the first presentation's row, as the recorder's
+    gait = None if feet is None else measured(feet, episode, start=first.start_position[:1], end=first.end_position[:1],
+                                              facing=first.start_facing[:1], time_up=float(first.end_time[0]),
+                                              seconds=cfg.seconds, up=not bool(first.fell[0]))
     traj = recorder.trajectory
     trajs = [traj] + [o.trajectory for o in others]
     frames = times = None
