@@ -1,18 +1,23 @@
 """Fault campaign on ``evobiped evolve`` (and the commands that read its files), for a release check.
 
-Fourteen classes of faults.  The first seven strike at random moments and are repeated ``--repeat`` times (50 or
-more for a release): a pool worker SIGKILLed, every worker killed, SIGTERM/SIGHUP to a worker, the resource
-tracker then a worker, every worker killed 2 to 6 pools in a row, the whole run SIGKILLed, and SIGINT/SIGTERM/SIGHUP
-to the run.  The other seven are fixed cases: tampered checkpoints, edited configs, hostile settings files, genome
-files, ``select`` on damaged runs, runs started ``--from`` a relative path and refusals before any worker starts.
+Twenty classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
+release): a pool worker SIGKILLed, every worker killed, SIGTERM/SIGHUP to a worker, the resource tracker then a
+worker, every worker killed 2 to 6 pools in a row, the whole run SIGKILLed, SIGINT/SIGTERM/SIGHUP to the run,
+SIGINT at any moment from a command's start (evolve, replay, select, ``-h``; or to the process group while workers
+start), and a replay or select killed between its outputs.  The others are fixed cases: tampered checkpoints, edited
+configs, hostile settings files, genome files, ``select`` on damaged runs, runs started ``--from`` a relative path,
+damaged generation files, worker counts beyond the machine per backend, an empty value for every flag, and a run
+directory whose name is not UTF-8.  The classes after the first fourteen run their commands under a memory guard
+(a quarter of the machine, at most 8 GiB of address space) and check every case for residue: temporaries, a set's
+mark, a video's temporary folder, processes that outlived their command.
 
 Each case ends in one verdict: ``identical`` (the run completed and equals an undisturbed one file for file, wall
 times aside), ``resumed`` (it stopped, with one line where it could say one, and ``--resume`` completed it, equal
 to an undisturbed one), ``refused, resumed`` (the workers died past the retries: one line, exit status 2, then
 the same), ``refused`` (one line on stderr, exit status 2, and nothing of the run directory changed where that is
 asked), or a failure: ``traceback``, ``hang`` (no answer within the
-time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs) and
-``other``.  The exit status is 1 when any case fails.
+time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs),
+``residue`` (something left behind), ``mixed`` (a new output beside an old one of the same command) and ``other``.  The exit status is 1 when any case fails.
 
     python scripts/fault_campaign.py --repeat 50 --out /tmp/campaign      # about an hour on 2 cores
     python scripts/fault_campaign.py --repeat 2 --classes worker-sigkill group-kill
@@ -45,24 +50,65 @@ LIMIT = 180.0  # s: a case that takes longer hangs
 ANSWERS: list[str] = []
 #: the whole stderr of each command and run (a failed case's are kept beside its run directory)
 STDERR: list[str] = []
-FAILURES = ("traceback", "hang", "silent", "other")
+FAILURES = ("traceback", "hang", "silent", "other", "residue", "mixed")
 
 
 # ---- running the command
-def command(*args, cwd=None, env=None, timeout=LIMIT) -> tuple[int | None, str, str]:
-    """``evobiped ARGS`` in a child process: (exit status, None on a hang; stderr; stdout)."""
+def guard() -> None:
+    """A child's memory guard: at most :data:`MEMORY` bytes of address space, so a case never threatens the machine."""
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY, MEMORY))
+
+
+#: the address space a guarded case's process may take (bytes): a quarter of the machine, at most 8 GiB
+MEMORY = min(8 * 2**30, os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 4)
+#: processes a command left in its process group after it ended (killed, then counted as residue)
+LEFTOVER: list[str] = []
+
+
+def command(*args, cwd=None, env=None, timeout=LIMIT, guarded=False) -> tuple[int | None, str, str]:
+    """``evobiped ARGS`` in a child process (``guarded``: under the memory guard): (exit status, None on a hang;
+    stderr; stdout).  Processes left in its process group afterwards are killed and noted in :data:`LEFTOVER`."""
     env = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
-    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, env=env, text=True,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, env=env, text=True, errors="replace",
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, preexec_fn=guard if guarded else None)
     try:
         out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
         os.killpg(p.pid, signal.SIGKILL)
         out, err = p.communicate()
         return None, err, out
+    _leftovers(p.pid, " ".join(map(str, args[:2])))
     ANSWERS.append((err.strip().splitlines() or [""])[-1])
     STDERR.append(err)
     return p.returncode, err, out
+
+
+def _group(pgid: int) -> list[int]:
+    """The live processes (zombies aside: ended, not yet reaped by init) of process group ``pgid``."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            found.append(int(stat.parent.name))
+    return found
+
+
+def _leftovers(pgid: int, what: str) -> None:
+    """Kill and note the processes of a command's group that outlive it by more than 1.5 s (a worker's own watch
+    ends it within 0.5 s of its parent)."""
+    deadline = time.time() + 1.5
+    while _group(pgid) and time.time() < deadline:
+        time.sleep(0.1)
+    left = _group(pgid)
+    if left:
+        for pid in left:
+            kill(pid)
+        LEFTOVER.append(f"{what}: {len(left)} processes outlived it")
 
 
 def start(d: Path) -> subprocess.Popen:
@@ -285,7 +331,9 @@ RANDOM = {
 
 # ---- the fixed classes
 def _case(name: str, v: str) -> tuple[str, str, str]:
-    """A fixed case's name, verdict and the last line its command printed."""
+    """A fixed case's name, verdict and the last line its command printed (a residue: what it left)."""
+    if v == "residue" and STDERR and STDERR[-1].startswith("residue: "):
+        return name, v, STDERR[-1]
     return name, v, ANSWERS[-1] if ANSWERS else ""
 
 
@@ -494,6 +542,205 @@ FIXED = {
 }
 
 
+# ---- a hostile user's input (the classes after the fourteen above)
+def residue(*dirs: Path) -> list[str]:
+    """What a case must never leave: temporaries of a write cut short, a set's mark, a video's temporary folder in
+    the system's, processes of its commands (:data:`LEFTOVER`)."""
+    import tempfile
+
+    found = [str(p) for d in dirs if Path(d).is_dir() for pat in (".*.tmp*", ".*.incomplete") for p in Path(d).rglob(pat)]
+    found += [str(p) for p in Path(tempfile.gettempdir()).glob("tmp*/video.mp4")]
+    found += LEFTOVER
+    LEFTOVER.clear()
+    return found
+
+
+def _checked(v: str, *dirs: Path) -> str:
+    """A verdict, unless the case left residue (what it left goes to the case's stderr, :data:`STDERR`)."""
+    left = residue(*dirs)
+    if left:
+        STDERR.append("residue: " + "; ".join(left))
+    return "residue" if v not in FAILURES and left else v
+
+
+def _interpreters_own(err: str) -> bool:
+    """A traceback of Python's own start (its site module, runpy finding evobiped) before any of evobiped's code."""
+    frames = [x for x in err.splitlines() if x.strip().startswith("File ")]
+    return bool(frames) and not any("evobiped" in f or "site-packages" in f for f in frames) and \
+        any("<frozen site>" in f or "<frozen runpy>" in f for f in frames)
+
+
+def start_signal(d: Path, reference) -> str:
+    """SIGINT at a random moment 0.02-0.6 s from the start of evolve, replay, select or -h, or to the process group
+    0.5-1.5 s into an evolve on two worker processes; then a stopped evolve resumed."""
+    done = d.parent / "done"
+    what = random.choice(["evolve", "replay", "select", "help", "group"])
+    args = {"evolve": ["evolve", *RUN, "--backend", "serial", "--out", d], "help": ["evolve", "-h"],
+            "replay": ["replay", done, "--seconds", "1", "--out", d / "r.rrd"], "select": ["select", done, "--seconds", "1"],
+            "group": ["evolve", *PROCESS, "--out", d]}[what]
+    d.mkdir(parents=True, exist_ok=True) if what in ("replay", "select") else None
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], text=True, errors="replace", stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
+    time.sleep(random.uniform(0.5, 1.5) if what == "group" else random.uniform(0.02, 0.6))
+    if kill(p.pid, signal.SIGINT) if what != "group" else _killpg(p.pid, signal.SIGINT):
+        STRUCK["signalled"] += 1
+    try:
+        _, err = p.communicate(timeout=LIMIT)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        return "hang"
+    STDERR.append(f"{what} {' '.join(map(str, args))}:\n{err}")
+    _leftovers(p.pid, what)
+    if "Traceback" in err:
+        if _interpreters_own(err):
+            STRUCK["in Python's own start"] += 1
+            return "python-start"
+        return "traceback"
+    lines = [x for x in err.splitlines() if not x.startswith(RETRY_NOTE)]
+    if p.returncode not in (0, 130, -signal.SIGINT) or len(lines) > 1:  # -SIGINT: before Python's handler, as a shell's 130
+        return "other"
+    if p.returncode in (130, -signal.SIGINT) and what in ("evolve", "group") and (d / "config.json").exists():
+        rc, err, _ = command("evolve", "--resume", d, "--quiet")
+        return _checked("resumed" if rc == 0 else verdict(rc, err), d, done)
+    return _checked("completed" if p.returncode == 0 else "stopped", d, done)
+
+
+def _killpg(pgid: int, sig) -> bool:
+    try:
+        os.killpg(pgid, sig)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def output_kill(d: Path, reference) -> str:
+    """A replay (recording and figures) or a select killed at a random rename of its outputs, then run again: never a
+    new file beside an old one of the same command, and the next run says the previous was cut short."""
+    shutil.copytree(d.parent / "done", d)
+    replay = random.random() < 0.5
+    args = ["replay", d, "--seconds", "1", "--figures", "--quiet"] if replay else ["select", d, "--seconds", "1"]
+    rc, err, _ = command(*args)
+    if rc != 0:
+        return verdict(rc, err)
+    outputs = (lambda: [d / "replay_best.rrd", *(d / "figures_best").glob("*.png")]) if replay else \
+        (lambda: [d / "selected.json", d / "selected_candidates.json"])
+    time.sleep(0.05)
+    t0 = time.time()
+    rc, err, _ = command(*args, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(random.randint(1, 9 if replay else 3))})
+    if rc is None or "Traceback" in err:
+        return verdict(rc, err)
+    if rc == -signal.SIGKILL:
+        STRUCK["killed between outputs"] += 1
+        new = [p.stat().st_mtime >= t0 for p in outputs() if p.exists()]
+        if any(new) and not all(new):
+            return "mixed"
+    cut = rc == -signal.SIGKILL and bool(list(d.glob(".*.incomplete")))
+    rc, err, _ = command(*args)
+    if rc != 0 or "Traceback" in err:
+        return verdict(rc, err)
+    if cut and "cut short" not in err:
+        return "silent"
+    return _checked("rewritten" if cut else "identical", d)
+
+
+RANDOM.update({"start-signal": start_signal, "output-kill": output_kill})
+
+
+def generation_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """Committed generation files cut, deleted, swapped or edited, then --resume, replay and select: the best
+    generation's is rewritten from the checkpoint, any other refused by name."""
+    best = json.loads((done / "checkpoint.json").read_text())["best"]["generation"]
+    other = next(g for g in range(6) if g != best)
+
+    def gen(d, g):
+        return d / "generations" / f"gen_{g:04d}.json"
+
+    def edit(key, change):
+        return lambda d, g: _tamper(gen(d, g), lambda obj: {**obj, key: change(obj[key])})
+
+    damage = {
+        "cut": lambda d, g: gen(d, g).write_bytes(gen(d, g).read_bytes()[:100]),
+        "deleted": lambda d, g: gen(d, g).unlink(),
+        "swapped": lambda d, g: shutil.copyfile(gen(d, (g + 1) % 6), gen(d, g)),
+        "a gene edited": edit("genome", lambda x: [x[0] / 2 + 0.125, *x[1:]]),
+        "fitness edited": edit("fitness", lambda f: f + 1.0),
+    }
+    out = []
+    for name, harm in damage.items():
+        for g in (best, other):
+            for cmd in ("resume", "replay", "select"):
+                d = work / f"gen-{len(out)}"
+                shutil.copytree(done, d)
+                harm(d, g)
+                before = files(d)
+                args = {"resume": ["evolve", "--resume", d], "replay": ["replay", d, "--generation", g, "--seconds", "1"],
+                        "select": ["select", d, "--seconds", "1"]}[cmd]
+                rc, err, _ = command(*args)
+                v = verdict(rc, err)
+                if g == best:  # rewritten from the checkpoint, as committed
+                    v = "rewritten" if rc == 0 and gen(d, g).read_bytes() == gen(done, g).read_bytes() else v.replace("identical", "silent")
+                else:  # refused by name, nothing changed
+                    v = "silent" if v == "identical" or (v == "refused" and (gen(d, g).name not in err or files(d) != before)) else v
+                out.append(_case(f"gen_{g:04d}.json {name}, {cmd}", _checked(v, d)))
+    return out
+
+
+def worker_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """Worker counts beyond the machine on every backend, as a flag and in a settings file, under the memory guard."""
+    out = []
+    for backend in ("thread", "process", "ray"):
+        for n in ("100000", "1000000000"):
+            d = work / f"workers-{len(out)}"
+            rc, err, _ = command("evolve", *RUN, "--backend", backend, "--workers", n, "--out", d, guarded=True, timeout=60)
+            out.append(_case(f"--backend {backend} --workers {n}", _checked(verdict(rc, err).replace("identical", "silent"), d)))
+        (work / "workers.toml").write_text("workers = 100000\n")
+        d = work / f"workers-{len(out)}"
+        rc, err, _ = command("evolve", *RUN, "--backend", backend, "--config", work / "workers.toml", "--out", d, guarded=True, timeout=60)
+        out.append(_case(f"--backend {backend}, workers = 100000 in a settings file", _checked(verdict(rc, err).replace("identical", "silent"), d)))
+    return out
+
+
+def empty_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """An empty value for every flag and argument of every command that takes one."""
+    import argparse
+
+    from evobiped.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    out = []
+    for name, parser in sub.choices.items():
+        for action in parser._actions:
+            if action.nargs in (0, argparse.PARSER) or isinstance(action, argparse._SubParsersAction):
+                continue
+            n = action.nargs if isinstance(action.nargs, int) else 1
+            args = [action.option_strings[0], *[""] * n] if action.option_strings else [""]
+            cwd = work / f"empty-{len(out)}"
+            cwd.mkdir()
+            rc, err, _ = command(name, *args, cwd=cwd, guarded=True, timeout=60)
+            v = verdict(rc, err).replace("identical", "silent")
+            out.append(_case(f"{name} {' '.join(args) or 'POSITIONAL'}", _checked(v, cwd) if not any(cwd.iterdir()) or v != "refused" else "residue"))
+    return out
+
+
+def latin1_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """A run directory whose name is not UTF-8 (byte 0xff), in a UTF-8 locale: evolve, resume, replay, select."""
+    d = work / os.fsdecode(b"run\xff")
+    env = {"LC_ALL": "C.UTF-8"}
+    out = []
+    for name, args in (("evolve --out", ["evolve", *RUN, "--backend", "serial", "--out", d]), ("evolve --resume", ["evolve", "--resume", d]),
+                       ("evolve --resume again", ["evolve", "--resume", d]), ("replay --figures", ["replay", d, "--seconds", "1", "--figures"]),
+                       ("select", ["select", d, "--seconds", "1"])):
+        rc, err, _ = command(*args, env=env)
+        v = verdict(rc, err)
+        if name == "evolve --resume again" and "repaired" in err:
+            v = "silent"  # a second resume has nothing to repair
+        out.append(_case(f"{name} {d.name!a}", _checked(v, d)))
+    return out
+
+
+FIXED.update({"generation-file": generation_cases, "workers": worker_cases, "empty-string": empty_cases, "non-utf8": latin1_cases})
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=50, help="trials of each random-moment class (default 50)")
@@ -515,7 +762,7 @@ def main() -> int:
     assert rc == 0, err
     reference = contents(ref_dir)
     done = work / "done"  # a completed serial run to damage (the fixed classes)
-    if set(classes) & set(FIXED):
+    if set(classes) & {*FIXED, "start-signal", "output-kill"}:
         rc, err, _ = command("evolve", *RUN, "--backend", "serial", "--out", done)
         assert rc == 0, err
     results: dict[str, Counter] = defaultdict(Counter)
@@ -540,7 +787,7 @@ def main() -> int:
                     print(f"  {case}: {v}: {answer}")
                 results[name][v] += 1
                 if v in FAILURES:
-                    notes.append(f"{name}: {case}: {v}")
+                    notes.append(f"{name}: {case}: {v}: {answer}")
         struck = f"  ({', '.join(f'{k} {n}' for k, n in STRUCK.items())})" if name in RANDOM else ""
         print(f"{name:<22} {sum(results[name].values()):>4} cases  " + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())) + struck,
               flush=True)

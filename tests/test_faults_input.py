@@ -139,7 +139,7 @@ def test_ctrl_c_while_a_command_starts_is_one_line(latin1_run, tmp_path, command
         if _interpreters_own(r.stderr):
             continue
         assert "Traceback" not in r.stderr and r.stderr.count("\n") <= 1, (delay, r.stderr)
-        assert r.returncode in (0, 130), (delay, r.returncode, r.stderr)
+        assert r.returncode in (0, 130, -signal.SIGINT), (delay, r.returncode, r.stderr)  # -SIGINT: before Python's handler
 
 
 def _interpreters_own(err: str) -> bool:

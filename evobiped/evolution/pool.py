@@ -30,6 +30,8 @@ from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import resource_tracker
 from typing import Callable
 
+from ..core.errors import signals_deferred
+
 #: seconds between a worker's checks that its parent still lives (where the kernel does not kill it at once)
 WATCH_PERIOD = 0.5
 _PR_SET_PDEATHSIG = 1
@@ -109,7 +111,8 @@ class _Pool(ProcessPoolExecutor):
     def _spawn_process(self):
         old = signal.pthread_sigmask(signal.SIG_BLOCK, PARENTS_SIGNALS)
         try:
-            super()._spawn_process()
+            with signals_deferred():  # nor is the parent stopped while it hands the worker its start (EOFError there)
+                super()._spawn_process()
         finally:
             signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
