@@ -1,6 +1,6 @@
 """Write the start genome of ``--preset walker-command-tune``: a walking CTRNN that reads the commands.
 
-The walker (default ``docs/walkers/ctrnn_es_seed5.json``) keeps every gene and its frozen input normalisation; the
+The walker (default ``docs/walkers/ctrnn_walk_seed1.json``, the from-scratch network that walks) keeps every gene and its frozen input normalisation; the
 senses ``command_speed`` and ``command_turning`` are added with zero weights (they change nothing until the search
 moves them) and their declared centre and scale (:func:`evobiped.episode.remap.remap_inputs`).  On the command task
 its ``heading_error`` reads the angle from the commanded facing, so the heading hold it evolved turns it at a
@@ -42,7 +42,7 @@ def command_genome(walker: Path):
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out")
-    p.add_argument("--walker", default="docs/walkers/ctrnn_es_seed5.json")
+    p.add_argument("--walker", default="docs/walkers/ctrnn_walk_seed1.json")
     a = p.parse_args(argv)
     try:
         genome, cfg = command_genome(Path(a.walker))
