@@ -20,6 +20,7 @@ from .controllers.base import GENERIC_CONTROLLER_OPTIONS
 from .envs.walkers import EnvOptions
 from .evolution.cma import CMAOptions
 from .evolution.curriculum import CurriculumOptions
+from .evolution.stopping import StopOptions
 from .evolution.es import ESOptions
 from .evolution.map_elites import MapElitesOptions
 from .evolution.run_config import NormaliseOptions
@@ -84,6 +85,7 @@ def tables() -> dict[str, str]:
     out["optimizer map-elites"] = markdown_table(MapElitesOptions)
     out["run normalise"] = markdown_table(NormaliseOptions)
     out["run curriculum"] = markdown_table(CurriculumOptions)
+    out["run stop"] = markdown_table(StopOptions)
     out["environment"] = markdown_table(EnvOptions)
     return out
 
