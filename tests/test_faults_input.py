@@ -291,3 +291,52 @@ def test_a_select_killed_between_its_two_files_leaves_no_old_candidates_beside_a
     r = guarded("select", d, "--seconds", "1")
     assert r.returncode == 0 and "the previous select was cut short" in r.stderr, r.stderr
     assert (d / "selected.json").exists() and (d / "selected_candidates.json").exists() and not list(d.glob(".*incomplete"))
+
+
+# ---- Ray's agents end with a killed run
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+def test_no_ray_process_outlives_a_killed_run(tmp_path):
+    pytest.importorskip("ray")
+    from .test_faults import children
+
+    d = tmp_path / "run"
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", "--population", "8", "--generations", "200", "--seconds", "2",
+                          "--backend", "ray", "--workers", "2", "--quiet", "--out", str(d)], env={**os.environ, "PYTHONPATH": str(ROOT)},
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.time() + 240
+    while not (d / "checkpoint.json").exists() and time.time() < deadline:
+        time.sleep(0.1)
+    assert (d / "checkpoint.json").exists()
+    ray = [k for k in _descendants(p.pid, children) if b"ray::" in _cmdline(k)]  # the agents and workers
+    assert any(b"Agent" in _cmdline(k) for k in ray), "no Ray agent found"
+    p.kill()
+    p.wait()
+    deadline = time.time() + 10  # they lived 50-65 s more before
+    while [k for k in ray if _alive(k)] and time.time() < deadline:
+        time.sleep(0.2)
+    assert not [k for k in ray if _alive(k)], [_cmdline(k) for k in ray if _alive(k)]
+
+
+def _descendants(pid: int, children) -> list[int]:
+    out, todo = [], [pid]
+    while todo:
+        k = todo.pop()
+        kids = children(k)
+        out += kids
+        todo += kids
+    return out
+
+
+def _cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"

@@ -68,6 +68,56 @@ def init_ray(address: str | None, workers: int | None):
     return ray, True
 
 
+#: the watcher of a local Ray's processes: while this process lives it notes every descendant of the Ray node's
+#: processes (argv: this pid, the node's pids); when this process ends it SIGKILLs them at once, so the dashboard and
+#: runtime-env agents, which outlive a killed raylet by a minute (their error report waits on the dead GCS), go too
+_WATCH = """
+import os, signal, sys, time
+parent, roots = int(sys.argv[1]), {int(p) for p in sys.argv[2:]}
+def tree():
+    kids = {}
+    for d in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            ppid = int(open(f"/proc/{d}/stat").read().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        kids.setdefault(ppid, []).append(int(d))
+    found, todo = set(), list(roots)
+    while todo:
+        p = todo.pop()
+        if p not in found:
+            found.add(p)
+            todo += kids.get(p, [])
+    return found
+seen = set()
+while os.getppid() == parent:
+    seen |= tree()
+    time.sleep(1.0)
+for p in seen:
+    try:
+        if b"ray" in open(f"/proc/{p}/cmdline", "rb").read():
+            os.kill(p, signal.SIGKILL)
+    except OSError:
+        pass
+"""
+
+
+def _watch_local_ray(ray):
+    """Start the watcher of a local Ray's processes (:data:`_WATCH`; Linux, where /proc lists them), or None."""
+    import subprocess
+    import sys
+
+    try:
+        node = ray._private.worker._global_node
+        pids = [str(info.process.pid) for infos in node.all_processes.values() for info in infos]
+    except AttributeError:  # another Ray's internals
+        return None
+    if not pids or not os.path.isdir("/proc"):
+        return None
+    return subprocess.Popen([sys.executable, "-c", _WATCH, str(os.getpid()), *pids], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+
+
 class RayEvaluator(Evaluator):
     """Ray actors (one per CPU of the cluster, or ``workers``), each holding an Episode.
 
@@ -80,6 +130,7 @@ class RayEvaluator(Evaluator):
         super().__init__(episode)
         ray, self._owns = init_ray(address, workers)
         self.ray = ray
+        self._watch = _watch_local_ray(ray) if self._owns and address is None else None
         self.chunk = chunk
         cpus = int(ray.cluster_resources().get("CPU", 1))
         if workers is not None and workers > cpus:  # an actor takes a CPU: the rest would wait for one forever
@@ -138,3 +189,7 @@ class RayEvaluator(Evaluator):
         self.actors = []
         if self._owns:
             self.ray.shutdown()
+        if getattr(self, "_watch", None) is not None:  # Ray's processes ended with it: nothing left to watch
+            self._watch.kill()
+            self._watch.wait()
+            self._watch = None
