@@ -279,6 +279,16 @@ def test_a_replay_killed_between_its_outputs_leaves_no_old_figure_beside_a_new_r
     assert not [p for p in (d / "figures_best").iterdir() if p.name.endswith(".tmp")]
 
 
+def test_a_select_killed_while_it_marks_its_set_leaves_no_temporary(plain_run, tmp_path):
+    import shutil
+
+    d = tmp_path / "run"
+    shutil.copytree(plain_run, d)
+    assert _killed_at(1, "select", d, "--seconds", "1").returncode == -signal.SIGKILL  # the mark's own write
+    assert guarded("select", d, "--seconds", "1").returncode == 0
+    assert not [p.name for p in d.iterdir() if p.name.endswith(".tmp") or p.name.endswith(".incomplete")]
+
+
 def test_a_select_killed_between_its_two_files_leaves_no_old_candidates_beside_a_new_choice(plain_run, tmp_path):
     import shutil
 

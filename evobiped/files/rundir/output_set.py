@@ -55,6 +55,8 @@ def output_set(name: str, files: list[Path], folders: list[Path] = (), say=None)
         _remove(p)
         for t in _temporaries(p):
             t.unlink(missing_ok=True)
+    for t in _temporaries(marker):  # the mark's own write, cut short
+        t.unlink(missing_ok=True)
     made = not marker.parent.exists()
     marker.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(marker, b"".join(os.fsencode(p) + b"\n" for p in everything))  # a name's bytes, UTF-8 or not
