@@ -279,6 +279,21 @@ def test_a_replay_killed_between_its_outputs_leaves_no_old_figure_beside_a_new_r
     assert not [p for p in (d / "figures_best").iterdir() if p.name.endswith(".tmp")]
 
 
+def test_a_robustness_battery_killed_between_its_files_leaves_no_old_figure_beside_new_results(plain_run, tmp_path):
+    import shutil
+
+    d = tmp_path / "run"
+    shutil.copytree(plain_run, d)
+    battery = ["robustness", d, "--seconds", "1.5", "--push-after", "1", "--quiet"]
+    assert guarded(*battery, timeout=300).returncode == 0
+    r = _killed_at(2, *battery)  # the mark, then killed before the second rename
+    assert r.returncode == -signal.SIGKILL
+    assert not ((d / "robustness.json").exists() and (d / "robustness.png").exists()), "one file of each battery"
+    r = guarded(*battery, timeout=300)
+    assert r.returncode == 0 and "the previous robustness was cut short" in r.stderr, r.stderr
+    assert (d / "robustness.json").exists() and (d / "robustness.png").exists()
+
+
 def test_a_select_killed_while_it_marks_its_set_leaves_no_temporary(plain_run, tmp_path):
     import shutil
 
