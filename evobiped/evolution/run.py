@@ -87,7 +87,7 @@ class Run:
         start = start_genome(config)
         opt = make_optimizer(config, start)
         made = not directory.exists()
-        if not made:
+        if not made and not (directory / rundir.CONFIG).is_file():  # a run's: the lock says whether it runs now
             _check_unused(directory)  # before the lock: a refused directory is left as it was (no .lock in it)
         try:
             directory.mkdir(parents=True, exist_ok=True)
