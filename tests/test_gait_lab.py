@@ -92,6 +92,10 @@ def test_a_known_stance_schedule_gives_its_duty_factors_flight_and_steps():
     assert m["power"] == pytest.approx(3.0) and m["positive_work"] == pytest.approx(12.0)
     assert m["cost_of_transport"] == pytest.approx(3.0 / (9.81 * 0.5)) and m["froude"] == pytest.approx(0.25 / 9.81)
     assert m["clearance"] == pytest.approx(0.05)
+    kicked = {**sample, "height": sample["height"].copy()}
+    kicked["height"][130, 1] = 1.0  # one swing's foot kicked a metre high (as a falling walker can)
+    k = measure_one(kicked, dt, forward=2.0, mass=2.0, leg_length=1.0, feet=("left", "right"))
+    assert k["clearance"] > 0.15 and k["lift"] == pytest.approx(0.05)  # the lift a fitness pays is capped per swing
 
 
 def test_the_walk_tasks_gait_terms_are_the_reports_measures():

@@ -18,7 +18,8 @@ turns them into the measures of :data:`MEASURES`, one value per row:
   **sliding**: the distance the standing feet slid per second up (m/s; finite for any gait: what a fitness can weigh);
 * **clearance**: the mean over swings of each swing's peak foot height (m); **knee swing**: the mean over swings of
   the knee's excursion (rad, max - min) during the swing (both 0 without a whole swing: every measure a fitness
-  may weigh is finite);
+  may weigh is finite); **lift**: the clearance with each swing's peak capped at ``LIFT_CAP`` (5 cm), what a
+  fitness should pay (an uncapped clearance pays a leg kicked a metre high as the walker falls);
 * **power**: mean positive mechanical power sum_j max(tau_j omega_j, 0) per kg (W/kg); **cost of transport**: that
   power over (g v) (dimensionless: positive work per metre per body weight); **Froude number** v^2 / (g L).
 
@@ -34,6 +35,9 @@ import numpy as np
 
 #: s: a contact episode no longer than this is chatter, not a stance
 MIN_CONTACT = 0.04
+#: m: a swing's peak height counted in ``lift`` at most (a fitness paying foot clearance must not pay a leg kicked
+#: high while the walker falls)
+LIFT_CAP = 0.05
 G = 9.81
 #: the per-row measures of :meth:`GaitMeter.measure` (plus ``duty_<foot>`` for each foot), with their units
 MEASURES = {
@@ -42,7 +46,8 @@ MEASURES = {
     "steps_per_s": "stance episodes per second up", "step_length": "forward travel per step (m)",
     "slip": "median stance slip speed (m/s)", "slip_share": "median stance slip over the speed",
     "sliding": "stance feet's slip distance per second up (m/s; 0 without a stance)",
-    "clearance": "mean peak swing-foot height (m)", "knee_swing": "mean knee excursion in swing (rad)",
+    "clearance": "mean peak swing-foot height (m)", "lift": "mean peak swing-foot height, each swing's capped at LIFT_CAP (m)",
+    "knee_swing": "mean knee excursion in swing (rad)",
     "power": "mean positive mechanical power (W/kg)", "positive_work": "positive mechanical work (J/kg)",
     "cost_of_transport": "positive work / (m g distance forward)", "froude": "v^2 / (g L)",
 }
@@ -113,7 +118,8 @@ def measure_one(sample: dict[str, np.ndarray], dt: float, *, forward: float, mas
         airborne=float((n_standing == 0).mean()), double_support=float((n_standing >= 2).mean()),
         steps_per_s=steps / up, step_length=forward / steps if steps else 0.0,
         slip=float(np.median(slips)) if len(slips) else np.nan, sliding=float(slips.sum() / T),
-        clearance=float(np.mean(clear)) if clear else 0.0, knee_swing=float(np.mean(knee)) if knee else 0.0,
+        clearance=float(np.mean(clear)) if clear else 0.0, lift=float(np.mean(np.minimum(clear, LIFT_CAP))) if clear else 0.0,
+        knee_swing=float(np.mean(knee)) if knee else 0.0,
         power=float(positive), positive_work=float(positive * up),
         cost_of_transport=float(positive / (G * speed)) if speed > 1e-3 else np.inf,
         froude=float(speed * speed / (G * leg_length)),
