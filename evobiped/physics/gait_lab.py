@@ -151,7 +151,7 @@ class GaitMeter:
         mask[ids] = True
         self.ticked.append(mask)
         for k in self.series:
-            self.series[k].append(np.array(getattr(sample, k), float if k != "contact" else bool))
+            self.series[k].append(np.asarray(getattr(sample, k), float if k != "contact" else bool))  # fresh per tick: no copy
 
     def restart(self, ids: np.ndarray) -> None:
         """Rows ``ids`` begin anew: their earlier ticks no longer count."""
