@@ -48,7 +48,7 @@ def choices_text(kind: str) -> str:
     elif kind == "task":
         from .tasks import TASKS as reg
     elif kind == "backend":
-        from .evolution.evaluate import BACKENDS as reg
+        from .evaluation import BACKENDS as reg
     elif kind == "preset":
         from .files.presets import names as preset_names
 
@@ -71,14 +71,14 @@ def refuse(flags: str, why: str) -> None:
 
 def check_workers(backend: str, workers: int | None, address: str | None) -> None:
     """--workers and --address must apply to the backend; more local workers than this machine runs
-    (:func:`~evobiped.evolution.evaluate.worker_limit`) are refused, more than its cores earn a warning line."""
+    (:func:`~evobiped.evaluation.worker_limit`) are refused, more than its cores earn a warning line."""
     import os
 
     if address is not None and backend != "ray":
         refuse("--address", f"only a Ray backend connects to a cluster (use --backend ray; the backend here is {backend})")
     if workers is not None and backend == "serial":
         refuse("--workers", "the serial backend runs in this process (use --backend process, thread or ray for workers)")
-    from .evolution.evaluate import check_worker_count
+    from .evaluation import check_worker_count
 
     check_worker_count(backend, workers, address, name="--workers")
     cores = os.cpu_count() or 1
@@ -107,7 +107,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
-    from .evolution.run_config import RunConfig, check_tables
+    from .run.run_config import RunConfig, check_tables
     from .core.fileio import read_toml
     from .tasks import TASKS
 
@@ -129,7 +129,7 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     if population is not None:  # the population of every optimizer; only the chosen one's refuses a value
         from .core.errors import ConfigError
         from .core.options import check_value
-        from .evolution.run_config import RunConfig
+        from .run.run_config import RunConfig
 
         chosen = optimizer or d.get("optimizer", "ga")
         for table, name, key, value in (("ga", "ga", "population", population), ("cma", "cma", "population", population),

@@ -18,13 +18,13 @@ from .bodies import BODIES
 from .controllers import CONTROLLERS
 from .controllers.base import GENERIC_CONTROLLER_OPTIONS
 from .envs.walkers import EnvOptions
-from .evolution.cma import CMAOptions
-from .evolution.curriculum import CurriculumOptions
-from .evolution.stopping import StopOptions
-from .evolution.es import ESOptions
-from .evolution.map_elites import MapElitesOptions
-from .evolution.run_config import NormaliseOptions
-from .evolution.ga import GAOptions
+from .optimizers.cma import CMAOptions
+from .run.curriculum import CurriculumOptions
+from .run.stopping import StopOptions
+from .optimizers.es import ESOptions
+from .optimizers.map_elites import MapElitesOptions
+from .run.run_config import NormaliseOptions
+from .optimizers.ga import GAOptions
 from .core.options import markdown_table
 from .physics import gait
 from .physics.perturb import PerturbationOptions
@@ -117,7 +117,7 @@ def environments_table() -> str:
 
 def presets_table() -> str:
     """The shipped presets: controller, optimizer and population, generations and episodes, and the preset's own line."""
-    from .evolution.run_config import RunConfig
+    from .run.run_config import RunConfig
     from .core.fileio import read_toml
     from .files.presets import describe, names, path, split_declarations
 

@@ -40,7 +40,7 @@ import numpy as np
 
 from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import UserError
-from evobiped.evolution.cma import CMAES, CMAOptions
+from evobiped.optimizers.cma import CMAES, CMAOptions
 from evobiped.files.genome_file import save_genome
 from evobiped.physics.models import model_path
 

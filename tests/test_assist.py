@@ -7,10 +7,10 @@ import pytest
 
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution.cma import CMAOptions
-from evobiped.evolution.evaluate import make_evaluator
-from evobiped.evolution.run import Run
-from evobiped.evolution.run_config import RunConfig
+from evobiped.optimizers.cma import CMAOptions
+from evobiped.evaluation import make_evaluator
+from evobiped.run.run import Run
+from evobiped.run.run_config import RunConfig
 from evobiped.files.genome_file import load_genome
 from evobiped.episode.disturbances import assist_torque
 from evobiped.physics.perturb import PerturbationOptions, Trials

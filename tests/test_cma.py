@@ -8,9 +8,10 @@ import pytest
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import ConfigError, UserError
-from evobiped.evolution import Run, RunConfig, make_evaluator
-from evobiped.evolution.cma import CMAES, CMAOptions
-from evobiped.evolution.individuals import Individuals
+from evobiped.run import Run, RunConfig
+from evobiped.evaluation import make_evaluator
+from evobiped.optimizers.cma import CMAES, CMAOptions
+from evobiped.run.individuals import Individuals
 from evobiped.interface.genome import GeneBlock, GenomeLayout
 
 from .test_evolve import fitness_history

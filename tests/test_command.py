@@ -29,7 +29,7 @@ def standing(seconds=1.0, **task_options):
 def commanded_genome(path, **episode):
     """A genome file of the walker-command preset's layout (every gene at its range's centre: it need not walk)."""
     from evobiped.core.fileio import read_toml
-    from evobiped.evolution.run_config import RunConfig
+    from evobiped.run.run_config import RunConfig
     from evobiped.files.genome_file import save_genome
     from evobiped.files.presets import path as preset_path, split_declarations
 
@@ -206,7 +206,8 @@ def test_a_run_on_drawn_commands_resumed_on_two_workers_is_bit_identical(tmp_pat
     worker processes has the uninterrupted run's history (the tracking terms included) and θ."""
     import csv
 
-    from evobiped.evolution import Run, RunConfig, make_evaluator
+    from evobiped.run import Run, RunConfig
+    from evobiped.evaluation import make_evaluator
 
     config = RunConfig.from_dict({
         "optimizer": "es", "generations": 3, "seed": 4, "backend": "serial", "es": {"pairs": 2},

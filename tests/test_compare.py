@@ -71,7 +71,7 @@ def test_mann_whitney_of_identical_constant_samples_is_one_and_median_iqr_interp
 
 
 def test_a_run_stops_at_the_first_generation_boundary_where_its_episodes_reach_the_budget(tmp_path):
-    from evobiped.evolution.run_config import RunConfig
+    from evobiped.run.run_config import RunConfig
     from evobiped.usecases.evolving import evolve
 
     plain = RunConfig.from_dict({"episode": {"seconds": 0.2}, "ga": {"population": 4}, "generations": 50, "budget": 9,
@@ -183,7 +183,7 @@ def test_the_same_seeds_give_the_same_results_bit_for_bit_with_one_worker(compar
 
 
 def test_a_resumed_comparison_finishes_an_interrupted_run_and_gives_the_same_results(compared):
-    from evobiped.evolution.run_config import RunConfig
+    from evobiped.run.run_config import RunConfig
     from evobiped.usecases.comparing import Comparison, FILE
     from evobiped.usecases.evolving import evolve
 

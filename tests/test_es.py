@@ -11,8 +11,9 @@ import pytest
 
 from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import ConfigError
-from evobiped.evolution import Run, RunConfig, make_evaluator
-from evobiped.evolution.es import ESOptions, EvolutionStrategy, centred_ranks
+from evobiped.run import Run, RunConfig
+from evobiped.evaluation import make_evaluator
+from evobiped.optimizers.es import ESOptions, EvolutionStrategy, centred_ranks
 from evobiped.interface.genome import GeneBlock, GenomeLayout
 from evobiped.interface.normaliser import Normaliser, SenseSums
 from evobiped.physics.sim import Sims
@@ -203,7 +204,7 @@ def test_the_ga_and_cma_es_run_in_the_stance_frame_with_a_running_normaliser(tmp
     """The route's pieces are the search's choice, not a fork: the GA and CMA-ES evolve the linear policy in the stance
     frame under the running normaliser and the curriculum; without evaluation rows of their own, the normaliser learns
     from every walker they evaluated (one tick of senses per control tick each was up: the sum of their end times)."""
-    from evobiped.evolution.run_config import make_optimizer
+    from evobiped.run.run_config import make_optimizer
 
     config = RunConfig.from_dict({
         "optimizer": optimizer, "generations": 1, "seed": 2, "backend": "serial",
@@ -320,7 +321,7 @@ def test_a_checkpoint_list_that_is_not_numbers_is_one_line(value, nulls, rows, w
     """OptimizerState.numbers_of, which every optimizer's state reads its arrays with: strings, booleans, infinities,
     nulls where none may be, and ragged rows are refused naming the optimizer and field; nulls, where allowed, read NaN."""
     from evobiped.core.errors import UserError
-    from evobiped.evolution.es import ESState
+    from evobiped.optimizers.es import ESState
 
     with pytest.raises(UserError) as err:
         ESState.numbers_of({"theta": value}, "theta", nulls=nulls, rows=rows)

@@ -5,8 +5,8 @@ import tomllib
 
 import numpy as np
 
-from evobiped.evolution import RunConfig
-from evobiped.evolution.run_context import RunContext
+from evobiped.run import RunConfig
+from evobiped.run.run_context import RunContext
 from evobiped.files.genome_file import load_genome
 from evobiped.files.presets import path as preset_path
 
@@ -109,7 +109,7 @@ def test_a_run_from_a_walker_resumed_elsewhere_keeps_its_seeded_normaliser(tmp_p
     cut before its first commit and resumed from another directory, the source gone, starts from the same statistics."""
     import shutil
 
-    from evobiped.evolution import Run
+    from evobiped.run import Run
 
     (tmp_path / "a").mkdir()
     shutil.copy(SEED, tmp_path / "a" / "seed.json")

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution import RunConfig
+from evobiped.run import RunConfig
 from evobiped.files import presets
-from evobiped.evolution.es import ESOptions, EvolutionStrategy, centred_ranks
+from evobiped.optimizers.es import ESOptions, EvolutionStrategy, centred_ranks
 from evobiped.interface.genome import GeneBlock, GenomeLayout
 
 FIRST_SHIPPED = dict(weight_decay_to="zero", credit="drawn", ties="order")

@@ -18,9 +18,11 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
+from evobiped.optimizers import GAOptions
+from evobiped.run import Run, RunConfig
+from evobiped.evaluation import make_evaluator
 from evobiped.files.rundir import HISTORY_COLUMNS
-from evobiped.evolution.run_context import HISTORY_EXTRA, STOP_COLUMN
+from evobiped.run.run_context import HISTORY_EXTRA, STOP_COLUMN
 
 from .conftest import cli
 
@@ -62,7 +64,7 @@ def test_batches_join_into_one_episode_result():
     the per-presentation rows of a two-source steer task included."""
     import dataclasses
 
-    from evobiped.evolution.evaluate import SerialEvaluator, ThreadEvaluator
+    from evobiped.evaluation import SerialEvaluator, ThreadEvaluator
 
     cfg = EpisodeConfig(task="steer", seconds=0.6)
     rng = np.random.default_rng(3)
@@ -140,7 +142,7 @@ def test_resume_equals_uninterrupted(tmp_path):
 def test_the_optimizer_state_is_a_frozen_value(tmp_path):
     """The GA's state is a value: read-only arrays that later generations leave alone; restored into a fresh
     GA, it asks the same and both continue alike."""
-    from evobiped.evolution.run_config import make_optimizer
+    from evobiped.run.run_config import make_optimizer
 
     run = Run.create(tmp_path / "r", SMALL)
     with make_evaluator(SMALL.episode, "serial") as ev:
@@ -366,7 +368,7 @@ def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_chec
     """The evolve use case checks everything, creates or resumes the run, and only then starts the evaluator (the
     process pool); an evaluator that cannot start removes the new run again."""
     from evobiped.core.errors import UserError
-    from evobiped.evolution import evaluate
+    from evobiped.evaluation import backends as evaluate
 
     started = []
     monkeypatch.setattr(evaluate, "make_evaluator", lambda *a, **k: started.append(a) or pytest.fail("a worker started"))

@@ -252,7 +252,7 @@ def test_a_dead_worker_is_replaced_and_its_batch_evaluated_again(tmp_path, refer
 def test_workers_that_keep_dying_stop_the_generation_after_the_last_retry(tmp_path, monkeypatch):
     from evobiped.episode import EpisodeConfig
     from evobiped.core.errors import UserError
-    from evobiped.evolution.evaluate import MAX_RETRIES, ProcessPoolEvaluator
+    from evobiped.evaluation import MAX_RETRIES, ProcessPoolEvaluator
 
     marker = tmp_path / "kill-one-worker"
     marker.touch()
@@ -342,7 +342,7 @@ HOSTILE = {
 
 @pytest.mark.parametrize("text", HOSTILE, ids=[t.replace("\n", " ") for t in HOSTILE])
 def test_hostile_config_is_one_line_and_writes_nothing(tmp_path, capsys, text, monkeypatch):
-    from evobiped.evolution import run_config
+    from evobiped.run import run_config
 
     monkeypatch.setattr(run_config, "WALKER_BYTES", 2**30)  # any machine: 5e6 walkers of 1 GiB do not fit
     cfg = tmp_path / "c.toml"
@@ -451,11 +451,11 @@ def test_a_killed_resource_tracker_prints_nothing(tmp_path):
 def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkeypatch, signum):
     """Ctrl-C, SIGTERM or SIGHUP between writing checkpoint.json and history.csv stops the run only after both are
     written (KeyboardInterrupt; Interrupted carrying the signal for the other two)."""
-    import evobiped.evolution.checkpoint as commit_point
+    import evobiped.run.checkpoint as commit_point
     from evobiped.core.errors import stop_on_signals
-    from evobiped.evolution.evaluate import make_evaluator
-    from evobiped.evolution.run import Run
-    from evobiped.evolution.run_config import RunConfig
+    from evobiped.evaluation import make_evaluator
+    from evobiped.run.run import Run
+    from evobiped.run.run_config import RunConfig
 
     config = RunConfig.from_dict({"episode": {"seconds": 0.5}, "ga": {"population": 4}, "generations": 2, "backend": "serial"})
     run = Run.create(tmp_path / "r", config)
@@ -630,7 +630,7 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
 
     from evobiped.episode import EpisodeConfig
     from evobiped.core.errors import UserError
-    from evobiped.evolution.ray_backend import RayEvaluator
+    from evobiped.evaluation.ray_backend import RayEvaluator
 
     if how == "node died error":  # the result of a task on the lost node
         monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))
@@ -650,7 +650,7 @@ def test_a_generation_lost_to_the_evaluator_keeps_the_run_resumable(tmp_path, ca
     """The UserError of a lost Ray node in the middle of a run: exit 2, one line, and --resume completes the run
     as if nothing had happened."""
     from evobiped.core.errors import UserError
-    from evobiped.evolution import evaluate
+    from evobiped.evaluation import backends as evaluate
 
     real = evaluate.make_evaluator
 

@@ -74,7 +74,7 @@ def test_a_checkpoint_missing_what_it_always_holds_is_refused(run, capsys, key):
 # ---- the start genome lives in the run directory
 def _cut_mid_run(monkeypatch):
     """Stop the run after generation 0's commit, while generation 1 is evaluated (a Ctrl-C in the middle of a run)."""
-    import evobiped.evolution.run as runmod
+    import evobiped.run.run as runmod
 
     step = runmod.Run.step
 
@@ -89,7 +89,7 @@ def _cut_mid_run(monkeypatch):
 
 def _cut_before_summary(monkeypatch):
     """Stop the run after its last commit, before summary.json (a finished run's last step)."""
-    import evobiped.evolution.run as runmod
+    import evobiped.run.run as runmod
 
     def stop(*a):
         raise KeyboardInterrupt
@@ -224,7 +224,7 @@ def test_an_older_cma_log_longer_than_the_history_is_refused_at_once(tmp_path, c
 
 # ---- refused before any worker starts or file is written
 def test_a_population_beyond_memory_is_refused_before_any_worker(tmp_path, capsys, monkeypatch):
-    import evobiped.evolution.evaluate as evaluate
+    import evobiped.evaluation.backends as evaluate
 
     def no_workers(*a, **k):
         raise AssertionError("workers started")

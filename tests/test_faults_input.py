@@ -43,7 +43,7 @@ def test_a_worker_count_beyond_the_machine_is_one_line_before_anything_starts(tm
 def test_the_use_case_refuses_a_worker_count_beyond_the_machine():
     from evobiped.core.errors import ConfigError
     from evobiped.episode import EpisodeConfig
-    from evobiped.evolution.evaluate import make_evaluator, worker_limit
+    from evobiped.evaluation import make_evaluator, worker_limit
 
     with pytest.raises(ConfigError, match="runs at most"):
         make_evaluator(EpisodeConfig(seconds=0.5), "process", 10**6).close()

@@ -15,7 +15,7 @@ import pytest
 
 from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import UserError
-from evobiped.evolution.evaluate import MAX_RETRIES, ProcessPoolEvaluator, SerialEvaluator, ThreadEvaluator
+from evobiped.evaluation import MAX_RETRIES, ProcessPoolEvaluator, SerialEvaluator, ThreadEvaluator
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = EpisodeConfig(seconds=0.2)

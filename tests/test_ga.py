@@ -8,8 +8,8 @@ import pytest
 from evobiped.controllers import CTRNN
 from evobiped.core.errors import ConfigError
 from evobiped.episode.result import EpisodeResult
-from evobiped.evolution.ga import GA, GAOptions
-from evobiped.evolution.individuals import Individuals
+from evobiped.optimizers.ga import GA, GAOptions
+from evobiped.run.individuals import Individuals
 from evobiped.interface.genome import GeneBlock, GenomeLayout
 
 LAYOUT = CTRNN(n_outputs=6).layout
@@ -155,7 +155,8 @@ def test_same_seed_same_population_and_bad_configs():
 def test_table_iii_numbers_are_config_values(tmp_path):
     """`genes` controller options replace a block's initialisation and mutation (here: fixed weights, frozen taus)."""
     from evobiped.episode import EpisodeConfig
-    from evobiped.evolution import Run, RunConfig, make_evaluator
+    from evobiped.run import Run, RunConfig
+    from evobiped.evaluation import make_evaluator
 
     genes = {"weights": {"init_mean": 2.0, "init_sigma": 0.0}, "time_constants": {"mutation_sigma": 0.0, "low": 1.0, "high": 3.0}}
     cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), ga=GAOptions(population=10), generations=3, backend="serial")

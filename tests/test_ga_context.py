@@ -4,8 +4,8 @@ fitness kept from an earlier generation's normaliser, phase, disturbances or sou
 import numpy as np
 import pytest
 
-from evobiped.evolution import RunConfig
-from evobiped.evolution.run_config import make_optimizer
+from evobiped.run import RunConfig
+from evobiped.run.run_config import make_optimizer
 
 from .conftest import cli
 
@@ -35,7 +35,7 @@ def survivors_after_one_generation(table: dict) -> np.ndarray:
 @pytest.mark.parametrize("table, what", CHANGING)
 def test_survivors_are_scored_again_where_each_generation_is_scored_differently(table, what):
     assert np.isnan(survivors_after_one_generation(table)).all()
-    from evobiped.evolution.run_config import changing_context
+    from evobiped.run.run_config import changing_context
 
     assert changing_context(RunConfig.from_dict(table)) == what
 

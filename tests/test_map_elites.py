@@ -11,9 +11,10 @@ pytest.importorskip("ribs")
 
 from evobiped.episode import EpisodeConfig  # noqa: E402
 from evobiped.core.errors import UserError  # noqa: E402
-from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
-from evobiped.evolution.archive_file import read_archive  # noqa: E402
-from evobiped.evolution.map_elites import MapElites, MapElitesOptions  # noqa: E402
+from evobiped.run import Run, RunConfig  # noqa: E402
+from evobiped.evaluation import make_evaluator  # noqa: E402
+from evobiped.files.rundir.archive_file import read_archive  # noqa: E402
+from evobiped.optimizers.map_elites import MapElites, MapElitesOptions  # noqa: E402
 from evobiped.core.fileio import packed_floats, unpacked_floats  # noqa: E402
 from evobiped.files.genome_file import load_genome  # noqa: E402
 

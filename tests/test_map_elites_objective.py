@@ -9,7 +9,7 @@ import pytest
 pytest.importorskip("ribs")
 
 from evobiped.episode import EpisodeConfig  # noqa: E402
-from evobiped.evolution.map_elites import MapElites, MapElitesOptions  # noqa: E402
+from evobiped.optimizers.map_elites import MapElites, MapElitesOptions  # noqa: E402
 
 from .conftest import cli  # noqa: E402
 

@@ -8,7 +8,7 @@ from evobiped.bodies import BODIES
 from evobiped.controllers import CONTROLLERS
 from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import ConfigError
-from evobiped.evolution.run_config import RunConfig
+from evobiped.run.run_config import RunConfig
 from evobiped.core.options import markdown_table, option, parse
 from evobiped.readme import USAGE, render, sections, tables
 from evobiped.tasks import TASKS

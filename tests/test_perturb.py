@@ -215,7 +215,8 @@ def test_bad_perturbation_config_file_one_line_nothing_written(tmp_path, capsys,
 def test_a_scheduled_run_resumes_and_parallelises_identically(tmp_path):
     """Schedules are functions of the generation: a run cut after two generations and resumed on two worker processes
     writes the history of an uninterrupted serial run, and its best is the best since the schedules ended."""
-    from evobiped.evolution import GAOptions, RunConfig
+    from evobiped.optimizers import GAOptions
+    from evobiped.run import RunConfig
 
     from .test_evolve import fitness_history, whole_and_resumed
 

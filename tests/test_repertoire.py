@@ -7,7 +7,8 @@ import pytest
 
 pytest.importorskip("ribs")
 
-from evobiped.evolution import Run, RunConfig, make_evaluator  # noqa: E402
+from evobiped.run import Run, RunConfig  # noqa: E402
+from evobiped.evaluation import make_evaluator  # noqa: E402
 from evobiped.files.genome_file import load_genome  # noqa: E402
 from evobiped.repertoire.damage import damaged_episode, parse_damage  # noqa: E402
 from evobiped.repertoire.elites import load_repertoire as load  # noqa: E402
@@ -163,7 +164,7 @@ def test_the_knob_switches_to_the_gait_most_like_the_current_one():
     from pathlib import Path
 
     from evobiped.episode import EpisodeConfig
-    from evobiped.evolution.archive_file import Archive
+    from evobiped.files.rundir.archive_file import Archive
     from evobiped.repertoire.elites import Repertoire
 
     g = np.array([[0.0, 0.0], [1.0, 1.0], [0.1, 0.2], [0.15, 0.1]])  # A far from D, B far, C near D

@@ -8,8 +8,9 @@ import pytest
 
 from evobiped.core.errors import ConfigError
 from evobiped.episode import EpisodeConfig
-from evobiped.evolution import Run, RunConfig, make_evaluator
-from evobiped.evolution.stopping import StopOptions, streak
+from evobiped.run import Run, RunConfig
+from evobiped.evaluation import make_evaluator
+from evobiped.run.stopping import StopOptions, streak
 
 from .conftest import cli
 from .test_evolve import Stop, fitness_history

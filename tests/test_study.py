@@ -95,7 +95,9 @@ def test_tiny_study_end_to_end(tmp_path, capsys):
 def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     """A run stopped after generation 1 of 3 is resumed from its checkpoint and ends as an uninterrupted one."""
     from evobiped.episode import EpisodeConfig
-    from evobiped.evolution import GAOptions, Run, RunConfig, make_evaluator
+    from evobiped.optimizers import GAOptions
+    from evobiped.run import Run, RunConfig
+    from evobiped.evaluation import make_evaluator
     from evobiped.experiments.reil.study import StudyConfig, open_study, run_dir, run_study
 
     cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), ga=GAOptions(population=4), generations=3),

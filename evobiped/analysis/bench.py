@@ -42,8 +42,8 @@ from mujoco import rollout
 
 from ..episode import Context, EpisodeConfig
 from ..core.errors import ConfigError
-from ..evolution.evaluate import ProcessPoolEvaluator, ThreadEvaluator
-from ..evolution.ga import GA, GAOptions
+from ..evaluation import ProcessPoolEvaluator, ThreadEvaluator
+from ..optimizers import GA, GAOptions
 from ..core.progress import Progress
 
 #: the disturbances of measurement (e), per presentation (see evobiped.physics.perturb)

@@ -1,4 +1,4 @@
-"""A gait repertoire: a MAP-Elites run's archive (:mod:`evobiped.evolution.map_elites`) used as a set of gaits.
+"""A gait repertoire: a MAP-Elites run's archive (:mod:`evobiped.optimizers.map_elites`) used as a set of gaits.
 
 ``elites``: the archive with the episode its genomes walk, which elites walk, one elite as a genome to replay,
 the elite nearest a commanded speed and turning rate; ``speed``: a speed schedule that switches elites on the

@@ -14,7 +14,7 @@ import numpy as np
 from ..files import rundir
 from ..episode import EpisodeConfig
 from ..core.errors import UserError
-from ..evolution.archive_file import Archive, read_archive
+from ..files.rundir.archive_file import Archive, read_archive
 from ..files.genome_file import load_genome
 from ..record.source import Source
 

@@ -31,7 +31,7 @@ even before the walker moves), then distance forward.
 
 Weighted terms (``fitness = "weighted"``, beyond the paper): F = sum_k w_k term_k over the terms named in
 ``weights`` (e.g. forward m, time up s, steps), the weights a run's curriculum may change from one phase to the next
-(:mod:`evobiped.evolution.curriculum`).  ``steps`` counts the walker's stance switches (a touchdown of the swing
+(:mod:`evobiped.run.curriculum`).  ``steps`` counts the walker's stance switches (a touchdown of the swing
 foot, :mod:`evobiped.physics.gait`): paying for steps teaches a policy on point feet to step, the only way it stays up.
 
 Gait measures (``gait_measures = true``): the terms ``speed``, the mean forward speed (m/s: the pelvis's path

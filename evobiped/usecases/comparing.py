@@ -33,8 +33,8 @@ from .. import __version__
 from ..analysis.retest import Success, check_measure, check_walker_test, fresh_noise, parse_success, retest
 from ..core.errors import UserError
 from ..core.fileio import json_text, read_json, write_json
-from ..evolution.fingerprint import settings
-from ..evolution.run_config import RunConfig, check_run, episodes_per_genome, population_of
+from ..run.fingerprint import settings
+from ..run.run_config import RunConfig, check_run, episodes_per_genome, population_of
 from ..files import rundir
 from ..files.genome_file import load_genome
 from .evolving import open_run, start_evaluator
@@ -196,7 +196,7 @@ def compare_configurations(comparison: Comparison | None = None, *, out: str | P
     """The whole use case: open (or resume) the comparison, run what is left (``workers`` runs at once, default one per
     core), write results.json, results.md and success.png; returns the results.  ``say(line)``: what it starts;
     ``on_run(done, total, retest)``: before the first run (0, None) and after each."""
-    from ..evolution.pool import spawn_pool, stop_pool
+    from ..evaluation.pool import spawn_pool, stop_pool
     from .compare_report import write_comparison
 
     d, c = open_comparison(comparison, out=out, resume=resume, given=given)

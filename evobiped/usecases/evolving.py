@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Callable
 
 from ..files import rundir
-from ..evolution import evaluate
-from ..evolution.evaluate import Evaluator
-from ..evolution.run import Run
-from ..evolution.run_config import RunConfig, check_run
+from ..evaluation import backends as evaluate
+from ..evaluation import Evaluator
+from ..run import Run
+from ..run.run_config import RunConfig, check_run
 from ..core.fileio import read_json
 
 

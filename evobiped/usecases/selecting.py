@@ -11,7 +11,7 @@ import numpy as np
 
 from ..files import rundir
 from ..core.errors import UserError
-from ..evolution.run_config import RunConfig, initial_genome
+from ..run.run_config import RunConfig, initial_genome
 from ..core.fileio import read_json, write_json
 from ..files.genome_file import load_genome, save_genome
 from ..files.outcome import outcome

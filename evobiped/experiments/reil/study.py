@@ -39,13 +39,13 @@ from ... import __version__
 from ...files import rundir
 from ...core.errors import ConfigError, UserError
 from ...core.options import given
-from ...evolution.evaluate import SerialEvaluator
-from ...evolution.ray_backend import init_ray
-from ...evolution.pool import spawn_pool, stop_pool
+from ...evaluation import SerialEvaluator
+from ...evaluation.ray_backend import init_ray
+from ...evaluation.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
 from ...tasks import TASKS
-from ...evolution.run import Run
-from ...evolution.run_config import OPTIMIZERS, RunConfig
+from ...optimizers import OPTIMIZERS
+from ...run import Run, RunConfig
 from ...core.fileio import read_json, write_json
 from ...files.genome_file import load_genome
 from ...core.progress import Progress

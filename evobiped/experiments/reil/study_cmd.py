@@ -48,7 +48,7 @@ def run_study_cmd(args) -> int:
                       first_seed=args.first_seed, recheck_seconds=args.recheck_seconds)
     check_workers(args.backend, args.workers, args.address)
     if args.backend == "ray" and args.address:
-        from ...evolution.ray_backend import check_reachable
+        from ...evaluation.ray_backend import check_reachable
 
         check_reachable(args.address)
     say = (lambda m: None) if args.quiet else (lambda m: print(m, file=sys.stderr, flush=True))

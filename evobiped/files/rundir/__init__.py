@@ -24,7 +24,7 @@ Other commands add to it: ``outcome.json`` (a study's result for the run),
 never reads ``--from`` again (the run may be resumed from any directory, its
 source gone).  The checkpoint holds the start genome too, and the settings the
 run was created with (``settings``: config.json's, less where episodes run),
-so a resume refuses an edited config.json by name (:mod:`evobiped.evolution.fingerprint`).
+so a resume refuses an edited config.json by name (:mod:`evobiped.run.fingerprint`).
 
 ``checkpoint.json`` is the run's one commit point per generation and its one
 source of truth: ``history.csv``, ``best.json``, ``summary.json`` and

@@ -24,8 +24,8 @@ from ..core.errors import UserError
 from ..core.fileio import WriteError, atomic_write, json_text, write_json
 from ..files.genome_file import genome_text
 from . import checkpoint as commit_point
-from .evaluate import Evaluator
-from .base import Optimizer
+from ..evaluation import Evaluator
+from ..optimizers import Optimizer
 from .individuals import Individuals
 from .run_config import RunConfig, episodes_per_genome, make_optimizer, start_genome
 from .generation_stats import GenerationStats

@@ -14,17 +14,14 @@ from ..episode import EpisodeConfig
 from ..core.errors import ConfigError, UserError
 from ..core.options import check_fields, option, parse, refuse_unknown, scheduled
 from ..physics.perturb import STRENGTHS
-from .base import Optimizer
-from .cma import CMAES, CMAOptions
+from ..evaluation import BACKENDS
+from ..optimizers import OPTIMIZERS, Optimizer
+from ..optimizers.cma import CMAES, CMAOptions
+from ..optimizers.es import ESOptions, EvolutionStrategy
+from ..optimizers.ga import GA, GAOptions
+from ..optimizers.map_elites import MapElites, MapElitesOptions
 from .curriculum import Curriculum, CurriculumOptions
-from .es import ESOptions, EvolutionStrategy
-from .evaluate import BACKENDS
-from .ga import GA, GAOptions
 from .stopping import StopOptions
-from .map_elites import MapElites, MapElitesOptions
-
-#: optimizer name -> class; each an :class:`~.base.Optimizer` (ask/tell/ranking/next_generation) with state/restore
-OPTIMIZERS = {"ga": GA, "cma": CMAES, "es": EvolutionStrategy, "map-elites": MapElites}
 
 
 def _text(v) -> None:

@@ -5,7 +5,7 @@ evaluated).  ``ask()`` gives the population and the rows to evaluate; ``tell(res
 takes their :class:`~evobiped.episode.result.EpisodeResult` (or their fitness alone);
 ``next_generation()`` moves the fitness along with the individuals it keeps and
 returns, for each new row, the previous row it is (-1: a new individual), so that the
-run carries each individual's outcome (:mod:`evobiped.evolution.individuals`) and
+run carries each individual's outcome (:mod:`evobiped.run.individuals`) and
 never reorders anything.  Fitness: higher is better.
 
 Between generations an optimizer is a value: :meth:`Optimizer.state` gives a frozen

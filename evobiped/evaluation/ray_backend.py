@@ -11,7 +11,7 @@ import numpy as np
 from ..episode import EpisodeConfig
 from ..core.errors import STOP_SIGNALS, UserError
 from ..core.net import connect_error
-from .evaluate import MAX_RETRIES, Evaluator, _evaluate, _fault_point, chunks, concat
+from .backends import MAX_RETRIES, Evaluator, _evaluate, _fault_point, chunks, concat
 from .pool import silenced_stderr
 
 #: seconds between checks, while a generation waits for Ray actors, that their nodes are alive

@@ -32,7 +32,7 @@ from ..core.errors import ConfigError, UserError
 from ..core.fileio import packed_floats, unpacked_floats
 from ..interface.genome import GenomeLayout
 from ..core.options import check_fields, option
-from .archive_file import ARCHIVE, archive_text
+from ..files.rundir.archive_file import ARCHIVE, archive_text
 from .base import Optimizer, OptimizerState, frozen_array
 from .ga import MAX_POPULATION, generation_rng
 

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import UserError
-from ..core.fileio import read_json
+from ...core.errors import UserError
+from ...core.fileio import read_json
 
 #: the file name in the run directory
 ARCHIVE = "archive.json"
