@@ -35,17 +35,3 @@ def cli(*args) -> int:
         return main([str(a) for a in args])
     except SystemExit as exc:
         return exc.code
-
-
-def run_script(name: str, *argv) -> int:
-    """Run ``scripts/<name>`` as ``python scripts/<name> ARGV...`` in this process; its exit status."""
-    import runpy
-    import sys
-
-    saved, sys.argv = sys.argv, [name, *map(str, argv)]
-    try:
-        with pytest.raises(SystemExit) as done:
-            runpy.run_path(str(ROOT / "scripts" / name), run_name="__main__")
-    finally:
-        sys.argv = saved
-    return done.value.code

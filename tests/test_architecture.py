@@ -21,7 +21,7 @@ LAYERS: list[set[str]] = [
     {"episode"},
     {"analysis.gait_report"},
     {"envs", "files.genome_file", "files.outcome", "analysis.selection", "analysis.compare_stats"},
-    {"files.rundir"},
+    {"files.rundir", "files.genome_edit"},
     {"analysis.robustness", "analysis.retest", "analysis.commanded", "distill"},
     {"record"},
     {"optimizers", "evaluation"},

@@ -10,7 +10,7 @@ from evobiped.run.run_context import RunContext
 from evobiped.files.genome_file import load_genome
 from evobiped.files.presets import path as preset_path
 
-from .conftest import WALKERS, run_script
+from .conftest import WALKERS, cli
 
 SEED = WALKERS / "ctrnn_es_seed5.json"
 
@@ -128,7 +128,7 @@ def test_a_run_from_a_walker_resumed_elsewhere_keeps_its_seeded_normaliser(tmp_p
 
 
 def _gene_ranges(*argv) -> int:
-    return run_script("gene_ranges.py", *argv)
+    return cli("genome", "ranges", *argv)
 
 
 TIGHT = ["--block", "weights", -2, 2, "--block", "biases", -1, 1, "--block", "input_weights", -1.5, 1.5,
@@ -136,7 +136,7 @@ TIGHT = ["--block", "weights", -2, 2, "--block", "biases", -1, 1, "--block", "in
 
 
 def test_a_walker_declared_with_tight_ranges_is_the_same_walker_and_the_battery_noise_is_smaller(tmp_path):
-    """ctrnn_es_robust_seed0_tight is scripts/gene_ranges.py's output: the shipped genes, the same episode, ranges 8 (recurrent
+    """ctrnn_es_robust_seed0_tight is evobiped genome ranges' output: the shipped genes, the same episode, ranges 8 (recurrent
     weights) to 5 (direct) times narrower; the battery's 1 % gene noise draws on the paper's ranges fell it in all 8."""
     from evobiped.analysis.robustness import GENE_NOISE, GENE_NOISE_DRAWS, GENE_NOISE_SEED
 

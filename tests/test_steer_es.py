@@ -15,7 +15,7 @@ from evobiped.files.presets import path as preset_path
 from evobiped.episode.remap import remap_inputs, remap_norm
 from evobiped.tasks.steer import SteerTask
 
-from .conftest import WALKERS, cli, run_script
+from .conftest import WALKERS, cli
 
 SEED = WALKERS / "ctrnn_es_seed5.json"
 RANDOM = {"fitness": "arrive", "random_sources": 3, "source_distance": [5.0, 15.0], "source_bearing": [-60.0, 60.0],
@@ -76,10 +76,10 @@ def test_a_walker_moved_onto_reordered_inputs_walks_exactly_as_before():
 
 
 def test_the_hearing_start_replaces_the_heading_by_the_ear_signal(tmp_path):
-    """scripts/hearing_start.py: the sound rows are minus the heading rows, every other gene the walker's; the steer-es
+    """evobiped genome hearing-start: the sound rows are minus the heading rows, every other gene the walker's; the steer-es
     preset's episode takes the genome."""
     out = tmp_path / "h.json"
-    assert run_script("hearing_start.py", out, "--walker", SEED) == 0
+    assert cli("genome", "hearing-start", out, "--walker", SEED) == 0
     g, cfg, _ = load_genome(out)
     old_g, old, _ = load_genome(SEED)
     c, c_old = cfg.build().controller, old.build().controller
@@ -156,12 +156,12 @@ def test_a_hearing_walker_given_the_distance_cue_with_zero_weights_walks_as_befo
 
 
 def test_the_rewired_start_walks_as_before_with_zero_side_weights_and_turns_both_ways_with_them(tmp_path):
-    """scripts/rewire_inputs.py adds stance_side to the from-scratch walker with zero rows: with its heading sense kept
+    """evobiped genome rewire adds stance_side to the from-scratch walker with zero rows: with its heading sense kept
     it walks exactly as before.  Without the heading sense (which steers it back to its first facing), +-0.2 on the
     side's direct weights to the two hip-roll motors turns it: the two signs turn it opposite ways, each more than
     5 deg/s from the symmetric network's own drift, and both walk the whole 20 s."""
     def rewire(out, *flags):
-        assert run_script("rewire_inputs.py", out, "--walker", SEED, *flags) == 0
+        assert cli("genome", "rewire", out, "--walker", SEED, *flags) == 0
         return load_genome(out)
 
     g, old, _ = load_genome(SEED)

@@ -25,7 +25,7 @@ from ..core.errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, las
 #: how every refusal begins, a bad argument's and a UserError's alike
 ERROR = "evobiped: error: "
 #: the core's subcommand modules, in the order ``evobiped --help`` lists them (the experiments' follow)
-CORE = ("episode_cmd", "evolve_cmd", "compare_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd",
+CORE = ("episode_cmd", "evolve_cmd", "compare_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd", "genome_cmd",
         "select_cmd", "repertoire_cmd", "adapt_cmd", "gait_cmd", "gait_report_cmd")
 
 

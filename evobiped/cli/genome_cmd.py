@@ -1,0 +1,124 @@
+"""``evobiped genome``: a genome file made from a walker's (other gene ranges, senses rewired, a preset's start).
+
+Four actions over :mod:`evobiped.files.genome_edit`; each writes only the OUT it is given and prints it.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ..core.errors import UserError
+from ..flags import positive_float
+
+#: the shipped walkers the start genomes are made from by default (paths from the repository's root)
+SCRATCH_WALKER = "docs/walkers/ctrnn_es_seed5.json"
+WALKING_WALKER = "docs/walkers/ctrnn_walk_seed1.json"
+
+
+def add_genome(sub) -> None:
+    p = sub.add_parser("genome", help="write a genome file made from a walker's: other gene ranges, senses rewired, a preset's start genome",
+                       description="Write a genome file made from a walker's genome file; nothing but OUT is written.")
+    actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    r = actions.add_parser("ranges", help="the same walker with other declared ranges for gene blocks (another yardstick for the battery's gene noise)",
+                           description="Write IN as OUT with the ranges of the named gene blocks declared otherwise; every gene and "
+                           "the rest of the file kept. A gene outside its new range is refused (it would be clipped: another walker).")
+    r.add_argument("genome", metavar="IN", help="a genome JSON file")
+    r.add_argument("out", metavar="OUT", help="the genome file to write")
+    r.add_argument("--block", nargs=3, action="append", required=True, metavar=("NAME", "LOW", "HIGH"),
+                   help="a gene block's new range (repeat for several blocks)")
+    r.set_defaults(func=run_genome_ranges)
+    h = actions.add_parser("hearing-start", help="the start genome of --preset steer-es: the walker's heading sense replaced by the ear signal",
+                           description="Write the start genome of --preset steer-es: the walker's heading_error rows become the ear "
+                           "signal's, negated and scaled so that it turns towards a source --reference-distance m away as it turned "
+                           "back to its first facing; every other gene and input normalisation kept.")
+    h.add_argument("out", metavar="OUT", help="the genome file to write")
+    h.add_argument("--walker", default=SCRATCH_WALKER, metavar="FILE", help=f"the walker's genome file (default {SCRATCH_WALKER})")
+    h.add_argument("--reference-distance", type=positive_float, default=4.0, metavar="M",
+                   help="the source distance in m at which it turns as it held its heading (default 4)")
+    h.add_argument("--neurons-only", action="store_true",
+                   help="the ear signal into the neurons only, not on the direct input-to-motor path (the walker then hardly turns)")
+    h.set_defaults(func=run_genome_hearing)
+    w = actions.add_parser("rewire", help="the walker reading other senses: some dropped, others added with zero weights",
+                           description="Write the walker rewired onto other senses: each kept input keeps its weights and frozen "
+                           "normalisation, an added one starts with zero weights and its declared centre and scale. Prints the "
+                           "inputs and input_norm lines of the controller's table a run's config needs.")
+    w.add_argument("out", metavar="OUT", help="the genome file to write")
+    w.add_argument("--walker", default=SCRATCH_WALKER, metavar="FILE", help=f"the walker's genome file (default {SCRATCH_WALKER})")
+    w.add_argument("--drop", action="append", metavar="SENSE", help="an input to drop (repeat; default: heading_error)")
+    w.add_argument("--add", action="append", metavar="SENSE", help="an input to add (repeat; default: stance_side)")
+    w.set_defaults(func=run_genome_rewire)
+    c = actions.add_parser("command-start", help="the start genome of --preset walker-command-tune: the command senses added at zero weight",
+                           description="Write the start genome of --preset walker-command-tune: the walker with command_speed and "
+                           "command_turning added at zero weight (they change nothing until the search moves them).")
+    c.add_argument("out", metavar="OUT", help="the genome file to write")
+    c.add_argument("--walker", default=WALKING_WALKER, metavar="FILE", help=f"the walker's genome file (default {WALKING_WALKER})")
+    c.set_defaults(func=run_genome_command)
+
+
+def run_genome_ranges(args) -> int:
+    from ..files.genome_edit import with_ranges
+    from ..files.genome_file import save_genome
+
+    ranges = {}
+    for name, lo, hi in args.block:
+        try:
+            ranges[name] = (float(lo), float(hi))
+        except ValueError:
+            raise UserError(f"--block {name}: low and high must be numbers, got {lo!r} {hi!r}") from None
+    genome, cfg, meta = with_ranges(args.genome, ranges)
+    save_genome(args.out, genome, cfg, **{k: v for k, v in meta.items() if k not in ("version", "environment")})
+    print(args.out)
+    return 0
+
+
+def _walker(args) -> str:
+    """``--walker``'s path; a default one missing here is one line saying where it is found."""
+    from pathlib import Path
+
+    if args.walker in (SCRATCH_WALKER, WALKING_WALKER) and not Path(args.walker).is_file():
+        raise UserError(f"--walker: the default {args.walker} is a path from the repository's root; run there or give --walker FILE")
+    return args.walker
+
+
+def run_genome_hearing(args) -> int:
+    from ..files.genome_edit import hearing_genome
+
+    _save(args, *hearing_genome(_walker(args), args.reference_distance, not args.neurons_only))
+    print(args.out)
+    return 0
+
+
+def run_genome_command(args) -> int:
+    from ..files.genome_edit import command_genome
+
+    _save(args, *command_genome(_walker(args)))
+    print(args.out)
+    return 0
+
+
+def run_genome_rewire(args) -> int:
+    from ..core.options import given
+    from ..files.genome_edit import rewired
+
+    drop = ["heading_error"] if args.drop is None else args.drop
+    add = ["stance_side"] if args.add is None else args.add
+    genome, cfg = rewired(_walker(args), drop, add)
+    table = given(cfg.controller_options)
+    _save(args, genome, cfg)
+    print(f"inputs = {json.dumps(list(table['inputs']))}")
+    if "input_norm" in table:
+        n = table["input_norm"]
+        print(f"input_norm = {{mean = {json.dumps(n['mean'])}, std = {json.dumps(n['std'])}, count = {n['count']!r}}}")
+    print(args.out, file=sys.stderr)
+    return 0
+
+
+def _save(args, genome, cfg) -> None:
+    """Write ``genome`` (G,) of episode ``cfg`` as ``args.out``, its source ``args.walker``."""
+    from ..files.genome_file import save_genome
+
+    save_genome(args.out, genome, cfg, source=str(args.walker))
+
+
+SUBCOMMANDS = (add_genome,)

@@ -1,0 +1,136 @@
+"""Genome files made from a walker's: other gene ranges declared, senses rewired, a preset's start genome.
+
+Each function reads a genome file and returns ``(genome (G,), EpisodeConfig)`` of a new one (``evobiped genome``
+writes it); a walker's genes are kept wherever its episode still reads them, so the new file walks as the old one
+did until a search moves it.
+
+- :func:`with_ranges`: the same genes with other declared ranges for some gene blocks (the battery's gene noise
+  is a fraction of a gene's range: another yardstick, the same walker);
+- :func:`rewired`: the walker reading its inputs less some plus others (new rows zero,
+  :func:`evobiped.episode.remap.remap_inputs`);
+- :func:`hearing_genome`: the start of ``--preset steer-es``, the heading sense replaced by the ear signal;
+- :func:`command_genome`: the start of ``--preset walker-command-tune``, the command senses added at zero weight.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import UserError
+from ..core.options import given
+from ..episode import EpisodeConfig
+from ..episode.remap import input_widths, remap_inputs, remap_norm
+from .genome_file import load_genome
+from .presets import path as preset_path
+
+#: m, the Reil ears either side of the pelvis centre
+EAR = 0.25
+
+
+def with_ranges(path: str | Path, ranges: dict[str, tuple[float, float]]) -> tuple[np.ndarray, EpisodeConfig, dict]:
+    """(genome (G,), EpisodeConfig, metadata) of the genome file ``path`` with block name -> (low, high) declared
+    (``[episode.controller_options.genes]``), every gene and the rest of the file kept; UserError for an unknown
+    block, an empty range, or a gene outside its new range (it would be clipped: another walker)."""
+    genome, cfg, meta = load_genome(path)
+    genes = {**given(cfg.controller_options).get("genes", {})}
+    for name, (lo, hi) in ranges.items():
+        if not lo < hi:
+            raise UserError(f"--block {name}: the range [{lo:g}, {hi:g}] is empty (give low < high)")
+        genes[name] = {**genes.get(name, {}), "low": float(lo), "high": float(hi)}
+    new = dataclasses.replace(cfg, controller_options={**given(cfg.controller_options), "genes": genes})
+    layout = new.parts()[1].layout  # ConfigError (a UserError) for an unknown block name
+    for name, sl in layout.slices().items():
+        g, (lo, hi) = genome[sl], (layout.low[sl], layout.high[sl])
+        if ((g < lo) | (g > hi)).any():
+            raise UserError(f"{path}: block {name} has genes in [{g.min():g}, {g.max():g}], outside the range "
+                            f"[{lo.min():g}, {hi.max():g}]; they would be clipped (another walker)")
+    return genome, new, meta
+
+
+def rewired(walker: str | Path, drop: list[str], add: list[str]) -> tuple[np.ndarray, EpisodeConfig]:
+    """(genome (G,), EpisodeConfig) of the walker in genome file ``walker`` reading its inputs less ``drop`` plus
+    ``add`` (appended, zero rows, their declared centre and scale); each kept input keeps its row of weights and
+    its frozen normalisation.  UserError for a sense it does not read (drop) or already reads (add)."""
+    genome, old, _ = load_genome(walker)
+    table = given(old.controller_options)
+    inputs = list(table.get("inputs") or ())
+    for name in drop:
+        if name not in inputs:
+            raise UserError(f"{walker}: the walker does not read {name} (it reads {', '.join(inputs)})")
+    for name in add:
+        if name in inputs and name not in drop:
+            raise UserError(f"{walker}: the walker already reads {name}")
+    new_inputs = [n for n in inputs if n not in drop] + list(add)
+    bare = {k: v for k, v in table.items() if k != "input_norm"}
+    new = dataclasses.replace(old, controller_options={**bare, "inputs": new_inputs})
+    norm = table.get("input_norm")
+    if norm is not None:
+        new = dataclasses.replace(new, controller_options={**bare, "inputs": new_inputs, "input_norm": remap_norm(norm, old, new)})
+    return _remapped(walker, genome, old, new), new
+
+
+def hearing_genome(walker: str | Path, reference: float = 4.0, direct: bool = True) -> tuple[np.ndarray, EpisodeConfig]:
+    """(genome (G,), EpisodeConfig) of ``--preset steer-es``'s hearing walker made from the genome file ``walker``.
+
+    The walker read ``heading_error`` (rad) and turned back to its first facing.  For a source at distance D (m)
+    and a small bearing theta (rad, left positive) the ear signal is s ~ 2 e theta / D (ears at +-e = :data:`EAR`),
+    so with s normalised by sigma_s = 2 e sigma_h / ``reference`` (m) and the rows of s minus those of the heading,
+    the walker turns towards a source ``reference`` m away as it turned back to its facing.  ``direct`` False: the
+    ear signal into the neurons only, not on the direct input-to-motor path.  ``reference`` must be > 0."""
+    if not reference > 0:
+        raise UserError(f"--reference-distance must be > 0 m, got {reference:g}")
+    genome, old, _ = load_genome(walker)
+    if "heading_error" not in (old.controller_options.inputs or ()):
+        raise UserError(f"{walker}: the walker does not read heading_error; nothing to steer with")
+    if old.controller_options.input_norm is None:
+        raise UserError(f"{walker}: the walker has no frozen input_norm; the ear signal's scale is the heading's")
+    sigma_h = old.controller_options.input_norm["std"][_offset(old, "heading_error")]
+    genome, new = _onto_preset(walker, genome, old, "steer-es", extra={"sound": ([0.0], [2 * EAR * sigma_h / reference])},
+                               copy={"sound": ("heading_error", -1.0)})
+    if not direct:  # the ear signal into the neurons only (they saturate; the direct path is linear)
+        c = new.parts()[1]
+        rows = genome[c.layout.slices()["direct_weights"]].reshape(c.n_inputs, -1)
+        rows[_offset(new, "sound")] = 0.0
+        genome[c.layout.slices()["direct_weights"]] = rows.ravel()
+    return genome, new
+
+
+def command_genome(walker: str | Path) -> tuple[np.ndarray, EpisodeConfig]:
+    """(genome (G,), EpisodeConfig) of ``--preset walker-command-tune``'s commanded walker made from the genome file
+    ``walker``: every gene and its frozen input normalisation kept, ``command_speed`` and ``command_turning`` added
+    with zero weights and their declared centre and scale."""
+    genome, old, _ = load_genome(walker)
+    return _onto_preset(walker, genome, old, "walker-command-tune")
+
+
+def _onto_preset(walker, genome: np.ndarray, old: EpisodeConfig, preset: str, *, extra: dict | None = None,
+                 copy: dict | None = None) -> tuple[np.ndarray, EpisodeConfig]:
+    """``genome`` of episode ``old`` moved onto the episode of the preset named ``preset``, its frozen input
+    normalisation with it (a new input: ``extra[name]`` = (means, stds), else its declared centre and scale)."""
+    new = EpisodeConfig(**tomllib.loads(preset_path(preset).read_text())["episode"])
+    norm = old.controller_options.input_norm
+    if norm is not None:
+        new = dataclasses.replace(new, controller_options={**given(new.controller_options), "input_norm": remap_norm(norm, old, new, extra)})
+    return _remapped(walker, genome, old, new, copy), new
+
+
+def _remapped(walker, genome: np.ndarray, old: EpisodeConfig, new: EpisodeConfig, copy: dict | None = None) -> np.ndarray:
+    """:func:`~evobiped.episode.remap.remap_inputs`, its ValueError (controllers that differ) one line naming ``walker``."""
+    try:
+        return remap_inputs(genome, old, new, copy=copy)
+    except ValueError as e:
+        raise UserError(f"{walker}: {e}") from None
+
+
+def _offset(episode: EpisodeConfig, name: str) -> int:
+    """Where input ``name`` of ``episode``'s controller begins among its input columns."""
+    at = 0
+    for n, w in zip(episode.parts()[1].input_names, input_widths(episode)):
+        if n == name:
+            return at
+        at += w
+    raise KeyError(name)
