@@ -58,6 +58,15 @@ def choices_text(kind: str) -> str:
     return ", ".join(reg)
 
 
+def add_stored_walker(p, dest: str = "source", metavar: str = "SOURCE", *, also: str = "", nargs=None,
+                      generation: str = "the best of generation N of a run directory") -> None:
+    """A command's stored walker: the positional ``dest`` (a run directory, its best.json, or a genome JSON file; its
+    help ends with ``also``) and ``--generation N`` (help ``generation``), which
+    :func:`evobiped.record.source.resolve` reads."""
+    p.add_argument(dest, metavar=metavar, nargs=nargs, help=f"a run directory (its best.json) or a genome JSON file{also}")
+    p.add_argument("--generation", type=int, metavar="N", help=generation)
+
+
 def add_source_flag(p) -> None:
     p.add_argument("--source", dest="sources", nargs=2, type=float, action="append", metavar=("X", "Y"),
                    help="a sound source at (X, Y) m for the steer task, one presentation each; repeat it for several "

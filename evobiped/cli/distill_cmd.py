@@ -5,14 +5,13 @@ from __future__ import annotations
 import dataclasses
 
 from ..core.errors import UserError
-from ..flags import positive_float, positive_int, walk_line
+from ..flags import add_stored_walker, positive_float, positive_int, walk_line
 from ..core.progress import Progress
 
 
 def add_distill(sub) -> None:
     p = sub.add_parser("distill", help="train a CTRNN to imitate a walker (DAgger + backpropagation through time); writes a genome file")
-    p.add_argument("teacher", metavar="TEACHER", help="a run directory (its best.json) or a genome JSON file, any controller")
-    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    add_stored_walker(p, "teacher", "TEACHER", also=", any controller")
     p.add_argument("--config", metavar="FILE.toml", help="[distill] settings and [student] controller options")
     p.add_argument("--neurons", type=int, metavar="N", help="the student's neurons (default 40)")
     p.add_argument("--iterations", type=positive_int, metavar="I", help="DAgger iterations (default 5)")

@@ -5,13 +5,13 @@ from __future__ import annotations
 import json
 import math
 
+from ..flags import add_stored_walker
+
 
 def add_gait_report(sub) -> None:
     p = sub.add_parser("gait-report", help="a walker's gait: duty factors, flight, steps, slip, clearance, power, cost of "
                        "transport, and whether it meets the walking criteria")
-    p.add_argument("source", metavar="GENOME|RUN", nargs="+", help="a run directory (its best.json) or a genome JSON "
-                   "file; several: one row each (with --table)")
-    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    add_stored_walker(p, metavar="GENOME|RUN", nargs="+", also="; several: one row each (with --table)")
     p.add_argument("--seconds", type=float, default=20.0, metavar="S", help="measure the first S s of the nominal "
                    "episode (default 20)")
     p.add_argument("--up-for", type=float, metavar="S", help="then let it walk on to S s: 'up' means it stood that long "

@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import sys
 
-from ..flags import add_source_flag, positive_float, positive_int, refuse, walk_line
+from ..flags import add_source_flag, add_stored_walker, positive_float, positive_int, refuse, walk_line
 from ..core.progress import Progress
 
 
 def add_replay(sub) -> None:
     p = sub.add_parser("replay", help="re-simulate a stored genome into a Rerun recording (and figures)")
-    p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
-    p.add_argument("--generation", type=int, metavar="N", help="replay the best of generation N of a run directory")
+    add_stored_walker(p, generation="replay the best of generation N of a run directory")
     p.add_argument("--cell", metavar="I,J", help="replay the elite of cell I,J of a map-elites run's archive (evobiped repertoire)")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
     where = p.add_mutually_exclusive_group()

@@ -7,15 +7,14 @@ import json
 import sys
 
 from ..core.errors import UserError
-from ..flags import positive_float
+from ..flags import add_stored_walker, positive_float
 from ..core.progress import Progress
 from ..tasks.steer import with_sources
 
 
 def add_robustness(sub) -> None:
     p = sub.add_parser("robustness", help="the robustness battery (pushes, target offsets, friction, slopes, gene noise) and its score for any Reil walker")
-    p.add_argument("source", metavar="SOURCE", help="a run directory (its best.json) or a genome JSON file")
-    p.add_argument("--generation", type=int, metavar="N", help="the best of generation N of a run directory")
+    add_stored_walker(p)
     p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
     p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
                    help="pushes fall in the first stride after S s (default 10)")
