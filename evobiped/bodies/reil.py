@@ -64,6 +64,14 @@ def _range_of(actuator: str) -> tuple[float, float]:
     return TABLE_II[actuator.split("_", 1)[1]]
 
 
+# the heading frame's rows from the forward axis (f_x, f_y): forward (f_x, f_y), left (-f_y, f_x)
+_FRAME_COLUMNS, _FRAME_SIGNS = np.array([0, 1, 1, 0]), np.array([1.0, 1.0, -1.0, 1.0])
+#: pitch = -asin(R_20) (+ nose down), roll = asin(R_21) (+ left side up)
+_TILT_SIGNS = np.array([-1.0, 1.0])
+#: cross-product index cycles: (1, 2, 0) and (2, 0, 1)
+_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
+
+
 @dataclass(frozen=True, kw_only=True)
 class ReilOptions:
     """Options of the reil body."""
@@ -201,11 +209,10 @@ class ReilBiped(Body):
         * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s);
         * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.physics.gait`; left = +1).
         """
-        R = sims.xmat[:, self._pelvis].reshape(-1, 3, 3)
+        m = sims.xmat[:, self._pelvis]  # (P, 9): the pelvis rotation, row-major
         fwd = self.heading(sims)
-        left = np.stack([-fwd[:, 1], fwd[:, 0]], axis=1)
-        frame = np.stack([fwd, left], axis=1)  # (P, 2, 2): rows forward, left
-        tilt = np.stack([-np.arcsin(np.clip(R[:, 2, 0], -1, 1)), np.arcsin(np.clip(R[:, 2, 1], -1, 1))], axis=1)
+        frame = (fwd[:, _FRAME_COLUMNS] * _FRAME_SIGNS).reshape(-1, 2, 2)  # (P, 2, 2): rows forward, left = (-f_y, f_x)
+        tilt = np.arcsin(np.clip(m[:, 6:8], -1, 1)) * _TILT_SIGNS  # (-asin R_20, asin R_21)
         omega = sims.cvel[:, self._pelvis, :2]  # world angular velocity, x and y
         com = sims.subtree_com[:, self._pelvis, None, :2] - sims.site_xpos[:, self._feet, :2]  # (P, 2 feet, 2)
         contact = self.contacts(sims)
@@ -255,11 +262,7 @@ class ReilBiped(Body):
         simulation ~5 % of its step time whether a controller reads it or not.
         """
         cvel = sims.cvel[:, 1:]
-        arm = sims.xipos[:, 1:] - sims.subtree_com[:, self._pelvis, None]
-        w, r = cvel[..., :3], arm
-        # w x r written out: the same products and differences as np.cross, at half its cost
-        v = cvel[..., 3:] + np.stack(
-            [w[..., 1] * r[..., 2] - w[..., 2] * r[..., 1], w[..., 2] * r[..., 0] - w[..., 0] * r[..., 2], w[..., 0] * r[..., 1] - w[..., 1] * r[..., 0]],
-            axis=-1,
-        )
+        w, r = cvel[..., :3], sims.xipos[:, 1:] - sims.subtree_com[:, self._pelvis, None]
+        # w x r: component i is w_(i+1) r_(i+2) - w_(i+2) r_(i+1), the same products and differences as np.cross
+        v = cvel[..., 3:] + (w[..., _NEXT] * r[..., _AFTER] - w[..., _AFTER] * r[..., _NEXT])
         return np.einsum("b,pbi->pi", self._mass_share, v)

@@ -48,6 +48,8 @@ class Episode:
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)
         self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
+        #: the task reads the controller's neuron outputs each tick (else they are computed only for a listener)
+        self._task_reads_neurons = task.reads_neurons()
 
     @property
     def n_ticks(self) -> int:
@@ -197,7 +199,7 @@ class Episode:
         for _ in range(n):
             if not alive.any():
                 break
-            neurons = ctrl.neuron_outputs(params, st.controller)
+            neurons = ctrl.neuron_outputs(params, st.controller) if listener is not None or self._task_reads_neurons else None
             inputs, flip = self._inputs(st, P)
             st.controller, out = ctrl.step(params, st.controller, inputs)
             action = to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out)

@@ -17,13 +17,15 @@ def controller_inputs(body: Body, ctrl: Controller, task: Task, st: EpisodeState
     actions its stance frame mirrors (None: no frame).  Collects the senses of rows that are up (``st.senses``)."""
     sims = st.sims
     frame = getattr(ctrl, "frame", None)
-    flip = None if frame is None else flips(gait.read(body.contacts(sims), sims)["stance_leg"])
     names = ctrl.input_names
-    if not names:
-        return np.zeros((P, 0)), flip
-    available = task.sensors(body, sims, st.task)
+    available = task.sensors(body, sims, st.task) if names else {}
     if any(n not in available for n in names):  # body sensors only when the controller reads one
         available = {**body.sensors(sims), **available}
+    flip = None
+    if frame is not None:  # the stance leg from the body's senses when they were read this tick (one gait read per tick)
+        flip = flips(available["stance_leg"] if "stance_leg" in available else gait.read(body.contacts(sims), sims)["stance_leg"])
+    if not names:
+        return np.zeros((P, 0)), flip
     x = np.concatenate([available[n] for n in names], axis=1)
     if flip is not None:
         x = frame.inputs(x, flip)

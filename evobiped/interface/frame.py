@@ -76,9 +76,7 @@ def _mirrored(a: np.ndarray, flip: np.ndarray, perm: np.ndarray, sign: np.ndarra
     """``a`` ``(P, k)`` with rows ``flip`` replaced by their mirror ``sign * a[:, perm]`` (``a`` itself if none flips)."""
     if not flip.any():
         return a
-    out = a.copy()
-    out[flip] = a[flip][:, perm] * sign
-    return out
+    return np.where(flip[:, None], a[:, perm] * sign, a)
 
 
 def flips(stance_leg: np.ndarray) -> np.ndarray:

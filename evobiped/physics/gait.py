@@ -77,14 +77,15 @@ def update(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:
     table = sims.extra.get("gait")
     if table is None or len(ids) == 0:
         return
-    t = sims.time[ids]
-    lifted = table["lifted"][ids]
-    other = 1 - table["stance"][ids]
-    landed = contact[np.arange(len(ids)), other] & (t - lifted[np.arange(len(ids)), other] >= MIN_AIRBORNE)
-    table["stance"][ids] = np.where(landed, other, table["stance"][ids])
-    table["touchdown"][ids] = np.where(landed, t, table["touchdown"][ids])
+    rows = slice(None) if len(ids) == sims.n else ids  # every row (ids sorted and unique): views, no gathers
+    t = sims.time[rows]
+    lifted, stance = table["lifted"][rows], table["stance"][rows]
+    first = stance == 0  # the other foot is the second
+    landed = np.where(first, contact[:, 1], contact[:, 0]) & (t - np.where(first, lifted[:, 1], lifted[:, 0]) >= MIN_AIRBORNE)
+    table["stance"][rows] = np.where(landed, 1 - stance, stance)
+    table["touchdown"][rows] = np.where(landed, t, table["touchdown"][rows])
     # a foot on the ground: inf; a foot that just left it: now; a foot in the air keeps its lift-off time
-    table["lifted"][ids] = np.where(contact, np.inf, np.minimum(lifted, t[:, None]))
+    table["lifted"][rows] = np.where(contact, np.inf, np.minimum(lifted, t[:, None]))
 
 
 def restart(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:
