@@ -118,3 +118,21 @@ def test_configurable_time_constants():
 def test_time_constants_that_euler_cannot_integrate_are_refused(bad):
     with pytest.raises(ConfigError, match="time_constants"):
         CTRNN(n_outputs=6, time_constants=bad)
+
+
+@pytest.mark.parametrize("P", [1, 2, 16, 33, 65])
+@pytest.mark.parametrize("k,n", [(1, 1), (27, 1), (5, 2), (27, 6), (27, 10), (10, 10), (40, 20)])
+def test_row_dot_is_the_plain_products_and_sum_bit_for_bit(P, k, n):
+    """The network's sums (einsum for speed) equal ``(x[:, :, None] * M).sum(axis=1)`` to the last bit, and row p of
+    a batch equals the same row alone: shipped walkers replay exactly and results never depend on the batch size."""
+    from evobiped.controllers.ctrnn import row_dot
+
+    rng = np.random.default_rng(P * 1000 + k * 10 + n)
+    x = rng.normal(size=(P, k)) * rng.choice([1e-3, 1.0, 1e3], size=(P, k))
+    M = rng.normal(size=(P, k, n)) * 5.0
+    plain = (x[:, :, None] * M).sum(axis=1)
+    fast = row_dot(x, M)
+    assert np.array_equal(fast, plain)
+    assert np.array_equal(row_dot(x[-1:], M[-1:]), fast[-1:])
+    wide = np.concatenate([x, x], axis=1)[:, :k]  # a non-contiguous slice, as the inputs are
+    assert np.array_equal(row_dot(wide, M), plain)
