@@ -144,15 +144,29 @@ def test_the_run_recording_holds_the_archive_growth(tmp_path):
 
 
 def test_an_archive_is_seeded_from_a_genome_file(tmp_path):
-    """--from: the first batch is the start genome itself and its mutants."""
+    """--from: the first batch is the start genome itself and its mutants, and the archive after it holds exactly the
+    fittest of them in each cell, by their own episodes and the grid arithmetic (the start genome's cell among them)."""
     config = RunConfig.from_dict({**TINY, "generations": 1, "initial": str(WALKERS / "simbicon_cma_seed5.json")})
     run = Run.create(tmp_path / "run", config)
     start, _, _ = load_genome(WALKERS / "simbicon_cma_seed5.json")
-    assert np.array_equal(run.optimizer.population[0], start)
-    assert not np.array_equal(run.optimizer.population[1], start)
+    batch = run.optimizer.population.copy()
+    assert len(batch) == TINY["map_elites"]["batch"] and np.array_equal(batch[0], start)
+    assert not (batch[1:] == start).all(axis=1).any()
     with make_evaluator(config.episode, "serial") as ev:
         run.evolve(ev)
-    assert len(read_archive(run.dir).cell) >= 1
+    r = config.episode.build().run(batch)
+    me = TINY["map_elites"]
+    low, high, res = (np.array(me[k], float) for k in ("low", "high", "resolution"))
+    m = np.stack([r.terms["speed"], r.terms["turning"]], axis=1)
+    cells = np.clip(np.floor((m - low) / ((high - low) / res)), 0, res - 1).astype(int)
+    fittest = {}
+    for cell, f, g in zip(map(tuple, cells.tolist()), r.fitness, batch):
+        if cell not in fittest or f > fittest[cell][0]:
+            fittest[cell] = (f, g)
+    arch = read_archive(run.dir)
+    assert {tuple(c): o for c, o in zip(arch.cell.tolist(), arch.objective)} == {c: f for c, (f, _) in fittest.items()}
+    assert all(np.array_equal(g, fittest[tuple(c)][1]) for c, g in zip(arch.cell.tolist(), arch.genome))
+    assert tuple(cells[0]) in fittest and len(fittest) >= 2
 
 
 @pytest.mark.parametrize("setting, words", [
