@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 import shlex
 import tomllib
@@ -72,11 +73,23 @@ def shipped_walkers() -> list[Path]:
 @pytest.mark.parametrize("path", shipped_walkers(), ids=lambda p: p.stem)
 def test_every_shipped_walker_records_its_outcome(path):
     """What `replay` checks on a machine whose numerical environment differs: without it, nothing would be."""
-    meta = json.loads(path.read_text())
-    outcome = meta.get("outcome")
+    from dataclasses import asdict
+
+    from evobiped.files.genome_file import load_genome
+    from evobiped.files.outcome import TOLERANCE
+
+    outcome = json.loads(path.read_text()).get("outcome")
     assert isinstance(outcome, dict), f"{path.name} has no outcome: scripts/refresh_walkers.py --write {path}"
-    assert isinstance(outcome.get("fell"), bool) and isinstance(outcome.get("end_time"), (int, float))
-    assert outcome.get("rows") and all("distance" in r and "heading_deg" in r for r in outcome["rows"])
+    _, cfg, _ = load_genome(path)  # the outcome's form checked as replay reads it
+    episode = cfg.nominal().build()
+    rows = outcome["rows"]
+    assert len(rows) == episode.task.presentations  # one row per presentation of the nominal episode
+    assert outcome["fell"] == any(r["fell"] for r in rows) and outcome["end_time"] == min(r["end_time"] for r in rows)
+    for r in rows:
+        assert 0 < r["end_time"] <= cfg.seconds and (r["fell"] or r["end_time"] == cfg.seconds), r
+        assert r["distance"] >= 0 and (r["heading_deg"] is None or -180 <= r["heading_deg"] <= 180), r
+        assert r["distance"] == pytest.approx(math.dist([0.0, 0.0], r["end_position"]), abs=0.5), r  # starts near the origin
+    assert outcome["tolerance"] == asdict(TOLERANCE)
 
 
 def test_ci_cites_a_readme_section_that_exists():
@@ -91,11 +104,44 @@ def toml_blocks(text: str) -> list[str]:
     return re.findall(r"```toml\n(.*?)```", text, re.S)
 
 
+def settings_of(block: str, before: dict | None) -> dict:
+    """The settings a TOML block of the docs stands for.  Its first line may say where it goes: ``# in [TABLE]`` (a
+    table's lines), ``# over PRESET`` (laid over a preset), ``# over the settings above`` (over the page's block
+    before, ``before``); otherwise it is a whole settings file."""
+    from evobiped.core.fileio import read_toml
+    from evobiped.files.presets import merge, path, split_declarations
+
+    table, first = tomllib.loads(block), block.splitlines()[0]
+    if m := re.match(r"# in \[([\w.]+)\]", first):
+        for key in reversed(m[1].split(".")):
+            table = {key: table}
+    elif m := re.match(r"# over (the settings above|[\w-]+)", first):
+        base = before if m[1] == "the settings above" else split_declarations(m[1], read_toml(path(m[1])))[0]
+        assert base is not None, f"{first}: no settings above"
+        table = merge(base, table)
+    return table
+
+
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
-def test_every_toml_block_in_the_docs_parses(page):
-    """A settings file shown in the docs can be pasted as it stands."""
+def test_every_toml_block_in_the_docs_is_accepted_as_evobiped_reads_it(page):
+    """A settings file shown in the docs can be pasted as it stands: an evolve settings file (or a distill one) that
+    ``evolve --config`` (``distill --config``) accepts, every name declared and every value in range."""
+    from evobiped.core.errors import UserError
+    from evobiped.run import RunConfig
+
+    before = None
     for block in toml_blocks(page.read_text()):
-        tomllib.loads(block)
+        table = settings_of(block, before)
+        try:
+            if "distill" in table:
+                from evobiped.distill.settings import parse_options
+
+                parse_options(table["distill"])
+            else:
+                RunConfig.from_dict(table)
+        except UserError as exc:
+            raise AssertionError(f"{page.name}: {exc}\n{block}") from None
+        before = table
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
