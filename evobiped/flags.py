@@ -128,7 +128,6 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     where = config or (f"preset {preset}" if preset else "")
     check_tables(d, where)  # before the flags go into its tables
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
-    ga = dict(d.get("ga", {})) if isinstance(d.get("ga", {}), dict) else d.get("ga")
     for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
         if value is not None:
             ep[key] = value
@@ -138,28 +137,25 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     if population is not None:  # the population of every optimizer; only the chosen one's refuses a value
         from .core.errors import ConfigError
         from .core.options import check_value
-        from .run.run_config import RunConfig
+        from .optimizers import OPTIMIZERS
 
         chosen = optimizer or d.get("optimizer", "ga")
-        for table, name, key, value in (("ga", "ga", "population", population), ("cma", "cma", "population", population),
-                                        ("es", "es", "pairs", max(1, population // 2)), ("map_elites", "map-elites", "batch", population)):
+        for name, cls in OPTIMIZERS.items():
+            key, value = cls.population_setting(population)
             try:
-                check_value(RunConfig.__dataclass_fields__[table].default_factory, key, value, "--population")
+                check_value(cls.Options, key, value, "--population")
             except ConfigError:
                 if name == chosen:
                     raise
                 continue
-            if table == "ga":
-                ga[key] = value
-            else:
-                d[table] = {**(d.get(table) if isinstance(d.get(table), dict) else {}), key: value}
+            d[cls.table] = {**(d.get(cls.table) if isinstance(d.get(cls.table), dict) else {}), key: value}
     for key, value in (("optimizer", optimizer), ("generations", generations), ("seed", seed), ("backend", backend),
                        ("workers", workers), ("address", address), ("initial", initial)):
         if value is not None:
             d[key] = value
     if freeze:
         d["frozen_blocks"] = [b.strip() for b in freeze.split(",") if b.strip()]
-    built = RunConfig.from_dict({**d, "episode": ep, "ga": ga}, where=where)
+    built = RunConfig.from_dict({**d, "episode": ep}, where=where)
     if declared.get("needs_start") and not built.initial:
         refuse(f"--preset {preset}", "tunes a given genome: name it with --from GENOME_OR_RUN (see `evobiped presets`)")
     return dataclasses.replace(built, episode=with_sources(built.episode, sources))

@@ -117,7 +117,7 @@ def environments_table() -> str:
 
 def presets_table() -> str:
     """The shipped presets: controller, optimizer and population, generations and episodes, and the preset's own line."""
-    from .run.run_config import RunConfig
+    from .run.run_config import RunConfig, population_of
     from .core.fileio import read_toml
     from .files.presets import describe, names, path, split_declarations
 
@@ -125,11 +125,10 @@ def presets_table() -> str:
     for name in names():
         settings, declared = split_declarations(name, read_toml(path(name)))
         c = RunConfig.from_dict(settings, where=f"preset {name}")
-        population = getattr(getattr(c, c.optimizer, None), "population", None)  # the optimizer's own table
-        if c.optimizer == "es":  # ES: mirrored pairs and theta's own rows, not a population table
-            population = 2 * c.es.pairs + c.es.evaluation_rows
-        if c.optimizer == "map-elites":  # MAP-Elites: the batch asked per generation
-            population = c.map_elites.batch
+        # the optimizer's population setting (CMA-ES's 0: its default, which depends on the genes), else the walkers it
+        # evaluates per generation (ES: mirrored pairs and theta's own rows; MAP-Elites: the batch)
+        population = getattr(c.options, "population", None)
+        population = population_of(c) if population is None else population
         pop = f", {population}" if population else ", its default (CMA-ES: 4 + ⌊3 ln genes⌋)"
         episode = f"{c.generations} × {c.episode.seconds:g} s"
         what = describe(name).replace("|", "\\|") + (" (needs `--from`)" if declared["needs_start"] else "")  # a table cell

@@ -91,7 +91,7 @@ SMALL = dict(controller="simbicon", seconds=1.0, task_options={"fitness": "forwa
 
 def _config(**perturbations) -> RunConfig:
     return RunConfig(episode=EpisodeConfig(**SMALL, perturbations=perturbations), optimizer="cma",
-                     cma=CMAOptions(population=6), generations=4, seed=3, backend="serial")
+                     optimizer_options={"cma": CMAOptions(population=6)}, generations=4, seed=3, backend="serial")
 
 
 def test_the_best_of_an_assisted_run_is_an_unassisted_generation(tmp_path):

@@ -133,7 +133,7 @@ def test_a_resume_costs_the_same_at_any_generation():
 
 
 SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task_options={"fitness": "forward"}),
-                  optimizer="cma", cma=CMAOptions(population=6), generations=4, seed=2, backend="serial")
+                  optimizer="cma", optimizer_options={"cma": CMAOptions(population=6)}, generations=4, seed=2, backend="serial")
 
 
 def test_cma_run_resumes_bit_identically(tmp_path):

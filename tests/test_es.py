@@ -324,9 +324,9 @@ def test_a_checkpoint_list_that_is_not_numbers_is_one_line(value, nulls, rows, w
     from evobiped.optimizers.es import ESState
 
     with pytest.raises(UserError) as err:
-        ESState.numbers_of({"theta": value}, "theta", nulls=nulls, rows=rows)
+        ESState.numbers_of({"theta": value}, "theta", null=np.nan if nulls else None, rows=rows)
     assert str(err.value) == f"checkpoint: {words}"
-    got = ESState.numbers_of({"fitness": [1, None, 2.5]}, "fitness", nulls=True)
+    got = ESState.numbers_of({"fitness": [1, None, 2.5]}, "fitness", null=np.nan)
     assert np.isnan(got[1]) and got[[0, 2]].tolist() == [1.0, 2.5]
     assert ESState.numbers_of({"g": [[1, 2], [3, 4]]}, "g", rows=2).shape == (2, 2)
     assert ESState.numbers_of({"g": []}, "g", rows=3).shape == (0, 3)

@@ -26,7 +26,7 @@ from evobiped.run.run_context import HISTORY_EXTRA, STOP_COLUMN
 
 from .conftest import cli
 
-SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), ga=GAOptions(population=8), generations=3, seed=7, backend="serial")
+SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), optimizer_options={"ga": GAOptions(population=8)}, generations=3, seed=7, backend="serial")
 
 
 def fitness_history(run_dir) -> list[list[str]]:
@@ -211,7 +211,7 @@ def test_individuals_jsonl_records_every_row_with_its_lineage(tmp_path):
     with make_evaluator(SMALL.episode, "serial") as ev:
         run.evolve(ev)
     lines = read_individuals(run.dir / "individuals.jsonl")
-    P, k = SMALL.ga.population, SMALL.ga.n_survivors
+    P, k = SMALL.options.population, SMALL.options.n_survivors
     assert [(r["generation"], r["row"]) for r in lines] == [(g, i) for g in range(SMALL.generations) for i in range(P)]
     by = [lines[g * P:(g + 1) * P] for g in range(SMALL.generations)]
     assert all(r["evaluated"] and r["previous"] is None and r["parents"] is None for r in by[0])
@@ -432,7 +432,7 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
     """PD gains far beyond what the 20 ms step can integrate blow every walker up: the run goes on."""
     cfg = RunConfig(
         episode=EpisodeConfig(seconds=1.0, body_options={"timestep": 0.02, "kp": 1e6, "kv": 0.0}),
-        ga=GAOptions(population=6),
+        optimizer_options={"ga": GAOptions(population=6)},
         generations=2,
         backend="serial",
     )

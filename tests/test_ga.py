@@ -159,7 +159,7 @@ def test_table_iii_numbers_are_config_values(tmp_path):
     from evobiped.evaluation import make_evaluator
 
     genes = {"weights": {"init_mean": 2.0, "init_sigma": 0.0}, "time_constants": {"mutation_sigma": 0.0, "low": 1.0, "high": 3.0}}
-    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), ga=GAOptions(population=10), generations=3, backend="serial")
+    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), optimizer_options={"ga": GAOptions(population=10)}, generations=3, backend="serial")
     run = Run.create(tmp_path / "r", cfg)
     layout = cfg.episode.build().controller.layout
     s = layout.slices()

@@ -223,7 +223,7 @@ def test_a_scheduled_run_resumes_and_parallelises_identically(tmp_path):
     ramp = {"presentations": 2, "pushes": 1, "push_after": 0.2, "push_force": {"start": 0.0, "end": 20.0, "generations": 3},
             "gene_noise": {"start": 0.0, "end": 0.05, "generations": 2, "after": 1}, "slope": {"start": 0.0, "end": 0.1, "generations": 3},
             "aggregate": "mean", "aggregate_later": "worst", "aggregate_from": 2}
-    config = RunConfig(episode=EpisodeConfig(seconds=1.5, perturbations=ramp), ga=GAOptions(population=8), generations=5, seed=7,
+    config = RunConfig(episode=EpisodeConfig(seconds=1.5, perturbations=ramp), optimizer_options={"ga": GAOptions(population=8)}, generations=5, seed=7,
                        backend="serial")
     whole, cut = whole_and_resumed(tmp_path, config)
     assert fitness_history(cut) == fitness_history(whole.dir)

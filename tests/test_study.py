@@ -100,7 +100,7 @@ def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     from evobiped.evaluation import make_evaluator
     from evobiped.experiments.reil.study import StudyConfig, open_study, run_dir, run_study
 
-    cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), ga=GAOptions(population=4), generations=3),
+    cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), optimizer_options={"ga": GAOptions(population=4)}, generations=3),
                       runs=1, conditions=("plain",), recheck_seconds=3.0)
     ref = run_study(tmp_path / "whole", cfg, backend="serial")
 

@@ -11,13 +11,14 @@ from ..core.progress import Progress, hms
 
 
 def add_evolve(sub) -> None:
+    from ..optimizers import OPTIMIZERS, described
+
     what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings), CMA-ES, evolution strategies or MAP-Elites (--optimizer)"
     p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
-    p.add_argument("--optimizer", choices=("ga", "cma", "es", "map-elites"), help="ga (Reil & Husbands' GA, default), cma (CMA-ES), "
-                   "es (evolution strategies) or map-elites (a repertoire of gaits; the qd extra)")
+    p.add_argument("--optimizer", choices=tuple(OPTIMIZERS), help=f"{described(quote='')}; default ga")
     p.add_argument("--body", help=f"body: {choices_text('body')} (default reil)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")

@@ -1,4 +1,4 @@
-"""What every optimizer shares: the ask/tell seam over a population.
+"""What every optimizer shares: the ask/tell seam over a population, its construction and its random stream.
 
 An optimizer holds ``population`` ``(P, G)`` and ``fitness`` ``(P,)`` (NaN: not yet
 evaluated).  ``ask()`` gives the population and the rows to evaluate; ``tell(result)``
@@ -6,24 +6,39 @@ takes their :class:`~evobiped.episode.result.EpisodeResult` (or their fitness al
 ``next_generation()`` moves the fitness along with the individuals it keeps and
 returns, for each new row, the previous row it is (-1: a new individual), so that the
 run carries each individual's outcome (:mod:`evobiped.run.individuals`) and
-never reorders anything.  Fitness: higher is better.
+never reorders anything.  Fitness: higher is better; an unstable row (a fitness that is not a finite number)
+ranks last (-inf).
+
+Every optimizer is made alike, ``cls(layout, options, seed=, initial=, mutable=)`` (:meth:`Optimizer.__init__`: the
+genome layout, its settings, the run seed, a start genome, the genes it may change), draws generation g's random
+numbers from (run seed, g) alone (:meth:`Optimizer.rng`), and registers (:data:`evobiped.optimizers.OPTIMIZERS`) its
+name, its ``Options`` and the config table they are read from.
 
 Between generations an optimizer is a value: :meth:`Optimizer.state` gives a frozen
 :class:`OptimizerState` (its subclass per optimizer), which the checkpoint stores as
 ``state.to_dict()`` under the key ``optimizer``; :meth:`Optimizer.restore` puts an
 optimizer in that state, and a run resumed from it continues exactly as an
-uninterrupted one.
+uninterrupted one.  A checkpoint's lists of numbers are read by one reader, :meth:`OptimizerState.numbers_of`.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 import numpy as np
 
-from ..core.errors import UserError
+from ..core.errors import ConfigError, UserError
+from ..interface.genome import GenomeLayout
+
+#: the largest population any optimizer accepts (memory is checked against the machine too: ``run_config.check_memory``)
+MAX_POPULATION = 10**7
+
+
+def generation_rng(seed: int, generation: int) -> np.random.Generator:
+    """The random stream of one generation, from (run seed, generation) only."""
+    return np.random.default_rng([int(seed), int(generation), 0x6A])
 
 
 def frozen_array(values: Any) -> np.ndarray:
@@ -63,35 +78,101 @@ class OptimizerState:
         return gen
 
     @classmethod
-    def numbers_of(cls, table: dict, key: str, *, nulls: bool = False, rows: int | None = None) -> np.ndarray:
-        """``table[key]`` of a checkpoint as an array: a list of finite numbers ``(n,)`` (with ``nulls``, null reads
-        NaN: a value not yet known), or with ``rows`` = W a list of rows of W finite numbers ``(n, W)``; UserError,
-        one line naming ``<optimizer>.<key>``, for anything else."""
+    def numbers_of(cls, table: dict, key: str, *, null: float | None = None, rows: int | None = None,
+                   length: int | None = None, minus_infinity: bool = False, non_empty: bool = False) -> np.ndarray:
+        """``table[key]`` of a checkpoint as an array: a list of finite numbers ``(n,)`` (``null``: the value a null
+        reads as, e.g. NaN for a value not yet known; None: no nulls), of ``length`` entries when given, or with ``rows``
+        = W a list of rows of W finite numbers ``(n, W)``; ``minus_infinity``: -Infinity (an unstable row) is a number
+        too; ``non_empty``: at least one entry.  UserError, one line naming ``<optimizer>.<key>``, for anything else."""
         vals = table.get(key)
 
         def number(x) -> bool:
-            return (x is None and nulls) or (isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x))
+            if x is None:
+                return null is not None
+            return isinstance(x, (int, float)) and not isinstance(x, bool) and (math.isfinite(x) or (minus_infinity and x == -math.inf))
 
+        wanted = ("finite numbers" + (", -Infinity" if minus_infinity else "") + (" or nulls" if null is not None else "")
+                  if rows is None else f"rows of {rows} finite numbers")
         if rows is None:
             ok = isinstance(vals, list) and all(map(number, vals))
-            wanted = "finite numbers" + (" or nulls" if nulls else "")
         else:
             ok = isinstance(vals, list) and all(isinstance(r, list) and len(r) == rows and all(map(number, r)) for r in vals)
-            wanted = f"rows of {rows} finite numbers"
+        ok = ok and (length is None or len(vals) == length) and (not non_empty or len(vals) > 0)
         if not ok:
-            raise UserError(f"checkpoint: {cls.name}.{key} must be a list of {wanted}")
+            raise UserError(f"checkpoint: {cls.name}.{key} must be a {'non-empty ' if non_empty else ''}list of "
+                            f"{'' if length is None else f'{length} '}{wanted}")
+        value = lambda x: null if x is None else float(x)  # noqa: E731
         if rows is None:
-            return np.array([np.nan if x is None else float(x) for x in vals])
-        return np.array([[np.nan if x is None else float(x) for x in r] for r in vals]).reshape(-1, rows)
+            return np.array([value(x) for x in vals], float)
+        return np.array([[value(x) for x in r] for r in vals], float).reshape(-1, rows)
 
 
 class Optimizer:
-    """Base of the optimizers (``ga``, ``cma``); subclasses set ``population`` and ``fitness`` and make the next generation."""
+    """Base of the optimizers: what they are made from, their random stream and the ask/tell seam.  A subclass registers
+    (:data:`evobiped.optimizers.OPTIMIZERS`) with ``name``, ``Options`` (its settings' frozen dataclass), ``table`` (the
+    run config's table they are read from) and ``about``; it sets ``population`` and ``fitness`` and makes the next
+    generation."""
 
-    name = ""
+    #: the registry name (``--optimizer``, config ``optimizer``, a checkpoint state's ``name``)
+    name: ClassVar[str] = ""
+    #: its settings: a frozen dataclass of ``option`` fields
+    Options: ClassVar[type]
+    #: the run config's table its settings are read from (``[ga]``) and written to (config.json)
+    table: ClassVar[str] = ""
+    #: what it is, in a few words (the ``optimizer`` option's and ``--optimizer``'s help)
+    about: ClassVar[str] = ""
+    #: config.json holds this table in every run (the GA's and CMA-ES's, as it always has), not only in this
+    #: optimizer's runs when its settings differ from the defaults
+    always_written: ClassVar[bool] = False
+    #: its ``evaluation_rows()`` stand for the generation (ES's theta): history.csv reports how they did
+    reports_evaluation_rows: ClassVar[bool] = False
     population: np.ndarray
     fitness: np.ndarray
     generation: int
+
+    def __init__(self, layout: GenomeLayout, config: Any, *, seed: int, initial: np.ndarray | None = None,
+                 mutable: np.ndarray | None = None):
+        """``layout``: the genomes' layout (G genes); ``config``: its ``Options``; ``seed``: the run seed; ``initial``: a
+        start genome ``(G,)`` or rows of them ``(n, G)`` (None: the layout's initial distribution or mean);
+        ``mutable`` ``(G,)`` bool: the genes it may change (None: all).  ConfigError for a mask that changes nothing
+        or does not fit, UserError for a start genome that does not fit the layout."""
+        self.layout, self.config, self.seed = layout, config, int(seed)
+        self.low, self.high = layout.low, layout.high
+        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
+        if self.mutable.shape != (layout.size,) or not self.mutable.any():
+            raise ConfigError("the mutable-gene mask must have one entry per gene and at least one True")
+        #: the start genomes ``(n, G)`` (None: none)
+        self.initial = None if initial is None else layout.validate(initial, what="initial genome")
+
+    def rng(self, generation: int) -> np.random.Generator:
+        """Generation ``generation``'s random stream (:func:`generation_rng`: from the run seed and it alone)."""
+        return generation_rng(self.seed, generation)
+
+    def start_point(self) -> np.ndarray:
+        """One point ``(G,)`` to start a search from: the first start genome, else the layout's ``init_mean``, within the
+        genes' bounds."""
+        return np.clip(self.layout.init_mean if self.initial is None else self.initial[0], self.low, self.high).astype(float)
+
+    # ---- what the run asks of the registered class before it makes one
+    @classmethod
+    def population_size(cls, options: Any, n_genes: int) -> int:
+        """Walkers evaluated per generation with settings ``options`` for genomes of ``n_genes`` genes."""
+        return int(options.population)
+
+    @classmethod
+    def population_setting(cls, population: int) -> tuple[str, int]:
+        """The setting (name, value) of this optimizer's table that ``--population`` gives."""
+        return "population", population
+
+    @classmethod
+    def settled(cls, options: Any, scored_differently: Callable[[], bool]) -> Any:
+        """``options`` with what depends on the run decided (``scored_differently()``: the run scores one generation
+        differently from another); default: as given."""
+        return options
+
+    @classmethod
+    def check_task(cls, options: Any, task) -> None:
+        """ConfigError (one line) when ``options`` ask the task for what it has not (e.g. a term); default: nothing asked."""
 
     def ask(self) -> tuple[np.ndarray, np.ndarray]:
         """The population ``(P, G)`` and a bool mask ``(P,)`` of the individuals whose fitness is unknown."""
@@ -106,6 +187,11 @@ class Optimizer:
             raise ValueError(f"tell: expected {int(unknown.sum())} fitness values, got {fitness.shape}")
         # an undefined fitness (should not happen: unstable runs score as falls) ranks last
         self.fitness[unknown] = np.where(np.isfinite(fitness), fitness, -np.inf)
+
+    def evaluation_rows(self) -> np.ndarray | None:
+        """The rows that stand for the generation (ES's theta: the run's curriculum watches them, its running normaliser
+        learns from their senses); None (this default): the fittest row does, and every evaluated row is learnt from."""
+        return None
 
     def state(self) -> OptimizerState:
         """This optimizer between generations, as a frozen value (what the checkpoint stores)."""

@@ -35,11 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import ConfigError, UserError
-from ..interface.genome import GenomeLayout
 from ..core.options import check_fields, option
 from . import cma_state
-from .base import Optimizer, OptimizerState, frozen_array
-from .ga import MAX_POPULATION, generation_rng
+from .base import MAX_POPULATION, Optimizer, OptimizerState, frozen_array
 
 
 def _population(p) -> None:
@@ -106,21 +104,21 @@ class CMAES(Optimizer):
     ``state()`` / ``restore()``: its state as a frozen value (:class:`CMAState`) for the checkpoint.
     """
 
-    name = "cma"
+    name, Options, table, about, always_written = "cma", CMAOptions, "cma", "CMA-ES", True
 
-    def __init__(self, layout: GenomeLayout, config: CMAOptions, *, seed: int, initial: np.ndarray | None = None, mutable: np.ndarray | None = None):
+    def __init__(self, layout, config: CMAOptions, **start):
+        """As every optimizer (:meth:`Optimizer.__init__`); the initial mean is the start point (the start genome, else
+        the layout's ``init_mean``)."""
         if importlib.util.find_spec("cma") is None:  # pragma: no cover - a core dependency
             raise UserError("the cma optimizer needs pycma: pip install cma")
-        self.layout, self.config, self.seed = layout, config, int(seed)
-        self.low, self.high = layout.low, layout.high
+        super().__init__(layout, config, **start)
         self.span = np.where(self.high > self.low, self.high - self.low, 1.0)
-        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
-        if self.mutable.shape != (layout.size,) or not self.mutable.any():
-            raise ConfigError("the mutable-gene mask must have one entry per gene and at least one True")
-        if initial is not None:
-            initial = layout.validate(initial, what="initial genome")[0]
-        self.x0 = np.clip(layout.init_mean if initial is None else initial, self.low, self.high)
+        self.x0 = self.start_point()
         self._rewind()
+
+    @classmethod
+    def population_size(cls, options: CMAOptions, n_genes: int) -> int:
+        return options.lam(n_genes)
 
     def _rewind(self) -> None:
         self.generation = 0
@@ -159,7 +157,7 @@ class CMAES(Optimizer):
         return np.clip(g, self.low, self.high)
 
     def _sample(self) -> None:
-        self.normal.rng = generation_rng(self.seed, self.generation)
+        self.normal.rng = self.rng(self.generation)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             self._asked = self.es.ask()
@@ -232,17 +230,12 @@ class CMAES(Optimizer):
             restart = table.get("restart")
             if not (isinstance(restart, int) and not isinstance(restart, bool) and restart >= 0):
                 raise UserError(f"checkpoint: cma.restart must be a whole number >= 0, got {restart!r}")
-            return CMAState(generation=generation, fitness=_numbers(fitness, "fitness", allow_nan=True), strategy=table["strategy"],
-                            restart=restart)
+            return CMAState(generation=generation, fitness=CMAState.numbers_of(table, "fitness", null=np.nan),
+                            strategy=table["strategy"], restart=restart)
         told = table.get("told")
         if not (isinstance(told, list) and generation == len(told)):
             raise UserError("checkpoint: the CMA-ES state needs 'strategy' (or, from an older checkpoint, 'told': one list per generation)")
-        return CMAState(generation=generation, told=tuple(_numbers(f, f"told[{g}]") for g, f in enumerate(told)),
-                        fitness=_numbers(fitness, "fitness", allow_nan=True))
-
-
-def _numbers(values, what: str, *, allow_nan: bool = False) -> np.ndarray:
-    """A checkpoint list of finite numbers (None: an unstable -inf, or unknown with ``allow_nan``)."""
-    if not isinstance(values, list) or not all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)) for v in values):
-        raise UserError(f"checkpoint: CMA-ES {what} must be a list of finite numbers or nulls")
-    return np.array([(np.nan if allow_nan else -np.inf) if v is None else float(v) for v in values])
+        # a null told: an unstable individual (-inf); a null fitness: not yet evaluated
+        return CMAState(generation=generation, told=tuple(CMAState.numbers_of({f"told[{g}]": f}, f"told[{g}]", null=-np.inf)
+                                                          for g, f in enumerate(told)),
+                        fitness=CMAState.numbers_of(table, "fitness", null=np.nan))

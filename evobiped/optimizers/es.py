@@ -57,10 +57,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import ConfigError, UserError
-from ..interface.genome import GenomeLayout
 from ..core.options import check_fields, option
-from .base import Optimizer, OptimizerState, frozen_array
-from .ga import MAX_POPULATION, generation_rng
+from .base import MAX_POPULATION, Optimizer, OptimizerState, frozen_array
 
 BETA1, BETA2, EPS = 0.9, 0.999, 1e-8
 
@@ -131,21 +129,28 @@ class EvolutionStrategy(Optimizer):
     """Ask/tell ES over a :class:`GenomeLayout` (:class:`~.base.Optimizer`): rows ``[theta + sigma eps (N), theta - sigma eps
     (N), theta (evaluation_rows)]``."""
 
-    name = "es"
+    name, Options, table, about = "es", ESOptions, "es", "evolution strategies"
+    reports_evaluation_rows = True
 
-    def __init__(self, layout: GenomeLayout, config: ESOptions, *, seed: int, initial: np.ndarray | None = None,
-                 mutable: np.ndarray | None = None):
-        self.layout, self.config, self.seed = layout, config, int(seed)
-        self.low, self.high = layout.low, layout.high
-        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
-        if initial is not None:
-            initial = layout.validate(initial, what="initial genome")[0]
-        self.theta = np.clip(layout.init_mean if initial is None else initial, self.low, self.high).astype(float)
+    def __init__(self, layout, config: ESOptions, **start):
+        """As every optimizer (:meth:`Optimizer.__init__`); theta starts at the start point (the start genome, else the
+        layout's ``init_mean``)."""
+        super().__init__(layout, config, **start)
+        self.theta = self.start_point()
         self.centre = layout.centre if config.weight_decay_to == "centre" else np.zeros(layout.size)
         self.decays = layout.decays if config.weight_decay_to == "centre" else np.ones(layout.size, bool)
         self.m, self.v = np.zeros(layout.size), np.zeros(layout.size)
         self.generation = 0
         self._sample()
+
+    @classmethod
+    def population_size(cls, options: ESOptions, n_genes: int) -> int:
+        return 2 * options.pairs + options.evaluation_rows
+
+    @classmethod
+    def population_setting(cls, population: int) -> tuple[str, int]:
+        """``--population`` P: P // 2 mirrored pairs (at least one)."""
+        return "pairs", max(1, population // 2)
 
     @property
     def sigma(self) -> float:
@@ -154,7 +159,7 @@ class EvolutionStrategy(Optimizer):
         return max(c.sigma * c.sigma_decay ** self.generation, c.sigma_min) if c.sigma_decay < 1 else c.sigma
 
     def _noise(self) -> np.ndarray:
-        eps = generation_rng(self.seed, self.generation).standard_normal((self.config.pairs, self.layout.size))
+        eps = self.rng(self.generation).standard_normal((self.config.pairs, self.layout.size))
         return eps * self.mutable
 
     def _sample(self) -> None:
@@ -208,7 +213,7 @@ class EvolutionStrategy(Optimizer):
             step = total * (c.learning_rate / (len(keep) * spread)) if spread > 0 else 0.0
             self.theta = self.theta + step * self.mutable
         else:
-            r = centred_ranks(np.where(finite, f, -np.inf), c.ties)  # unstable: below every finite one
+            r = centred_ranks(f, c.ties)  # unstable (told as -inf): below every finite one
             rp, rm = r[:N], r[N:]
             g = ((rp - rm) @ eps if dp is None else rp @ dp + rm @ dm) / (2 * N)  # the same where nothing is clipped
             g = (g - c.weight_decay * (self.theta - self.centre) * self.decays) * self.mutable
@@ -241,7 +246,7 @@ class EvolutionStrategy(Optimizer):
 
     def _state_from(self, table: dict) -> ESState:
         gen = ESState.generation_of(table)
-        out = {k: ESState.numbers_of(table, k, nulls=k == "fitness") for k in ("theta", "m", "v", "fitness")}
+        out = {k: ESState.numbers_of(table, k, null=np.nan if k == "fitness" else None) for k in ("theta", "m", "v", "fitness")}
         if (out["v"] < 0).any():
             raise UserError("checkpoint: es.v must be >= 0")
         return ESState(generation=gen, **out)

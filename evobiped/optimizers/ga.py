@@ -17,18 +17,14 @@ Fitness: higher is better.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..core.errors import ConfigError, UserError
-from ..interface.genome import GenomeLayout
 from ..core.options import check_fields, option
-from .base import Optimizer, OptimizerState, frozen_array
-
-
-#: the largest population any optimizer accepts (memory is checked against the machine too: ``run.check_memory``)
-MAX_POPULATION = 10**7
+from .base import MAX_POPULATION, Optimizer, OptimizerState, frozen_array
 
 
 def _bool_or_none(v) -> None:
@@ -74,11 +70,6 @@ class GAState(OptimizerState):
                 "fitness": [None if np.isnan(f) else float(f) for f in self.fitness]}
 
 
-def generation_rng(seed: int, generation: int) -> np.random.Generator:
-    """The random stream of one generation, from (run seed, generation) only."""
-    return np.random.default_rng([int(seed), int(generation), 0x6A])
-
-
 class GA(Optimizer):
     """Ask/tell truncation GA (the optimizer named ``ga``; the seam is :class:`~.base.Optimizer`'s).
 
@@ -88,32 +79,29 @@ class GA(Optimizer):
     survivors first (best first), keeping their fitness and outcome.
     """
 
-    name = "ga"
+    name, Options, table, about, always_written = "ga", GAOptions, "ga", "Reil & Husbands' GA", True
 
-    def __init__(
-        self,
-        layout: GenomeLayout,
-        config: GAOptions,
-        *,
-        seed: int,
-        initial: np.ndarray | None = None,
-        mutable: np.ndarray | None = None,
-    ):
-        self.layout, self.config, self.seed = layout, config, int(seed)
-        self.low, self.high = layout.low, layout.high
+    def __init__(self, layout, config: GAOptions, **start):
+        """As every optimizer (:meth:`Optimizer.__init__`); the population is ``config.population`` clones of the start
+        genomes (repeated in order), or samples of the layout's initial distribution."""
+        super().__init__(layout, config, **start)
         self.sigma = layout.mutation_sigma
-        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
-        if self.mutable.shape != (layout.size,) or not self.mutable.any():
-            raise ConfigError("the mutable-gene mask must have one entry per gene and at least one True")
         self.generation = 0
         P = config.population
-        rng = generation_rng(self.seed, 0)
-        if initial is None:
+        rng = self.rng(0)
+        if self.initial is None:
             self.population = layout.sample(rng, P)
         else:  # clones of one genome (G,), or a population (n, G) repeated to size P
-            initial = layout.validate(initial, what="initial genome")
-            self.population = initial[np.arange(P) % len(initial)].copy()
+            self.population = self.initial[np.arange(P) % len(self.initial)].copy()
         self.fitness = np.full(P, np.nan)
+
+    @classmethod
+    def settled(cls, options: GAOptions, scored_differently) -> GAOptions:
+        """``reevaluate_survivors`` none: the survivors are scored again exactly when the run scores each generation
+        differently."""
+        if options.reevaluate_survivors is None:
+            return dataclasses.replace(options, reevaluate_survivors=scored_differently())
+        return options
 
     @property
     def mutation_rate(self) -> float:
@@ -130,7 +118,7 @@ class GA(Optimizer):
         parents = order[:k]
         children_of = parents[np.arange(P - k) % k]
         self.generation += 1
-        rng = generation_rng(self.seed, self.generation)
+        rng = self.rng(self.generation)
         children = self.mutate(self.population[children_of], rng)
         self.population = np.concatenate([self.population[parents], children])
         fit = np.full(P, np.nan)
@@ -166,13 +154,7 @@ class GA(Optimizer):
         self.population, self.fitness, self.generation = pop.copy(), np.array(state.fitness, float), int(state.generation)
 
     def _state_from(self, table: dict) -> GAState:
-        gen, pop, fit = GAState.generation_of(table), table.get("population"), table.get("fitness")
-        rows_ok = isinstance(pop, list) and all(isinstance(r, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in pop)
-        if not rows_ok or not pop or len({len(r) for r in pop}) > 1:
-            raise UserError("checkpoint: ga.population must be a non-empty list of genomes (lists of numbers of one length)")
-        pop = np.array(pop, float).reshape(len(pop), -1)
-        P = len(pop)
-        if not (isinstance(fit, list) and len(fit) == P and all(f is None or (isinstance(f, (int, float)) and not isinstance(f, bool) and not np.isnan(f) and f != np.inf) for f in fit)):
-            raise UserError(f"checkpoint: ga.fitness must be a list of {P} numbers (or -Infinity, or null for unknown)")
-        values = np.array([np.nan if f is None else f for f in fit], float)
-        return GAState(generation=gen, population=pop, fitness=values)
+        gen = GAState.generation_of(table)
+        pop = GAState.numbers_of(table, "population", rows=self.layout.size, non_empty=True)
+        fitness = GAState.numbers_of(table, "fitness", null=np.nan, length=len(pop), minus_infinity=True)  # null: unknown
+        return GAState(generation=gen, population=pop, fitness=fitness)

@@ -30,11 +30,9 @@ import numpy as np
 
 from ..core.errors import ConfigError, UserError
 from ..core.fileio import packed_floats, unpacked_floats
-from ..interface.genome import GenomeLayout
 from ..core.options import check_fields, option
 from ..files.rundir.archive_file import ARCHIVE, archive_text
-from .base import Optimizer, OptimizerState, frozen_array
-from .ga import MAX_POPULATION, generation_rng
+from .base import MAX_POPULATION, Optimizer, OptimizerState, frozen_array
 
 #: what an elite keeps beside its genome, objective and measures (its outcome, and the task's fitness)
 OUTCOME = ("fell", "end_time", "task_fitness")
@@ -140,20 +138,32 @@ def ribs_archives():
 class MapElites(Optimizer):
     """Ask/tell MAP-Elites over a :class:`GenomeLayout`; ``population`` is the batch being evaluated ``(batch, G)``."""
 
-    name = "map-elites"
+    name, Options, table = "map-elites", MapElitesOptions, "map_elites"
+    about = "a repertoire: one elite per cell of two measures; needs the qd extra"
 
-    def __init__(self, layout: GenomeLayout, config: MapElitesOptions, *, seed: int, initial: np.ndarray | None = None,
-                 mutable: np.ndarray | None = None):
-        self.layout, self.config, self.seed = layout, config, int(seed)
-        self.low, self.high = layout.low, layout.high
-        self.mutable = np.ones(layout.size, bool) if mutable is None else np.asarray(mutable, bool)
-        self.initial = None if initial is None else layout.validate(initial, what="initial genome")[0]
+    def __init__(self, layout, config: MapElitesOptions, **start):
+        """As every optimizer (:meth:`Optimizer.__init__`); the first batch is the start genome and its mutants, or
+        samples of the layout's initial distribution."""
+        super().__init__(layout, config, **start)
         c = config
         self.archive = ribs_archives().GridArchive(
             solution_dim=layout.size, dims=c.resolution, ranges=list(zip(c.low, c.high)), seed=self.seed, qd_score_offset=c.qd_offset,
             extra_fields={k: ((), np.float64) for k in OUTCOME})
         self.generation, self.evaluations, self.progress = 0, 0, []
         self._sample()
+
+    @classmethod
+    def population_size(cls, options: MapElitesOptions, n_genes: int) -> int:
+        return options.batch
+
+    @classmethod
+    def population_setting(cls, population: int) -> tuple[str, int]:
+        return "batch", population
+
+    @classmethod
+    def check_task(cls, options: MapElitesOptions, task) -> None:
+        """ConfigError unless the measures and objective terms are the task's terms."""
+        options.check_terms(tuple(task.term_names), task.name)
 
     # ---- the archive
     def elites(self) -> dict[str, np.ndarray]:
@@ -171,14 +181,14 @@ class MapElites(Optimizer):
 
     def _sample(self) -> None:
         c, G = self.config, self.layout.size
-        rng = generation_rng(self.seed, self.generation)
+        rng = self.rng(self.generation)
         span = (self.high - self.low) * self.mutable
         if len(self.archive) == 0:
             if self.initial is None:
                 rows = self.layout.sample(rng, c.batch)
             else:  # the start genome and its mutants
-                rows = self.initial + c.sigma * span * rng.standard_normal((c.batch, G))
-                rows[0] = self.initial
+                rows = self.initial[0] + c.sigma * span * rng.standard_normal((c.batch, G))
+                rows[0] = self.initial[0]
         else:
             e = self.elites()
             up = e["fell"] == 0
@@ -269,7 +279,7 @@ class MapElites(Optimizer):
     def _state_from(self, table: dict) -> MapElitesState:
         gen = MapElitesState.generation_of(table)
         widths = {"genome": self.layout.size, "measures": 2, "progress": 3}
-        out = {k: MapElitesState.numbers_of(table, k, nulls=k == "fitness", rows=widths.get(k))
+        out = {k: MapElitesState.numbers_of(table, k, null=np.nan if k == "fitness" else None, rows=widths.get(k))
                for k in ("fitness", "index", "objective", "measures", "fell", "end_time", "progress")}
         out["task_fitness"] = (MapElitesState.numbers_of(table, "task_fitness") if "task_fitness" in table
                                else out["objective"].copy())  # written before it: the objective was the fitness

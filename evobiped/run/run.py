@@ -221,7 +221,7 @@ class Run:
         self.history.append(stats.row())
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
-        self.context.after(result, unknown, getattr(opt, "evaluation_rows", lambda: None)(), f)
+        self.context.after(result, unknown, opt.evaluation_rows(), f)
         self.individuals.carry(opt.next_generation(), opt.parent_rows())  # the individuals it keeps keep their outcome
         return stats
 

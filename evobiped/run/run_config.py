@@ -1,5 +1,6 @@
 """What defines an evolutionary run (:class:`RunConfig`, saved as config.json) and what it builds before any
-file is written: the optimizer, seeded from a genome file when asked, within this machine's memory."""
+file is written: the optimizer (any registered in :data:`evobiped.optimizers.OPTIMIZERS`), seeded from a genome file
+when asked, within this machine's memory."""
 
 from __future__ import annotations
 
@@ -15,11 +16,7 @@ from ..core.errors import ConfigError, UserError
 from ..core.options import check_fields, option, parse, refuse_unknown, scheduled
 from ..physics.perturb import STRENGTHS
 from ..evaluation import BACKENDS
-from ..optimizers import OPTIMIZERS, Optimizer
-from ..optimizers.cma import CMAES, CMAOptions
-from ..optimizers.es import ESOptions, EvolutionStrategy
-from ..optimizers.ga import GA, GAOptions
-from ..optimizers.map_elites import MapElites, MapElitesOptions
+from ..optimizers import OPTIMIZERS, Optimizer, described
 from .curriculum import Curriculum, CurriculumOptions
 from .stopping import StopOptions
 
@@ -39,12 +36,10 @@ class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
-    optimizer: str = option("ga", "`ga` (Reil & Husbands' GA), `cma` (CMA-ES), `es` (evolution strategies) or `map-elites` "
-                           "(a repertoire: one elite per cell of two measures; needs the qd extra)", choices=tuple(OPTIMIZERS))
-    ga: GAOptions = field(default_factory=GAOptions)
-    cma: CMAOptions = field(default_factory=CMAOptions)
-    es: ESOptions = field(default_factory=ESOptions)
-    map_elites: MapElitesOptions = field(default_factory=MapElitesOptions)
+    optimizer: str = option("ga", described(), choices=tuple(OPTIMIZERS))
+    #: optimizer name -> its settings (its ``Options``; given as a table or a parsed object), one for every registered
+    #: optimizer (defaults where none are given): a config's ``[ga]``, ``[cma]``, ``[es]``, ``[map_elites]`` tables
+    optimizer_options: dict = field(default_factory=dict)
     normalise: NormaliseOptions = field(default_factory=lambda: NormaliseOptions())
     curriculum: CurriculumOptions = field(default_factory=CurriculumOptions)
     stop: StopOptions = field(default_factory=StopOptions)
@@ -61,25 +56,42 @@ class RunConfig:
                                             check=_names)
 
     def __post_init__(self):
+        given = self.optimizer_options
+        unknown = [n for n in given if n not in OPTIMIZERS] if isinstance(given, dict) else [given]
+        if unknown:
+            raise ConfigError(f"optimizer_options: {unknown[0]!r} is no optimizer (choose from {', '.join(OPTIMIZERS)})")
+        object.__setattr__(self, "optimizer_options", {name: parse(cls.Options, given.get(name, {}), cls.table)
+                                                       for name, cls in OPTIMIZERS.items()})
         check_fields(self, "")
         if self.normalise.running and not self.episode.parts()[1].normalises_inputs:  # (parts built only when asked for)
             raise ConfigError(f"normalise.running: controller {self.episode.controller!r} reads raw senses here "
                               "(it does not normalise its inputs)")
-        if self.optimizer == "map-elites":
-            task = self.episode.parts()[2]
-            self.map_elites.check_terms(tuple(task.term_names), task.name)
+        OPTIMIZERS[self.optimizer].check_task(self.options, self.episode.parts()[2])
         if self.curriculum.phases:
             Curriculum(self.curriculum).check(self.episode.parts()[2])
         if self.stop.active:
             self.stop.check(self.episode.parts()[2])
 
+    @property
+    def options(self):
+        """The run's optimizer's settings (its ``Options``)."""
+        return self.optimizer_options[self.optimizer]
+
     def to_dict(self) -> dict:
-        d = dataclasses.asdict(self)
+        """config.json's table: the optimizers' settings as tables of their own (``ga``, ``cma``, ...), in the
+        registry's order where ``optimizer_options`` stands."""
+        d = {}
+        for name, value in dataclasses.asdict(self).items():
+            if name != "optimizer_options":
+                d[name] = value
+                continue
+            for opt, cls in OPTIMIZERS.items():
+                # the GA's and CMA-ES's always, the others' only in their own runs and when set: config.json as before
+                if cls.always_written or (opt == self.optimizer and value[opt] != dataclasses.asdict(cls.Options())):
+                    d[cls.table] = value[opt]
         d["episode"] = self.episode.to_dict()
-        for name, cls in (("es", ESOptions), ("map_elites", MapElitesOptions), ("normalise", NormaliseOptions),
-                          ("curriculum", CurriculumOptions), ("stop", StopOptions)):
-            # written only when set (the ES's and MAP-Elites' only for their runs): other runs' config.json as before
-            if d[name] == dataclasses.asdict(cls()) or (name in ("es", "map_elites") and self.optimizer != name.replace("_", "-")):
+        for name, cls in (("normalise", NormaliseOptions), ("curriculum", CurriculumOptions), ("stop", StopOptions)):
+            if d[name] == dataclasses.asdict(cls()):  # written only when set: other runs' config.json as before
                 del d[name]
         d["frozen_blocks"] = list(self.frozen_blocks)
         if d["budget"] is None:  # written only when set: other runs' config.json as before
@@ -92,15 +104,18 @@ class RunConfig:
         line, ``where: path.of.setting: what is wrong`` (``where``: the file or preset, if any)."""
         try:
             check_tables(d)
-            d = dict(refuse_unknown(cls, d, ""))
+            keys = settings_keys()
+            unknown = [k for k in d if k not in keys]
+            if unknown:
+                raise ConfigError(f"{unknown[0]}: unknown option (choose from {', '.join(keys)})")
+            d = dict(d)
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
-            ga, cma = parse(GAOptions, d.pop("ga", {}), "ga"), parse(CMAOptions, d.pop("cma", {}), "cma")
+            optimizers = {name: parse(opt.Options, d.pop(opt.table, {}), opt.table) for name, opt in OPTIMIZERS.items()}
             extra = {name: parse(cls, d.pop(name, {}), name)
-                     for name, cls in (("es", ESOptions), ("map_elites", MapElitesOptions), ("normalise", NormaliseOptions),
-                                       ("curriculum", CurriculumOptions), ("stop", StopOptions))}
+                     for name, cls in (("normalise", NormaliseOptions), ("curriculum", CurriculumOptions), ("stop", StopOptions))}
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
-            return cls(episode=episode, ga=ga, cma=cma, **extra, **d)
+            return cls(episode=episode, optimizer_options=optimizers, **extra, **d)
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}" if where else str(exc)) from None
 
@@ -126,14 +141,24 @@ class NormaliseOptions:
 
 
 def _table_fields(cls: type) -> list[str]:
-    """The fields of dataclass ``cls`` that hold a table of settings (an options dataclass, or a dict)."""
+    """The settings of dataclass ``cls`` that are tables of settings (an options dataclass, or a dict): of a
+    :class:`RunConfig`, each registered optimizer's table where ``optimizer_options`` stands."""
     out = []
     for f in dataclasses.fields(cls):
-        if f.default_factory is not dataclasses.MISSING:
+        if cls is RunConfig and f.name == "optimizer_options":
+            out += [opt.table for opt in OPTIMIZERS.values()]
+        elif f.default_factory is not dataclasses.MISSING:
             made = f.default_factory()
             if isinstance(made, dict) or dataclasses.is_dataclass(made):
                 out.append(f.name)
     return out
+
+
+def settings_keys() -> list[str]:
+    """The keys of a run's settings table (a config file's, config.json's) in config.json's order: each registered
+    optimizer's table where ``optimizer_options`` stands."""
+    return [k for f in dataclasses.fields(RunConfig)
+            for k in ([opt.table for opt in OPTIMIZERS.values()] if f.name == "optimizer_options" else [f.name])]
 
 
 def check_tables(d, where: str = "") -> None:
@@ -165,7 +190,7 @@ def check_memory(population: int, genes: int) -> None:
 
 
 def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimizer:
-    """Build the optimizer (GA, CMA-ES or ES) for the episode's genome layout, known from the declarations
+    """Build the run's optimizer (the one registered under ``config.optimizer``) for the episode's genome layout, known from the declarations
     (nothing compiled); fails before any file is written.  ``start``: the start genome ``(G,)`` when the run has
     one (:func:`start_genome`; None: read from ``config.initial``, as a new run does)."""
     layout = config.episode.layout()
@@ -182,16 +207,9 @@ def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimi
         mutable = np.ones(layout.size, bool)
         for b in config.frozen_blocks:
             mutable[slices[b]] = False
-    if config.optimizer == "cma":
-        return CMAES(layout, config.cma, seed=config.seed, initial=initial, mutable=mutable)
-    if config.optimizer == "map-elites":
-        return MapElites(layout, config.map_elites, seed=config.seed, initial=initial, mutable=mutable)
-    if config.optimizer == "es":
-        return EvolutionStrategy(layout, config.es, seed=config.seed, initial=initial, mutable=mutable)
-    ga = config.ga
-    if ga.reevaluate_survivors is None:  # the survivors scored again when each generation is scored differently
-        ga = dataclasses.replace(ga, reevaluate_survivors=changing_context(config) is not None)
-    return GA(layout, ga, seed=config.seed, initial=initial, mutable=mutable)
+    cls = OPTIMIZERS[config.optimizer]
+    options = cls.settled(config.options, lambda: changing_context(config) is not None)
+    return cls(layout, options, seed=config.seed, initial=initial, mutable=mutable)
 
 
 def changing_context(config: RunConfig) -> str | None:
@@ -222,9 +240,7 @@ def check_run(config: RunConfig) -> None:
 
 def population_of(config: RunConfig) -> int:
     """Walkers evaluated per generation by the run's optimizer."""
-    layout = config.episode.layout()
-    rows = {"cma": config.cma.lam(layout.size), "es": 2 * config.es.pairs + config.es.evaluation_rows, "map-elites": config.map_elites.batch}
-    return rows.get(config.optimizer, config.ga.population)
+    return OPTIMIZERS[config.optimizer].population_size(config.options, config.episode.layout().size)
 
 
 def episodes_per_genome(config: RunConfig) -> int:

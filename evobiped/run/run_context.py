@@ -32,6 +32,7 @@ from ..core.errors import UserError
 from ..episode.remap import input_widths
 from ..interface.normaliser import Normaliser, frozen_table
 from ..core.options import given
+from ..optimizers import OPTIMIZERS
 from .curriculum import Curriculum
 from .stopping import streak
 
@@ -64,7 +65,7 @@ class RunContext:
 
     @property
     def active(self) -> bool:
-        return self.running or self.curriculum.active or self.config.optimizer == "es" or self.config.stop.active
+        return self.running or self.curriculum.active or OPTIMIZERS[self.config.optimizer].reports_evaluation_rows or self.config.stop.active
 
     def stopped(self) -> bool:
         """The stopping rule (:mod:`.stopping`) held for its generations running."""
