@@ -33,6 +33,7 @@ def test_cli_json(capsys):
     assert main(["bench", "--population", "1", "--seconds", "0.5", "--workers", "1", "--repeats", "1", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert r["population"] == 1 and r["repeats"] == 1 and r["simulated_seconds"] == pytest.approx(0.5)
+    assert {k: len(v) for k, v in r["wall_seconds"].items()} == dict.fromkeys(r["median_sim_s_per_s"], 1)  # one repeat ran
     m = r["median_sim_s_per_s"]
     assert set(m) == {"raw 1", "eval", "pool 1", "threads 1"} and all(np.isfinite(v) and v > 0 for v in m.values())
     # one worker: the efficiencies are each evaluator's rate over the one raw rate
@@ -40,9 +41,14 @@ def test_cli_json(capsys):
 
 
 def test_cli_quick_sizes_and_overrides(capsys):
+    """--quick: 16 walkers, 5 repeats, --seconds overriding its 4 s; each measurement ran 5 times (not only reported)."""
     assert main(["bench", "--quick", "--seconds", "0.2", "--workers", "1", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert (r["population"], r["episode_seconds"], r["repeats"]) == (16, 0.2, 5)
+    assert r["simulated_seconds"] == pytest.approx(16 * 0.2)
+    assert {k: len(v) for k, v in r["wall_seconds"].items()} == dict.fromkeys(r["median_sim_s_per_s"], 5)
+    m = r["median_sim_s_per_s"]
+    assert all(m[k] == pytest.approx(16 * 0.2 / np.median(v)) for k, v in r["wall_seconds"].items())
 
 
 @pytest.mark.parametrize("args, words", [(["--population", "0"], "must be > 0"), (["--repeats", "0"], "must be > 0"), (["--body", "tripod"], "unknown body 'tripod'")])
