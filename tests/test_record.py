@@ -9,6 +9,7 @@ compared at float32 precision; scalars are float64 and compared exactly.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -264,20 +265,49 @@ def test_evolution_log_has_one_row_per_generation(tmp_path):
     assert rows["/evolution/counts/falls"] == {0: 40.0, 1: 39.0, 2: 38.0}
 
 
-def test_figures_are_written(tmp_path):
+def test_figures_are_written(tmp_path, monkeypatch):
+    """Every replay figure is written as a PNG and draws what the episode did: the fitness graph the history, the
+    motor figure one panel per motor output against time, the ground path the pelvis's planar track and where it
+    ended, the stick figure the centre of mass's height, the motion sequence evenly spaced recorded states."""
     import matplotlib.image as mpimg
 
-    from evobiped.record.figures import replay_figures
+    from evobiped.record import figures
 
+    drawn, save = {}, figures.save_figure
+
+    def keep(fig, path, **kw):  # the figure as drawn, then written as the command writes it
+        drawn[Path(path).name] = fig
+        return save(fig, path, **kw)
+
+    monkeypatch.setattr(figures, "save_figure", keep)
     ep = EpisodeConfig(seconds=1.0).build()
     _, traj = record(ep, random_genome(ep.controller.layout, 4))
     history = {"generation": np.arange(5.0), "best": np.array([1, 2, 2, 3, 4.0]), "mean": np.array([0.5, 1, 1.2, 1.5, 2.0])}
-    paths = replay_figures(traj, tmp_path / "figs", history=history)
+    paths = figures.replay_figures(traj, tmp_path / "figs", history=history)
     assert [p.name for p in paths] == ["fitness.png", "motor_neurons.png", "motion_sequence.png", "stick_figure.png", "ground_trajectory.png"]
+    assert sorted(drawn) == sorted(p.name for p in paths)
     for p in paths:
         img = mpimg.imread(p)
         assert img.ndim == 3 and img.shape[0] > 200 and img.shape[1] > 300
         assert img[..., :3].std() > 0.05  # not a blank canvas
+
+    best, mean = drawn["fitness.png"].axes[0].get_lines()[:2]
+    assert np.array_equal(best.get_xdata(), history["generation"]) and np.array_equal(best.get_ydata(), history["best"])
+    assert np.array_equal(mean.get_ydata(), history["mean"])
+    panels, shown = drawn["motor_neurons.png"].axes, traj.command_time <= 10.0
+    assert len(panels) == traj.n_motor > 1
+    for i, ax in enumerate(panels):
+        t, y = ax.get_lines()[0].get_data()
+        assert np.array_equal(t, traj.command_time[shown]) and np.array_equal(y, traj.neurons[shown, i]), i
+    ground = drawn["ground_trajectory.png"].axes[0].get_lines()
+    assert np.array_equal(np.column_stack(ground[0].get_data()), traj.planar)
+    end = [l for l in ground if l.get_marker() in ("s", "X")]
+    assert len(end) == 1 and end[0].get_marker() == ("X" if traj.fell else "s")
+    assert np.array_equal(np.ravel(end[0].get_data()), traj.planar[-1])
+    heights = [l.get_ydata() for l in drawn["stick_figure.png"].axes[0].get_lines() if len(l.get_ydata()) > 2]
+    assert any(np.array_equal(z, traj.com[: len(z), 2]) for z in heights)
+    times = [float(ax.get_title().split()[2]) for ax in drawn["motion_sequence.png"].axes if ax.get_title().startswith("t = ")]
+    assert len(times) > 1 and np.allclose(np.diff(times), times[1] - times[0], atol=0.011) and set(times) <= set(np.round(traj.state_time, 2))
 
 
 def test_importing_the_package_does_not_import_rerun_or_matplotlib():
