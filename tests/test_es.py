@@ -285,15 +285,25 @@ def test_the_taga_body_declares_its_mirror_truly():
 
 
 def test_evolve_runs_the_es_preset_from_the_command_line(tmp_path, capsys):
-    """`evobiped evolve --preset walker-es-linear` end to end (two short generations): the run directory holds the ES
-    state, the normaliser and the phase column."""
+    """`evobiped evolve --preset walker-es-linear` end to end (two short generations): the checkpoint holds the ES
+    state of the preset's genome, the normaliser has learnt from the evaluation walker's senses at every tick of both
+    generations (it stayed up), and the curriculum, its walker up two generations running (``advance_for = 2``),
+    moved to its second phase after scoring both generations in the first (history.csv's phase column)."""
+    from evobiped.flags import run_config
+
     (tmp_path / "short.toml").write_text("[es]\npairs = 2\n[curriculum]\nseconds = [0.4, 0.4]\n")
     code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "short.toml", "--generations", 2,
                "--backend", "serial", "--out", tmp_path / "run", "--quiet")
     assert code == 0, capsys.readouterr().err
     ck = json.loads((tmp_path / "run" / "checkpoint.json").read_text())
-    assert ck["optimizer"]["name"] == "es" and ck["normaliser"]["count"] > 0
-    assert "phase" in (tmp_path / "run" / "history.csv").read_text().splitlines()[0].split(",")
+    episode = run_config(preset="walker-es-linear", config=str(tmp_path / "short.toml")).episode.build()
+    assert ck["optimizer"]["name"] == "es" and ck["optimizer"]["generation"] == 2
+    assert len(ck["optimizer"]["theta"]) == episode.controller.layout.size and len(ck["optimizer"]["fitness"]) == 2 * 2 + 1
+    with open(tmp_path / "run" / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["phase"], float(r["evaluation_up"])) for r in rows] == [("0", 1.0), ("0", 1.0)]
+    assert ck["curriculum"] == {"phase": 1, "streak": 0}
+    assert ck["normaliser"]["count"] == 2 * round(0.4 / episode.control_dt)  # one evaluation walker, 2 generations
 
 
 def test_a_stance_frame_network_s_motor_neurons_are_labelled_by_leg_role():
@@ -318,8 +328,9 @@ def test_a_stance_frame_network_s_motor_neurons_are_labelled_by_leg_role():
     ([[1.0, 2.0], [3.0]], False, 2, "es.theta must be a list of rows of 2 finite numbers"),
 ])
 def test_a_checkpoint_list_that_is_not_numbers_is_one_line(value, nulls, rows, words):
-    """OptimizerState.numbers_of, which every optimizer's state reads its arrays with: strings, booleans, infinities,
-    nulls where none may be, and ragged rows are refused naming the optimizer and field; nulls, where allowed, read NaN."""
+    """OptimizerState.numbers_of (every optimizer's state reads its lists of numbers with it: the next test): strings,
+    booleans, infinities, nulls where none may be, and ragged rows are refused naming the optimizer and field; nulls,
+    where allowed, read NaN."""
     from evobiped.core.errors import UserError
     from evobiped.optimizers.es import ESState
 
@@ -330,3 +341,35 @@ def test_a_checkpoint_list_that_is_not_numbers_is_one_line(value, nulls, rows, w
     assert np.isnan(got[1]) and got[[0, 2]].tolist() == [1.0, 2.5]
     assert ESState.numbers_of({"g": [[1, 2], [3, 4]]}, "g", rows=2).shape == (2, 2)
     assert ESState.numbers_of({"g": []}, "g", rows=3).shape == (0, 3)
+
+
+@pytest.mark.parametrize("name", ["ga", "cma", "es", "map-elites"])
+def test_every_optimizer_reads_its_checkpoint_lists_with_numbers_of(name, monkeypatch):
+    """Each registered optimizer's state, written and read back, goes through OptimizerState.numbers_of (so each refuses
+    a malformed list as the previous test shows), and reads back equal to what it wrote."""
+    from evobiped.optimizers import OPTIMIZERS
+    from evobiped.optimizers.base import OptimizerState
+
+    if name == "map-elites":
+        pytest.importorskip("ribs")
+    assert set(OPTIMIZERS) == {"ga", "cma", "es", "map-elites"}
+    cls = OPTIMIZERS[name]
+    layout = EpisodeConfig(controller="simbicon").layout()
+    opt = cls(layout, cls.Options(), seed=3)
+    from types import SimpleNamespace
+
+    n = len(opt.ask()[1])
+    f = np.arange(n, dtype=float)
+    opt.tell(SimpleNamespace(fitness=f, fell=np.zeros(n), end_time=np.full(n, 2.0),
+                             terms={"speed": f / n, "turning": 10.0 * f - 20.0}))  # the map-elites cells' measures
+    opt.next_generation()
+    table = json.loads(json.dumps(opt.state().to_dict()))
+    read, numbers_of = [], OptimizerState.numbers_of.__func__
+
+    def counted(klass, table, key, **kw):
+        read.append(key)
+        return numbers_of(klass, table, key, **kw)
+
+    monkeypatch.setattr(OptimizerState, "numbers_of", classmethod(counted))
+    assert json.loads(json.dumps(opt.state_from(table).to_dict())) == table
+    assert "fitness" in read, read
