@@ -11,7 +11,8 @@ import numpy as np
 from ..episode import EpisodeConfig
 from ..core.errors import STOP_SIGNALS, UserError
 from ..core.net import connect_error
-from .backends import MAX_RETRIES, Evaluator, _evaluate, _fault_point, chunks, concat
+from .base import MAX_RETRIES, Evaluator, chunks, concat, evaluate_batch
+from .faults import FaultHook
 from .pool import silenced_stderr
 
 #: seconds between checks, while a generation waits for Ray actors, that their nodes are alive
@@ -124,10 +125,13 @@ class RayEvaluator(Evaluator):
     An actor that dies is restarted and its batch sent again, at most :data:`MAX_RETRIES` times.  One lost for
     good, or one whose node died (checked every :data:`NODE_CHECK_PERIOD` s while a generation waits: Ray would
     wait forever for room to restart it), stops the generation with a UserError, the run's last checkpoint intact.
+    ``fault``: the actors' testing hook (:class:`~.faults.FaultHook`; None: the one the environment names).
     """
 
-    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None):
+    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None,
+                 fault: FaultHook | None = None):
         super().__init__(episode)
+        fault = FaultHook.from_environment() if fault is None else fault
         ray, self._owns = init_ray(address, workers)
         self.ray = ray
         self._watch = _watch_local_ray(ray) if self._owns and address is None else None
@@ -142,17 +146,17 @@ class RayEvaluator(Evaluator):
         # a worker that dies is restarted and its batch sent again (same result: fates depend on genomes alone)
         @ray.remote(num_cpus=1, max_restarts=MAX_RETRIES, max_task_retries=MAX_RETRIES)
         class _Worker:
-            def __init__(self, config):
-                self.episode = config.build()
+            def __init__(self, config, fault):
+                self.episode, self.fault = config.build(), fault
 
             def evaluate(self, genomes, key, context):
-                _fault_point()
-                return _evaluate(self.episode, genomes, key, context)
+                self.fault.kill_process()
+                return evaluate_batch(self.episode, genomes, key, context)
 
             def node(self):
                 return ray.get_runtime_context().get_node_id()
 
-        self.actors = [_Worker.remote(episode) for _ in range(max(1, n))]
+        self.actors = [_Worker.remote(episode, fault) for _ in range(max(1, n))]
         self.nodes = set(ray.get([a.node.remote() for a in self.actors]))  # where they run
 
     def _check_nodes(self) -> None:
