@@ -51,13 +51,14 @@ def concat(parts: list[EpisodeResult]) -> EpisodeResult:
 
 
 def chunks(n: int, size: int | None, workers: int = 1) -> list[slice]:
-    """Slices of at most ``size`` genomes; ``size=None``: about two batches per worker.
+    """Slices of at most ``size`` genomes; ``size=None``: one batch per worker, as even as can be.
 
-    Bigger batches share the per-tick Python work among more simulations;
-    several per worker still balance the load when walkers fall early.
+    An episode's Python work per control tick costs about the same for 15 simulations as for 60, so the fewer the
+    batches, the less of it each simulated second pays; a worker whose batch ends early (its walkers fell) waits for
+    the others (docs/performance.md measures both).
     """
     if size is None:
-        size = max(1, -(-n // (2 * workers)))
+        size = max(1, -(-n // workers))
     return [slice(i, min(i + size, n)) for i in range(0, n, size)]
 
 
