@@ -10,9 +10,8 @@ import time
 import pytest
 
 from .conftest import cli
+from .fault_cases import CHECKPOINT_EDITS, CONFIG_EDITS, DEEP, DIFFERS, GENOME_EDITS, SELECT_DAMAGE, SETTINGS, edit
 from .test_faults import RUN, contents, files, one_line_error
-
-DEEP = "[" * 100_000 + "]" * 100_000
 
 
 @pytest.fixture(scope="module")
@@ -29,28 +28,16 @@ def run(finished, tmp_path):
     return d
 
 
-def edit(path, change):
-    path.write_text(json.dumps(change(json.loads(path.read_text()))))
-
-
 # ---- config.json edited: refused by name
-EDITS = {
-    "seed": (lambda c: {**c, "seed": 4}, "seed 3 → 4"),
-    "generations": (lambda c: {**c, "generations": 3}, "generations 2 → 3"),
-    "body": (lambda c: {**c, "episode": {**c["episode"], "body": "taga"}}, 'episode.body "reil" → "taga"'),
-    "perturbations": (lambda c: {**c, "episode": {**c["episode"], "perturbations": {"presentations": 2}}}, "episode.perturbations"),
-    "environment": (lambda c: {**c, "environment": {**c["environment"], "numpy": "1.0"}}, 'environment.numpy "'),
-}
-
-
-@pytest.mark.parametrize("name", EDITS)
+@pytest.mark.parametrize("name", CONFIG_EDITS)
 def test_an_edited_config_is_refused_by_name(run, capsys, name):
-    change, words = EDITS[name]
+    change, words = CONFIG_EDITS[name]
     (run / "summary.json").unlink()  # cut before its end
+    original = json.loads((run / "config.json").read_text())
     edit(run / "config.json", change)
     before = files(run)
     assert cli("evolve", "--resume", run) == 2
-    one_line_error(capsys.readouterr().err, "config.json differs from the one this checkpoint was made with", words)
+    one_line_error(capsys.readouterr().err, DIFFERS, words(original))
     assert files(run) == before
 
 
@@ -60,15 +47,14 @@ def test_where_the_episodes_run_may_change(run, capsys):
     assert "already complete" in capsys.readouterr().out
 
 
-DELETED = {"outcome": "outcome is missing", "history_terms": "history_terms is missing", "best_walk": "best_walk is missing",
-           "start": "start is missing"}
-
-
-@pytest.mark.parametrize("key", DELETED)
-def test_a_checkpoint_missing_what_it_always_holds_is_refused(run, capsys, key):
-    edit(run / "checkpoint.json", lambda ck: {k: v for k, v in ck.items() if k != key})
+@pytest.mark.parametrize("name", CHECKPOINT_EDITS)
+def test_a_checkpoint_edited_or_missing_what_it_always_holds_is_refused(run, capsys, name):
+    change, words = CHECKPOINT_EDITS[name]
+    edit(run / "checkpoint.json", change)
+    before = files(run)
     assert cli("evolve", "--resume", run) == 2
-    one_line_error(capsys.readouterr().err, DELETED[key])
+    one_line_error(capsys.readouterr().err, words)
+    assert files(run) == before
 
 
 # ---- the start genome lives in the run directory
@@ -147,32 +133,23 @@ def test_deep_nesting_in_any_file_is_one_line(run, tmp_path, capsys):
     one_line_error(capsys.readouterr().err, "nested more than 32 deep")
 
 
-@pytest.mark.parametrize("text, words", [("episode = 5", "episode: must be a table"), ("ga = [1, 2]", "ga: must be a table"),
-                                         ("cma = 3", "cma: must be a table"), ("[episode]\ntask_options = 3", "episode.task_options: must be")])
-def test_a_table_of_the_wrong_type_is_one_line(tmp_path, capsys, text, words):
+@pytest.mark.parametrize("name", SETTINGS)
+def test_a_hostile_settings_file_is_one_line_before_anything_is_written(tmp_path, capsys, name):
+    """Tables of the wrong type (checked before the flags go into them: --cyclic adds task options), nesting, a source
+    beyond 10 km, a population beyond the machine's memory."""
+    text, words = SETTINGS[name]
     (tmp_path / "c.toml").write_text(text + "\n")
-    assert cli("evolve", "--config", tmp_path / "c.toml", "--population", "4", "--episode-seconds", "1", "--cyclic", "--out", tmp_path / "x") == 2
+    sizes = [] if "population" in name else ["--population", "4"]
+    cyclic = [] if "steer" in text else ["--cyclic"]  # the steer task has no cyclic criterion
+    assert cli("evolve", "--config", tmp_path / "c.toml", *sizes, "--episode-seconds", "1", *cyclic, "--backend", "thread",
+               "--workers", "2", "--out", tmp_path / "x") == 2
     one_line_error(capsys.readouterr().err, words)
     assert not (tmp_path / "x").exists()
 
 
-def test_an_empty_population_in_the_checkpoint_is_one_line(run, capsys):
-    edit(run / "checkpoint.json", lambda ck: {**ck, "optimizer": {**ck["optimizer"], "population": [], "fitness": []}})
-    assert cli("evolve", "--resume", run) == 2
-    one_line_error(capsys.readouterr().err, "ga.population must be a non-empty list")
-
-
-GENOMES = {
-    "booleans": (lambda g: {**g, "genome": [True] * len(g["genome"])}, "'genome' must be a list of numbers"),
-    "short": (lambda g: {**g, "genome": g["genome"][:5]}, "has 5 genes, the layout needs"),
-    "outcome rows a number": (lambda g: {**g, "outcome": {"fell": False, "rows": 5}}, "'outcome' must be"),
-    "outcome rows of strings": (lambda g: {**g, "outcome": {"fell": False, "rows": [{"distance": "far"}]}}, "'outcome' must be"),
-}
-
-
-@pytest.mark.parametrize("name", GENOMES)
+@pytest.mark.parametrize("name", GENOME_EDITS)
 def test_a_malformed_genome_file_is_one_line(run, tmp_path, capsys, name):
-    change, words = GENOMES[name]
+    change, words = GENOME_EDITS[name]
     f = tmp_path / "g.json"
     shutil.copy(run / "best.json", f)
     edit(f, change)
@@ -180,31 +157,9 @@ def test_a_malformed_genome_file_is_one_line(run, tmp_path, capsys, name):
     one_line_error(capsys.readouterr().err, words)
 
 
-def test_a_nan_best_in_the_history_is_one_line(run, capsys):
-    rows = (run / "history.csv").read_text().splitlines()
-    cells = rows[1].split(",")
-    cells[1] = "nan"
-    (run / "history.csv").write_text("\n".join([rows[0], ",".join(cells), *rows[2:]]) + "\n")
-    assert cli("select", run, "--seconds", "1") == 2
-    one_line_error(capsys.readouterr().err, "best of row 1 is nan, not a fitness")
-
-
-SELECT = {
-    "short genome": (lambda d: edit(d / "generations" / "gen_0000.json", lambda g: {**g, "genome": g["genome"][:7]}),
-                     "gen_0000.json is not the file its generation committed"),
-    "start genome a number": (lambda d: edit(d / "config.json", lambda c: {**c, "initial": 5}), "initial: must be a non-empty string"),
-    "another episode": (lambda d: edit(d / "generations" / "gen_0000.json", lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}}),
-                        "gen_0000.json is not the file its generation committed"),
-    # a checkpoint written before it kept the generation files' digests: their generation and fitness agree
-    "another episode, older checkpoint": (lambda d: (edit(d / "checkpoint.json", lambda ck: {k: v for k, v in ck.items() if k != "generation_digests"}),
-                                                     edit(d / "generations" / "gen_0001.json", lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}})),
-                                          "of another episode than the run's"),
-}
-
-
-@pytest.mark.parametrize("name", SELECT)
+@pytest.mark.parametrize("name", SELECT_DAMAGE)
 def test_select_on_a_damaged_run_is_one_line(run, capsys, name):
-    damage, words = SELECT[name]
+    damage, words = SELECT_DAMAGE[name]
     damage(run)
     assert cli("select", run, "--seconds", "1") == 2
     one_line_error(capsys.readouterr().err, words)
