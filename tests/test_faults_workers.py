@@ -1,12 +1,10 @@
 """Worker death at every point of a pool's life: while batches are fed, while they are collected, between
 generations; on the process and thread backends.  The retries give an undisturbed run's results; past the
-limit, one line and the last checkpoint kept.  ``scripts/fault_campaign.py`` repeats the random moments many
-times for a release; here a few of each run in seconds."""
+limit, one line and the last checkpoint kept.  The release campaign (tests/fault_campaign.py) repeats the random
+moments many times; here a few of each run in seconds."""
 
 import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -17,7 +15,6 @@ from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import UserError
 from evobiped.evaluation import MAX_RETRIES, ProcessPoolEvaluator, SerialEvaluator, ThreadEvaluator
 
-ROOT = Path(__file__).resolve().parents[1]
 CFG = EpisodeConfig(seconds=0.2)
 
 
@@ -99,12 +96,19 @@ def test_thread_batches_that_keep_dying_stop_after_the_last_retry(tmp_path, monk
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
 def test_workers_killed_at_random_moments(tmp_path):
-    """The release check's random-moment classes, once each: every run completes equal to an undisturbed one."""
-    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "fault_campaign.py"), "--repeat", "1", "--seed", "7", "--out",
-                        str(tmp_path / "c"), "--classes", "worker-sigkill", "worker-storm", "late-signal"],
-                       capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=600)
-    assert r.returncode == 0, r.stdout + r.stderr
-    assert "0 traceback, 0 hang, 0 silent, 0 other" in r.stdout
+    """The release campaign's random-moment classes, once each: every run completes equal to an undisturbed one."""
+    import random
+
+    from .fault_campaign import FAILURES, campaign
+
+    kept = random.getstate()
+    random.seed(7)
+    try:
+        results, notes = campaign(tmp_path / "c", ["worker-sigkill", "worker-storm", "late-signal"], repeat=1)
+    finally:
+        random.setstate(kept)
+    assert {name: sum(c.values()) for name, c in results.items()} == {"worker-sigkill": 1, "worker-storm": 1, "late-signal": 1}
+    assert not notes and not any(c[f] for c in results.values() for f in FAILURES), (dict(results), notes)
 
 
 def test_a_pool_that_breaks_while_it_starts_its_workers_costs_a_retry(monkeypatch):
