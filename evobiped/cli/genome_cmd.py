@@ -28,32 +28,35 @@ def add_genome(sub) -> None:
     r.add_argument("--block", nargs=3, action="append", required=True, metavar=("NAME", "LOW", "HIGH"),
                    help="a gene block's new range (repeat for several blocks)")
     r.set_defaults(func=run_genome_ranges)
-    h = actions.add_parser("hearing-start", help="the start genome of --preset steer-es: the walker's heading sense replaced by the ear signal",
-                           description="Write the start genome of --preset steer-es: the walker's heading_error rows become the ear "
-                           "signal's, negated and scaled so that it turns towards a source --reference-distance m away as it turned "
-                           "back to its first facing; every other gene and input normalisation kept.")
-    h.add_argument("out", metavar="OUT", help="the genome file to write")
-    h.add_argument("--walker", default=SCRATCH_WALKER, metavar="FILE", help=f"the walker's genome file (default {SCRATCH_WALKER})")
+    h = _from_walker(actions, "hearing-start", SCRATCH_WALKER, run_genome_hearing,
+                     "the start genome of --preset steer-es: the walker's heading sense replaced by the ear signal",
+                     "Write the start genome of --preset steer-es: the walker's heading_error rows become the ear signal's, negated "
+                     "and scaled so that it turns towards a source --reference-distance m away as it turned back to its first "
+                     "facing; every other gene and input normalisation kept.")
     h.add_argument("--reference-distance", type=positive_float, default=4.0, metavar="M",
                    help="the source distance in m at which it turns as it held its heading (default 4)")
     h.add_argument("--neurons-only", action="store_true",
                    help="the ear signal into the neurons only, not on the direct input-to-motor path (the walker then hardly turns)")
-    h.set_defaults(func=run_genome_hearing)
-    w = actions.add_parser("rewire", help="the walker reading other senses: some dropped, others added with zero weights",
-                           description="Write the walker rewired onto other senses: each kept input keeps its weights and frozen "
-                           "normalisation, an added one starts with zero weights and its declared centre and scale. Prints the "
-                           "inputs and input_norm lines of the controller's table a run's config needs.")
-    w.add_argument("out", metavar="OUT", help="the genome file to write")
-    w.add_argument("--walker", default=SCRATCH_WALKER, metavar="FILE", help=f"the walker's genome file (default {SCRATCH_WALKER})")
+    w = _from_walker(actions, "rewire", SCRATCH_WALKER, run_genome_rewire,
+                     "the walker reading other senses: some dropped, others added with zero weights",
+                     "Write the walker rewired onto other senses: each kept input keeps its weights and frozen normalisation, an "
+                     "added one starts with zero weights and its declared centre and scale. Prints the inputs and input_norm "
+                     "lines of the controller's table a run's config needs.")
     w.add_argument("--drop", action="append", metavar="SENSE", help="an input to drop (repeat; default: heading_error)")
     w.add_argument("--add", action="append", metavar="SENSE", help="an input to add (repeat; default: stance_side)")
-    w.set_defaults(func=run_genome_rewire)
-    c = actions.add_parser("command-start", help="the start genome of --preset walker-command-tune: the command senses added at zero weight",
-                           description="Write the start genome of --preset walker-command-tune: the walker with command_speed and "
-                           "command_turning added at zero weight (they change nothing until the search moves them).")
-    c.add_argument("out", metavar="OUT", help="the genome file to write")
-    c.add_argument("--walker", default=WALKING_WALKER, metavar="FILE", help=f"the walker's genome file (default {WALKING_WALKER})")
-    c.set_defaults(func=run_genome_command)
+    _from_walker(actions, "command-start", WALKING_WALKER, run_genome_command,
+                 "the start genome of --preset walker-command-tune: the command senses added at zero weight",
+                 "Write the start genome of --preset walker-command-tune: the walker with command_speed and command_turning "
+                 "added at zero weight (they change nothing until the search moves them).")
+
+
+def _from_walker(actions, name: str, walker: str, run, about: str, description: str):
+    """An action writing OUT from the genome file ``--walker`` (default ``walker``); its parser, for its own flags."""
+    p = actions.add_parser(name, help=about, description=description)
+    p.add_argument("out", metavar="OUT", help="the genome file to write")
+    p.add_argument("--walker", default=walker, metavar="FILE", help=f"the walker's genome file (default {walker})")
+    p.set_defaults(func=run)
+    return p
 
 
 def run_genome_ranges(args) -> int:
