@@ -171,8 +171,9 @@ class Optimizer:
         return options
 
     @classmethod
-    def check_task(cls, options: Any, task) -> None:
-        """ConfigError (one line) when ``options`` ask the task for what it has not (e.g. a term); default: nothing asked."""
+    def check_episode(cls, options: Any, episode) -> None:
+        """ConfigError (one line) when ``options`` ask the episode config's task for what it has not (e.g. a term);
+        default: nothing asked (its parts are not built here)."""
 
     def ask(self) -> tuple[np.ndarray, np.ndarray]:
         """The population ``(P, G)`` and a bool mask ``(P,)`` of the individuals whose fitness is unknown."""

@@ -161,8 +161,9 @@ class MapElites(Optimizer):
         return "batch", population
 
     @classmethod
-    def check_task(cls, options: MapElitesOptions, task) -> None:
-        """ConfigError unless the measures and objective terms are the task's terms."""
+    def check_episode(cls, options: MapElitesOptions, episode) -> None:
+        """ConfigError unless the measures and objective terms are terms of the episode's task."""
+        task = episode.parts()[2]
         options.check_terms(tuple(task.term_names), task.name)
 
     # ---- the archive

@@ -66,7 +66,7 @@ class RunConfig:
         if self.normalise.running and not self.episode.parts()[1].normalises_inputs:  # (parts built only when asked for)
             raise ConfigError(f"normalise.running: controller {self.episode.controller!r} reads raw senses here "
                               "(it does not normalise its inputs)")
-        OPTIMIZERS[self.optimizer].check_task(self.options, self.episode.parts()[2])
+        OPTIMIZERS[self.optimizer].check_episode(self.options, self.episode)
         if self.curriculum.phases:
             Curriculum(self.curriculum).check(self.episode.parts()[2])
         if self.stop.active:
