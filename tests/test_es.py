@@ -311,7 +311,7 @@ def test_a_stance_frame_network_s_motor_neurons_are_labelled_by_leg_role():
     motor figure names it so."""
     from types import SimpleNamespace
 
-    from evobiped.record.motor_labels import _motor_label
+    from evobiped.record.png.motor_labels import _motor_label
 
     names = ("left_hip_pitch", "left_hip_roll", "left_knee", "right_hip_pitch", "right_hip_roll", "right_knee")
     framed, plain = (SimpleNamespace(actuator_names=names, stance_frame=f) for f in (True, False))

@@ -40,7 +40,7 @@ def evolve(*args, env=None, **kw) -> subprocess.CompletedProcess:
 
 def contents(d: Path) -> dict:
     """Every file of a run directory, wall-clock times left out (the evolution recording as its series)."""
-    from evobiped.record.evolution_log import recording_series
+    from evobiped.record.recordings.evolution_log import recording_series
 
     out = {}
     for p in sorted(d.rglob("*")):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from evobiped.files.genome_file import load_genome
-from evobiped.record import figures
+from evobiped.record.png import figures
 from evobiped.record.trajectory import record
 
 pytest.importorskip("matplotlib")
@@ -17,7 +17,7 @@ WALKER = Path(__file__).resolve().parent.parent / "docs" / "walkers" / "simbicon
 
 @pytest.fixture
 def captured(monkeypatch):
-    import evobiped.record.robustness_figure as rf  # imported first: it binds figures.save_figure when imported
+    import evobiped.record.png.robustness_figure as rf  # imported first: it binds figures.save_figure when imported
 
     figs = []
     monkeypatch.setattr(figures, "save_figure", lambda fig, path, **kw: figs.append(fig) or Path(path))
@@ -74,7 +74,7 @@ def test_the_stick_figure_times_are_readable(walk, captured):
 
 
 def test_survivors_sit_in_a_column_without_a_time_scale(captured):
-    from evobiped.record.robustness_figure import robustness_figure
+    from evobiped.record.png.robustness_figure import robustness_figure
     from evobiped.analysis.robustness import Trial
 
     trials = [Trial("push 5 N", f"d{i}", i % 2 == 0, 30.0 if i % 2 == 0 else 5.0 + i, 1.0 + i, 1.0 + i) for i in range(8)]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from evobiped.episode import EpisodeConfig
-from evobiped.record import figures
+from evobiped.record.png import figures
 from evobiped.record.trajectory import record
 
 pytest.importorskip("matplotlib")
@@ -55,7 +55,7 @@ def test_side_views_look_along_the_initial_facing_not_the_travel(long_walk):
 @pytest.fixture
 def captured(monkeypatch):
     """The matplotlib figures the figure functions save, kept open for inspection (nothing written)."""
-    import evobiped.record.robustness_figure as rf  # imported unpatched: it binds figures.save_figure when imported
+    import evobiped.record.png.robustness_figure as rf  # imported unpatched: it binds figures.save_figure when imported
 
     figs = []
 
@@ -128,7 +128,7 @@ def test_stick_figures_are_spaced_apart(long_walk, captured):
 
 
 def test_the_robustness_figure_decodes_its_markers_and_spreads_the_survivors(captured):
-    from evobiped.record.robustness_figure import robustness_figure
+    from evobiped.record.png.robustness_figure import robustness_figure
     from evobiped.analysis.robustness import Trial
 
     trials = [Trial("push 5 N", f"p{i}", True, 30.0, 10.0, 10.0) for i in range(20)]

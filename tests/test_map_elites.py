@@ -128,7 +128,7 @@ def test_the_elites_genomes_are_packed_exactly_and_a_checkpoint_of_rows_still_re
 
 def test_the_run_recording_holds_the_archive_growth(tmp_path):
     """evolution.rrd records the archive's cells, coverage and QD score per generation, as archive.json counts them."""
-    from evobiped.record.evolution_log import recording_series
+    from evobiped.record.recordings.evolution_log import recording_series
 
     config = RunConfig.from_dict(dict(TINY, generations=3))
     run = Run.create(tmp_path / "run", config)

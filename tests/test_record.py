@@ -63,7 +63,7 @@ def column(entity: dict, name: str) -> tuple[np.ndarray, list]:
 
 
 def write_recording(episode, genome, path):
-    from evobiped.record.rerun_recorder import RerunRecorder
+    from evobiped.record.recordings.rerun_recorder import RerunRecorder
 
     rec = rr.RecordingStream("test", recording_id="test")
     rec.save(path)
@@ -221,7 +221,7 @@ SAGITTAL = """
 
 
 def test_any_model_draws_including_a_point_mass_without_geoms(tmp_path):
-    from evobiped.record.rerun_recorder import log_geometry
+    from evobiped.record.recordings.rerun_recorder import log_geometry
 
     m = mujoco.MjModel.from_xml_string(SAGITTAL)
     kinds = {(s.name, s.kind, s.body) for s in geometry.shapes(m)}
@@ -247,7 +247,7 @@ def test_any_model_draws_including_a_point_mass_without_geoms(tmp_path):
 
 
 def test_evolution_log_has_one_row_per_generation(tmp_path):
-    from evobiped.record.evolution_log import EvolutionLog
+    from evobiped.record.recordings.evolution_log import EvolutionLog
 
     best = [1.0, 2.5, 4.0]
     with EvolutionLog(path=tmp_path / "evo.rrd", recording_id="evo") as log:
@@ -271,7 +271,7 @@ def test_figures_are_written(tmp_path, monkeypatch):
     ended, the stick figure the centre of mass's height, the motion sequence evenly spaced recorded states."""
     import matplotlib.image as mpimg
 
-    from evobiped.record import figures
+    from evobiped.record.png import figures
 
     drawn, save = {}, figures.save_figure
 
@@ -314,7 +314,7 @@ def test_importing_the_package_does_not_import_rerun_or_matplotlib():
     import subprocess
     import sys
 
-    code = "import sys, evobiped.cli, evobiped.usecases.replaying, evobiped.record.replay_recording, evobiped.usecases.evolving, evobiped.usecases.selecting, evobiped.record.figures, evobiped.record.rerun_recorder, evobiped.record.evolution_log; print(sorted({m.split('.')[0] for m in sys.modules} & {'rerun', 'matplotlib'}))"
+    code = "import sys, evobiped.cli, evobiped.usecases.replaying, evobiped.record.recordings.replay_recording, evobiped.usecases.evolving, evobiped.usecases.selecting, evobiped.record.png.figures, evobiped.record.recordings.rerun_recorder, evobiped.record.recordings.evolution_log; print(sorted({m.split('.')[0] for m in sys.modules} & {'rerun', 'matplotlib'}))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
@@ -322,7 +322,7 @@ def test_importing_the_package_does_not_import_rerun_or_matplotlib():
 def test_the_targets_a_task_names_are_recorded(tmp_path, monkeypatch):
     """A task naming its presentations' targets (``Task.targets``, a steering walker's sources): all of
     them, and this walker's own (presentation 0 here) at every tick."""
-    from evobiped.record.figures import ground_trajectory
+    from evobiped.record.png.figures import ground_trajectory
 
     ep = EpisodeConfig(seconds=0.5).build()
     sources = np.array([[-3.0, -10.0], [3.0, -10.0]])

@@ -62,7 +62,7 @@ def run_evolve_cmd(args) -> int:
     from ..usecases.evolving import open_run, start_evaluator
 
     if args.rerun is not None:  # before anything is written
-        from ..record.viewer import connect_url, require_display, require_viewer
+        from ..record.recordings.viewer import connect_url, require_display, require_viewer
 
         require_display() if args.rerun == "spawn" else require_viewer(connect_url(args.rerun))
     on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
@@ -174,7 +174,7 @@ class _Watched:
 def _viewer_log(run, rerun: str):
     """A live viewer of the run's fitness (a new one, or the one at ADDR), started with the history so far
     (the run's own evolution.rrd is written either way, after every generation)."""
-    from ..record.evolution_log import EvolutionLog
+    from ..record.recordings.evolution_log import EvolutionLog
     from ..files.rundir import history_columns
 
     log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))

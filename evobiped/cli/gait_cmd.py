@@ -108,7 +108,7 @@ def _run_commanded(args, speeds, turnings) -> int:
 
     from ..analysis.commanded import check_commanded, follow_commands, nominal_plan, plan, stretch_line
     from ..core.fileio import write_json
-    from ..record.command_figure import command_figure
+    from ..record.png.command_figure import command_figure
     from ..record.source import resolve
 
     for flag in ("ramp", "ramp_down", "correction", "overshoot"):

@@ -52,7 +52,7 @@ def run_gait_report_cmd(args) -> int:
         if args.table:
             print(table_row(source.label, report), flush=True)
     if args.figure is not None:
-        from ..record.footfall_figure import footfall_figure
+        from ..record.png.footfall_figure import footfall_figure
 
         footfall_figure(reports[0], Path(args.figure), title=sources[0].label)
     if args.json:

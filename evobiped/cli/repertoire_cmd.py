@@ -15,8 +15,8 @@ def add_repertoire(sub) -> None:
 def run_repertoire_cmd(args) -> int:
     from pathlib import Path
 
-    from ..record.archive_figures import archive_figure, progress_figure
-    from ..record.figures import fitness_label
+    from ..record.png.archive_figures import archive_figure, progress_figure
+    from ..record.png.figures import fitness_label
     from ..repertoire.elites import WALK_SPEED, load_repertoire
     from ..files.rundir import figures_dir
 

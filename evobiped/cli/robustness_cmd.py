@@ -32,7 +32,7 @@ def run_robustness_cmd(args) -> int:
     from pathlib import Path
 
     from ..core.fileio import write_json
-    from ..record.robustness_figure import robustness_figure
+    from ..record.png.robustness_figure import robustness_figure
     from ..record.source import resolve
     from ..analysis.robustness import battery, score, summarise, table
     from ..files.rundir import robustness_stem

@@ -193,7 +193,7 @@ def log_frames(rec, frames: np.ndarray, times: np.ndarray, entity: str = "video"
     import rerun as rr
     from PIL import Image
 
-    from .rerun_recorder import TIMELINE
+    from .recordings.rerun_recorder import TIMELINE
 
     blobs = []
     for frame in frames:

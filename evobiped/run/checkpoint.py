@@ -9,6 +9,7 @@ on a resume.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -18,10 +19,37 @@ from ..core.errors import UserError, signals_deferred
 from ..core.fileio import atomic_write, json_text, read_json, write_json
 from ..files.genome_file import genome_text, load_genome
 from . import fingerprint
+from ..optimizers import Optimizer
 from .individuals import Individuals
 from .run_config import RunConfig, make_optimizer
 from .run_context import RunContext
 from .start_genome import kept_start, start_episode
+
+
+class CommittedRun(Protocol):
+    """What the commit point reads of a run (:class:`~.run.Run` is one; named here, not imported, so that the run and
+    its checkpoint do not import each other): its directory and config, the optimizer, the committed record
+    (history, best, outcomes, context) and where the repairs of a resume are noted."""
+
+    dir: Path
+    config: RunConfig
+    optimizer: Optimizer
+    history: list[list]
+    best: dict | None
+    best_genome: list[float] | None
+    best_walk: dict | None
+    wall: float
+    individuals: Individuals
+    history_terms: list[dict]
+    generation_digests: list[str | None]
+    context: RunContext
+    start: list[float] | None
+    started_in: dict | None
+    recording_id: str
+    repairs: list[str]
+
+    @property
+    def done(self) -> bool: ...
 
 
 def load(directory: Path) -> dict:
@@ -78,7 +106,7 @@ def committed_files(directory: Path) -> list[str]:
     return found
 
 
-def commit(run) -> None:
+def commit(run: CommittedRun) -> None:
     """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
     Ctrl-C (SIGTERM, SIGHUP) waits until all are written."""
     with signals_deferred():
@@ -92,7 +120,7 @@ def commit(run) -> None:
         derive(run)
 
 
-def rebuild(run) -> None:
+def rebuild(run: CommittedRun) -> None:
     """Make every derived file what the checkpoint says it is; note each repair in ``run.repairs``."""
     d, g = run.dir, run.optimizer.generation
     for p in rundir.remove_stale_temporaries(d):
@@ -113,7 +141,7 @@ def rebuild(run) -> None:
         run.repairs.append(f"{rundir.SUMMARY} removed (the run is not complete)")
 
 
-def _cut_individuals(run) -> None:
+def _cut_individuals(run: CommittedRun) -> None:
     """individuals.jsonl back to the committed generations' lines; say which committed generations it lacks."""
     path, g = run.dir / rundir.INDIVIDUALS, run.optimizer.generation
     size, covered = rundir.committed_size(path, g)
@@ -124,7 +152,7 @@ def _cut_individuals(run) -> None:
         run.repairs.append(f"{rundir.INDIVIDUALS} lacks generations {covered}..{g - 1} (not in the checkpoint: lost)")
 
 
-def _sync(run, name: str, text: str | None, *, repair: bool) -> None:
+def _sync(run: CommittedRun, name: str, text: str | None, *, repair: bool) -> None:
     """Give file ``name`` the content ``text`` (None: no such file) unless it has it; a repair says so."""
     path = run.dir / name
     try:
@@ -141,9 +169,9 @@ def _sync(run, name: str, text: str | None, *, repair: bool) -> None:
         atomic_write(path, text)
 
 
-def derive(run, *, repair: bool = False) -> None:
+def derive(run: CommittedRun, *, repair: bool = False) -> None:
     """history.csv, best.json and evolution.rrd from the committed state."""
-    from ..record.evolution_log import recording_matches, write_recording
+    from ..record.recordings.evolution_log import recording_matches, write_recording
 
     _sync(run, rundir.HISTORY, rundir.history_text(run.history, run.history_terms, run.context.history), repair=repair)
     _sync(run, rundir.BEST, _best_text(run), repair=repair)
@@ -151,7 +179,8 @@ def derive(run, *, repair: bool = False) -> None:
         _sync(run, name, text, repair=repair)
     rec = run.dir / rundir.RECORDING
     if not run.history:
-        _sync(run, rundir.RECORDING, None, repair=repair) if rec.exists() else None
+        if rec.exists():
+            _sync(run, rundir.RECORDING, None, repair=repair)
         return
     columns = rundir.history_columns(run.history, run.history_terms, run.context.history)
     if repair:
@@ -161,7 +190,7 @@ def derive(run, *, repair: bool = False) -> None:
     write_recording(rec, columns, run.recording_id, run.optimizer.series())
 
 
-def _best_text(run) -> str | None:
+def _best_text(run: CommittedRun) -> str | None:
     if run.best is None:
         return None
     genome = run.best_genome
@@ -171,7 +200,7 @@ def _best_text(run) -> str | None:
     return genome_text(np.array(genome), run.context.best_episode(), **run.best)
 
 
-def _nominal_walk(run) -> dict | None:
+def _nominal_walk(run: CommittedRun) -> dict | None:
     """Distance and walking direction of the best walker in the nominal episode (``EpisodeResult.walk``): kept from
     its evaluation.  A perturbed run's evaluation has no nominal presentation (its walks are perturbed), so its
     best is walked once, nominally, for the summary (what a replay checks); so is the best of a checkpoint
@@ -184,7 +213,7 @@ def _nominal_walk(run) -> dict | None:
     return cfg.nominal().build().run(genome).walk()
 
 
-def _summary(run, best_walk: dict | None) -> dict:
+def _summary(run: CommittedRun, best_walk: dict | None) -> dict:
     out = {
         "evobiped": __version__,
         "generations": run.optimizer.generation,
@@ -199,7 +228,7 @@ def _summary(run, best_walk: dict | None) -> dict:
     return out
 
 
-def write_summary(run, *, repair: bool = False) -> dict:
+def write_summary(run: CommittedRun, *, repair: bool = False) -> dict:
     """summary.json of a complete run; a repair keeps one whose fields agree with the checkpoint (the best walk
     costs an episode).  Returns the summary."""
     path = run.dir / rundir.SUMMARY

@@ -83,7 +83,7 @@ def markdown(results: dict) -> str:
 
 def write_comparison(directory: Path, comparison, retests: list[dict]) -> dict:
     """results.json, results.md and success.png in ``directory``; returns the results."""
-    from ..record.compare_figure import success_figure
+    from ..record.png.compare_figure import success_figure
 
     results = comparison_results(comparison, retests)
     write_json(directory / RESULTS_JSON, results)

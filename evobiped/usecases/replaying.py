@@ -2,7 +2,7 @@
 
 The replay is the same episode the GA ran (``EpisodeConfig(**stored).build()``
 with the genome alone; batch size does not change results) with its recording
-(:class:`~evobiped.record.replay_recording.ReplayRecording`) listening, so in the numerical environment
+(:class:`~evobiped.record.recordings.replay_recording.ReplayRecording`) listening, so in the numerical environment
 the genome was stored in (:mod:`evobiped.core.provenance`) the replayed fitness
 equals the stored one to the last bit; in another, the report says what differs
 and how far the outcome drifted (:mod:`evobiped.files.outcome`).  The ``.rrd`` is made in memory and
@@ -100,7 +100,7 @@ def replay(
     (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``).
     The recording, video and figures are one set (:func:`~evobiped.files.rundir.output_set.output_set`): ``note(line)``
     hears that the previous replay there was cut short."""
-    from ..record.viewer import require_display
+    from ..record.recordings.viewer import require_display
 
     if spawn:
         require_display()
@@ -134,9 +134,9 @@ def replay(
 def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options):
     from ..analysis.gait_report import FootRecorder, has_feet, measured
     from ..episode import Listeners
-    from ..record.figures import fitness_label, replay_figures
-    from ..record.replay_recording import ReplayRecording
-    from ..record.steering_figures import steering_figures
+    from ..record.png.figures import fitness_label, replay_figures
+    from ..record.recordings.replay_recording import ReplayRecording
+    from ..record.png.steering_figures import steering_figures
 
     streaming = spawn or connect is not None
     target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
@@ -172,7 +172,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         if others:
             figs += steering_figures(trajs, figures_dir, who=who)
         if gait is not None:
-            from ..record.footfall_figure import footfall_figure
+            from ..record.png.footfall_figure import footfall_figure
 
             figs.append(Path(figures_dir) / "footfalls.png")
             footfall_figure(gait, figs[-1], title=who)

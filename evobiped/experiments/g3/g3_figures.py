@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .gaits import THRESHOLD
-from ...record.figures import pyplot, save_figure
+from ...record.png.figures import pyplot, save_figure
 
 GAIT_COLOURS = {"walk": "tab:blue", "trot": "tab:orange", "pace": "tab:green", "gallop": "tab:red", "pronk": "tab:purple", "none": "0.6"}
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...record.figures import pyplot, save_figure
+from ...record.png.figures import pyplot, save_figure
 
 _COLORS = {"plain": "tab:blue", "cyclic": "tab:orange"}
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...record.figures import pyplot, save_figure
+from ...record.png.figures import pyplot, save_figure
 
 LEG_COLOURS = ("tab:red", "tab:blue")  # right, left
 

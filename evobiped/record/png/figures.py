@@ -9,7 +9,7 @@
 The steering experiment's pair (Figs. 12-13) is :mod:`.steering_figures`; the side view's drawing :mod:`.side_view`,
 the motor outputs' names :mod:`.motor_labels`.
 
-Drawing is generic over the model: every shape of :mod:`.geometry` is drawn
+Drawing is generic over the model: every shape of :mod:`..geometry` is drawn
 as its long axis (spheres as circles), so a sagittal biped draws as well as the
 3D one.  Side views look along the direction the walker faced at the start
 (walking backwards goes to the left), never along the direction it travelled.
@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.fileio import atomic_write
-from .geometry import shapes
+from ...core.fileio import atomic_write
+from ..geometry import shapes
 from .motor_labels import _motor_label, _motor_quantity, motor_file
 from .side_view import _draw_walker, _side_axis, _side_key, _side_points, steady_stride
-from .trajectory import Trajectory
+from ..trajectory import Trajectory
 
 DPI = 120
 #: no figure is drawn larger than this (inches; at DPI 120: 1920 x 1680 px before the tight bounding box)
@@ -63,7 +63,7 @@ def save_figure(fig, path: str | Path, *, dpi: int = DPI) -> Path:
 
 def walk_text(traj: Trajectory) -> str:
     """'38.65 m, -166 deg from the initial facing: backwards' for the end of ``traj``."""
-    from ..tasks.walk import direction_words, displacement_heading
+    from ...tasks.walk import direction_words, displacement_heading
 
     a, b = traj.planar[:1], traj.planar[-1:]
     heading = float(displacement_heading(a, b, traj.start_facing[None])[0])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
-from ..core.fileio import atomic_write
+from ...core.fileio import atomic_write
 
 
 def footfall_figure(report: dict, path: Path, *, title: str = "", window: float = 4.0) -> None:
@@ -16,7 +16,7 @@ def footfall_figure(report: dict, path: Path, *, title: str = "", window: float 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..analysis.gait_report import gait_line
+    from ...analysis.gait_report import gait_line
 
     feet = report["feet"]
     end = report["time_up"]

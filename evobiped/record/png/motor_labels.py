@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .trajectory import Trajectory
+from ..trajectory import Trajectory
 
 
 def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:

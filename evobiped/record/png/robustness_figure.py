@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.robustness import Trial, summarise
+from ...analysis.robustness import Trial, summarise
 from .figures import pyplot, save_figure
 
 

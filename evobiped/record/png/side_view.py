@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import Shape, body_names, segment
-from .trajectory import Trajectory
+from ..geometry import Shape, body_names, segment
+from ..trajectory import Trajectory
 
 #: matplotlib colours of the left and right legs and of the bodies between them
 LEFT, RIGHT, OTHER = "tab:blue", "tab:red", "0.25"

@@ -12,7 +12,7 @@ import numpy as np
 
 from .figures import _title, ground_trajectory, pyplot, save_figure
 from .motor_labels import _motor_quantity
-from .trajectory import Trajectory
+from ..trajectory import Trajectory
 
 
 def _travel_heading(traj: Trajectory, window: float = 1.0) -> tuple[np.ndarray, np.ndarray]:

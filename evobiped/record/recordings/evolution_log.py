@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.fileio import atomic_write
-from ..files.rundir import TERM_PREFIX
+from ...core.fileio import atomic_write
+from ...files.rundir import TERM_PREFIX
 from .viewer import connect_url, flush, require_viewer
 
 TIMELINE = "generation"

@@ -8,9 +8,9 @@ from __future__ import annotations
 import uuid
 from pathlib import Path
 
-from ..core.fileio import atomic_write
+from ...core.fileio import atomic_write
 from .rerun_recorder import RerunRecorder, blueprint, log_presentations
-from .trajectory import Trajectory
+from ..trajectory import Trajectory
 
 
 class ReplayRecording:
@@ -55,7 +55,7 @@ class ReplayRecording:
         if gait is not None:
             log_gait(self.rec, gait, traj)
         if frames is not None:
-            from .video import log_frames
+            from ..video import log_frames
 
             log_frames(self.rec, frames, times)
         self.rec.send_blueprint(blueprint(traj, with_evolution=history is not None, with_presentations=several,
@@ -74,7 +74,7 @@ def log_gait(rec, gait: dict, traj: Trajectory) -> None:
     import numpy as np
     import rerun as rr
 
-    from ..analysis.gait_report import gait_line
+    from ...analysis.gait_report import gait_line
     from .rerun_recorder import TIMELINE
 
     t = np.asarray(traj.tick_time, float)

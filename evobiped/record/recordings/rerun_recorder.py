@@ -29,8 +29,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import PLANE_HALF_SIZE, body_names, quat_to_mat, shapes, wxyz_to_xyzw
-from .trajectory import Trajectory, TrajectoryRecorder
+from ..geometry import PLANE_HALF_SIZE, body_names, quat_to_mat, shapes, wxyz_to_xyzw
+from ..trajectory import Trajectory, TrajectoryRecorder
 
 TIMELINE = "sim_time"
 #: the centre-of-mass path keeps one point per this many seconds (plus the last one)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from urllib.parse import urlparse
 
-from ..core.errors import UserError
-from ..core.net import connect_error
+from ...core.errors import UserError
+from ...core.net import connect_error
 
 DEFAULT_ADDR = "127.0.0.1:9876"
 #: seconds to wait for a viewer to take the data
@@ -50,7 +50,10 @@ def require_display() -> None:
 def flush(rec, *, streaming: bool) -> None:
     """Flush ``rec`` (bounded when streaming to a viewer) and close its sinks."""
     try:
-        rec.flush(timeout_sec=FLUSH_TIMEOUT) if streaming else rec.flush()
+        if streaming:
+            rec.flush(timeout_sec=FLUSH_TIMEOUT)
+        else:
+            rec.flush()
     except RuntimeError as exc:
         raise UserError(f"could not send the recording to the viewer: {str(exc).splitlines()[0]}") from None
     rec.disconnect()

@@ -1,0 +1,1 @@
+"""PNG figures (matplotlib): the papers' figures, steering, footfalls, robustness, commands, archives, comparisons."""
