@@ -69,7 +69,7 @@ def _check_value(f: dataclasses.Field, value: Any, path: str) -> None:
             raise ConfigError(f"{path}: must be true or false, got {value!r}")
     elif m.get("choices") is not None:
         if value not in m["choices"]:
-            raise ConfigError(f"{path}: must be one of {', '.join(map(str, m['choices']))}, got {value!r}")
+            raise ConfigError(f"{path}: must be one of {', '.join(repr(c) if c == '' else str(c) for c in m['choices'])}, got {value!r}")
     elif any(m.get(k) is not None for k in ("low", "high", "above", "below")) or m.get("integer") or (
             isinstance(default, (int, float)) and m.get("check") is None):
         number(value, f"{path}:", low=m["low"], high=m["high"], above=m["above"], below=m["below"], integer=m["integer"], unit=m["unit"])
