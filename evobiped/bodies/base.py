@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import copy
 from abc import ABC, abstractmethod
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Collection, Literal
 
 import mujoco
 import numpy as np
@@ -104,8 +104,13 @@ class Body(ABC):
         """Set the actuators of simulations ``ids`` to ``action`` ``(len(ids), n_act)``."""
 
     def contacts(self, sims: Sims) -> np.ndarray:
-        """Which feet touch the ground, ``(n, legs)`` bool in the order of :attr:`contact_sensor`."""
-        return self.sensors(sims)[self.contact_sensor[0]] > 0
+        """Which feet touch the ground, ``(n, legs)`` bool in the order of :attr:`contact_sensor`; read once per state
+        of the batch (:meth:`Sims.kept`: the senses, the gait tracker and the task share it)."""
+        return sims.kept("contacts", self._contacts)
+
+    def _contacts(self, sims: Sims) -> np.ndarray:
+        name = self.contact_sensor[0]
+        return self.sensors(sims, (name,))[name] > 0
 
     def substep(self, sims: Sims, ids: np.ndarray) -> None:
         """Custom forces before each physics step (only if ``has_custom_forces``)."""
@@ -137,8 +142,9 @@ class Body(ABC):
     def fallen(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         """Bool ``(len(ids),)``: the walker has fallen (episode ends)."""
 
-    def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
-        """Named sensor arrays ``(P, k)`` a controller may take as inputs, k as :attr:`sensor_widths` declares."""
+    def sensors(self, sims: Sims, names: Collection[str] | None = None) -> dict[str, np.ndarray]:
+        """Named sensor arrays ``(P, k)`` a controller may take as inputs, k as :attr:`sensor_widths` declares: those
+        ``names`` (computing only them: an episode asks for what its controller reads), by default all."""
         return {}
 
     def feet(self, sims: Sims) -> FootSample:

@@ -29,7 +29,7 @@ the inertia its mass and length alone imply.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, Collection
 
 import mujoco
 import numpy as np
@@ -187,6 +187,9 @@ class ReilBiped(Body):
         return sims.xpos[:, self._pelvis, :2]
 
     def heading(self, sims: Sims) -> np.ndarray:
+        return sims.kept("heading", self._heading)
+
+    def _heading(self, sims: Sims) -> np.ndarray:
         # the body x axis (forward) is column 0 of the pelvis rotation matrix
         fwd = sims.xmat[:, self._pelvis].reshape(-1, 3, 3)[:, :2, 0]
         return fwd / np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-12)
@@ -198,7 +201,7 @@ class ReilBiped(Body):
         up = sims.xmat[ids, self._pelvis, 8]  # z component of the pelvis z axis
         return (sims.subtree_com[ids, self._pelvis, 2] < self.fall_height) | (up < np.cos(self.fall_tilt))
 
-    def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
+    def sensors(self, sims: Sims, names: Collection[str] | None = None) -> dict[str, np.ndarray]:
         """Joint angles and velocities (rad, rad/s; actuator order), foot contacts (0/1, left, right),
         and the vestibular and proprioceptive readings a balance controller needs, in the heading
         frame (forward = the pelvis x axis on the ground, left = 90 degrees anticlockwise):
@@ -208,27 +211,35 @@ class ReilBiped(Body):
         * ``com_from_feet`` ``(P, 4)``: centre of mass minus left foot (forward, left), minus right foot (m);
         * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s);
         * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.physics.gait`; left = +1).
-        """
-        m = sims.xmat[:, self._pelvis]  # (P, 9): the pelvis rotation, row-major
-        fwd = self.heading(sims)
-        frame = (fwd[:, _FRAME_COLUMNS] * _FRAME_SIGNS).reshape(-1, 2, 2)  # (P, 2, 2): rows forward, left = (-f_y, f_x)
-        tilt = np.arcsin(np.clip(m[:, 6:8], -1, 1)) * _TILT_SIGNS  # (-asin R_20, asin R_21)
-        omega = sims.cvel[:, self._pelvis, :2]  # world angular velocity, x and y
-        com = sims.subtree_com[:, self._pelvis, None, :2] - sims.site_xpos[:, self._feet, :2]  # (P, 2 feet, 2)
-        contact = self.contacts(sims)
-        return {
-            "joint_angles": sims.qpos[:, self._qadr],
-            "joint_velocities": sims.qvel[:, self._dadr],
-            "foot_contact": contact.astype(float),
-            "pelvis_tilt": tilt,
-            # pitch is a rotation about the left axis, roll about the forward axis
-            "pelvis_tilt_rate": np.einsum("pij,pj->pi", frame, omega)[:, ::-1],
-            "com_from_feet": np.einsum("pij,pfj->pfi", frame, com).reshape(-1, 4),
-            "com_velocity": np.einsum("pij,pj->pi", frame, self._com_velocity(sims)[:, :2]),
-            **gait.read(contact, sims),
-        }
 
-    def contacts(self, sims: Sims) -> np.ndarray:
+        Only ``names`` are computed (default all), in the order above.
+        """
+        want = self.sensor_widths if names is None else names
+        out = {}
+        if "joint_angles" in want:
+            out["joint_angles"] = sims.qpos[:, self._qadr]
+        if "joint_velocities" in want:
+            out["joint_velocities"] = sims.qvel[:, self._dadr]
+        contact = self.contacts(sims)
+        if "foot_contact" in want:
+            out["foot_contact"] = contact.astype(float)
+        if "pelvis_tilt" in want:  # (-asin R_20, asin R_21) of the pelvis rotation (row-major)
+            out["pelvis_tilt"] = np.arcsin(np.clip(sims.xmat[:, self._pelvis, 6:8], -1, 1)) * _TILT_SIGNS
+        if "pelvis_tilt_rate" in want or "com_from_feet" in want or "com_velocity" in want:
+            fwd = self.heading(sims)
+            frame = (fwd[:, _FRAME_COLUMNS] * _FRAME_SIGNS).reshape(-1, 2, 2)  # (P, 2, 2): rows forward, left = (-f_y, f_x)
+            if "pelvis_tilt_rate" in want:  # pitch is a rotation about the left axis, roll about the forward axis
+                out["pelvis_tilt_rate"] = np.einsum("pij,pj->pi", frame, sims.cvel[:, self._pelvis, :2])[:, ::-1]
+            if "com_from_feet" in want:
+                com = sims.subtree_com[:, self._pelvis, None, :2] - sims.site_xpos[:, self._feet, :2]  # (P, 2 feet, 2)
+                out["com_from_feet"] = np.einsum("pij,pfj->pfi", frame, com).reshape(-1, 4)
+            if "com_velocity" in want:
+                out["com_velocity"] = np.einsum("pij,pj->pi", frame, self._com_velocity(sims)[:, :2])
+        if "stance_leg" in want or "since_touchdown" in want or "stance_side" in want:
+            out.update(gait.read(contact, sims, want))
+        return out
+
+    def _contacts(self, sims: Sims) -> np.ndarray:
         return sims.sensordata[:, self._touch] > 0
 
     def feet(self, sims: Sims) -> FootSample:

@@ -27,7 +27,7 @@ backward): thigh x_5 = pi/2 + hip, shank x_11 = x_5 + knee.  The forces are expl
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, Collection
 
 import mujoco
 import numpy as np
@@ -168,9 +168,9 @@ class TagaBiped(Body):
         q[rows, self._qadr[3]] = q[rows, self._qadr[5]] = 0.0
         sims.qvel[rows] = 0.0
         sims.qfrc_applied[rows] = 0.0
-        sims.forward(ids)
         for a in self._ground(sims).values():
             a[rows] = 0
+        sims.forward(ids)  # after the ground's state, so no reading of the old state is kept
 
     # ------------------------------------------------------------ kinematics
     def links(self, sims: Sims) -> dict[str, np.ndarray]:
@@ -240,12 +240,9 @@ class TagaBiped(Body):
         q_hip = q_hip + moment(ankle - hip, fx, fy)
         q_knee = q_knee + moment(ankle - knee, fx, fy)
         qf = np.zeros((len(ids), 6))
-        qf[:, 0] = fx.sum(1)
-        qf[:, 1] = fy.sum(1)
-        qf[:, [2, 4]] = q_hip
-        qf[:, [3, 5]] = q_knee
-        out = sims.qfrc_applied
-        out[np.ix_(ids, self._dadr)] = qf
+        qf[:, 0], qf[:, 1] = fx.sum(1), fy.sum(1)
+        qf[:, [2, 4]], qf[:, [3, 5]] = q_hip, q_knee
+        sims.qfrc_applied[np.ix_(ids, self._dadr)] = qf
 
     def feet(self, sims: Sims) -> FootSample:
         """The ankles (point feet) on the spring-damper ground: a foot stands while the ground pushes it up; slip is
@@ -280,20 +277,23 @@ class TagaBiped(Body):
     def fallen(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         return self.hip_height(sims)[ids] < self.fall_height
 
-    def sensors(self, sims: Sims) -> dict[str, np.ndarray]:
-        """Feedback of Appendix C and more; leg order (right, left).
+    def sensors(self, sims: Sims, names: Collection[str] | None = None) -> dict[str, np.ndarray]:
+        """Feedback of Appendix C and more, only ``names`` (default all); leg order (right, left).
 
         ``link_angles`` (P, 4): inertial angles x5, x11, x8, x14 (right thigh,
         right shank, left thigh, left shank; rad from the horizontal);
         ``link_velocities`` (P, 4): their rates (rad/s); ``ground_contact``
         (P, 2): h(F_g2), h(F_g4); ``ground_force`` (P, 4): F_g1..F_g4 (N).
         """
-        k = self.links(sims)
-        st = self._ground(sims)
-        order = lambda a, b: np.stack([a[:, 0], b[:, 0], a[:, 1], b[:, 1]], 1)  # noqa: E731
-        return {
-            "link_angles": order(k["thigh"], k["shank"]),
-            "link_velocities": order(k["dthigh"], k["dshank"]),
-            "ground_contact": (st["force"][:, [1, 3]] > 0).astype(float),
-            "ground_force": st["force"].copy(),
-        }
+        want, out = self.sensor_widths if names is None else names, {}
+        if "link_angles" in want or "link_velocities" in want:
+            k = self.links(sims)
+            for name, (a, b) in (("link_angles", ("thigh", "shank")), ("link_velocities", ("dthigh", "dshank"))):
+                if name in want:
+                    out[name] = np.stack([k[a][:, 0], k[b][:, 0], k[a][:, 1], k[b][:, 1]], 1)
+        force = self._ground(sims)["force"]
+        if "ground_contact" in want:
+            out["ground_contact"] = (force[:, [1, 3]] > 0).astype(float)
+        if "ground_force" in want:
+            out["ground_force"] = force.copy()
+        return out

@@ -19,8 +19,8 @@ from ..physics.sim import Sims
 from ..tasks.base import Task
 from .config import check_timing
 from .disturbances import assisted_physics, disturb
-from .senses import controller_inputs
-from .state import Context, EpisodeState, Listener, Pose
+from .senses import SensePlan
+from .state import Context, EpisodeState, Listener, Pose, RowSenses
 
 
 class Episode:
@@ -48,7 +48,9 @@ class Episode:
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)
         self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
-        #: the task reads the controller's neuron outputs each tick (else they are computed only for a listener)
+        #: what the controller reads each tick (None: no controller), and whether the task reads its neuron outputs
+        #: (else they are computed only for a listener): planned once
+        self.senses = None if self.controller is None else SensePlan(body, self.controller, task)
         self._task_reads_neurons = task.reads_neurons()
 
     @property
@@ -163,7 +165,7 @@ class Episode:
             offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
             assist=trials.assist[trial] if trials is not None and trials.assist is not None else None,
             norm=ctx.norm,
-            senses=(np.zeros(P), np.zeros((P, k)), np.zeros((P, k))) if ctx.observe and k is not None else None,
+            senses=RowSenses.zeros(P, k) if ctx.observe and k is not None else None,
         )
 
     def restart(self, state: EpisodeState, ids: np.ndarray, *, pose: Pose | None = None) -> EpisodeState:
@@ -258,7 +260,7 @@ class Episode:
             end_position=task.end_position(self.body, state.sims, tstate).copy(),
             start_facing=state.start_facing.copy(),
             terms={k: np.array(v) for k, v in task.terms(tstate).items()},
-            senses=None if state.senses is None else dict(zip(("count", "total", "squares"), (a.copy() for a in state.senses))),
+            senses=None if state.senses is None else state.senses.table(),
         )
         trials = state.trials
         if trials is not None:
@@ -269,8 +271,8 @@ class Episode:
         return result
 
     def _inputs(self, st: EpisodeState, P: int) -> tuple[np.ndarray, np.ndarray | None]:
-        """The controller's inputs now and the rows its stance frame mirrors (:func:`.senses.controller_inputs`)."""
-        return controller_inputs(self.body, self.controller, self.task, st, P)
+        """The controller's inputs now and the rows its stance frame mirrors (:meth:`.senses.SensePlan.read`)."""
+        return self.senses.read(st, P)
 
     def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
         """One control period of physics for ``ids``; bool mask of blow-ups."""

@@ -95,9 +95,8 @@ class EpisodeState:
     assist: np.ndarray | None = None
     #: ``(centre (k,), scale (k,))`` the controller's inputs are normalised with in this episode (None: the controller's)
     norm: tuple | None = None
-    #: per row: control ticks, sums and sums of squares of the inputs it sensed ``(n,)``, ``(n, k)``, ``(n, k)``
-    #: (None: not collected; :mod:`evobiped.interface.normaliser`)
-    senses: tuple | None = None
+    #: what each row sensed (None: not collected)
+    senses: RowSenses | None = None
     #: what an episode stepped by outside actions (a Gymnasium environment's) keeps per row ``(n,)``, None otherwise:
     #: the task's fitness when the row last stepped or began (the reward baseline: a reward is its increment), the
     #: generator of the row's reset noise, and whether its episode ended and waits for a reset
@@ -134,6 +133,35 @@ class Context:
     def empty(self) -> bool:
         """Nothing beyond the config (a plain run's: its evaluations need no context)."""
         return self.norm is None and not self.observe and self.weights is None and self.seconds is None
+
+
+@dataclass(eq=False)
+class RowSenses:
+    """What each row sensed while up (:mod:`evobiped.interface.normaliser`): ``count`` ``(n,)`` control ticks, ``total``
+    and ``squares`` ``(n, k)`` sums of its inputs and of their squares."""
+
+    count: np.ndarray
+    total: np.ndarray
+    squares: np.ndarray
+
+    @classmethod
+    def zeros(cls, n: int, k: int) -> "RowSenses":
+        return cls(np.zeros(n), np.zeros((n, k)), np.zeros((n, k)))
+
+    def add(self, x: np.ndarray, up: np.ndarray) -> None:
+        """One tick's inputs ``x`` ``(n, k)`` of the rows ``up`` ``(n,)`` bool."""
+        if up.all():
+            self.count += 1
+            self.total += x
+            self.squares += x * x
+        else:
+            self.count[up] += 1
+            self.total[up] += x[up]
+            self.squares[up] += x[up] * x[up]
+
+    def table(self) -> dict[str, np.ndarray]:
+        """Copies by name, as :attr:`EpisodeResult.senses` holds them."""
+        return {"count": self.count.copy(), "total": self.total.copy(), "squares": self.squares.copy()}
 
 
 def sense_sums(result: EpisodeResult, rows: np.ndarray) -> SenseSums:

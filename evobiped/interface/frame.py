@@ -77,8 +77,3 @@ def _mirrored(a: np.ndarray, flip: np.ndarray, perm: np.ndarray, sign: np.ndarra
     if not flip.any():
         return a
     return np.where(flip[:, None], a[:, perm] * sign, a)
-
-
-def flips(stance_leg: np.ndarray) -> np.ndarray:
-    """Rows whose stance leg is the contact sensor's second leg (``stance_leg`` ``(P, 1)`` = -1)."""
-    return stance_leg[:, 0] < 0

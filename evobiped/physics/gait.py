@@ -61,14 +61,33 @@ def _start(contact: np.ndarray, time: np.ndarray) -> dict[str, np.ndarray]:
     }
 
 
-def read(contact: np.ndarray, sims: Sims) -> dict[str, np.ndarray]:
-    """The two senses for every row; ``contact`` ``(n, 2)`` bool, the body's contact sensor now."""
+def tracker(contact: np.ndarray, sims: Sims) -> dict[str, np.ndarray]:
+    """The batch's tracker (``stance`` ``(n,)``: 0 while the first leg stands, 1 the second; ``touchdown`` ``(n,)`` s;
+    ``lifted`` ``(n, 2)`` s), started from ``contact`` ``(n, 2)`` bool (the body's contact sensor now) on first use;
+    from then on :func:`update` runs after every control tick."""
     table = sims.extra.get("gait")
     if table is None:
         table = sims.extra["gait"] = _start(contact, sims.time.copy())
-    since = np.minimum(sims.time - table["touchdown"], CAP)
-    leg = np.where(table["stance"] == 0, 1.0, -1.0)[:, None]
-    return {"stance_leg": leg, "since_touchdown": since[:, None], "stance_side": leg.copy()}
+    return table
+
+
+def read(contact: np.ndarray, sims: Sims, names=NAMES) -> dict[str, np.ndarray]:
+    """The senses ``names`` (default all) of every row, each ``(n, 1)``; ``contact`` ``(n, 2)`` bool, the body's
+    contact sensor now (the tracker starts from it on first use)."""
+    table = tracker(contact, sims)
+    leg = np.where(table["stance"] == 0, 1.0, -1.0)[:, None] if "stance_leg" in names or "stance_side" in names else None
+    out = {"stance_leg": leg} if "stance_leg" in names else {}
+    if "since_touchdown" in names:
+        out["since_touchdown"] = np.minimum(sims.time - table["touchdown"], CAP)[:, None]
+    if "stance_side" in names:
+        out["stance_side"] = leg.copy()
+    return out
+
+
+def second_stands(contact: np.ndarray, sims: Sims) -> np.ndarray:
+    """Rows whose stance leg is the contact sensor's second ``(n,)`` bool (``stance_leg`` = -1: the rows a stance frame
+    mirrors); ``contact`` as in :func:`read`."""
+    return tracker(contact, sims)["stance"] != 0
 
 
 def update(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:

@@ -13,6 +13,8 @@ in one control tick while still looking finite, which a GA would exploit.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import mujoco
 import numpy as np
 from mujoco.batch import Batch, SimulationError
@@ -31,7 +33,8 @@ class Sims:
     A batch is a value: :meth:`copy` (and ``copy.deepcopy``) gives an independent batch in the same
     state, which continues bit for bit as the original would.  ``extra`` holds what a body keeps per
     simulation beside MuJoCo's state (the Taga ground's contact points and pushes): name -> table of
-    ``(n, ...)`` arrays, copied with the batch.
+    ``(n, ...)`` arrays, copied with the batch.  ``readings`` keeps what a body read of the current state
+    (:meth:`kept`) until the state changes.
     """
 
     def __init__(self, model: mujoco.MjModel, n: int, *, nthread: int = 1):
@@ -39,6 +42,10 @@ class Sims:
         self.n = n
         self.batch = Batch(model, nsim=n, nthread=nthread, persistent=True)
         self.extra: dict[str, dict[str, np.ndarray]] = {}
+        #: what has been read of the current state, by name (a body's contacts and heading): kept until the state
+        #: changes (:meth:`reset`, :meth:`forward`, :meth:`step`), so the parts of a control tick (the senses, the gait
+        #: tracker, the task, the fall test) share one reading
+        self.readings: dict[str, np.ndarray] = {}
 
     def copy(self) -> "Sims":
         """An independent batch of the same model in this batch's state (MuJoCo's full state and ``extra``)."""
@@ -59,13 +66,23 @@ class Sims:
         arr = self.__dict__[name] = self.batch.bind(name)
         return arr
 
+    def kept(self, name: str, read: Callable[["Sims"], np.ndarray]) -> np.ndarray:
+        """``read(self)`` of the current state, read once until the state changes; read-only, as every reader shares it."""
+        got = self.readings.get(name)
+        if got is None:
+            got = self.readings[name] = read(self)
+            got.flags.writeable = False
+        return got
+
     def reset(self, ids: np.ndarray | None = None) -> None:
         """Simulations ``ids`` (default all) to the model's initial state, derived fields current."""
+        self.readings.clear()
         self.batch.reset(ids=ids)
         self.batch.forward(ids=ids, stage=_VEL)
 
     def forward(self, ids: np.ndarray | None = None) -> None:
         """Recompute derived fields after the caller wrote qpos/qvel."""
+        self.readings.clear()
         self.batch.forward(ids=ids, stage=_VEL)
 
     def step(self, ids: np.ndarray, nstep: int) -> np.ndarray:
@@ -79,6 +96,7 @@ class Sims:
         failed = np.zeros(len(ids), bool)
         if len(ids) == 0:
             return failed
+        self.readings.clear()
         every = len(ids) == self.n  # all simulations (ids are sorted and unique): whole views, no copies
         rows = slice(None) if every else ids
         try:

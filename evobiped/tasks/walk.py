@@ -198,8 +198,7 @@ class WalkTask(Task):
         if self.counts_steps:
             if body.contact_sensor is None:
                 raise ConfigError(f"the walk task counts steps by foot contact; body {body.name!r} declares no contact sensor")
-            gait.read(body.contacts(sims), sims)  # the episode keeps the gait tracker from now on
-            state["stance"] = sims.extra["gait"]["stance"].copy()
+            state["stance"] = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
             state["steps"] = np.zeros(sims.n)
         if self.gait_lab:
             self._lab_constants = self._lab_constants or body.gait_constants(sims.model)
