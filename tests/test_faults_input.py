@@ -192,9 +192,9 @@ def test_a_video_window_after_the_episode_leaves_nothing(plain_run, tmp_path, ca
 def test_an_interrupt_before_the_first_commit_claims_no_checkpoint(tmp_path):
     from types import SimpleNamespace
 
-    from evobiped.cli.evolve_cmd import _stopped
+    from evobiped.usecases.evolving import stop_report
 
-    line = _stopped(SimpleNamespace(optimizer=SimpleNamespace(generation=0), done=False, dir=tmp_path))
+    line = stop_report(SimpleNamespace(optimizer=SimpleNamespace(generation=0), done=False, dir=tmp_path))
     assert "generation -1" not in line and "checkpoint saved" not in line and "no checkpoint yet" in line
 
 

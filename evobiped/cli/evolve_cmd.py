@@ -47,19 +47,8 @@ def add_evolve(sub) -> None:
     p.set_defaults(func=run_evolve_cmd)
 
 
-def default_run_dir(config) -> str:
-    from pathlib import Path
-
-    base = Path("runs") / f"{config.episode.body}_{config.episode.controller}_seed{config.seed}"
-    path, i = base, 1
-    while path.exists():
-        i += 1
-        path = base.with_name(f"{base.name}_{i}")
-    return str(path)
-
-
 def run_evolve_cmd(args) -> int:
-    from ..usecases.evolving import open_run, start_evaluator
+    from ..usecases.evolving import evolve
 
     if args.rerun is not None:  # before anything is written
         from ..record.recordings.viewer import connect_url, require_display, require_viewer
@@ -70,105 +59,85 @@ def run_evolve_cmd(args) -> int:
     if args.resume:
         if any(getattr(args, f) is not None for f in (*RUN_FLAGS, "out") if f not in ("backend", "workers", "address")):
             raise UserError("--resume takes the run's saved config: give only --workers/--backend/--address with it")
-        # locks the directory, repairs its derived files, checks where the episodes run
-        opened = open_run(resume=args.resume, backend=args.backend, workers=args.workers, address=args.address, check=check_workers)
-    else:
-        config = run_config(**{f: getattr(args, f) for f in RUN_FLAGS})
-        # the settings, the start genome and the run directory are checked before anything is written
-        opened = open_run(config, out=args.out or default_run_dir(config), check=check_workers)
-    run = opened.run
-    with run:
+        where = dict(config=args.resume, backend=args.backend, workers=args.workers, address=args.address)
+    else:  # the settings, the start genome and the run directory are checked before anything is written
+        where = dict(config=run_config(**{f: getattr(args, f) for f in RUN_FLAGS}), out=args.out)
+    shown = _Shown(args)
+    try:
+        with shown.viewer:
+            evolve(**where, check=check_workers, on_opened=shown.opened, on_started=shown.started, on_evaluated=shown.evaluated,
+                   on_generation=shown.generation, on_retry=on_retry, on_done=shown.done, on_stop=shown.stopped)
+    except KeyboardInterrupt as exc:
+        if not shown.stop_said:  # before the evaluator started: the command's own "interrupted" line
+            raise
+        return exit_status(exc)
+    return 0
+
+
+class _Shown:
+    """What the command shows of a run as :func:`~evobiped.usecases.evolving.evolve` goes: the repairs and notes of
+    a resume, the header, a progress line per generation with the time left (every walker's episode length told to
+    the clock), an optional live viewer, the final lines, and what a stop signal left."""
+
+    def __init__(self, args):
+        self.args, self.stop_said = args, False
+        self.say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
+        self.viewer, self.log, self.line, self.clock = contextlib.ExitStack(), None, None, None
+
+    def opened(self, run) -> None:
+        self.run = run
         for repair in run.repairs:
             print(f"evobiped: repaired: {repair}", file=sys.stderr)
         if run.environment_differences:
             print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
                   " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
         if run.done:
-            print(f"run {args.resume} is already complete ({run.optimizer.generation} generations)")
-            return 0
-        evaluator = start_evaluator(opened, on_retry)  # last: the workers start once the run is created or resumed
-        return _evolve(run, evaluator, opened.backend, args)
+            print(f"run {self.args.resume} is already complete ({run.optimizer.generation} generations)")
 
+    def started(self, run, backend: str) -> None:
+        from ..core.progress import GenerationClock
 
-def _evolve(run, evaluator, backend: str, args) -> int:
-    """The generations left, with progress lines and an optional live viewer; the summary line."""
-    say = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
-    c = run.config
-    population = len(run.optimizer.ask()[0])
-    try:
-        say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
-            f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
-        return _generations(run, evaluator, c, say, args)
-    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP, at any moment (closing the workers, the last line)
-        last_line(_stopped(run))
-        return exit_status(exc)
+        c = run.config
+        population = len(run.optimizer.ask()[0])
+        self.say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
+                 f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+        if self.args.rerun is not None:
+            self.log = self.viewer.enter_context(_viewer_log(run, self.args.rerun))
+        self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet)
+        self.clock = GenerationClock(c.generations, c.episode.seconds)  # every walker's episode, generation by generation
 
+    def evaluated(self, rows) -> None:
+        self.clock.episodes(rows.end_time)
 
-def _generations(run, evaluator, c, say, args) -> int:
-    from ..core.progress import GenerationClock, generation_note
+    def generation(self, s) -> None:
+        from ..core.progress import generation_note
 
-    with evaluator, contextlib.ExitStack() as stack:
-        log = stack.enter_context(_viewer_log(run, args.rerun)) if args.rerun is not None else None
+        if self.log is not None:
+            self.log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
+                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
+        self.clock.generation(s.wall_seconds)
+        best = self.run.best or {"fitness": s.best, "fell": s.best_fell}
+        self.line.report(s.generation + 1, generation_note(
+            best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean, worst=s.worst,
+            evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds),
+            left=self.clock.left(s.generation + 1))
 
-        line = Progress("evolve", c.generations, "generations", quiet=args.quiet)
-        clock = GenerationClock(c.generations, c.episode.seconds)  # every walker's episode, generation by generation
+    def done(self, run, summary: dict) -> None:
+        best = summary["best"]
+        state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
+        walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
+        # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
+        earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if self.args.resume else ""
+        if summary.get("stopped_early"):
+            rule = run.config.stop
+            what = "its evaluation walkers met the walking criteria" if rule.when == "walking" else f"its evaluation walkers' fitness reached {rule.above:g}"
+            print(f"stopped after generation {summary['generations'] - 1}: {what} for {rule.generations} generations running ([stop])")
+        print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
+              f"{summary['evaluations']} evaluations, elapsed {hms(self.line.elapsed)}{earlier}; results in {run.dir}")
 
-        def progress(s):
-            if log is not None:
-                log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
-                                   evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
-            clock.generation(s.wall_seconds)
-            best = run.best or {"fitness": s.best, "fell": s.best_fell}
-            line.report(s.generation + 1, generation_note(
-                best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean, worst=s.worst,
-                evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds),
-                left=clock.left(s.generation + 1))
-
-        summary = run.evolve(_Watched(evaluator, clock), progress)
-    best = summary["best"]
-    state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
-    walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
-    # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
-    earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if args.resume else ""
-    if summary.get("stopped_early"):
-        rule = run.config.stop
-        what = "its evaluation walkers met the walking criteria" if rule.when == "walking" else f"its evaluation walkers' fitness reached {rule.above:g}"
-        print(f"stopped after generation {summary['generations'] - 1}: {what} for {rule.generations} generations running ([stop])")
-    print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
-          f"{summary['evaluations']} evaluations, elapsed {hms(line.elapsed)}{earlier}; results in {run.dir}")
-    return 0
-
-
-def _stopped(run) -> str:
-    """What a stop signal left: the generations committed and whether the run is complete."""
-    from ..files.rundir import HISTORY, SUMMARY
-
-    g = run.optimizer.generation
-    if g == 0:
-        return (f"evobiped: interrupted before its first generation was committed (no checkpoint yet); "
-                f"evobiped evolve --resume {run.dir} starts it from the beginning")
-    if not run.done:
-        return (f"evobiped: interrupted after generation {g - 1} (numbered from 0, as in {HISTORY}); checkpoint saved; "
-                f"continue with: evobiped evolve --resume {run.dir}")
-    if (run.dir / SUMMARY).is_file():
-        return f"evobiped: interrupted after the run completed: all {g} generations and {SUMMARY} are written in {run.dir}"
-    return (f"evobiped: interrupted after the last of {g} generations was committed, before {SUMMARY} was written; "
-            f"the run is complete once evobiped evolve --resume {run.dir} writes it")
-
-
-class _Watched:
-    """An evaluator that tells the clock every walker's episode length (end time of every row) as it evaluates."""
-
-    def __init__(self, evaluator, clock):
-        self.evaluator, self.clock = evaluator, clock
-
-    def evaluate(self, genomes, key=None, **context):
-        result = self.evaluator.evaluate(genomes, key=key, **context)  # the run's context, if any (normaliser, phase weights)
-        self.clock.episodes((result.rows if result.rows is not None else result).end_time)
-        return result
-
-    def __getattr__(self, name):
-        return getattr(self.evaluator, name)
+    def stopped(self, line: str) -> None:
+        self.stop_said = True
+        last_line(line)
 
 
 def _viewer_log(run, rerun: str):

@@ -37,7 +37,7 @@ from ..run.fingerprint import settings
 from ..run.run_config import RunConfig, check_run, episodes_per_genome, population_of
 from ..files import rundir
 from ..files.genome_file import load_genome
-from .evolving import open_run, start_evaluator
+from .evolving import evolve
 
 FILE, RUNS, RETESTS = "comparison.json", "runs", "retests"
 
@@ -165,12 +165,9 @@ def run_and_retest(directory: str, config: dict, retested: str, name: str, test:
         return read_json(retested, what="retest")
     cfg = RunConfig.from_dict(config)
     d = Path(directory)
-    opened = open_run(resume=d) if (d / rundir.CONFIG).is_file() else open_run(cfg, out=d)
-    with opened.run as run:
-        if not run.done:
-            with start_evaluator(opened) as evaluator:
-                run.evolve(evaluator)
-        history = [int(x) for x in rundir.column(run.history, "evaluations")]
+    runs = []  # the run, whose history (the checkpoint's rows) grows as it evolves
+    evolve(d if (d / rundir.CONFIG).is_file() else cfg, out=d, on_opened=runs.append)
+    history = [int(x) for x in rundir.column(runs[0].history, "evaluations")]
     per = episodes_per_genome(cfg)
     spent = [per * sum(history[:g + 1]) for g in range(len(history))]
     noise = fresh_noise(test["noise"], test["trials"])

@@ -39,16 +39,16 @@ from ... import __version__
 from ...files import rundir
 from ...core.errors import ConfigError, UserError
 from ...core.options import given
-from ...evaluation import SerialEvaluator
 from ...evaluation.ray_backend import init_ray
 from ...evaluation.pool import spawn_pool, stop_pool
 from ...controllers import CONTROLLERS
 from ...tasks import TASKS
 from ...optimizers import OPTIMIZERS
-from ...run import Run, RunConfig
+from ...run import RunConfig
 from ...core.fileio import read_json, write_json
 from ...files.genome_file import load_genome
 from ...core.progress import Progress
+from ...usecases.evolving import evolve
 
 #: the fitness terms a study needs of the run's task (besides the criteria its conditions name, ``Task.criteria``)
 TERMS = ("distance",)
@@ -146,10 +146,8 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
     d = Path(directory)
     if (d / rundir.OUTCOME).is_file():
         return read_json(d / rundir.OUTCOME, what="run outcome")
-    run_cfg = RunConfig.from_dict(config)
-    run = Run.resume(d) if (d / rundir.CONFIG).is_file() else Run.create(d, run_cfg)
-    with run, SerialEvaluator(run_cfg.episode) as ev:  # the run's lock is released when it ends
-        summary = run.evolve(ev)  # a finished run only writes its summary again
+    run_cfg = RunConfig.from_dict(config)  # evaluated serially (StudyConfig.run_config): one run per worker
+    summary = evolve(d if (d / rundir.CONFIG).is_file() else run_cfg, out=d)  # a finished run: its summary as it is
     best = summary["best"]
     walk = summary["best_walk"]  # eq. 4's distance and the direction, of the nominal episode (the run's summary)
     outcome = {
