@@ -208,3 +208,23 @@ def test_spawn_streams_to_a_new_viewer_and_writes_no_file(tmp_path, monkeypatch,
     assert len(calls) == 1
     assert "recording streamed to the viewer" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]
+
+
+def test_the_report_says_why_a_stored_fitness_is_not_compared(tmp_path):
+    """ReplayReport.not_compared: None for the stored episode; --seconds, --source (a steering walker's sources) and a
+    fitness aggregated over perturbed presentations each say so; the command prints the report's words."""
+    from evobiped.usecases.replaying import replay, stored_walker
+
+    def reason(cfg, **kw):
+        g = random_genomes(cfg.build().controller.layout, 1, seed=3)[0]
+        path = tmp_path / f"w{len(list(tmp_path.glob('w*.json')))}.json"
+        save_genome(path, g, cfg, fitness=1.0)
+        return replay(stored_walker(path), out=tmp_path / "r.rrd", **kw).not_compared
+
+    plain, steer = EpisodeConfig(seconds=0.3), EpisodeConfig(seconds=0.3, controller="simbicon", task="steer")
+    assert reason(plain) is None
+    assert reason(plain, seconds=0.2) == "--seconds changed the episode length"
+    assert reason(steer, sources=[[5.0, 1.0], [5.0, -1.0]]) == "--source changed the sources"
+    assert reason(steer, seconds=0.2, sources=[[5.0, 1.0], [5.0, -1.0]]) == "--seconds changed the episode length"
+    noisy = EpisodeConfig(seconds=0.3, perturbations={"presentations": 2, "pose_noise": 0.01})
+    assert reason(noisy).startswith("it is the aggregate over the perturbed presentations")

@@ -34,8 +34,7 @@ def add_replay(sub) -> None:
 def run_replay_cmd(args) -> int:
     from pathlib import Path
 
-    from ..usecases.replaying import replay
-    from ..record.source import resolve
+    from ..usecases.replaying import replay, stored_walker
     from ..files.rundir import figures_dir
 
     video_flags = args.video_window is not None or args.video_size != [480, 360] or args.video_fps != 25.0
@@ -45,14 +44,7 @@ def run_replay_cmd(args) -> int:
         refuse("--video-size", f"width and height must be even (H.264), got {args.video_size[0]} {args.video_size[1]}")
     if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
         refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
-    if args.cell is not None:
-        from ..repertoire.elites import load_repertoire, parse_cell
-
-        if args.generation is not None:
-            refuse("--cell", "an archive's elite is of no generation: give --cell or --generation")
-        source = load_repertoire(args.source).source(parse_cell(args.cell))
-    else:
-        source = resolve(args.source, args.generation)
+    source = stored_walker(args.source, args.generation, args.cell)
     figures = args.figures
     if figures == "":
         base = Path(args.out).parent if args.out else source.outputs
@@ -85,10 +77,7 @@ def run_replay_cmd(args) -> int:
 
         print(f"gait: {gait_line(r.gait)}; {'walks' if r.gait['walks'] else 'does not walk: ' + criteria_words(r.gait['failed'])}")
     if not r.compared:
-        why = ("it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
-               if source.config.perturbed else "--source changed the sources" if args.sources and not args.seconds
-               else "--seconds changed the episode length")
-        print(f"stored fitness not compared: {why}")
+        print(f"stored fitness not compared: {r.not_compared}")
     elif r.stored_fitness is None:
         print("stored fitness: none in the genome file")
     elif not r.environment_differences:

@@ -16,6 +16,7 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core.errors import UserError
 from ..files import rundir
 from ..files.outcome import compare, outcome
 from ..files.rundir.output_set import output_set
@@ -31,7 +32,9 @@ class ReplayReport:
 
     fitness: float
     stored_fitness: float | None  # None if the source has none
-    compared: bool  # False when --seconds or --source changed the episode, or the stored fitness is over perturbed presentations
+    #: why the stored fitness was not compared (--seconds or --source changed the episode, or it is the aggregate over
+    #: perturbed presentations); None: it was
+    not_compared: str | None
     fell: bool
     end_time: float
     #: distance and walking direction (``EpisodeResult.walk``)
@@ -52,6 +55,11 @@ class ReplayReport:
     gait: dict | None = None
 
     @property
+    def compared(self) -> bool:
+        """The replayed episode is the one the stored fitness was scored on (see :attr:`not_compared`)."""
+        return self.not_compared is None
+
+    @property
     def matches(self) -> bool:
         """Replayed fitness equals the stored one bit for bit."""
         return self.compared and self.stored_fitness is not None and self.fitness == self.stored_fitness
@@ -68,6 +76,20 @@ class ReplayReport:
         the same outcome within :data:`evobiped.files.outcome.TOLERANCE` in another (True when nothing is compared)."""
         bits = self.matches or not self.compared or self.stored_fitness is None or bool(self.environment_differences)
         return bits and not (self.outcome_checked and self.outcome_failures)
+
+
+def stored_walker(path: str | Path, generation: int | None = None, cell: str | None = None) -> Source:
+    """What a replay re-simulates: the best of a run directory (of its generation ``generation``), a genome file,
+    or the elite of grid cell ``cell`` (``"I,J"``) of a map-elites run's archive; UserError, one line, otherwise."""
+    if cell is None:
+        from ..record.source import resolve
+
+        return resolve(path, generation)
+    from ..repertoire.elites import load_repertoire, parse_cell
+
+    if generation is not None:
+        raise UserError("--cell: an archive's elite is of no generation: give --cell or --generation")
+    return load_repertoire(path).source(parse_cell(cell))
 
 
 def default_out(source: Source, video: bool = False) -> Path:
@@ -125,13 +147,14 @@ def replay(
     try:  # one set: the previous replay's outputs go first, a cut-short one is said (``note``)
         with output_set("replay", [p for p in (target, video) if p is not None], owned, say=note):
             return _replay(source, cfg, episode, history, out=out, spawn=spawn, connect=connect, figures_dir=figures_dir,
-                           listener=listener, video=video, video_options=opts)
+                           listener=listener, video=video, video_options=opts,
+                           not_compared=_not_compared(source, cfg, seconds is not None, bool(sources)))
     finally:
         if video is not None:
             opts["renderer"].close()
 
 
-def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options):
+def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options, not_compared):
     from ..analysis.gait_report import FootRecorder, has_feet, measured
     from ..episode import Listeners
     from ..record.png.figures import fitness_label, replay_figures
@@ -184,7 +207,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     return ReplayReport(
         fitness=float(result.fitness[0]),
         stored_fitness=float(stored) if isinstance(stored, (int, float)) else None,
-        compared=cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options and not source.config.perturbed,
+        not_compared=not_compared,
         fell=bool(result.fell[0]),
         end_time=float(result.end_time[0]),
         walk=result.walk(),
@@ -198,6 +221,15 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         video=video,
         gait=gait,
     )
+
+
+def _not_compared(source: Source, cfg, seconds_given: bool, sources_given: bool) -> str | None:
+    """Why the stored fitness of ``source`` cannot be compared with a replay of episode ``cfg`` (None: it can)."""
+    if cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options and not source.config.perturbed:
+        return None
+    if source.config.perturbed:
+        return "it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
+    return "--source changed the sources" if sources_given and not seconds_given else "--seconds changed the episode length"
 
 
 def _history(source: Source):
