@@ -28,7 +28,7 @@ class _Reach:
         self.first = np.full(sims.n, np.nan)
 
     def tick(self, t, sims, ids, neurons, action, task_state):
-        d = np.linalg.norm(task_state["position"] - task_state["source"], axis=1)
+        d = np.linalg.norm(task_state.position - task_state.source, axis=1)
         new = np.isnan(self.first) & (d <= self.reach)
         new[np.setdiff1d(np.arange(len(d)), ids)] = False
         self.first[new] = t

@@ -67,12 +67,13 @@ def test_fitness_is_the_mean_over_presentations_of_minus_the_distance():
 # ---- the arrive fitness: every fall costs more than any distance
 def arrive_state(position, end_time, seconds=50.0):
     """A steer task (arrive fitness, sources (10, 3) and (10, -3) m) and its state at the end: rows = presentations."""
+    from evobiped.tasks.states import SteerState
     from evobiped.tasks.steer import SteerTask
 
     task = SteerTask(sources=[[10, 3], [10, -3]], fitness="arrive")
     src = task.sources[task.presentation_of(len(position))]
-    state = {"start": np.zeros((len(position), 2)), "position": np.array(position, float), "source": src,
-             "end_time": np.array(end_time, float), "seconds": seconds}
+    state = SteerState(start=np.zeros((len(position), 2)), position=np.array(position, float), source=src,
+                       near=np.zeros(len(position)), end_time=np.array(end_time, float), seconds=seconds)
     return task, state
 
 

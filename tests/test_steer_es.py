@@ -13,6 +13,7 @@ from evobiped.files.genome_file import load_genome
 from evobiped.core.options import given
 from evobiped.files.presets import path as preset_path
 from evobiped.episode.remap import remap_inputs, remap_norm
+from evobiped.tasks.states import SteerState
 from evobiped.tasks.steer import SteerTask
 
 from .conftest import WALKERS, cli
@@ -47,13 +48,13 @@ def test_a_generation_draws_its_sources_from_the_declared_distribution_and_every
 def test_lingering_within_reach_is_paid_and_a_fall_stays_below_any_walker_up():
     task = SteerTask(sources=[[10, 0], [5, 5]], fitness="arrive", reach=0.5, reach_bonus=4.0)
     src = task.sources
-    state = {"position": src + [[0.3, 0.0], [3.0, 0.0]], "source": src, "near": np.array([50.0, 0.0]), "ticks": 100,
-             "end_time": np.array([30.0, 30.0]), "seconds": 30.0}
+    state = SteerState(start=np.zeros((2, 2)), position=src + [[0.3, 0.0], [3.0, 0.0]], source=src, near=np.array([50.0, 0.0]),
+                       ticks=100, end_time=np.array([30.0, 30.0]), seconds=30.0)
     f = task.fitness(state)
     assert f == pytest.approx([-0.3 + 4.0 * 0.5, -3.0])
-    worst_up = task.fitness({**state, "position": src + 1e3, "near": np.zeros(2)}).mean()
-    best_fall = task.fitness({**state, "position": src.copy(), "near": np.array([100.0, 100.0]),
-                              "end_time": np.array([29.99, 30.0])}).mean()
+    worst_up = task.fitness(dataclasses.replace(state, position=src + 1e3, near=np.zeros(2))).mean()
+    best_fall = task.fitness(dataclasses.replace(state, position=src.copy(), near=np.array([100.0, 100.0]),
+                                                 end_time=np.array([29.99, 30.0]))).mean()
     assert best_fall < worst_up
     plain = SteerTask(sources=[[10, 0], [5, 5]], fitness="arrive")
     assert plain.fitness(state) == pytest.approx([-0.3, -3.0])  # no reach: the arrive fitness as before

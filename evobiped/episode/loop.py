@@ -150,10 +150,10 @@ class Episode:
             self.task.take_sources(tstate, trials.sources)
         # the task sees when each walker's episode ends: the full length until it falls (so a
         # fitness read mid-episode, e.g. by a recording, counts a walker still up as up to the end)
-        tstate["end_time"], tstate["seconds"] = end_time, n_ticks * self.control_dt
+        tstate.end_time, tstate.seconds = end_time, n_ticks * self.control_dt
         ctx = context or Context()
         if ctx.weights is not None:
-            tstate["weights"] = dict(ctx.weights)
+            tstate.weights = dict(ctx.weights)
         k = self.controller.n_inputs if self.controller is not None and hasattr(self.controller, "n_inputs") else None
         return EpisodeState(
             sims=sims, params=params, task=tstate,

@@ -13,6 +13,7 @@ from .result import EpisodeResult
 from ..interface.normaliser import SenseSums
 from ..physics.perturb import Trials
 from ..physics.sim import Sims
+from ..tasks.base import TaskState
 
 if TYPE_CHECKING:
     from .loop import Episode
@@ -26,7 +27,7 @@ class Listener(Protocol):
     """Watches an episode (recording, figures); never changes it."""
 
     def start(self, episode: "Episode", sims: Sims) -> None: ...
-    def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: dict) -> None: ...
+    def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: TaskState) -> None: ...
     def end(self, result: EpisodeResult) -> None: ...
 
 
@@ -66,7 +67,7 @@ class EpisodeState:
     #: the controller's state (see :meth:`Controller.initial_state`)
     controller: Any
     #: the task's state (see :class:`evobiped.tasks.base.Task`)
-    task: dict[str, Any]
+    task: TaskState
     alive: np.ndarray
     fell: np.ndarray
     unstable: np.ndarray

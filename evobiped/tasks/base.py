@@ -4,17 +4,16 @@ Fitness is higher-is-better everywhere.  Beside it a task returns named
 fitness terms (:attr:`Task.term_names`, :meth:`Task.terms`), one value per
 simulation row, which the episode hands back in ``EpisodeResult.terms``.
 
-The task state is the dict :meth:`Task.start` returns, private to the task
-except for the keys the episode writes into it: ``end_time`` ``(n,)`` s (when
-each row's episode ends: the planned length until it falls), ``seconds``
-(the planned length, s) and, when a run sets them for a generation
-(``episode.Context``), ``weights``: the fitness weights by term of a task
-whose fitness weighs its terms.  Everything else about the task is read through its
-methods (``end_position``, ``targets``, ``terms``), never through state keys.
+The task state is the :class:`TaskState` :meth:`Task.start` returns (a task's own subclass of it), private to the
+task except for the fields the episode writes into it: ``end_time`` ``(n,)`` s (when each row's episode ends: the
+planned length until it falls), ``seconds`` (the planned length, s) and, when a run sets them for a generation
+(``episode.Context``), ``weights``: the fitness weights by term of a task whose fitness weighs its terms.  Everything
+else about the task is read through its methods (``end_position``, ``targets``, ``terms``), never through its state.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
 import numpy as np
@@ -23,6 +22,20 @@ from ..bodies.base import Body
 from ..core.errors import ConfigError
 from ..core.options import NoOptions, taken
 from ..physics.sim import Sims
+
+
+@dataclass(eq=False, kw_only=True)
+class TaskState:
+    """What every task's state holds, written by the episode: ``end_time`` ``(n,)`` s, ``seconds`` s, ``weights``
+    (term -> weight; None: the task's own); a task's state subclasses it with its own fields."""
+
+    end_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    seconds: float = 0.0
+    weights: dict[str, float] | None = None
+
+
+#: the fields the episode writes (a task's :meth:`Task.restart` leaves them to it)
+EPISODE_FIELDS = frozenset(f.name for f in fields(TaskState))
 
 
 class Task:
@@ -71,42 +84,47 @@ class Task:
         (column permutation, sign per column); default none."""
         return {}
 
-    def start(self, body: Body, sims: Sims) -> dict[str, Any]:
+    def start(self, body: Body, sims: Sims) -> TaskState:
         """Task state at t = 0 (after the body's reset)."""
-        return {}
+        return TaskState()
 
-    def restart(self, body: Body, sims: Sims, state: dict[str, Any], ids: np.ndarray) -> None:
+    def restart(self, body: Body, sims: Sims, state: TaskState, ids: np.ndarray) -> None:
         """Rows ``ids`` of ``state`` begin anew (after the body's reset of those rows), in place: by default
-        they take the rows of a fresh :meth:`start`; a task whose state is not kept per row overrides this."""
+        they take the rows of a fresh :meth:`start` (a field None there is one these options leave out); a task whose
+        state is not kept per row overrides this."""
         fresh = self.start(body, sims)
-        for key, value in fresh.items():
+        for f in fields(fresh):
+            value = getattr(fresh, f.name)
+            if f.name in EPISODE_FIELDS or value is None:
+                continue
+            kept = getattr(state, f.name)
             if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
-                state[key][ids] = value[ids]
-            elif hasattr(state[key], "restart"):  # a per-row record of its own (the gait lab's meter)
-                state[key].restart(ids)
+                kept[ids] = value[ids]
+            elif hasattr(kept, "restart"):  # a per-row record of its own (the gait lab's meter, a command schedule)
+                kept.restart(ids)
             elif not isinstance(value, (int, float, str)):
-                raise ConfigError(f"{self.name} task: its state {key!r} is not kept per row, so rows cannot begin anew")
+                raise ConfigError(f"{self.name} task: its state {f.name!r} is not kept per row, so rows cannot begin anew")
 
     #: the task reads the controller's neuron outputs (:meth:`on_tick`'s ``neurons``): it needs a controller
     def reads_neurons(self) -> bool:
         return False
 
-    def sensors(self, body: Body, sims: Sims, state: dict[str, Any]) -> dict[str, np.ndarray]:
+    def sensors(self, body: Body, sims: Sims, state: TaskState) -> dict[str, np.ndarray]:
         """Named sensor arrays ``(P, k)`` for the controller."""
         return {}
 
-    def on_tick(self, body: Body, sims: Sims, state: dict[str, Any], ids: np.ndarray, healthy: np.ndarray, neurons: np.ndarray) -> None:
+    def on_tick(self, body: Body, sims: Sims, state: TaskState, ids: np.ndarray, healthy: np.ndarray, neurons: np.ndarray) -> None:
         """After a control tick; ``ids`` were stepped, ``healthy`` (over ids) are finite."""
 
-    def fitness(self, state: dict[str, Any]) -> np.ndarray:
+    def fitness(self, state: TaskState) -> np.ndarray:
         """``(P,)`` fitness at the end of the episode."""
         raise NotImplementedError
 
-    def terms(self, state: dict[str, Any]) -> dict[str, np.ndarray]:
+    def terms(self, state: TaskState) -> dict[str, np.ndarray]:
         """The fitness terms named in :attr:`term_names`, ``(n,)`` each, at the end of the episode."""
         return {}
 
-    def end_position(self, body: Body, sims: Sims, state: dict[str, Any]) -> np.ndarray:
+    def end_position(self, body: Body, sims: Sims, state: TaskState) -> np.ndarray:
         """Where each row's walker ended on the ground plane, ``(n, 2)`` m (default: its position now)."""
         return body.planar_position(sims)
 

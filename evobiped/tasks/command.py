@@ -36,6 +36,7 @@ import numpy as np
 from ..core.errors import ConfigError
 from ..core.options import option
 from .command_schedule import check_times, draw_commands, schedule_of
+from .states import CommandState
 from .walk import LAB_TERMS, TERMS, WalkTask
 
 #: the terms the command task adds to the walk task's
@@ -125,9 +126,7 @@ class CommandOptions:
 
 
 class CommandTask(WalkTask):
-    """The walk task's state plus ``commands`` (the episode's schedule), ``t0``/``clock`` ``(n,)`` s (each row's start
-    and its last tick's end), ``up`` ``(n,)`` s scored, ``last_facing`` ``(n, 2)``, ``yaw_cmd`` ``(n,)`` rad (the
-    commanded facing), ``measured`` ``(n, 3)`` (v, |v_xy|, w, smoothed) and ``sums`` ``(n, 3)`` (the terms' integrals)."""
+    """Walking as commanded (:class:`~evobiped.tasks.states.CommandState`)."""
 
     name = "command"
     Options = CommandOptions
@@ -154,63 +153,62 @@ class CommandTask(WalkTask):
 
     def take_sources(self, state, commands) -> None:
         """Follow ``commands`` (a generation's draw) instead of the nominal schedule."""
-        state["commands"] = commands
+        state.commands = commands
 
     def commands(self, state, rows=None) -> tuple[np.ndarray, np.ndarray]:
         """The commands (speed m/s, turning rad/s) of rows ``rows`` (default all) at their clock now."""
         rows = slice(None) if rows is None else rows
-        return state["commands"].at(state["clock"][rows] - state["t0"][rows])
+        return state.commands.at(state.clock[rows] - state.t0[rows])
 
     def start(self, body, sims):
-        state = super().start(body, sims)
+        walk = super().start(body, sims)
         if body.contact_sensor is None or len(body.contact_sensor[1]) < 2:
             raise ConfigError(f"the command task scores standing on both feet; body {body.name!r} declares no two feet")
         if body.sagittal and np.any(self.nominal.turning != 0):
             raise ConfigError(f"body {body.name!r} walks in its sagittal plane: it cannot follow a turning command")
         f = body.heading(sims)
         n = sims.n
-        state.update(commands=self.nominal, t0=np.array(sims.time, float), clock=np.array(sims.time, float),
-                     up=np.zeros(n), last_facing=f.copy(), yaw_cmd=np.arctan2(f[:, 1], f[:, 0]),
-                     measured=np.zeros((n, 3)), sums=np.zeros((n, 3)), first=np.ones(n, bool))
-        return state
+        return CommandState(**vars(walk), commands=self.nominal, t0=np.array(sims.time, float), clock=np.array(sims.time, float),
+                            up=np.zeros(n), last_facing=f.copy(), yaw_cmd=np.arctan2(f[:, 1], f[:, 0]),
+                            measured=np.zeros((n, 3)), sums=np.zeros((n, 3)), first=np.ones(n, bool))
 
     def sensors(self, body, sims, state):
         speed, turning = self.commands(state)
         out = {"command_speed": speed[:, None], "command_turning": turning[:, None]}
         if self.heading_sense:
             f = body.heading(sims)
-            out["heading_error"] = _wrap(np.arctan2(f[:, 1], f[:, 0]) - state["yaw_cmd"])[:, None]
+            out["heading_error"] = _wrap(np.arctan2(f[:, 1], f[:, 0]) - state.yaw_cmd)[:, None]
         return out
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         o = self.options
         v_cmd, w_cmd = self.commands(state, ok)
-        dt = np.maximum(np.asarray(sims.time, float)[ok] - state["clock"][ok], 1e-12)
-        f0, f1 = state["last_facing"][ok], body.heading(sims)[ok]
-        step = body.planar_position(sims)[ok] - state["position"][ok]
+        dt = np.maximum(np.asarray(sims.time, float)[ok] - state.clock[ok], 1e-12)
+        f0, f1 = state.last_facing[ok], body.heading(sims)[ok]
+        step = body.planar_position(sims)[ok] - state.position[ok]
         turn = np.arctan2(f0[:, 0] * f1[:, 1] - f0[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f0, f1))
         now = np.stack([np.einsum("pi,pi->p", step, f1) / dt, np.linalg.norm(step, axis=1) / dt, turn / dt], axis=1)
         if o.smoothing > 0:  # a first-order low-pass, started at the first tick's reading
-            a = np.where(state["first"][ok], 1.0, 1.0 - np.exp(-dt / o.smoothing))[:, None]
-            now = state["measured"][ok] + a * (now - state["measured"][ok])
-        state["measured"][ok], state["first"][ok] = now, False
+            a = np.where(state.first[ok], 1.0, 1.0 - np.exp(-dt / o.smoothing))[:, None]
+            now = state.measured[ok] + a * (now - state.measured[ok])
+        state.measured[ok], state.first[ok] = now, False
         v, speed, w = now.T
         sv2, sw2 = o.sigma_speed ** 2, o.sigma_turning ** 2
         both = body.contacts(sims)[ok].all(axis=1)
         still = (v_cmd == 0) * both * np.exp(-speed ** 2 / sv2) * np.exp(-w ** 2 / sw2)
-        state["sums"][ok] += dt[:, None] * np.stack([np.exp(-(v - v_cmd) ** 2 / sv2), np.exp(-(w - w_cmd) ** 2 / sw2), still], axis=1)
-        state["up"][ok] += dt
+        state.sums[ok] += dt[:, None] * np.stack([np.exp(-(v - v_cmd) ** 2 / sv2), np.exp(-(w - w_cmd) ** 2 / sw2), still], axis=1)
+        state.up[ok] += dt
         yaw = np.arctan2(f1[:, 1], f1[:, 0])  # the commanded facing turns on, held within the leash of the facing
-        cmd = state["yaw_cmd"][ok] + w_cmd * dt
-        state["yaw_cmd"][ok] = yaw - np.clip(_wrap(yaw - cmd), -HEADING_LEASH, HEADING_LEASH)
-        state["last_facing"][ok], state["clock"][ok] = f1, np.asarray(sims.time, float)[ok]
+        cmd = state.yaw_cmd[ok] + w_cmd * dt
+        state.yaw_cmd[ok] = yaw - np.clip(_wrap(yaw - cmd), -HEADING_LEASH, HEADING_LEASH)
+        state.last_facing[ok], state.clock[ok] = f1, np.asarray(sims.time, float)[ok]
         super().on_tick(body, sims, state, ids, healthy, neurons)
 
     def terms(self, state):
         out = super().terms(state)
-        per = state["up"] if self.options.average == "time_up" else np.full(len(state["up"]), float(state["seconds"]))
-        scored = state["sums"] / np.maximum(per, 1e-9)[:, None]
+        per = state.up if self.options.average == "time_up" else np.full(len(state.up), float(state.seconds))
+        scored = state.sums / np.maximum(per, 1e-9)[:, None]
         for k, name in enumerate(COMMAND_TERMS):
             out[name] = np.where(per > 0, scored[:, k], 0.0)
         return out

@@ -81,6 +81,7 @@ from dataclasses import dataclass
 from ..core.errors import ConfigError
 from ..core.options import given, option
 from .base import Task
+from .states import SteerState
 
 #: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
 DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
@@ -212,8 +213,7 @@ class SteerOptions:
 
 
 class SteerTask(Task):
-    """State: ``start``, ``position`` ``(n, 2)`` m (the last finite planar position), ``source`` ``(n, 2)`` m
-    (each row's source)."""
+    """Walking to a sound source (:class:`~evobiped.tasks.states.SteerState`)."""
 
     name = "steer"
     Options = SteerOptions
@@ -243,8 +243,7 @@ class SteerTask(Task):
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        return {"start": p0, "position": p0.copy(), "source": self.sources[self.presentation_of(sims.n)],
-                "near": np.zeros(sims.n), "ticks": 0}
+        return SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)], near=np.zeros(sims.n))
 
     def draw_sources(self, key) -> np.ndarray | None:
         """This generation's random sources ``(S, 2)`` m (None: the fixed ones); :func:`draw_sources`."""
@@ -252,41 +251,41 @@ class SteerTask(Task):
 
     def take_sources(self, state, sources: np.ndarray) -> None:
         """Present ``sources`` ``(S, 2)`` m (a generation's draw) instead of the fixed ones."""
-        state["source"] = np.asarray(sources, float)[self.presentation_of(len(state["source"]))]
+        state.source = np.asarray(sources, float)[self.presentation_of(len(state.source))]
 
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
-        s = ear_signal(left, right, state["source"])[:, None]
+        s = ear_signal(left, right, state.source)[:, None]
         out = {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
         if self.options.loudness:
-            out["loudness"] = np.minimum((intensity(left, state["source"]) + intensity(right, state["source"])) / 2, 1.0)[:, None]
+            out["loudness"] = np.minimum((intensity(left, state.source) + intensity(right, state.source)) / 2, 1.0)[:, None]
         return out
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
-        state["position"][ok] = body.planar_position(sims)[ok]
-        state["ticks"] += 1
+        state.position[ok] = body.planar_position(sims)[ok]
+        state.ticks += 1
         if self.options.reach > 0:
-            near = np.linalg.norm(state["position"][ok] - state["source"][ok], axis=1) <= self.options.reach
-            state["near"][ok[near]] += 1
+            near = np.linalg.norm(state.position[ok] - state.source[ok], axis=1) <= self.options.reach
+            state.near[ok[near]] += 1
 
     def fitness(self, state):
-        distance = np.linalg.norm(state["position"] - state["source"], axis=1)
+        distance = np.linalg.norm(state.position - state.source, axis=1)
         if self.fitness_name == "distance":
             return -distance
         R, c = float(self.options.fall_penalty), float(self.options.fall_time_cost)
         b = float(self.options.reach_bonus) if self.options.reach > 0 else 0.0
-        lost = state["seconds"] - state["end_time"]  # s of the episode lost to a fall, 0 for a walker up to the end
+        lost = state.seconds - state.end_time  # s of the episode lost to a fall, 0 for a walker up to the end
         fall = np.where(lost > 0, R + b + c * lost, 0.0)
-        linger = b * state["near"] / max(state["ticks"], 1) if b else 0.0
+        linger = b * state.near / max(state.ticks, 1) if b else 0.0
         return -np.minimum(distance, R) + linger - self.presentations * fall
 
     def terms(self, state):
-        return {"distance": np.linalg.norm(state["position"] - state["start"], axis=1),
-                "distance_to_source": np.linalg.norm(state["position"] - state["source"], axis=1)}
+        return {"distance": np.linalg.norm(state.position - state.start, axis=1),
+                "distance_to_source": np.linalg.norm(state.position - state.source, axis=1)}
 
     def end_position(self, body, sims, state):
-        return state["position"]
+        return state.position
 
     def targets(self):
         return self.sources

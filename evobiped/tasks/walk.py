@@ -60,6 +60,7 @@ from ..core.errors import ConfigError
 from ..core.options import option
 from .base import Task
 from .cycles import count_cycles
+from .states import WalkState
 
 
 def displacement_heading(start_xy: np.ndarray, end_xy: np.ndarray, start_facing: np.ndarray) -> np.ndarray:
@@ -141,8 +142,7 @@ class WalkOptions:
 
 
 class WalkTask(Task):
-    """State: ``start``, ``position`` ``(n, 2)`` m (the last finite planar position), ``facing`` ``(n, 2)``,
-    ``n_motor``; with the cyclic criterion ``motor`` (per tick ``(n, n_motor)`` outputs) and ``ticks`` ``(n,)``."""
+    """Walking away from the start (:class:`WalkState`)."""
 
     name = "walk"
     Options = WalkOptions
@@ -186,26 +186,25 @@ class WalkTask(Task):
     def sensors(self, body, sims, state):
         if not self.heading_sense:
             return {}
-        f0, f = state["facing"], body.heading(sims)
+        f0, f = state.facing, body.heading(sims)
         return {"heading_error": np.arctan2(f0[:, 0] * f[:, 1] - f0[:, 1] * f[:, 0], np.einsum("pi,pi->p", f0, f))[:, None]}
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        state = {"start": p0, "position": p0.copy(), "facing": body.heading(sims).copy(), "n_motor": len(body.actuator_names)}
+        state = WalkState(start=p0, position=p0.copy(), facing=body.heading(sims).copy(), n_motor=len(body.actuator_names))
         if self.cyclic_weight:
-            state["motor"] = []
-            state["ticks"] = np.zeros(sims.n, int)
+            state.motor, state.ticks = [], np.zeros(sims.n, int)
         if self.counts_steps:
             if body.contact_sensor is None:
                 raise ConfigError(f"the walk task counts steps by foot contact; body {body.name!r} declares no contact sensor")
-            state["stance"] = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
-            state["steps"] = np.zeros(sims.n)
+            state.stance = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
+            state.steps = np.zeros(sims.n)
         if self.gait_lab:
             self._lab_constants = self._lab_constants or body.gait_constants(sims.model)
             feet = body.contact_sensor[1] if body.contact_sensor else ()
-            state["gait_lab"] = gait_lab.GaitMeter(sims.n, feet, *self._lab_constants, float(sims.time.max()))
+            state.gait_lab = gait_lab.GaitMeter(sims.n, feet, *self._lab_constants, float(sims.time.max()))
         if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
-            state["travel"], state["yaw"], state["facing_now"] = np.zeros(sims.n), np.zeros(sims.n), state["facing"].copy()
+            state.travel, state.yaw, state.facing_now = np.zeros(sims.n), np.zeros(sims.n), state.facing.copy()
         return state
 
     def reads_neurons(self):
@@ -214,53 +213,53 @@ class WalkTask(Task):
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
         if self.options.gait_measures:
-            f, f1 = state["facing_now"][ok], body.heading(sims)[ok]  # the facing before and after this tick
-            step = body.planar_position(sims)[ok] - state["position"][ok]
-            state["travel"][ok] += np.einsum("pi,pi->p", step, f1)
-            state["yaw"][ok] += np.arctan2(f[:, 0] * f1[:, 1] - f[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f, f1))
-            state["facing_now"][ok] = f1
-        state["position"][ok] = body.planar_position(sims)[ok]
+            f, f1 = state.facing_now[ok], body.heading(sims)[ok]  # the facing before and after this tick
+            step = body.planar_position(sims)[ok] - state.position[ok]
+            state.travel[ok] += np.einsum("pi,pi->p", step, f1)
+            state.yaw[ok] += np.arctan2(f[:, 0] * f1[:, 1] - f[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f, f1))
+            state.facing_now[ok] = f1
+        state.position[ok] = body.planar_position(sims)[ok]
         if self.counts_steps:
             stance = sims.extra["gait"]["stance"][ok]
-            state["steps"][ok] += stance != state["stance"][ok]
-            state["stance"][ok] = stance
+            state.steps[ok] += stance != state.stance[ok]
+            state.stance[ok] = stance
         if self.gait_lab:
-            state["gait_lab"].tick(body.feet(sims), ok, sims.time[ok])
+            state.gait_lab.tick(body.feet(sims), ok, sims.time[ok])
         if self.cyclic_weight:
-            state["motor"].append(neurons[:, : state["n_motor"]].copy())
-            state["ticks"][ok] += 1
+            state.motor.append(neurons[:, : state.n_motor].copy())
+            state.ticks[ok] += 1
 
     def distance(self, state) -> np.ndarray:
         """Eq. 4, ``(P,)`` m."""
-        return np.linalg.norm(state["position"] - state["start"], axis=1)
+        return np.linalg.norm(state.position - state.start, axis=1)
 
     def cyclicity(self, state) -> np.ndarray:
         """c in [0, 1] per individual ``(P,)`` (see the module docstring); counted once per tick count."""
-        if not state.get("motor"):
-            return np.zeros(len(state["start"]))
-        done = state.get("cyclicity")
-        if done is None or done[0] != len(state["motor"]):
-            n = count_cycles(np.stack(state["motor"]), state["ticks"], self.cyclic_band)
-            done = state["cyclicity"] = (len(state["motor"]), (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1))
+        if not state.motor:
+            return np.zeros(len(state.start))
+        done = state.cyclicity
+        if done is None or done[0] != len(state.motor):
+            n = count_cycles(np.stack(state.motor), state.ticks, self.cyclic_band)
+            done = state.cyclicity = (len(state.motor), (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1))
         return done[1]
 
     def terms(self, state):
-        c = self.cyclicity(state) if self.cyclic_weight else np.full(len(state["start"]), np.nan)
+        c = self.cyclicity(state) if self.cyclic_weight else np.full(len(state.start), np.nan)
         out = {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
         if self.counts_steps:
-            out["time_up"], out["steps"] = np.array(state["end_time"], float), state["steps"].copy()
+            out["time_up"], out["steps"] = np.array(state.end_time, float), state.steps.copy()
             if "pace" in self.weights:
                 out["pace"] = np.minimum(out["forward"], self.options.pace_cap * out["time_up"])
         if self.options.gait_measures:
-            up = np.maximum(np.asarray(state["end_time"], float), 1e-9)
-            out["speed"], out["turning"] = state["travel"] / up, np.degrees(state["yaw"]) / up
+            up = np.maximum(np.asarray(state.end_time, float), 1e-9)
+            out["speed"], out["turning"] = state.travel / up, np.degrees(state.yaw) / up
         if self.gait_lab:
-            lab = state["gait_lab"].measure(self.forward(state))
+            lab = state.gait_lab.measure(self.forward(state))
             out.update({k: lab[k] for k in LAB_TERMS})
         return out
 
     def end_position(self, body, sims, state):
-        return state["position"]
+        return state.position
 
     def fitness_label(self):
         if self.fitness_name == "weighted":
@@ -273,13 +272,13 @@ class WalkTask(Task):
 
     def forward(self, state) -> np.ndarray:
         """Displacement along the initial facing, ``(P,)`` m (negative: backwards)."""
-        return np.einsum("pi,pi->p", state["position"] - state["start"], state["facing"])
+        return np.einsum("pi,pi->p", state.position - state.start, state.facing)
 
     def fitness(self, state):
         if self.fitness_name == "weighted":
-            return weighted(self.terms(state), state.get("weights", self.weights))
+            return weighted(self.terms(state), self.weights if state.weights is None else state.weights)
         if self.fitness_name == "forward":
-            up = state["end_time"] / state["seconds"]
+            up = state.end_time / state.seconds
             return (self.forward(state) + self.survival_credit) * up
         W = self.distance(state)
         if not self.cyclic_weight:

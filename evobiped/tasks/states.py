@@ -1,0 +1,72 @@
+"""The tasks' states: what each task keeps of an episode in progress, beside the fields every task state has and the
+episode writes (:class:`~evobiped.tasks.base.TaskState`).  A field None is one the task's options leave out; arrays
+are ``(n, ...)`` over the episode's simulation rows."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..physics.gait_lab import GaitMeter
+from .base import TaskState
+from .command_schedule import CommandSchedule, DrawnCommands
+
+
+@dataclass(eq=False, kw_only=True)
+class WalkState(TaskState):
+    """The walk task's (:mod:`evobiped.tasks.walk`)."""
+
+    #: m ``(n, 2)``: where each row started, its last finite planar position; its facing at the start ``(n, 2)``
+    start: np.ndarray
+    position: np.ndarray
+    facing: np.ndarray
+    #: the motor neurons (the first of a controller's neuron outputs)
+    n_motor: int
+    #: the cyclic criterion: the motor neurons' outputs of every tick ``(n, n_motor)``, each row's ticks up ``(n,)``,
+    #: and the criterion as last counted (ticks counted, c ``(n,)``)
+    motor: list[np.ndarray] | None = None
+    ticks: np.ndarray | None = None
+    cyclicity: tuple[int, np.ndarray] | None = None
+    #: the weighted fitness: each row's stance leg at its last tick (:mod:`evobiped.physics.gait`) and its steps ``(n,)``
+    stance: np.ndarray | None = None
+    steps: np.ndarray | None = None
+    #: the gait terms' meter
+    gait_lab: GaitMeter | None = None
+    #: the gait measures: m along the facing and rad turned (unwrapped) so far ``(n,)``, the facing at the last tick
+    travel: np.ndarray | None = None
+    yaw: np.ndarray | None = None
+    facing_now: np.ndarray | None = None
+
+
+@dataclass(eq=False, kw_only=True)
+class SteerState(TaskState):
+    """The steer task's (:mod:`evobiped.tasks.steer`)."""
+
+    #: m ``(n, 2)``: where each row started, its last finite planar position, its source
+    start: np.ndarray
+    position: np.ndarray
+    source: np.ndarray
+    #: control ticks each row spent within reach of its source, up ``(n,)``; control ticks of the episode
+    near: np.ndarray
+    ticks: int = 0
+
+
+@dataclass(eq=False, kw_only=True)
+class CommandState(WalkState):
+    """The command task's (:mod:`evobiped.tasks.command`): the walk task's and its own."""
+
+    #: the commands followed (the schedule, or a generation's draw)
+    commands: CommandSchedule | DrawnCommands
+    #: s ``(n,)``: each row's start, the end of its last tick, and its time scored
+    t0: np.ndarray
+    clock: np.ndarray
+    up: np.ndarray
+    #: the facing at the last tick ``(n, 2)``, the commanded facing (rad, ``(n,)``)
+    last_facing: np.ndarray
+    yaw_cmd: np.ndarray
+    #: the measured forward speed, speed and turning rate (m/s, m/s, rad/s; smoothed) ``(n, 3)``, the tracking terms'
+    #: integrals ``(n, 3)``, and whether a row has yet to take its first tick ``(n,)``
+    measured: np.ndarray
+    sums: np.ndarray
+    first: np.ndarray
