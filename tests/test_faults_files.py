@@ -203,7 +203,7 @@ def test_a_source_beyond_10_km_is_one_line(tmp_path, capsys):
 
 # ---- a stop signal at the very end says whether the run is complete
 def test_a_stop_signal_after_the_last_file_says_the_run_is_complete(tmp_path, capsys, monkeypatch):
-    import evobiped.cli.evolve_cmd as evolve_cmd
+    import evobiped.cli.evolving.evolve_cmd as evolve_cmd
 
     def interrupted(*a):
         raise KeyboardInterrupt

@@ -2,7 +2,8 @@
 
 One module per subcommand, ``<name>_cmd.py``, with ``add_<name>(subparsers)`` (its parser and flags),
 ``run_<name>_cmd(args)`` (the handler) and ``SUBCOMMANDS`` (the ``add_`` functions it registers): the
-core's in this package (:data:`CORE`), and each experiment's own, which it registers by providing
+core's in this package's folders by what they are about (:data:`CORE`: ``evolving/``, evolving and what a run holds;
+``walkers/``, one walker's episode and analysis; ``gaits/``, a MAP-Elites archive used as gaits), and each experiment's own, which it registers by providing
 ``evobiped/experiments/<experiment>/<name>_cmd.py`` (found by :func:`experiment_commands`).  What
 the commands share is :mod:`evobiped.flags`.  A :class:`~evobiped.core.errors.UserError` (or a bad
 argument) becomes one line on stderr and exit status 2.
@@ -24,9 +25,10 @@ from ..core.errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, las
 
 #: how every refusal begins, a bad argument's and a UserError's alike
 ERROR = "evobiped: error: "
-#: the core's subcommand modules, in the order ``evobiped --help`` lists them (the experiments' follow)
-CORE = ("episode_cmd", "evolve_cmd", "compare_cmd", "presets_cmd", "robustness_cmd", "bench_cmd", "replay_cmd", "distill_cmd", "genome_cmd",
-        "select_cmd", "repertoire_cmd", "adapt_cmd", "gait_cmd", "gait_report_cmd")
+#: the core's subcommand modules (``<folder>.<name>_cmd``), in the order ``evobiped --help`` lists them (the experiments' follow)
+CORE = ("walkers.episode_cmd", "evolving.evolve_cmd", "evolving.compare_cmd", "evolving.presets_cmd", "walkers.robustness_cmd", "walkers.bench_cmd",
+        "evolving.replay_cmd", "walkers.distill_cmd", "evolving.genome_cmd", "evolving.select_cmd", "gaits.repertoire_cmd", "gaits.adapt_cmd",
+        "gaits.gait_cmd", "walkers.gait_report_cmd")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -7,8 +7,8 @@ import json
 
 import numpy as np
 
-from ..flags import add_source_flag, choices_text, positive_float, refuse, walk_line
-from ..tasks.steer import with_sources
+from ...flags import add_source_flag, choices_text, positive_float, refuse, walk_line
+from ...tasks.steer import with_sources
 
 
 def add_episode(sub) -> None:
@@ -25,8 +25,8 @@ def add_episode(sub) -> None:
 
 
 def run_episode_cmd(args) -> int:
-    from ..episode import EpisodeConfig
-    from ..files.genome_file import load_genome
+    from ...episode import EpisodeConfig
+    from ...files.genome_file import load_genome
 
     if args.genome:
         if args.body or args.controller:

@@ -8,8 +8,8 @@ from __future__ import annotations
 import json
 import sys
 
-from ..core.errors import UserError
-from ..flags import positive_float
+from ...core.errors import UserError
+from ...flags import positive_float
 
 #: the shipped walkers the start genomes are made from by default (paths from the repository's root)
 SCRATCH_WALKER = "docs/walkers/ctrnn_es_seed5.json"
@@ -60,8 +60,8 @@ def _from_walker(actions, name: str, walker: str, run, about: str, description: 
 
 
 def run_genome_ranges(args) -> int:
-    from ..files.genome_edit import with_ranges
-    from ..files.genome_file import save_genome
+    from ...files.genome_edit import with_ranges
+    from ...files.genome_file import save_genome
 
     ranges = {}
     for name, lo, hi in args.block:
@@ -85,7 +85,7 @@ def _walker(args) -> str:
 
 
 def run_genome_hearing(args) -> int:
-    from ..files.genome_edit import hearing_genome
+    from ...files.genome_edit import hearing_genome
 
     _save(args, *hearing_genome(_walker(args), args.reference_distance, not args.neurons_only))
     print(args.out)
@@ -93,7 +93,7 @@ def run_genome_hearing(args) -> int:
 
 
 def run_genome_command(args) -> int:
-    from ..files.genome_edit import command_genome
+    from ...files.genome_edit import command_genome
 
     _save(args, *command_genome(_walker(args)))
     print(args.out)
@@ -101,8 +101,8 @@ def run_genome_command(args) -> int:
 
 
 def run_genome_rewire(args) -> int:
-    from ..core.options import given
-    from ..files.genome_edit import rewired
+    from ...core.options import given
+    from ...files.genome_edit import rewired
 
     drop = ["heading_error"] if args.drop is None else args.drop
     add = ["stance_side"] if args.add is None else args.add
@@ -119,7 +119,7 @@ def run_genome_rewire(args) -> int:
 
 def _save(args, genome, cfg) -> None:
     """Write ``genome`` (G,) of episode ``cfg`` as ``args.out``, its source ``args.walker``."""
-    from ..files.genome_file import save_genome
+    from ...files.genome_file import save_genome
 
     save_genome(args.out, genome, cfg, source=str(args.walker))
 

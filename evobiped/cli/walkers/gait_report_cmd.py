@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 
-from ..flags import add_stored_walker
+from ...flags import add_stored_walker
 
 
 def add_gait_report(sub) -> None:
@@ -26,9 +26,9 @@ def add_gait_report(sub) -> None:
 def run_gait_report_cmd(args) -> int:
     from pathlib import Path
 
-    from ..analysis.gait_report import WALKING, criteria_words, gait_report
-    from ..core.errors import UserError
-    from ..record.source import resolve
+    from ...analysis.gait_report import WALKING, criteria_words, gait_report
+    from ...core.errors import UserError
+    from ...record.source import resolve
 
     for flag, v in (("--seconds", args.seconds), ("--up-for", args.up_for)):
         if v is not None and not (math.isfinite(v) and 0 < v <= 1e5):
@@ -52,7 +52,7 @@ def run_gait_report_cmd(args) -> int:
         if args.table:
             print(table_row(source.label, report), flush=True)
     if args.figure is not None:
-        from ..record.png.footfall_figure import footfall_figure
+        from ...record.png.footfall_figure import footfall_figure
 
         footfall_figure(reports[0], Path(args.figure), title=sources[0].label)
     if args.json:

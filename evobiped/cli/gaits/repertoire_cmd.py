@@ -15,10 +15,10 @@ def add_repertoire(sub) -> None:
 def run_repertoire_cmd(args) -> int:
     from pathlib import Path
 
-    from ..record.png.archive_figures import archive_figure, progress_figure
-    from ..record.png.figures import fitness_label
-    from ..repertoire.elites import WALK_SPEED, load_repertoire
-    from ..files.rundir import figures_dir
+    from ...record.png.archive_figures import archive_figure, progress_figure
+    from ...record.png.figures import fitness_label
+    from ...repertoire.elites import WALK_SPEED, load_repertoire
+    from ...files.rundir import figures_dir
 
     rep = load_repertoire(args.run)
     a, walk = rep.archive, rep.walking()

@@ -5,13 +5,13 @@ from __future__ import annotations
 import contextlib
 import sys
 
-from ..core.errors import UserError, exit_status, last_line
-from ..flags import RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config, walk_line
-from ..core.progress import Progress, hms
+from ...core.errors import UserError, exit_status, last_line
+from ...flags import RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config, walk_line
+from ...core.progress import Progress, hms
 
 
 def add_evolve(sub) -> None:
-    from ..optimizers import OPTIMIZERS, described
+    from ...optimizers import OPTIMIZERS, described
 
     what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings), CMA-ES, evolution strategies or MAP-Elites (--optimizer)"
     p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
@@ -48,10 +48,10 @@ def add_evolve(sub) -> None:
 
 
 def run_evolve_cmd(args) -> int:
-    from ..usecases.evolving import evolve
+    from ...usecases.evolving import evolve
 
     if args.rerun is not None:  # before anything is written
-        from ..record.recordings.viewer import connect_url, require_display, require_viewer
+        from ...record.recordings.viewer import connect_url, require_display, require_viewer
 
         require_display() if args.rerun == "spawn" else require_viewer(connect_url(args.rerun))
     on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
@@ -95,7 +95,7 @@ class _Shown:
             print(f"run {self.args.resume} is already complete ({run.optimizer.generation} generations)")
 
     def started(self, run, backend: str) -> None:
-        from ..core.progress import GenerationClock
+        from ...core.progress import GenerationClock
 
         c = run.config
         population = len(run.optimizer.ask()[0])
@@ -110,7 +110,7 @@ class _Shown:
         self.clock.episodes(rows.end_time)
 
     def generation(self, s) -> None:
-        from ..core.progress import generation_note
+        from ...core.progress import generation_note
 
         if self.log is not None:
             self.log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
@@ -143,8 +143,8 @@ class _Shown:
 def _viewer_log(run, rerun: str):
     """A live viewer of the run's fitness (a new one, or the one at ADDR), started with the history so far
     (the run's own evolution.rrd is written either way, after every generation)."""
-    from ..record.recordings.evolution_log import EvolutionLog
-    from ..files.rundir import history_columns
+    from ...record.recordings.evolution_log import EvolutionLog
+    from ...files.rundir import history_columns
 
     log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))
     if run.history:

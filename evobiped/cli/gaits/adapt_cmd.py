@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..flags import positive_float, positive_int
+from ...flags import positive_float, positive_int
 
 
 def add_adapt(sub) -> None:
@@ -18,10 +18,10 @@ def add_adapt(sub) -> None:
 def run_adapt_cmd(args) -> int:
     import time
 
-    from ..repertoire.adaptation import adapt, walks
-    from ..repertoire.damage import parse_damage
-    from ..repertoire.elites import load_repertoire
-    from ..repertoire.trial_error import TrialAndError
+    from ...repertoire.adaptation import adapt, walks
+    from ...repertoire.damage import parse_damage
+    from ...repertoire.elites import load_repertoire
+    from ...repertoire.trial_error import TrialAndError
 
     rep = load_repertoire(args.run)
     damages = [parse_damage(d, rep.episode) for d in args.damage]  # every one checked before any trial

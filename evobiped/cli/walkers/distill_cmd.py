@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..core.errors import UserError
-from ..flags import add_stored_walker, positive_float, positive_int, walk_line
-from ..core.progress import Progress
+from ...core.errors import UserError
+from ...flags import add_stored_walker, positive_float, positive_int, walk_line
+from ...core.progress import Progress
 
 
 def add_distill(sub) -> None:
@@ -25,11 +25,11 @@ def add_distill(sub) -> None:
 def run_distill_cmd(args) -> int:
     from pathlib import Path
 
-    from ..distill import distill, parse_options, student_config
-    from ..core.fileio import read_toml, write_json
-    from ..files.genome_file import save_genome
-    from ..files.outcome import outcome
-    from ..record.source import resolve
+    from ...distill import distill, parse_options, student_config
+    from ...core.fileio import read_toml, write_json
+    from ...files.genome_file import save_genome
+    from ...files.outcome import outcome
+    from ...record.source import resolve
 
     source = resolve(args.teacher, args.generation)
     table = read_toml(args.config) if args.config else {}

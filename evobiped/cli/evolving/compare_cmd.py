@@ -7,8 +7,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..core.errors import UserError
-from ..flags import choices_text, positive_int
+from ...core.errors import UserError
+from ...flags import choices_text, positive_int
 
 #: the comparison's settings a resume takes from its directory unless given again (then they must match)
 SETTINGS = ("seeds", "budget", "trials", "checkpoints", "noise", "measure", "success")
@@ -42,8 +42,8 @@ def add_compare(sub) -> None:
 
 def _configs(names: list[str]) -> tuple[tuple[str, ...], tuple]:
     """Each CONFIG's name (the preset's, the file's stem; repeats numbered) and RunConfig."""
-    from ..files.presets import names as presets
-    from ..flags import run_config
+    from ...files.presets import names as presets
+    from ...flags import run_config
 
     shipped, labels, configs = presets(), [], []
     for text in names:
@@ -62,7 +62,7 @@ def _configs(names: list[str]) -> tuple[tuple[str, ...], tuple]:
 
 
 def _noise(path: str | None) -> dict | None:
-    from ..core.fileio import read_toml
+    from ...core.fileio import read_toml
 
     if path is None:
         return None
@@ -83,8 +83,8 @@ def default_compare_dir(names: tuple[str, ...]) -> str:
 
 
 def run_compare_cmd(args) -> int:
-    from ..core.progress import Progress
-    from ..usecases.comparing import Comparison, compare_configurations
+    from ...core.progress import Progress
+    from ...usecases.comparing import Comparison, compare_configurations
 
     given = {"seeds": None if args.seeds is None else tuple(range(args.first_seed or 0, (args.first_seed or 0) + args.seeds)),
              "budget": args.budget, "trials": args.trials, "checkpoints": args.checkpoints, "noise": _noise(args.noise),
@@ -122,7 +122,7 @@ def run_compare_cmd(args) -> int:
     kwargs = {"resume": args.resume} if args.resume else {"out": results_dir}
     results = compare_configurations(comparison, given=given if args.resume else None, workers=args.workers, say=line.say,
                                      on_run=on_run, **kwargs)
-    from ..usecases.compare_report import markdown
+    from ...usecases.compare_report import markdown
 
     print(markdown(results), end="")
     print(f"results in {results_dir} (results.md, results.json, success.png)", file=sys.stderr if args.quiet else sys.stdout)

@@ -6,10 +6,10 @@ import dataclasses
 import json
 import sys
 
-from ..core.errors import UserError
-from ..flags import add_stored_walker, positive_float
-from ..core.progress import Progress
-from ..tasks.steer import with_sources
+from ...core.errors import UserError
+from ...flags import add_stored_walker, positive_float
+from ...core.progress import Progress
+from ...tasks.steer import with_sources
 
 
 def add_robustness(sub) -> None:
@@ -31,12 +31,12 @@ def add_robustness(sub) -> None:
 def run_robustness_cmd(args) -> int:
     from pathlib import Path
 
-    from ..core.fileio import write_json
-    from ..record.png.robustness_figure import robustness_figure
-    from ..record.source import resolve
-    from ..analysis.robustness import battery, score, summarise, table
-    from ..files.rundir import robustness_stem
-    from ..files.rundir.output_set import output_set
+    from ...core.fileio import write_json
+    from ...record.png.robustness_figure import robustness_figure
+    from ...record.source import resolve
+    from ...analysis.robustness import battery, score, summarise, table
+    from ...files.rundir import robustness_stem
+    from ...files.rundir.output_set import output_set
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")

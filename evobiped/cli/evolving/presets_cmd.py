@@ -10,8 +10,8 @@ def add_presets(sub) -> None:
 
 
 def run_presets_cmd(args) -> int:
-    from ..core.fileio import read_toml
-    from ..files.presets import describe, names, path, split_declarations
+    from ...core.fileio import read_toml
+    from ...files.presets import describe, names, path, split_declarations
 
     width = max(map(len, names()))
     for name in names():

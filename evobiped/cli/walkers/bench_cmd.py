@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from ..flags import check_workers, choices_text, positive_float, positive_int
-from ..core.progress import Progress
+from ...flags import check_workers, choices_text, positive_float, positive_int
+from ...core.progress import Progress
 
 
 def add_bench(sub) -> None:
@@ -27,8 +27,8 @@ def add_bench(sub) -> None:
 
 
 def run_bench_cmd(args) -> int:
-    from ..analysis.bench import QUICK, bench, format_bench
-    from ..episode import EpisodeConfig
+    from ...analysis.bench import QUICK, bench, format_bench
+    from ...episode import EpisodeConfig
 
     size = dict(QUICK) if args.quick else dict(population=50, seconds=50.0, repeats=5)
     size.update({k: getattr(args, k) for k in size if getattr(args, k) is not None})
@@ -36,8 +36,8 @@ def run_bench_cmd(args) -> int:
     if args.preset:
         import dataclasses
 
-        from ..episode import Context
-        from ..flags import run_config
+        from ...episode import Context
+        from ...flags import run_config
 
         run = run_config(preset=args.preset)
         cfg = dataclasses.replace(run.episode.nominal(), seconds=size["seconds"])

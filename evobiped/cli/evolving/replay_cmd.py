@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from ..flags import add_source_flag, add_stored_walker, positive_float, positive_int, refuse, walk_line
-from ..core.progress import Progress
+from ...flags import add_source_flag, add_stored_walker, positive_float, positive_int, refuse, walk_line
+from ...core.progress import Progress
 
 
 def add_replay(sub) -> None:
@@ -34,8 +34,8 @@ def add_replay(sub) -> None:
 def run_replay_cmd(args) -> int:
     from pathlib import Path
 
-    from ..usecases.replaying import replay, stored_walker
-    from ..files.rundir import figures_dir
+    from ...usecases.replaying import replay, stored_walker
+    from ...files.rundir import figures_dir
 
     video_flags = args.video_window is not None or args.video_size != [480, 360] or args.video_fps != 25.0
     if args.video is None and video_flags:
@@ -51,7 +51,7 @@ def run_replay_cmd(args) -> int:
         figures = figures_dir(base, source.label)
     seconds = args.seconds or source.config.seconds
     if args.video is not None:  # before anything is written: the longest the video can be
-        from ..record.video import check_frames
+        from ...record.video import check_frames
 
         if args.video_window is not None and args.video_window[0] > seconds:
             refuse("--video-window", f"{args.video_window[0]:g} {args.video_window[1]:g}: the episode ends at {seconds:g} s at the latest")
@@ -69,11 +69,11 @@ def run_replay_cmd(args) -> int:
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
     if source.config.task == "command":  # a commanded walker replays its nominal schedule: say which
-        from ..analysis.commanded import nominal_words
+        from ...analysis.commanded import nominal_words
 
         print(nominal_words(source.config))
     if r.gait is not None:
-        from ..analysis.gait_report import criteria_words, gait_line
+        from ...analysis.gait_report import criteria_words, gait_line
 
         print(f"gait: {gait_line(r.gait)}; {'walks' if r.gait['walks'] else 'does not walk: ' + criteria_words(r.gait['failed'])}")
     if not r.compared:

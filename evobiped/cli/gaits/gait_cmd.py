@@ -3,7 +3,7 @@ commanded walker's genome (the command task) following commanded speeds and turn
 
 from __future__ import annotations
 
-from ..flags import positive_float, refuse
+from ...flags import positive_float, refuse
 
 
 def add_gait(sub) -> None:
@@ -61,8 +61,8 @@ def run_gait_cmd(args) -> int:
 def _run_repertoire(args, speeds, turnings) -> int:
     import math
 
-    from ..repertoire.elites import load_repertoire
-    from ..repertoire.speed import CORRECTION, OVERSHOOT, RAMP, RAMP_DOWN, follow, hysteresis, tracking
+    from ...repertoire.elites import load_repertoire
+    from ...repertoire.speed import CORRECTION, OVERSHOOT, RAMP, RAMP_DOWN, follow, hysteresis, tracking
 
     if speeds is None or not all(v > 0 for v in speeds):
         refuse("--speed", f"a repertoire needs positive speeds in m/s, comma-separated, got {args.speed!r}")
@@ -106,10 +106,10 @@ def _run_commanded(args, speeds, turnings) -> int:
     import math
     from pathlib import Path
 
-    from ..analysis.commanded import check_commanded, follow_commands, nominal_plan, plan, stretch_line
-    from ..core.fileio import write_json
-    from ..record.png.command_figure import command_figure
-    from ..record.source import resolve
+    from ...analysis.commanded import check_commanded, follow_commands, nominal_plan, plan, stretch_line
+    from ...core.fileio import write_json
+    from ...record.png.command_figure import command_figure
+    from ...record.source import resolve
 
     for flag in ("ramp", "ramp_down", "correction", "overshoot"):
         if getattr(args, flag) is not None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..flags import positive_float, positive_int
+from ...flags import positive_float, positive_int
 
 
 def add_select(sub) -> None:
@@ -20,7 +20,7 @@ def add_select(sub) -> None:
 
 
 def run_select_cmd(args) -> int:
-    from ..usecases.selecting import select_walker
+    from ...usecases.selecting import select_walker
 
     import sys
 
