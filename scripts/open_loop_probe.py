@@ -15,7 +15,7 @@ of such rhythms directly for the longest survival (ties broken by distance):
 (evobiped/controllers/open_loop.py), by one of two searches: ``truncation``
 (random sampling in each gene's range, then keep the best 10 % and mutate; for
 ``sine``, the search docs/reil.md first reported) or ``cma`` (CMA-ES from the
-``cma`` library behind evobiped.evolution.cma: bounded to the genes' ranges,
+``cma`` library behind evobiped.optimizers.cma: bounded to the genes' ranges,
 pycma's stopping rules, ``--restarts`` IPOP restarts).  It prints the longest
 survival found as it goes and saves the best genome as a genome file
 (``--save``), which ``evobiped replay FILE`` re-simulates.

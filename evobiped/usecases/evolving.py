@@ -70,7 +70,10 @@ def start_evaluator(opened: OpenRun, on_retry: Callable[[int, int], None] | None
     try:
         return evaluate.make_evaluator(opened.run.config.episode, opened.backend, opened.workers, opened.address, on_retry=on_retry)
     except BaseException:
-        opened.run.abandon() if not opened.resumed else opened.run.close()
+        if opened.resumed:
+            opened.run.close()
+        else:
+            opened.run.abandon()
         raise
 
 

@@ -100,7 +100,7 @@ def _start(d: Path, run: RunConfig) -> tuple:
 
 def _experiment(episode, run) -> dict:
     """An episode config as a table without what ``run`` sets per generation (its running normaliser, its curriculum
-    phase's weights and episode length: evobiped.evolution.run_context), so generation files of one run compare equal."""
+    phase's weights and episode length: evobiped.run.run_context), so generation files of one run compare equal."""
     d = episode.to_dict()
     if run.curriculum.seconds:
         d.pop("seconds", None)

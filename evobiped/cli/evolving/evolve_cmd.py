@@ -53,7 +53,10 @@ def run_evolve_cmd(args) -> int:
     if args.rerun is not None:  # before anything is written
         from ...record.recordings.viewer import connect_url, require_display, require_viewer
 
-        require_display() if args.rerun == "spawn" else require_viewer(connect_url(args.rerun))
+        if args.rerun == "spawn":
+            require_display()
+        else:
+            require_viewer(connect_url(args.rerun))
     on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
                                       file=sys.stderr, flush=True)
     if args.resume:
