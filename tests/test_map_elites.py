@@ -130,8 +130,10 @@ def test_the_run_recording_holds_the_archive_growth(tmp_path):
     """evolution.rrd records the archive's cells, coverage and QD score per generation, as archive.json counts them."""
     from evobiped.record.recordings.evolution_log import recording_series
 
+    from evobiped.usecases.evolving import run_listeners
+
     config = RunConfig.from_dict(dict(TINY, generations=3))
-    run = Run.create(tmp_path / "run", config)
+    run = Run.create(tmp_path / "run", config, run_listeners())  # the evolve use case's: its recording
     with make_evaluator(config.episode, "serial") as ev:
         run.evolve(ev)
     progress = read_archive(run.dir).progress

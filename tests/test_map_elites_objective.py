@@ -9,6 +9,7 @@ import pytest
 pytest.importorskip("ribs")
 
 from evobiped.episode import EpisodeConfig  # noqa: E402
+from evobiped.files.rundir import archive_text  # noqa: E402
 from evobiped.optimizers.map_elites import MapElites, MapElitesOptions  # noqa: E402
 
 from .conftest import cli  # noqa: E402
@@ -59,7 +60,7 @@ def test_objective_terms_keep_the_better_walker_where_the_fitness_saturates(tmp_
         assert e["objective"][first] == pytest.approx(20.0 + 0.05 * kept) if terms else e["objective"][first] == 20.0
         assert np.array_equal(e["genome"][first], opt.population[0]) is (kept == 3.0)
         assert e["task_fitness"].tolist() == [20.0] * 3
-        text = json.loads(opt.derived_files(True)["archive.json"])
+        text = json.loads(archive_text(opt.archive_contents()))
         assert [row["objective"] for row in text["elites"]] == [20.0] * 3
 
 

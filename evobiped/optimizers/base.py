@@ -213,10 +213,13 @@ class Optimizer:
     def _state_from(self, table: dict) -> OptimizerState:
         raise NotImplementedError
 
-    def derived_files(self, generation_committed: bool) -> dict[str, str | None]:
-        """Files of the run directory this optimizer derives from its state (name -> text; None: no such file yet),
-        written at each commit and rebuilt on a resume; default none.  ``generation_committed``: a generation is."""
-        return {}
+    #: the optimizer keeps an archive of elites (:meth:`archive_contents`), which the run directory keeps as archive.json
+    keeps_archive = False
+
+    def archive_contents(self) -> Any:
+        """Its archive after a committed generation (an :class:`~evobiped.files.rundir.archive_file.ArchiveContents`),
+        when :attr:`keeps_archive`; the run directory writes the file."""
+        raise NotImplementedError
 
     def series(self) -> dict[str, np.ndarray]:
         """This optimizer's own numbers per committed generation (name -> ``(generations,)``), recorded in the run's

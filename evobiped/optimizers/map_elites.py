@@ -31,7 +31,7 @@ import numpy as np
 from ..core.errors import ConfigError, UserError
 from ..core.fileio import packed_floats, unpacked_floats
 from ..core.options import check_fields, option
-from ..files.rundir.archive_file import ARCHIVE, archive_text
+from ..files.rundir.archive_file import ArchiveContents
 from .base import MAX_POPULATION, Optimizer, OptimizerState, frozen_array
 
 #: what an elite keeps beside its genome, objective and measures (its outcome, and the task's fitness)
@@ -232,13 +232,14 @@ class MapElites(Optimizer):
         self._sample()
         return np.full(len(self.population), -1)
 
-    def derived_files(self, generation_committed: bool) -> dict[str, str | None]:
-        """archive.json (:mod:`.archive_file`) once a generation is committed."""
-        if not generation_committed:
-            return {ARCHIVE: None}
+    keeps_archive = True
+
+    def archive_contents(self) -> ArchiveContents:
+        """The archive as archive.json keeps it (:mod:`evobiped.files.rundir.archive_file`): its elites, their
+        objective the task's fitness (what a replay of an elite compares)."""
         e, c = self.elites(), self.config
-        e["objective"] = e["task_fitness"]  # archive.json's objective: the task's fitness, what a replay of an elite compares
-        return {ARCHIVE: archive_text(c.measures, c.low, c.high, c.resolution, self.cells(e["index"]), e, self.progress)}
+        e["objective"] = e["task_fitness"]
+        return ArchiveContents(c.measures, c.low, c.high, c.resolution, self.cells(e["index"]), e, self.progress)
 
     def series(self) -> dict[str, np.ndarray]:
         """The archive's growth per generation: evaluations so far, cells filled, coverage (fraction of the grid's cells)

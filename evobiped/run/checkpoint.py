@@ -1,9 +1,9 @@
-"""A run's commit point and the files derived from it: reading and checking checkpoint.json, writing it, and
-bringing every derived file (history.csv, best.json, evolution.rrd, summary.json, individuals.jsonl, the
-generation files) back to what it says.
+"""A run's commit point: reading and checking checkpoint.json, writing it, and having every derived file (history.csv,
+best.json, archive.json, summary.json, individuals.jsonl, the generation files: the run directory's writers; evolution.rrd:
+the run's listeners, :mod:`.listeners`) brought back to what it says.
 
-The formats are :mod:`evobiped.files.rundir`'s; :class:`~.run.Run` calls these at creation, after each generation and
-on a resume.
+The formats and writers are :mod:`evobiped.files.rundir`'s; :class:`~.run.Run` calls these at creation, after each
+generation and on a resume.
 """
 
 from __future__ import annotations
@@ -16,11 +16,12 @@ import numpy as np
 from .. import __version__
 from ..files import rundir
 from ..core.errors import UserError, signals_deferred
-from ..core.fileio import atomic_write, json_text, read_json, write_json
+from ..core.fileio import read_json, write_json
 from ..files.genome_file import genome_text, load_genome
 from . import fingerprint
 from ..optimizers import Optimizer
 from .individuals import Individuals
+from .listeners import Commit, RunListener
 from .run_config import RunConfig, make_optimizer
 from .run_context import RunContext
 from .start_genome import kept_start, start_episode
@@ -47,6 +48,7 @@ class CommittedRun(Protocol):
     started_in: dict | None
     recording_id: str
     repairs: list[str]
+    listeners: list[RunListener]
 
     @property
     def done(self) -> bool: ...
@@ -107,8 +109,8 @@ def committed_files(directory: Path) -> list[str]:
 
 
 def commit(run: CommittedRun) -> None:
-    """Commit the generation (checkpoint.json), then derive history.csv, best.json and evolution.rrd;
-    Ctrl-C (SIGTERM, SIGHUP) waits until all are written."""
+    """Commit the generation (checkpoint.json), then derive history.csv, best.json, archive.json and the listeners'
+    files (:func:`derive`); Ctrl-C (SIGTERM, SIGHUP) waits until all are written."""
     with signals_deferred():
         write_json(
             run.dir / rundir.CHECKPOINT,
@@ -152,42 +154,20 @@ def _cut_individuals(run: CommittedRun) -> None:
         run.repairs.append(f"{rundir.INDIVIDUALS} lacks generations {covered}..{g - 1} (not in the checkpoint: lost)")
 
 
-def _sync(run: CommittedRun, name: str, text: str | None, *, repair: bool) -> None:
-    """Give file ``name`` the content ``text`` (None: no such file) unless it has it; a repair says so."""
-    path = run.dir / name
-    try:
-        current = path.read_text() if path.exists() else None
-    except (OSError, UnicodeDecodeError):
-        current = ""
-    if current == text:
-        return
-    if repair:
-        run.repairs.append(f"{name} {'rewritten from the checkpoint' if text is not None else 'removed (no generation is complete)'}")
-    if text is None:
-        path.unlink(missing_ok=True)
-    else:
-        atomic_write(path, text)
-
-
 def derive(run: CommittedRun, *, repair: bool = False) -> None:
-    """history.csv, best.json and evolution.rrd from the committed state."""
-    from ..record.recordings.evolution_log import recording_matches, write_recording
-
-    _sync(run, rundir.HISTORY, rundir.history_text(run.history, run.history_terms, run.context.history), repair=repair)
-    _sync(run, rundir.BEST, _best_text(run), repair=repair)
-    for name, text in run.optimizer.derived_files(bool(run.history)).items():  # e.g. MAP-Elites' archive.json
-        _sync(run, name, text, repair=repair)
-    rec = run.dir / rundir.RECORDING
-    if not run.history:
-        if rec.exists():
-            _sync(run, rundir.RECORDING, None, repair=repair)
-        return
-    columns = rundir.history_columns(run.history, run.history_terms, run.context.history)
-    if repair:
-        if recording_matches(rec, columns):
-            return
-        run.repairs.append(f"{rundir.RECORDING} rebuilt from the checkpoint")
-    write_recording(rec, columns, run.recording_id, run.optimizer.series())
+    """The derived files from the committed state, in this order: the run directory's own (history.csv, best.json,
+    a MAP-Elites run's archive.json, each by :func:`~evobiped.files.rundir.sync_file`), then the run's listeners
+    (the evolve use case's recording, evolution.rrd).  A repair notes each file it changed in ``run.repairs``."""
+    repairs = run.repairs if repair else None
+    rundir.sync_file(run.dir, rundir.HISTORY, rundir.history_text(run.history, run.history_terms, run.context.history), repairs)
+    rundir.sync_file(run.dir, rundir.BEST, _best_text(run), repairs)
+    if run.optimizer.keeps_archive:
+        rundir.sync_file(run.dir, rundir.ARCHIVE, rundir.archive_text(run.optimizer.archive_contents()) if run.history else None, repairs)
+    committed = bool(run.history)
+    commit = Commit(run.dir, rundir.history_columns(run.history, run.history_terms, run.context.history) if committed else None,
+                    run.recording_id, run.optimizer.series() if committed else {}, repairs)
+    for listener in run.listeners:
+        listener.committed(commit)
 
 
 def _best_text(run: CommittedRun) -> str | None:
@@ -214,33 +194,20 @@ def _nominal_walk(run: CommittedRun) -> dict | None:
 
 
 def _summary(run: CommittedRun, best_walk: dict | None) -> dict:
-    out = {
-        "evobiped": __version__,
-        "generations": run.optimizer.generation,
-        "best": run.best,
-        "wall_seconds": round(run.wall, 3),
-        "evaluations": int(sum(rundir.column(run.history, "evaluations"))),
-        "stable": run.best is not None and not run.best["fell"],
-        "best_walk": best_walk,
-    }
-    if run.config.stop.active:  # the stopping rule's verdict (only in runs that have one: other summaries as before)
-        out["stopped_early"] = run.context.stopped()
-    return out
+    # the stopping rule's verdict only in runs that have one (other summaries as before)
+    return rundir.summary_table(version=__version__, generations=run.optimizer.generation, best=run.best, wall_seconds=run.wall,
+                                history=run.history, best_walk=best_walk,
+                                stopped_early=run.context.stopped() if run.config.stop.active else None)
 
 
 def write_summary(run: CommittedRun, *, repair: bool = False) -> dict:
-    """summary.json of a complete run; a repair keeps one whose fields agree with the checkpoint (the best walk
-    costs an episode).  Returns the summary."""
-    path = run.dir / rundir.SUMMARY
+    """summary.json of a complete run (:mod:`evobiped.files.rundir.summary_file`); a repair keeps one whose fields agree
+    with the checkpoint (the best walk costs an episode).  Returns the summary."""
     if repair:
-        try:
-            old = read_json(path, what="summary") if path.exists() else None
-            if isinstance(old, dict) and "best_walk" in old and path.read_text() == json_text(_summary(run, old["best_walk"])):
-                return old
-        except UserError:
-            pass
-        run.repairs.append(f"{rundir.SUMMARY} {'rewritten' if path.exists() else 'written'} from the checkpoint")
+        old = rundir.agreeing_summary(run.dir, lambda walk: _summary(run, walk))
+        if old is not None:
+            return old
+        run.repairs.append(f"{rundir.SUMMARY} {'rewritten' if (run.dir / rundir.SUMMARY).exists() else 'written'} from the checkpoint")
     summary = _summary(run, _nominal_walk(run))
-    write_json(path, summary)
+    rundir.write_summary_file(run.dir, summary)
     return summary
-

@@ -13,7 +13,7 @@ import contextlib
 import time
 import uuid
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from . import checkpoint as commit_point
 from ..evaluation import Evaluator
 from ..optimizers import Optimizer
 from .individuals import Individuals
+from .listeners import RunListener
 from .run_config import RunConfig, episodes_per_genome, make_optimizer, start_genome
 from .generation_stats import GenerationStats
 from .run_context import RunContext
@@ -76,11 +77,14 @@ class Run:
         self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
         #: what the run sets per generation beyond its config: the running normaliser, the curriculum's phase
         self.context = context if context is not None else RunContext(config)
+        #: told of each commit, after the run directory's own files (:mod:`.listeners`; the evolve use case's recording)
+        self.listeners: list[RunListener] = []
 
     # ---- creating and resuming
     @classmethod
-    def create(cls, directory: str | Path, config: RunConfig) -> "Run":
-        """Validate everything first; only then create the (new or empty) directory and lock it."""
+    def create(cls, directory: str | Path, config: RunConfig, listeners: Sequence[RunListener] = ()) -> "Run":
+        """Validate everything first; only then create the (new or empty) directory and lock it.  ``listeners``: told
+        of each commit (:mod:`.listeners`)."""
         directory = Path(directory)
         if directory.exists() and not directory.is_dir():
             raise UserError(f"run directory {directory} exists and is a file; give another --out")
@@ -115,6 +119,7 @@ class Run:
             run.started_in = environment
             run.start = None if start is None else [float(x) for x in start]
             run.made_directory = made
+            run.listeners = list(listeners)
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
             rundir.unlock(directory)
@@ -122,14 +127,16 @@ class Run:
         return run
 
     @classmethod
-    def resume(cls, directory: str | Path) -> "Run":
-        """Lock the directory, validate its checkpoint, rebuild every derived file from it (see :attr:`repairs`)."""
+    def resume(cls, directory: str | Path, listeners: Sequence[RunListener] = ()) -> "Run":
+        """Lock the directory, validate its checkpoint, rebuild every derived file from it (see :attr:`repairs`), the
+        ``listeners``' too (told of each commit from here on, :mod:`.listeners`)."""
         directory = Path(directory)
         if not directory.is_dir():
             raise UserError(f"run directory not found: {directory}")
         rundir.lock(directory)
         try:
             run = cls._load(directory)
+            run.listeners = list(listeners)
             commit_point.rebuild(run)
         except BaseException:
             rundir.unlock(directory)

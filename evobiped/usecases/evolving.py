@@ -13,13 +13,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 from ..files import rundir
 from ..episode.result import EpisodeResult
 from ..evaluation import backends as evaluate
 from ..evaluation import Evaluator
 from ..run import Run
+from ..run.listeners import RunListener
 from ..run.run_config import RunConfig, check_run
 from ..core.fileio import read_json
 
@@ -37,15 +38,18 @@ class OpenRun:
 
 def open_run(config: RunConfig | None = None, *, out: str | Path | None = None, resume: str | Path | None = None,
              backend: str | None = None, workers: int | None = None, address: str | None = None,
-             check: Callable[[str, int | None, str | None], None] | None = None) -> OpenRun:
+             check: Callable[[str, int | None, str | None], None] | None = None,
+             listeners: Sequence[RunListener] | None = None) -> OpenRun:
     """A new run of ``config`` in ``out``, or the run in ``resume`` (its saved config; ``backend``, ``workers`` and
     ``address``, when given, replace where its episodes run).  ``check(backend, workers, address)`` (optional, e.g.
     the command's flag checks) refuses where the episodes would run.  Everything is checked before anything is
-    written; a resume locks the directory and rebuilds its derived files first (``run.repairs``)."""
+    written; a resume locks the directory and rebuilds its derived files first (``run.repairs``).  ``listeners``:
+    told of each commit (default :func:`run_listeners`: the run's recording, evolution.rrd)."""
+    listeners = run_listeners() if listeners is None else listeners
     if (config is None) == (resume is None) or (config is not None and out is None):
         raise ValueError("open_run: give a config and its run directory (out), or a run directory to resume")
     if resume is not None:
-        run = Run.resume(resume)
+        run = Run.resume(resume, listeners)
         try:
             c = run.config
             where = (backend or c.backend, workers or c.workers, address or c.address)
@@ -61,7 +65,15 @@ def open_run(config: RunConfig | None = None, *, out: str | Path | None = None, 
         check(*where)
     check_run(config)  # memory, the start genome
     config.episode.check()  # the episode's timing: what a worker would refuse
-    return OpenRun(Run.create(out, config), *where, resumed=False)
+    return OpenRun(Run.create(out, config, listeners), *where, resumed=False)
+
+
+def run_listeners() -> list[RunListener]:
+    """What a run evolved by this use case tells of each commit: the recording of its fitness per generation
+    (evolution.rrd, :class:`~evobiped.record.recordings.evolution_log.RecordingFile`)."""
+    from ..record.recordings.evolution_log import RecordingFile  # Rerun itself only once a recording is written
+
+    return [RecordingFile()]
 
 
 def start_evaluator(opened: OpenRun, on_retry: Callable[[int, int], None] | None = None) -> Evaluator:

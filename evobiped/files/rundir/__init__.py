@@ -34,11 +34,17 @@ is written just before the commit of generation NNNN (a resume deletes those
 beyond the last commit); the checkpoint keeps each one's digest, and resume, replay and select check every
 committed one against it (:mod:`.generation_check`).
 
+The run directory owns the writers of its derived files: :func:`sync_file` (:mod:`.derived_file`) brings each to the
+text the checkpoint gives it (history.csv, best.json, archive.json from what a MAP-Elites optimizer gives,
+:mod:`.archive_file`), :mod:`.summary_file` writes summary.json; evolution.rrd is written by a listener of the run
+(the recording's, :mod:`evobiped.record.recordings.evolution_log`) that the evolve use case attaches.
+
 ``individuals.jsonl`` is appended before the commit of its generation and cut
 back to the committed generations' lines by a resume: no row of a committed
 generation is duplicated or lost (:mod:`.individuals_file`).
 """
 
+from .archive_file import ARCHIVE, ArchiveContents, archive_text
 from .checkpoint_check import OLD_OPTIMIZER_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, optimizer_table, validate_checkpoint
 from .generation_check import DIGESTS_KEY, check_generation_files, digest
 from .genome_source import GenomeSource, genome_path, resolve_genome
@@ -48,9 +54,11 @@ from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HIST
                      figures_dir, generation_file, generation_files, generation_of, genome_outputs, is_unused, label,
                      remove_stale_temporaries, replay_file, robustness_stem)
 from .locking import lock, unlock
+from .derived_file import sync_file
+from .summary_file import agreeing_summary, summary_table, write_summary_file
 
 __all__ = [
-    "BEST", "CHECKPOINT", "CONFIG", "DIGESTS_KEY", "check_generation_files", "digest", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
+    "ARCHIVE", "ArchiveContents", "archive_text", "agreeing_summary", "summary_table", "sync_file", "write_summary_file", "BEST", "CHECKPOINT", "CONFIG", "DIGESTS_KEY", "check_generation_files", "digest", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
     "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY", "OPTIMIZER_KEY", "OUTCOME", "RECORDING", "SETTINGS_KEY", "START",
     "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",
     "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "genome_path",

@@ -1,4 +1,5 @@
-"""A MAP-Elites run's archive as a file: ``archive.json`` in the run directory, derived from the checkpoint at each commit.
+"""A MAP-Elites run's archive as a file: ``archive.json`` in the run directory, derived from the checkpoint at each commit
+(from what the optimizer gives, :class:`ArchiveContents`; the optimizer writes no file).
 
 ::
 
@@ -29,16 +30,32 @@ ARCHIVE = "archive.json"
 FORMAT = "evobiped-archive/1"
 
 
-def archive_text(measures, low, high, resolution, cells: np.ndarray, elites: dict, progress: np.ndarray) -> str:
-    """The text of archive.json: ``cells`` ``(E, 2)`` grid coordinates, ``elites`` as :meth:`MapElites.elites` gives
-    them, ``progress`` ``(generations, 3)`` evaluations, cells, QD score."""
-    head = {"format": FORMAT, "measures": list(measures), "low": [float(x) for x in low], "high": [float(x) for x in high],
-            "resolution": [int(x) for x in resolution]}
+@dataclass(frozen=True)
+class ArchiveContents:
+    """What an optimizer that keeps an archive gives the run directory for archive.json: the measures' names, their
+    bounds ``low``, ``high`` ``(2,)`` and ``resolution`` (cells per measure), the elites' grid ``cells`` ``(E, 2)``,
+    the ``elites`` (arrays as :meth:`MapElites.elites` gives them; ``objective`` the task's fitness) and ``progress``
+    ``(generations, 3)`` evaluations, cells, QD score."""
+
+    measures: tuple[str, ...]
+    low: np.ndarray
+    high: np.ndarray
+    resolution: tuple[int, ...]
+    cells: np.ndarray
+    elites: dict
+    progress: np.ndarray
+
+
+def archive_text(archive: ArchiveContents) -> str:
+    """The text of archive.json, written by the run directory at each commit (:mod:`.derived_file`)."""
+    cells, elites = archive.cells, archive.elites
+    head = {"format": FORMAT, "measures": list(archive.measures), "low": [float(x) for x in archive.low],
+            "high": [float(x) for x in archive.high], "resolution": [int(x) for x in archive.resolution]}
     rows = [json.dumps({"cell": [int(c) for c in cell], "measures": [float(x) for x in elites["measures"][k]],
                         "objective": float(elites["objective"][k]), "fell": bool(elites["fell"][k]),
                         "end_time": float(elites["end_time"][k]), "genome": [float(x) for x in elites["genome"][k]]})
             for k, cell in enumerate(cells)]
-    p = np.asarray(progress, float).reshape(-1, 3)
+    p = np.asarray(archive.progress, float).reshape(-1, 3)
     prog = {"evaluations": [int(x) for x in p[:, 0]], "cells": [int(x) for x in p[:, 1]], "qd_score": [float(x) for x in p[:, 2]]}
     text = json.dumps(head, indent=2)[:-2] + ',\n  "elites": [\n' + ",\n".join("    " + r for r in rows)
     return text + ("\n  ],\n" if rows else "],\n") + '  "progress": ' + json.dumps(prog) + "\n}\n"

@@ -1,8 +1,9 @@
 """Evolution progress on a ``generation`` timeline in Rerun: a run's ``evolution.rrd`` and a live viewer.
 
-A run writes its ``evolution.rrd`` whole after every generation, from the
-checkpoint's history (:func:`write_recording`, atomic: a killed run leaves a
-complete recording of its last committed generation, never a cut one).  A live
+A run's listener, :class:`RecordingFile`, writes its ``evolution.rrd`` whole at
+every commit, from the checkpoint's history (:func:`write_recording`, atomic: a
+killed run leaves a complete recording of its last committed generation, never
+a cut one).  A live
 viewer gets each generation as it ends through :class:`EvolutionLog`::
 
     log = EvolutionLog(spawn=True)          # or connect="HOST:PORT", or path=FILE.rrd
@@ -25,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.fileio import atomic_write
-from ...files.rundir import TERM_PREFIX
+from ...files.rundir import RECORDING, TERM_PREFIX, sync_file
 from .viewer import connect_url, flush, require_viewer
 
 TIMELINE = "generation"
@@ -213,3 +214,21 @@ class EvolutionLog:
             self.close()
         except Exception:
             pass
+
+
+class RecordingFile:
+    """A run's listener (:class:`evobiped.run.listeners.RunListener`) that keeps the run directory's evolution.rrd:
+    the whole history and the optimizer's own series rewritten at each commit; a resume's rebuild rewrites it only
+    when it disagrees with the checkpoint (noting the repair) and removes it while no generation is committed."""
+
+    def committed(self, commit) -> None:
+        path = commit.directory / RECORDING
+        if commit.columns is None:
+            if path.exists():
+                sync_file(commit.directory, RECORDING, None, commit.repairs)
+            return
+        if commit.repairs is not None:
+            if recording_matches(path, commit.columns):
+                return
+            commit.repairs.append(f"{RECORDING} rebuilt from the checkpoint")
+        write_recording(path, commit.columns, commit.recording_id, commit.series)
