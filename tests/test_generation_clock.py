@@ -80,3 +80,26 @@ def test_a_short_run_is_forecast_no_lower_than_it_runs():
     """30 generations, most of them while the walkers still learn to stay up: the forecast errs long, never short."""
     errors = forecast_errors("generations30_seed1")
     assert errors.min() >= 0 and errors.max() < 0.6, (errors.min(), errors.max())
+
+
+def test_a_run_that_may_stop_early_says_its_time_left_is_a_bound(tmp_path):
+    """With a stopping rule the run may end before its last generation: the progress lines say "left at most", the
+    opening line says it may take fewer generations; a run without a rule keeps "left ~"."""
+    import subprocess
+    import sys
+
+    def lines(*extra):
+        out = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--preset", "walker-ctrnn-walk", "--generations", "2",
+                              "--population", "4", "--seconds", "0.2", "--workers", "1", *extra],
+                             capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr
+        return (out.stdout + out.stderr).splitlines()
+
+    bounded = lines("--out", str(tmp_path / "a"))
+    assert any("2 generations (or fewer: it stops once its walker walks)" in x for x in bounded)
+    mid = [x for x in bounded if x.startswith("evolve:  50%")]
+    assert mid and "left at most " in mid[0], bounded
+    (tmp_path / "plain.toml").write_text('[stop]\nwhen = ""\n')
+    plain = lines("--config", str(tmp_path / "plain.toml"), "--out", str(tmp_path / "b"))
+    mid = [x for x in plain if x.startswith("evolve:  50%")]
+    assert mid and "left ~" in mid[0] and not any("or fewer" in x for x in plain), plain

@@ -112,12 +112,14 @@ class GenerationClock:
         return (a * rows * self.seconds * u + b * self.seconds) * remaining
 
 
-def line_text(what: str | None, done: float, total: float, unit: str, note: str, *, elapsed: float, left: float) -> str:
+def line_text(what: str | None, done: float, total: float, unit: str, note: str, *, elapsed: float, left: float,
+              at_most: bool = False) -> str:
     """One progress line: ``what: 41% (62 of 150 generations; note)  elapsed 0:04:12  left ~0:06:20`` (without
-    ``what: `` when ``what`` is None)."""
+    ``what: `` when ``what`` is None); ``at_most``: the work may end before its total (a run with a stopping rule),
+    so the time left is a bound: ``left at most 0:06:20``."""
     frac = done / total if total > 0 else 1.0
     amount = f"{done:.4g} of {total:.4g}{' ' + unit if unit else ''}"
-    line = f"{100 * frac:3.0f}% ({amount}{'; ' + note if note else ''})  elapsed {hms(elapsed)}  left ~{hms(left)}"
+    line = f"{100 * frac:3.0f}% ({amount}{'; ' + note if note else ''})  elapsed {hms(elapsed)}  left {'at most ' if at_most else '~'}{hms(left)}"
     return line if what is None else f"{what}: {line}"
 
 
@@ -135,8 +137,10 @@ class Progress:
     each line instead of ``stream`` (default stderr)."""
 
     def __init__(self, what: str, total: float, unit: str = "", *, quiet: bool = False, stream: TextIO | None = None,
-                 emit: Callable[[str], None] | None = None):
+                 emit: Callable[[str], None] | None = None, at_most: bool = False):
+        """``at_most``: the work may stop before ``total`` (its time left is an upper bound, and says so)."""
         self.what, self.total, self.unit = what, float(total), unit
+        self.at_most = at_most
         self.quiet = quiet
         self.stream = stream
         self.emit = emit
@@ -196,7 +200,8 @@ class Progress:
         frac = self.done / self.total if self.total > 0 else 1.0
         if left is None:
             left = elapsed * (1 - frac) / frac if frac > 0 else float("nan")
-        self.say(line_text(None, self.done, self.total, self.unit, note, elapsed=elapsed, left=left))
+        self.say(line_text(None, self.done, self.total, self.unit, note, elapsed=elapsed, left=left,
+                           at_most=self.at_most and self.done < self.total))
 
     def listener(self, offset: float = 0.0, rows: bool = False, bound: float = 0.0, later: Sequence[tuple[int, float]] = ()):
         """An episode listener (:class:`evobiped.episode.Listener`) reporting ``offset`` + simulated seconds;

@@ -102,11 +102,12 @@ class _Shown:
 
         c = run.config
         population = len(run.optimizer.ask()[0])
+        until = f" (or fewer: it stops once its walker {'walks' if c.stop.when == 'walking' else 'is fit enough'})" if c.stop.active else ""
         self.say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
-                 f"{c.generations} generations, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+                 f"{c.generations} generations{until}, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
         if self.args.rerun is not None:
             self.log = self.viewer.enter_context(_viewer_log(run, self.args.rerun))
-        self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet)
+        self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet, at_most=c.stop.active)
         self.clock = GenerationClock(c.generations, c.episode.seconds)  # every walker's episode, generation by generation
 
     def evaluated(self, rows) -> None:
