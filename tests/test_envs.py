@@ -101,8 +101,9 @@ def test_the_vector_env_gives_the_trajectories_of_single_envs(single, vector, st
 
 
 def test_the_episode_state_holds_the_environment_s_episode_a_restored_copy_replays_it():
-    """The reward baseline, each row's reset-noise generator and which rows wait for a reset are the episode
-    state's: a copy taken mid-episode, put back, replays the same actions (autoresets included) exactly."""
+    """The reward baseline, each row's reset-noise generator and which rows wait for a reset are the environment's
+    state's, beside its episode's: a copy taken mid-episode, put back, replays the same actions (autoresets included)
+    exactly."""
     venv = ReilBipedVectorEnv(3, seconds=0.2, reset_noise_scale=0.05)  # 10 control ticks: every row resets below
     rng = np.random.default_rng(2)
     lo, hi = venv.single_action_space.low, venv.single_action_space.high
@@ -128,7 +129,7 @@ def test_rewards_are_the_increments_of_the_task_fitness_and_info_carries_its_ter
     env = ReilBipedEnv(seconds=T, reset_noise_scale=0.0)
     env.reset(seed=0)
     start = env.walkers.info()["position"][0].copy()
-    facing = env.walkers.state.start_facing[0].copy()
+    facing = env.walkers.state.episode.start_facing[0].copy()
     lean = np.array([0.4, 0, -0.2, 0.4, 0, -0.2], np.float32)  # both hips flexed: it topples forward
     rewards, forwards = [], [0.0]
     while True:

@@ -5,12 +5,14 @@ built by :meth:`EpisodeConfig.build <evobiped.episode.EpisodeConfig.build>` (the
 its options parsed once, the task checked against an episode without a controller), stepped one control tick at
 a time by :meth:`Episode.step <evobiped.episode.Episode.step>`, the loop every evolution and experiment uses.
 The reward is the increment of the task's fitness over the step, and ``info`` carries the task's named terms.
-Everything an episode in progress holds (the simulations, the reward baseline, each row's reset-noise generator,
-which rows ended) is its :class:`~evobiped.episode.EpisodeState`.
+What an environment holds in progress is an :class:`EnvState`: the :class:`~evobiped.episode.EpisodeState` and what
+only the environments keep per row beside it (the reward baseline, each row's reset-noise generator, which rows
+ended).
 """
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from typing import Any
 
@@ -65,6 +67,22 @@ def env_config(body: str, default_control_dt: float, kwargs: dict, where: str) -
     return config, options
 
 
+@dataclass(eq=False)
+class EnvState:
+    """An environment's episode in progress, a value: the episode's state, and per row ``(n,)`` the task's fitness
+    when the row last stepped or began (the reward baseline: a reward is its increment), the generator of the row's
+    reset noise, and whether its episode ended and waits for a reset."""
+
+    episode: EpisodeState
+    fitness: np.ndarray
+    ended: np.ndarray
+    rngs: list[np.random.Generator]
+
+    def copy(self) -> "EnvState":
+        """An independent state equal to this one (the episode's, the generators)."""
+        return copy.deepcopy(self)
+
+
 class Walkers:
     """``n`` walkers of ``config``'s body (an episode without controller) stepped together: observation, reward (the
     task's fitness increments), episode ends.
@@ -84,16 +102,17 @@ class Walkers:
         #: the observation's senses: the body's and the task's, less those read only on request
         self.sensor_widths = gait.by_default({**self.body.sensor_widths, **self.episode.task.sensor_widths()})
         #: the episode in progress (None before the first reset)
-        self.state: EpisodeState | None = None
+        self.state: EnvState | None = None
 
     @property
     def sims(self):
-        return self.state.sims
+        return self.state.episode.sims
 
     @property
     def steps(self) -> np.ndarray:
         """Control ticks each row has taken since its reset ``(n,)``."""
-        return self.state.ticks - self.state.born
+        st = self.state.episode
+        return st.ticks - st.born
 
     @property
     def ended(self) -> np.ndarray:
@@ -106,7 +125,7 @@ class Walkers:
 
     def reset(self, ids: np.ndarray, rngs: list[np.random.Generator] | None = None) -> None:
         """Rows ``ids`` to the body's initial state, each hinge angle of row i moved by U(-s, s) rad drawn from its
-        generator: ``rngs[i]`` (which the state keeps from now on), else the one the state kept."""
+        generator: ``rngs[i]`` (kept from now on), else the one kept."""
         if rngs is None:
             rngs = self.state.rngs
 
@@ -117,39 +136,38 @@ class Walkers:
                 sims.forward(rows)
 
         if self.state is None:
-            self.state = self.episode.start(self.n, pose=pose)
-            self.state.fitness, self.state.ended = np.zeros(self.n), np.zeros(self.n, bool)
+            self.state = EnvState(self.episode.start(self.n, pose=pose), np.zeros(self.n), np.zeros(self.n, bool), rngs)
         else:
-            self.episode.restart(self.state, ids, pose=pose)
+            self.episode.restart(self.state.episode, ids, pose=pose)
         st = self.state
         st.rngs = rngs
-        st.fitness[ids] = self.episode.task.fitness(st.task)[ids]
+        st.fitness[ids] = self.episode.task.fitness(st.episode.task)[ids]
         st.ended[ids] = False
 
     def step(self, ids: np.ndarray, action: np.ndarray):
         """Rows ``ids`` take ``action`` ``(n, n_act)`` (clipped to the bounds; other rows' ignored) for one
         control period.  Returns ``(reward, terminated, truncated, unstable)``, each ``(len(ids),)``."""
-        st, task = self.state, self.episode.task
-        self.episode.step(st, np.clip(action, self.low, self.high), rows=ids)
+        env, task = self.state, self.episode.task
+        st = self.episode.step(env.episode, np.clip(action, self.low, self.high), rows=ids)
         fitness = task.fitness(st.task)
-        reward = fitness[ids] - st.fitness[ids]
-        st.fitness[ids] = fitness[ids]
+        reward = fitness[ids] - env.fitness[ids]
+        env.fitness[ids] = fitness[ids]
         terminated = st.fell[ids]
         truncated = ~terminated & (self.steps[ids] >= st.n_ticks)
-        st.ended[ids] = terminated | truncated
+        env.ended[ids] = terminated | truncated
         return reward, terminated, truncated, st.unstable[ids]
 
     def info(self) -> dict[str, np.ndarray]:
         """Per row: the task's fitness and terms (those these task options define: a term NaN on every row is
         left out), where the walker is ``(n, 2)`` m, whether it blew up."""
-        st, ep = self.state, self.episode
+        st, ep = self.state.episode, self.episode
         terms = {k: v for k, v in ep.task.terms(st.task).items() if not np.isnan(v).all()}
-        return {"fitness": st.fitness.copy(), **terms, "position": ep.task.end_position(ep.body, st.sims, st.task).copy(),
+        return {"fitness": self.state.fitness.copy(), **terms, "position": ep.task.end_position(ep.body, st.sims, st.task).copy(),
                 "unstable": st.unstable.copy()}
 
     def observe(self) -> np.ndarray:
         """``(n, obs_size)``: the body's sensors and the task's, in :attr:`sensor_widths` order (blown-up rows: 0)."""
-        st, ep = self.state, self.episode
+        st, ep = self.state.episode, self.episode
         found = {**ep.body.sensors(st.sims), **ep.task.sensors(ep.body, st.sims, st.task)}
         obs = np.concatenate([found[k] for k in self.sensor_widths], axis=1)
         return obs if np.isfinite(obs).all() else np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)

@@ -1,31 +1,49 @@
-"""The disturbances a trial applies to a batch while it runs (evobiped.physics.perturb draws them): noise and offsets on
-the actions, pushes on the trunk, and the pelvis assistance's torque before every physics step."""
+"""The disturbances a trial applies to a batch while it runs (evobiped.physics.perturb draws them, :func:`draw_trials`
+a generation's): noise and offsets on the actions, pushes on the trunk, and the pelvis assistance's torque before every
+physics step."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..bodies.base import Body
+from ..physics.perturb import PerturbationOptions, Trials
 from ..physics.sim import Sims
-from .state import EpisodeState
+from ..tasks.base import Task
+from .state import Disturbances
 
 
-def disturb(state: EpisodeState, action: np.ndarray, low: np.ndarray, high: np.ndarray, trunk: int, t: float) -> np.ndarray:
-    """``action`` ``(n, n_act)`` with the state's trials applied at time ``t`` s: each row's target offset and this
-    tick's target noise (clipped to ``[low, high]``), and each trial's push set on body ``trunk`` of every row (written
-    only while a push is on or has just ended)."""
-    st, trials, trial, sims = state, state.trials, state.trial, state.sims
-    jitter = st.noise.next()
-    if st.offset is not None or jitter is not None:
-        disturbed = action + st.offset if st.offset is not None else action.copy()
+def draw_trials(perturbations: PerturbationOptions | None, task: Task, key: tuple[int, int] | None, *, seconds: float,
+                n_actuators: int, n_genes: int | None) -> Trials | None:
+    """The perturbed presentations of generation key = (run seed, generation) (None: nominal) of an episode of ``seconds``
+    s under ``perturbations``, with the task's random sources of that generation (the steer task's sources, the command
+    task's drawn commands; shared by every genome); ``n_genes`` None: no controller (no gene noise)."""
+    drawn = task.draw_sources(key) if key is not None and hasattr(task, "draw_sources") else None
+    if key is None or (perturbations is None and drawn is None):
+        return None
+    trials = Trials.nominal(1, n_actuators) if perturbations is None else perturbations.draw(
+        key, seconds=seconds, n_actuators=n_actuators, n_genes=n_genes)
+    trials.sources = drawn
+    return trials
+
+
+def disturb(d: Disturbances, sims: Sims, action: np.ndarray, low: np.ndarray, high: np.ndarray, trunk: int,
+            t: float) -> np.ndarray:
+    """``action`` ``(n, n_act)`` with the disturbances ``d`` applied at time ``t`` s: each row's target offset and this
+    tick's target noise (clipped to ``[low, high]``), and each trial's push set on body ``trunk`` of every row of
+    ``sims`` (written only while a push is on or has just ended)."""
+    trials, trial = d.trials, d.trial
+    jitter = d.noise.next()
+    if d.offset is not None or jitter is not None:
+        disturbed = action + d.offset if d.offset is not None else action.copy()
         if jitter is not None:
             disturbed += jitter[trial]
         action = np.clip(disturbed, low, high)
     if trials.push_start.size > 0:
         force = trials.push_at(t)  # (R, 3) N
-        if st.pushed or force.any():
+        if d.pushed or force.any():
             sims.xfrc_applied[:, trunk, :3] = force[trial]
-            st.pushed = bool(force.any())
+            d.pushed = bool(force.any())
     return action
 
 

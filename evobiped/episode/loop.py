@@ -3,24 +3,23 @@ docstring): :meth:`Episode.step` is one control tick, :meth:`Episode.advance` a 
 
 from __future__ import annotations
 
-import copy
-from typing import Any
-
 import numpy as np
 
-from ..physics import gait
 from ..bodies.base import Body
 from ..controllers.base import Controller
-from .result import EpisodeResult
 from ..core.errors import ConfigError
 from ..interface.mapping import to_action
+from ..physics import gait
 from ..physics.perturb import PerturbationOptions, Trials
 from ..physics.sim import Sims
 from ..tasks.base import Task
-from .config import check_timing
-from .disturbances import assisted_physics, disturb
+from .disturbances import assisted_physics, disturb, draw_trials
+from .grounds import Grounds
+from .listener import Listener
+from .result import EpisodeResult
 from .senses import SensePlan
-from .state import Context, EpisodeState, Listener, Pose, RowSenses
+from .state import Context, Disturbances, EpisodeState, Pose, RowSenses
+from .timing import check_timing
 
 
 class Episode:
@@ -44,7 +43,7 @@ class Episode:
         self.control_dt = dt
         # the controller told its period: a bound copy, the caller's controller unchanged
         self.controller = None if controller is None else controller.bound(dt)
-        self._models: dict[tuple, Any] = {}
+        self.grounds = Grounds(body, self.model)
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)
         self._act_qadr = self.model.jnt_qposadr[self.model.actuator_trnid[:, 0]]
@@ -58,36 +57,13 @@ class Episode:
         return int(round(self.seconds / self.control_dt))
 
     def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0, slope_direction: float = 0.0) -> Sims:
-        """A new batch of ``n`` simulations (each :meth:`start` owns one), on the model with this ground: floor
-        ``friction``, and a ``slope`` (grade, rise over run) rising towards ``slope_direction`` (rad from +x, the
-        walker's initial facing, towards +y, its left)."""
-        key = (friction, slope, slope_direction if slope else 0.0)
-        if key not in self._models:
-            model = self.model
-            if friction is not None or slope:
-                model = copy.deepcopy(self.model)
-                if friction is not None:
-                    if self.body.floor_geom is None:
-                        raise ConfigError(f"body {self.body.name!r} has no MuJoCo ground whose friction a trial could change")
-                    model.geom_friction[model.geom(self.body.floor_geom).id, 0] = friction
-                if slope:  # an inclined plane: gravity tilted down the slope, away from where the floor rises
-                    g = float(np.linalg.norm(self.model.opt.gravity))
-                    a = np.arctan(slope)
-                    c, s = (0.0 if abs(v) < 1e-12 else float(v) for v in (np.cos(slope_direction), np.sin(slope_direction)))  # exact on the axes
-                    model.opt.gravity[:] = (-g * np.sin(a) * c, -g * np.sin(a) * s if s else 0.0, -g * np.cos(a))
-            self._models[key] = model
-        return Sims(self._models[key], n)
+        """A new batch of ``n`` simulations (each :meth:`start` owns one) on this ground (:meth:`Grounds.sims`)."""
+        return self.grounds.sims(n, friction=friction, slope=slope, slope_direction=slope_direction)
 
     def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
-        """The perturbed presentations of generation key = (run seed, generation); None: nominal."""
-        drawn = self.task.draw_sources(key) if key is not None and hasattr(self.task, "draw_sources") else None
-        if key is None or (self.perturbations is None and drawn is None):
-            return None
-        n_act = len(self.body.actuator_names)
-        trials = Trials.nominal(1, n_act) if self.perturbations is None else self.perturbations.draw(
-            key, seconds=self.seconds, n_actuators=n_act, n_genes=None if self.controller is None else self.controller.layout.size)
-        trials.sources = drawn  # a task's random sources of this generation (the steer task's), shared by every genome
-        return trials
+        """The perturbed presentations of generation key = (run seed, generation); None: nominal (:func:`draw_trials`)."""
+        return draw_trials(self.perturbations, self.task, key, seconds=self.seconds, n_actuators=len(self.body.actuator_names),
+                           n_genes=None if self.controller is None else self.controller.layout.size)
 
     def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
             trials: Trials | None = None, context: "Context | None" = None) -> EpisodeResult:
@@ -160,11 +136,8 @@ class Episode:
             controller=None if self.controller is None else self.controller.initial_state(params),
             alive=np.ones(P, bool), fell=np.zeros(P, bool), unstable=np.zeros(P, bool), end_time=end_time,
             start_position=body.planar_position(sims).copy(), start_facing=body.heading(sims).copy(),
-            control_dt=self.control_dt, n_ticks=n_ticks, trials=trials, trial=trial, born=np.zeros(P, int),
-            noise=trials.noise() if trials is not None else None,
-            offset=trials.target_offset[trial] if trials is not None and trials.target_offset.any() else None,
-            assist=trials.assist[trial] if trials is not None and trials.assist is not None else None,
-            norm=ctx.norm,
+            control_dt=self.control_dt, n_ticks=n_ticks, born=np.zeros(P, int),
+            disturbances=None if trials is None else Disturbances.of(trials, trial), norm=ctx.norm,
             senses=RowSenses.zeros(P, k) if ctx.observe and k is not None else None,
         )
 
@@ -211,26 +184,28 @@ class Episode:
         return state
 
     def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,
-             listener: Listener | None = None, rows: np.ndarray | None = None) -> np.ndarray:
+             listener: Listener | None = None, rows: np.ndarray | None = None) -> EpisodeState:
         """One control tick of ``state``, in place: ``action`` ``(n, n_act)`` (rad targets or N m torques, the
         body's action kind; a controller's, or an agent's from outside) for every row, the rows that are up
         take it after the episode's perturbations and latency; then the physics, the task's bookkeeping
         (``neurons`` ``(n, k)``: the controller's outputs the task may read; default none) and the falls.
-        ``rows``: only these take the tick (default all; a row that is down never does).  Returns the rows
-        that were stepped."""
+        ``rows``: only these take the tick (default all; a row that is down never does).  Returns ``state``."""
         body, task, sims, st = self.body, self.task, state.sims, state
-        tstate, alive, trials = st.task, st.alive, st.trials
+        tstate, alive, d = st.task, st.alive, st.disturbances
         k = st.ticks
         ids = np.flatnonzero(alive) if rows is None else rows[alive[rows]]
         if neurons is None:
             neurons = np.zeros((len(alive), 0))
-        if trials is not None:
-            action = disturb(st, action, self.low, self.high, self._trunk, k * self.control_dt)
+        if d is not None:
+            action = disturb(d, sims, action, self.low, self.high, self._trunk, k * self.control_dt)
         if self.latency:
             st.pending.append(action)
             action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
         body.apply(sims, ids, action[ids])
-        bad = self._advance(sims, ids) if st.assist is None else self._assisted(sims, ids, st.assist[ids], trials.assist_damping)
+        if d is None or d.assist is None:
+            bad = self.body.advance(sims, ids, self.substeps)
+        else:  # the pelvis assistance (N m/rad) on the trunk
+            bad = assisted_physics(body, sims, ids, self._trunk, self.substeps, d.assist[ids], d.trials.assist_damping)
         st.ticks = k + 1
         t = (k + 1) * self.control_dt
         if "gait" in sims.extra:  # a controller reads the gait senses
@@ -244,7 +219,7 @@ class Episode:
             st.fell[ids[down]] = True
             alive[ids[down]] = False
             st.end_time[ids[down]] = (k + 1 - st.born[ids[down]]) * self.control_dt
-        return ids
+        return state
 
     def result(self, state: EpisodeState) -> EpisodeResult:
         """The outcome of ``state`` so far, one entry per genome (see :meth:`run`): copies, which nothing done to the
@@ -262,7 +237,7 @@ class Episode:
             terms={k: np.array(v) for k, v in task.terms(tstate).items()},
             senses=None if state.senses is None else state.senses.table(),
         )
-        trials = state.trials
+        trials = None if state.disturbances is None else state.disturbances.trials
         if trials is not None:
             R = trials.R
             result = result.per_genome(S * R, lambda f: trials.combine(task.combine(f.reshape(-1, S)).reshape(-1, R)))
@@ -273,12 +248,3 @@ class Episode:
     def _inputs(self, st: EpisodeState, P: int) -> tuple[np.ndarray, np.ndarray | None]:
         """The controller's inputs now and the rows its stance frame mirrors (:meth:`.senses.SensePlan.read`)."""
         return self.senses.read(st, P)
-
-    def _advance(self, sims: Sims, ids: np.ndarray) -> np.ndarray:
-        """One control period of physics for ``ids``; bool mask of blow-ups."""
-        return self.body.advance(sims, ids, self.substeps)
-
-    def _assisted(self, sims: Sims, ids: np.ndarray, stiffness: np.ndarray, damping: float) -> np.ndarray:
-        """:meth:`_advance` with the pelvis assistance (``stiffness`` ``(len(ids),)`` N m/rad) on the trunk."""
-        return assisted_physics(self.body, sims, ids, self._trunk, self.substeps, stiffness, damping)
-

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import EpisodeConfig
+from .config import EpisodeConfig
 
 
 def input_widths(episode: EpisodeConfig) -> list[int]:

@@ -1,54 +1,49 @@
-"""An episode in progress as a value (:class:`EpisodeState`), what a run sets for its episodes (:class:`Context`), and
-who may watch one (:class:`Listener`)."""
+"""An episode in progress as a value (:class:`EpisodeState`, with what a trial applies to it: :class:`Disturbances`, and
+what each row sensed: :class:`RowSenses`), and what a run sets for its episodes (:class:`Context`)."""
 
 from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Protocol
+from typing import Any, Callable
 
 import numpy as np
 
 from .result import EpisodeResult
 from ..interface.normaliser import SenseSums
-from ..physics.perturb import Trials
+from ..physics.perturb import TargetNoise, Trials
 from ..physics.sim import Sims
 from ..tasks.base import TaskState
 
-if TYPE_CHECKING:
-    from .loop import Episode
-
-
 #: ``pose(sims, ids)``: moves rows ``ids`` off the body's initial pose (and calls ``sims.forward(ids)``)
 Pose = Callable[[Sims, np.ndarray], None]
+#: how k inputs are normalised: ``(centre (k,), scale (k,))``, a reading x read as (x - centre) / scale
+Norm = tuple[np.ndarray, np.ndarray]
 
 
-class Listener(Protocol):
-    """Watches an episode (recording, figures); never changes it."""
+@dataclass(eq=False, kw_only=True)
+class Disturbances:
+    """What a trial applies to an episode's rows while they run (:mod:`evobiped.physics.perturb` draws it,
+    :mod:`.disturbances` applies it)."""
 
-    def start(self, episode: "Episode", sims: Sims) -> None: ...
-    def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: TaskState) -> None: ...
-    def end(self, result: EpisodeResult) -> None: ...
+    trials: Trials
+    #: each row's trial ``(n,)``
+    trial: np.ndarray
+    #: the noise on the PD targets, one draw per control tick
+    noise: TargetNoise
+    #: rad: each row's actuator-target offsets ``(n, n_act)`` (None: none)
+    offset: np.ndarray | None = None
+    #: N m/rad: each row's pelvis assistance ``(n,)`` (None: none)
+    assist: np.ndarray | None = None
+    #: a push force is on some trunk now
+    pushed: bool = False
 
-
-class Listeners:
-    """Several listeners as one (e.g. one recorder per presentation)."""
-
-    def __init__(self, *listeners: Listener):
-        self.listeners = listeners
-
-    def start(self, episode, sims):
-        for x in self.listeners:
-            x.start(episode, sims)
-
-    def tick(self, t, sims, ids, neurons, action, task_state):
-        for x in self.listeners:
-            x.tick(t, sims, ids, neurons, action, task_state)
-
-    def end(self, result):
-        for x in self.listeners:
-            x.end(result)
-
+    @classmethod
+    def of(cls, trials: Trials, trial: np.ndarray) -> "Disturbances":
+        """The disturbances of ``trials`` on rows of trials ``trial`` ``(n,)``."""
+        return cls(trials=trials, trial=trial, noise=trials.noise(),
+                   offset=trials.target_offset[trial] if trials.target_offset.any() else None,
+                   assist=trials.assist[trial] if trials.assist is not None else None)
 
 
 @dataclass(eq=False, kw_only=True)
@@ -68,11 +63,13 @@ class EpisodeState:
     controller: Any
     #: the task's state (see :class:`evobiped.tasks.base.Task`)
     task: TaskState
+    #: bool ``(n,)``: each row is up; it fell (or blew up); it blew up
     alive: np.ndarray
     fell: np.ndarray
     unstable: np.ndarray
     #: s: when each row fell, the planned length while it is up
     end_time: np.ndarray
+    #: where each row began ``(n, 2)`` m, and the direction it faced then ``(n, 2)`` (unit vectors on the ground)
     start_position: np.ndarray
     start_facing: np.ndarray
     #: s per control tick
@@ -81,29 +78,16 @@ class EpisodeState:
     n_ticks: int
     #: control ticks simulated so far
     ticks: int = 0
-    trials: Trials | None = None
-    #: each row's trial ``(n,)``, its noise stream, its actuator-target offsets ``(n, n_act)`` rad or None
-    trial: np.ndarray | None = None
-    noise: Any = None
-    offset: np.ndarray | None = None
-    #: a push force is on some trunk now
-    pushed: bool = False
-    #: the actions computed but not yet applied, oldest first (``Episode.latency`` > 0)
-    pending: list = field(default_factory=list)
     #: the tick at which each row began ``(n,)`` (0; later for a row :meth:`Episode.restart` began anew)
     born: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    #: N m/rad: each row's pelvis assistance ``(n,)`` (None: none; see :mod:`evobiped.physics.perturb`)
-    assist: np.ndarray | None = None
-    #: ``(centre (k,), scale (k,))`` the controller's inputs are normalised with in this episode (None: the controller's)
-    norm: tuple | None = None
-    #: what each row sensed (None: not collected)
+    #: the actions computed but not yet applied, oldest first (``Episode.latency`` > 0)
+    pending: list[np.ndarray] = field(default_factory=list)
+    #: what the episode's trials apply (None: a nominal episode)
+    disturbances: Disturbances | None = None
+    #: the run's context: how the controller's inputs are normalised in this episode (None: the controller's own),
+    #: and what each row sensed (None: not collected)
+    norm: Norm | None = None
     senses: RowSenses | None = None
-    #: what an episode stepped by outside actions (a Gymnasium environment's) keeps per row ``(n,)``, None otherwise:
-    #: the task's fitness when the row last stepped or began (the reward baseline: a reward is its increment), the
-    #: generator of the row's reset noise, and whether its episode ended and waits for a reset
-    fitness: np.ndarray | None = None
-    rngs: list | None = None
-    ended: np.ndarray | None = None
 
     @property
     def time(self) -> float:
@@ -122,9 +106,9 @@ class Context:
     (``EpisodeResult.senses``), fitness weights by term for a task whose fitness weighs its terms (None:
     the task's own) and the episodes' length."""
 
-    norm: tuple | None = None
+    norm: Norm | None = None
     observe: bool = False
-    weights: dict | None = None
+    weights: dict[str, float] | None = None
     #: control ticks of senses behind ``norm`` (recorded with it in genome files)
     norm_count: float = 0.0
     #: s: the episodes' length (None: the episode's own)
