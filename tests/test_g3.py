@@ -192,6 +192,25 @@ def test_cli_g3_json_and_figures(tmp_path, capsys):
     assert all((tmp_path / p.rsplit("/", 1)[1]).stat().st_size > 10_000 for p in out["files"])
 
 
+def test_cli_g3_reproduce_hands_the_folder_step_and_t_run_to_the_reproduction(tmp_path, monkeypatch):
+    """``evobiped g3 --reproduce DIR``: the paper's defaults (step 0.01, 200 per level) unless --step/--t-run say otherwise."""
+    from evobiped.cli import main
+    from evobiped.experiments.g3 import g3_reproduce
+
+    calls = []
+    monkeypatch.setattr(g3_reproduce, "reproduce_g3", lambda out, step, t_run: calls.append((out, step, t_run)))
+    out = str(tmp_path / "made" / "g3")
+    assert main(["g3", "--reproduce", out]) == 0
+    assert main(["g3", "--reproduce", out, "--step", "0.05", "--t-run", "80"]) == 0
+    assert calls == [(out, 0.01, 200.0), (out, 0.05, 80.0)] and (tmp_path / "made" / "g3").is_dir()
+
+
+def test_reproduce_ranges_are_contiguous_runs_of_one_gait():
+    from evobiped.experiments.g3.g3_reproduce import ranges
+
+    assert ranges([0.1, 0.2, 0.3, 0.4], ["walk", "walk", "trot", "walk"]) == [["walk", 0.1, 0.2], ["trot", 0.3, 0.3], ["walk", 0.4, 0.4]]
+
+
 @pytest.mark.parametrize(
     "argv, msg",
     [

@@ -261,6 +261,24 @@ def test_cli_bad_arguments(argv, needle, capsys):
     assert needle in err and len(err.splitlines()) == 1
 
 
+def test_cli_reproduce_runs_the_paper_into_the_folder(tmp_path, monkeypatch):
+    """``evobiped taga --reproduce DIR --quick --quiet`` hands the folder and both switches to the reproduction."""
+    from evobiped.experiments.taga import taga_reproduce
+
+    calls = []
+    monkeypatch.setattr(taga_reproduce, "reproduce_taga", lambda out, quick, quiet: calls.append((out, quick, quiet)))
+    assert main(["taga", "--reproduce", str(tmp_path / "r"), "--quick", "--quiet"]) == 0
+    assert main(["taga", "--reproduce", str(tmp_path / "r")]) == 0
+    assert calls == [(str(tmp_path / "r"), True, True), (str(tmp_path / "r"), False, False)] and (tmp_path / "r").is_dir()
+
+
+def test_reproduce_tables_format_cells_as_the_summary_shows_them():
+    from evobiped.experiments.taga.taga_reproduce import fmt
+
+    assert fmt([{"a": 1.23456, "b": float("nan"), "c": 0.004}, {"a": None, "b": "walk", "c": 3}], ["a", "b", "c"]) == (
+        "| a | b | c |\n|---|---|---|\n| 1.235 | - | 0.004 |\n| - | walk | 3 |\n")
+
+
 def test_cli_json_and_genome_file_replays_the_same_walk(capsys, tmp_path):
     import json
 

@@ -32,6 +32,12 @@ REFUSED = [
     (["taga", "--push-force", "100"], "--push-force/--push-delay"),
     (["g3", "fig4", "--switch-at", "5"], "--switch-at"),
     (["g3", "fig4", "--channels", "LF"], "--channels"),
+    (["g3", "fig4", "--reproduce", "out"], "PRESET: --reproduce runs the paper's own presets"),
+    (["g3", "--reproduce", "out", "--go", "0.1", "--continue"], "--go/--continue: --reproduce"),
+    (["g3", "fig4", "--step", "0.1"], "--step: it spaces the sweeps of --reproduce"),
+    (["g3"], "g3: give a PRESET"),
+    (["taga", "--reproduce", "out", "--u0", "6", "--json"], "--u0/--json: --reproduce runs the paper's own experiments"),
+    (["taga", "--quick"], "--quick: it coarsens the grids of --reproduce"),
     (["replay", "GENOME", "--spawn"], "cannot spawn a Rerun viewer: no display here"),
     (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"], "cannot write no/such/dir/t.json: No such file or directory"),
 ]

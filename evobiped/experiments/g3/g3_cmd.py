@@ -13,7 +13,7 @@ def add_g3(sub) -> None:
     p = sub.add_parser("g3", help="run the G3 gait generator (Pribe et al. 1997) at GO levels; gait table and PNGs")
     from .network import PRESETS
 
-    p.add_argument("preset", help=f"parameter set: {', '.join(PRESETS)}")
+    p.add_argument("preset", nargs="?", help=f"parameter set: {', '.join(PRESETS)} (not with --reproduce)")
     lv = p.add_mutually_exclusive_group()
     lv.add_argument("--go", type=float, nargs="+", metavar="I", help="GO level(s) (default: the preset's)")
     lv.add_argument("--sweep", type=float, nargs=3, metavar=("START", "STOP", "STEP"), help="GO levels START..STOP (inclusive)")
@@ -26,7 +26,34 @@ def add_g3(sub) -> None:
     p.add_argument("--channels", help="channels drawn in the diagrams, names or 0-3 (default all: LF,RF,LH,RH; only with --out)")
     p.add_argument("--out", metavar="DIR", help="write PNG gait diagrams and the frequency plot here")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.add_argument("--reproduce", metavar="DIR", help="check the paper claim by claim: write summary.json, one CSV per sweep and "
+                   "the figures into DIR (made if missing) and print the numbers docs/g3.md quotes; no PRESET, only --step and --t-run go with it")
+    p.add_argument("--step", type=positive_float, help="with --reproduce: GO increment of its sweeps (default 0.01, the paper's)")
     p.set_defaults(func=run_g3_cmd)
+    _DEFAULTS.update(vars(p.parse_args([])))
+
+
+_DEFAULTS: dict = {}  # every flag's default, to name the flags given with --reproduce
+_FLAG = {"preset": "PRESET", "mode": "--continue"}
+
+
+def _run_reproduce(args) -> int:
+    from pathlib import Path
+
+    from ...core.errors import UserError
+
+    given = [k for k, v in _DEFAULTS.items() if k not in ("reproduce", "step", "t_run", "func") and getattr(args, k) != v]
+    if given:
+        refuse("/".join(_FLAG.get(k, "--" + k.replace("_", "-")) for k in given),
+               "--reproduce runs the paper's own presets and levels; only --step and --t-run go with it")
+    try:
+        Path(args.reproduce).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise UserError(f"--reproduce: cannot make the folder {args.reproduce}: {e.strerror}") from None
+    from .g3_reproduce import reproduce_g3
+
+    reproduce_g3(args.reproduce, step=0.01 if args.step is None else args.step, t_run=200.0 if args.t_run is None else args.t_run)
+    return 0
 
 
 def run_g3_cmd(args) -> int:
@@ -34,6 +61,12 @@ def run_g3_cmd(args) -> int:
     from .simulation import go_sweep
     from ...core.errors import ConfigError
 
+    if args.reproduce is not None:
+        return _run_reproduce(args)
+    if args.step is not None:
+        refuse("--step", "it spaces the sweeps of --reproduce; give --sweep START STOP STEP for a preset's levels")
+    if args.preset is None:
+        raise ConfigError(f"g3: give a PRESET ({', '.join(g3.PRESETS)}) or --reproduce DIR")
     pre = g3.preset(args.preset)
     if args.switch_at is not None and args.from_go is None:
         refuse("--switch-at", "it times the switch from --from-go; give --from-go too")

@@ -30,7 +30,31 @@ def add_taga(sub) -> None:
     p.add_argument("--save-genome", metavar="FILE.json", help="also write the genome file of the (first) walker, for evobiped replay")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--reproduce", metavar="DIR", help="run every experiment of the paper with its published parameters and write "
+                   "taga_results.json, summary.md and the figures (Figs. 5-11) into DIR (made if missing); only --quick and --quiet go with it")
+    p.add_argument("--quick", action="store_true", help="with --reproduce: coarser grids in every part, to check the pipeline, not the numbers")
     p.set_defaults(func=run_taga_cmd)
+    _DEFAULTS.update(vars(p.parse_args([])))
+
+
+_DEFAULTS: dict = {}  # every flag's default, to name the flags given with --reproduce
+
+
+def _run_reproduce(args) -> int:
+    from pathlib import Path
+
+    given = [k for k, v in _DEFAULTS.items() if k not in ("reproduce", "quick", "quiet", "func") and getattr(args, k) != v]
+    if given:
+        refuse("/".join("--" + k.replace("_", "-") for k in given), "--reproduce runs the paper's own experiments and settings; "
+               "only --quick and --quiet go with it")
+    try:
+        Path(args.reproduce).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise UserError(f"--reproduce: cannot make the folder {args.reproduce}: {e.strerror}") from None
+    from .taga_reproduce import reproduce_taga
+
+    reproduce_taga(args.reproduce, quick=args.quick, quiet=args.quiet)
+    return 0
 
 
 def _nan_to_null(row: dict) -> dict:
@@ -46,6 +70,10 @@ def run_taga_cmd(args) -> int:
     from ...core.options import check_value, option_bounds
     from ...core.validate import number
 
+    if args.reproduce is not None:
+        return _run_reproduce(args)
+    if args.quick:
+        refuse("--quick", "it coarsens the grids of --reproduce; give --reproduce DIR")
     if args.preset not in PRESETS:
         raise UserError(f"unknown preset {args.preset!r} (choose from {', '.join(PRESETS)})")
     for u in args.u0:
@@ -97,7 +125,7 @@ def run_taga_cmd(args) -> int:
     _, rows = protocols.steady(args.u0, seconds=seconds, window=window, progress=progress.update, **opts)
     progress.finish()
     if args.json:
-        settings = {**{k: v for k, v in vars(args).items() if k != "func"}, "seconds": seconds, "window": window}
+        settings = {**{k: v for k, v in vars(args).items() if k not in ("func", "reproduce", "quick")}, "seconds": seconds, "window": window}
         print(json.dumps({"settings": settings, "walkers": [_nan_to_null(r) for r in rows]}, allow_nan=False))
         return 0
     print(f"Taga biped, preset {args.preset}, slope {args.slope:g} %, kg {args.kg:g}, bg {args.bg:g}; "

@@ -1,41 +1,34 @@
-"""Reproduce Taga, Yamaguchi & Shimizu 1991 (Figs. 5-11) with the published parameters.
+"""Every table and figure of Taga, Yamaguchi & Shimizu 1991 (Figs. 5-11), published parameters: ``evobiped taga --reproduce DIR``.
 
-    python scripts/reproduce_taga.py [--out results/taga] [--quick]
-
-Writes into the results folder: ``taga_results.json`` (every number),
-``summary.md`` (the tables), and PNG figures: stick figures of walking and
-running (Figs. 5, 9), one steady cycle of each, pushes (Fig. 7), uphill walking
-(Fig. 8), neuron activity walking vs isolated (Fig. 6) and the u0 bifurcation
-diagrams (Fig. 11).  Progress lines go to stderr; docs/taga.md gives the running times.
-``--quick`` runs every part on coarser grids (fewer u0 values, push phases, slopes and
-ground parameters, no physics-step halving) to check the pipeline, not the numbers.
+Writes into DIR: ``taga_results.json`` (every number), ``summary.md`` (the
+tables), and PNG figures: stick figures of walking and running (Figs. 5, 9),
+one steady cycle of each, pushes (Fig. 7), uphill walking (Fig. 8), neuron
+activity walking vs isolated (Fig. 6) and the u0 bifurcation diagrams
+(Fig. 11).  Progress lines go to stderr; docs/taga.md gives the running times.
+``quick`` runs every part on coarser grids (fewer u0 values, push phases,
+slopes and ground parameters, no physics-step halving) to check the pipeline,
+not the numbers.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from pathlib import Path
 
 import numpy as np
 
-from evobiped.experiments.taga import generator, protocols
-from evobiped.core.fileio import atomic_write
-from evobiped.core.progress import Progress
-from evobiped.experiments.taga import taga_figures as fig
-from evobiped.experiments.taga.stride import contact_onsets
+from ...core.fileio import atomic_write
+from ...core.progress import Progress
+from . import generator, protocols
+from . import taga_figures as fig
+from .stride import contact_onsets
 
 NEURONS = ["RH f", "RH e", "RK f", "RK e", "RA f", "RA e", "LH f", "LH e", "LK f", "LK e", "LA f", "LA e"]
 
 
 def log(msg: str) -> None:
     print(f"[{time.strftime('%H:%M:%S')}] {msg}", flush=True)
-
-
-def progress(what: str, seconds: float):
-    """A ``TagaWalker(progress=...)`` callback: progress lines over ``seconds`` of simulated time."""
-    return Progress(what, seconds, "s simulated").update
 
 
 def fmt(rows: list[dict], keys: list[str]) -> str:
@@ -58,16 +51,18 @@ def one_cycle(tr: dict, p: int, after: float) -> tuple[float, float]:
     return float(tr["t"][td[0]]), float(tr["t"][td[1]])
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="results/taga")
-    ap.add_argument("--quick", action="store_true", help="coarser sweeps and fewer phases")
-    args = ap.parse_args()
-    out = Path(args.out)
+def reproduce_taga(out: str | Path, quick: bool = False, quiet: bool = False) -> None:
+    """Run every experiment of the paper and write its tables and figures into ``out`` (made if missing)."""
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+
+    def progress(what: str, seconds: float):
+        """A ``TagaWalker(progress=...)`` callback: progress lines over ``seconds`` of simulated time."""
+        return Progress(what, seconds, "s simulated", quiet=quiet).update
+
     R: dict = {}
     md = ["# Taga et al. 1991 reproduction (published parameters, preset `taga`)\n"]
-    step = 0.5 if args.quick else 0.25
+    step = 0.5 if quick else 0.25
 
     # ---- claims 1, 2: walking at 5.5, running from Appendix E; u0 scan from the initial state
     log("claims 1-2: walking and running from Appendix E")
@@ -102,7 +97,7 @@ def main() -> None:
     # ---- claim 3: hysteresis sweeps (Fig. 11)
     log("claim 3: u0 sweeps up and down")
     up_vals = list(np.round(np.arange(5.5, 9.0 + 1e-9, step), 2))
-    down_vals = list(np.round(np.arange(7.75 if not args.quick else 7.5, 3.0 - 1e-9, -step), 2))
+    down_vals = list(np.round(np.arange(7.75 if not quick else 7.5, 3.0 - 1e-9, -step), 2))
     up = protocols.u0_sweep(up_vals, progress=progress("sweep up", 20.0 + 8.0 * (len(up_vals) - 1)))
     down = protocols.u0_sweep(down_vals, progress=progress("sweep down", 20.0 + 8.0 * (len(down_vals) - 1)))
     R["sweep_up"], R["sweep_down"] = up, down
@@ -112,7 +107,7 @@ def main() -> None:
 
     # ---- claim 4: pushes at phases of the cycle (Fig. 7)
     log("claim 4: pushes")
-    delays = np.arange(0.0, 1.12, 0.2 if args.quick else 0.1)
+    delays = np.arange(0.0, 1.12, 0.2 if quick else 0.1)
     for target, force in (("right_shank", 200.0), ("hip", 288.0)):
         wp, prow = protocols.push(target, force, delays, before=10.0, after=8.0, progress=progress(f"push {target}", 21.3))
         R[f"push_{target}"] = prow
@@ -127,7 +122,7 @@ def main() -> None:
 
     # ---- claim 5: slopes (start at x = 5 m, after ~4 s of level walking)
     log("claim 5: slopes")
-    slopes = [2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10] if not args.quick else [4, 6, 8, -2, -6]
+    slopes = [2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10] if not quick else [4, 6, 8, -2, -6]
     srows = []
     for s in slopes:
         ws, (m,) = protocols.steady(5.5, seconds=25.0, window=10.0, slope=s / 100, slope_start=5.0, progress=progress(f"slope {s} %", 25.0))
@@ -146,7 +141,7 @@ def main() -> None:
     # ---- claim 6: ground parameters; the explicit damper needs dt <= 0.5 ms * 2e3 / b_g
     log("claim 6: ground parameters")
     grows = []
-    if args.quick:  # the nominal step only (the stiff grounds need 5-10x smaller steps)
+    if quick:  # the nominal step only (the stiff grounds need 5-10x smaller steps)
         kgs, ground_steps = (5e3, 1e4, 4e4), ((0.0005, [4e2, 1e3, 2e3]),)
     else:
         kgs, ground_steps = (5e3, 8e3, 1e4, 2e4, 4e4), ((0.0005, [4e2, 8e2, 1e3, 2e3]), (0.0001, [1e4]), (0.00005, [2e4]))
@@ -177,9 +172,9 @@ def main() -> None:
            fmt(swrows, ["kg", "bg", "timestep"] + METRIC_KEYS[1:])]
 
     # ---- convergence of the physics step
-    log("convergence: halving the physics step" + (" (skipped with --quick)" if args.quick else ""))
+    log("convergence: halving the physics step" + (" (skipped with --quick)" if quick else ""))
     conv = []
-    for dt in () if args.quick else (0.0005, 0.00025):
+    for dt in () if quick else (0.0005, 0.00025):
         _, rows_ = protocols.steady([5.5, 7.5], seconds=20.0, window=10.0, timestep=dt, record_every=int(round(0.002 / dt)),
                              progress=progress(f"convergence, step {dt * 1000:g} ms", 20.0))
         for m in rows_:
@@ -192,6 +187,3 @@ def main() -> None:
     atomic_write(out / "summary.md", "\n".join(md))
     log(f"wrote {out}/summary.md, taga_results.json and the PNGs")
 
-
-if __name__ == "__main__":
-    main()

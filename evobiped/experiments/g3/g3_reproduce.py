@@ -1,14 +1,11 @@
-"""Reproduce Pribe, Grossberg & Cohen 1997 (G3) claim by claim; see docs/g3.md.
+"""Pribe, Grossberg & Cohen 1997 (G3) checked claim by claim: ``evobiped g3 --reproduce DIR``; see docs/g3.md.
 
-    python scripts/reproduce_g3.py [--out results/g3] [--step 0.01] [--t-run 200]
-
-Writes summary.json, one CSV per sweep and the PNG figures to --out, and prints
+Writes summary.json, one CSV per sweep and the PNG figures to DIR, and prints
 the numbers docs/g3.md quotes.  Takes ~1.5 minutes on one core.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import json
@@ -16,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from evobiped.experiments.g3 import network as g3net
-from evobiped.experiments.g3 import gaits
-from evobiped.experiments.g3 import simulation as g3sim
-from evobiped.experiments.g3.g3_figures import run_figure, sweep_figures
-from evobiped.core.fileio import atomic_write
+from ...core.fileio import atomic_write
+from . import gaits
+from . import network as g3net
+from . import simulation as g3sim
+from .g3_figures import run_figure, sweep_figures
 
 
 def ranges(levels, labels):
@@ -55,15 +52,12 @@ def save_sweep(out: Path, name: str, s: g3sim.GoSweep, title: str) -> dict:
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="results/g3")
-    ap.add_argument("--step", type=float, default=0.01, help="GO increment of the sweeps (paper: 0.01)")
-    ap.add_argument("--t-run", type=float, default=200.0, help="time units per GO level of the quadruped sweeps (steady state: last 40 %%)")
-    args = ap.parse_args()
-    out = Path(args.out)
+def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0) -> None:
+    """Every claim: the GO sweeps in increments of ``step`` (paper: 0.01), ``t_run`` time units per GO level of the
+    quadruped sweeps (steady state: the last 40 %); writes into ``out`` (made if missing)."""
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    levels = np.round(np.arange(0.05, 0.5 + 1e-9, args.step), 6)
+    levels = np.round(np.arange(0.05, 0.5 + 1e-9, step), 6)
     summary: dict = {}
 
     # claim 1: Fig. 4 walk
@@ -76,7 +70,7 @@ def main() -> None:
           f"first cycle {g.transient_label}, settled at t = {g.settle_time:.1f}")
 
     # claim 2: Fig. 8A / 9 sweep, reset per I
-    s = g3sim.go_sweep(g3net.preset("fig8a"), levels, t_run=args.t_run)
+    s = g3sim.go_sweep(g3net.preset("fig8a"), levels, t_run=t_run)
     c2 = save_sweep(out, "claim2_fig8a_sweep", s, "Fig. 8A/9: Table 1 modulation, reset per I")
     ok = [g for g in s.gaits if g.oscillating]
     ground = np.array([(1 - np.mean(g.duty)) * g.period for g in ok])
@@ -103,7 +97,7 @@ def main() -> None:
           f"({summary['claim3']['delay_cycles']:.2f} pace periods of {pace_period:.2f} after the switch)")
 
     # claim 4: human walk and run (faithful, then the tuned lags)
-    hl = np.round(np.arange(0.05, 0.30 + 1e-9, args.step), 6)
+    hl = np.round(np.arange(0.05, 0.30 + 1e-9, step), 6)
     c4 = {}
     for name in ("human", "human-lagged"):
         for mode, kw in (("reset", {}), ("from_walk", {"from_go": 0.1, "switch_at": 30.0})):
@@ -128,7 +122,7 @@ def main() -> None:
 
     # claim 5: Fig. 5A / 5B, symmetric unmodulated
     for name in ("fig5a", "fig5b", "fig7"):
-        s = g3sim.go_sweep(g3net.preset(name), levels, t_run=args.t_run)
+        s = g3sim.go_sweep(g3net.preset(name), levels, t_run=t_run)
         r = save_sweep(out, f"claim5_{name}_sweep", s, f"{g3net.preset(name).source}, reset per I")
         summary[f"claim5_{name}" if name != "fig7" else "fig7"] = r
         print(f"{name}: ranges {[(a, round(b, 3), round(c, 3)) for a, b, c in r['ranges']]}")
@@ -146,6 +140,3 @@ def main() -> None:
     atomic_write(out / "summary.json", json.dumps(summary, indent=1))
     print(f"wrote {out}/summary.json and figures")
 
-
-if __name__ == "__main__":
-    main()
