@@ -130,11 +130,12 @@ class _nothing:
 
 @pytest.mark.parametrize("command", ["-h", "evolve", "replay", "select"])
 def test_ctrl_c_while_a_command_starts_is_one_line(latin1_run, tmp_path, command):
-    run = tmp_path / "run"
-    args = {"-h": ["evolve", "-h"], "evolve": ["evolve", *TINY, "--backend", "serial", "--out", run],
-            "replay": ["replay", latin1_run, "--seconds", "0.5", "--out", tmp_path / "r.rrd"],
-            "select": ["select", latin1_run, "--seconds", "0.5"]}[command]
     for delay in (0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5):
+        # each try its own outputs: a run stopped at its start keeps its directory (to resume), which a new run refuses
+        run = tmp_path / f"run_{delay}"
+        args = {"-h": ["evolve", "-h"], "evolve": ["evolve", *TINY, "--backend", "serial", "--out", run],
+                "replay": ["replay", latin1_run, "--seconds", "0.5", "--out", tmp_path / f"r_{delay}.rrd"],
+                "select": ["select", latin1_run, "--seconds", "0.5"]}[command]
         r = _interrupt(args, delay)
         if _interpreters_own(r.stderr):
             continue
