@@ -202,6 +202,15 @@ class Optimizer:
         """Put the optimizer in ``state`` (UserError, one line, when it does not fit this run)."""
         raise NotImplementedError
 
+    def _resample_with_fitness(self, fitness: Any, what: str) -> None:
+        """Draw the restored generation's population again (``self._sample()``, from the restored random state) and
+        take its stored ``fitness`` (one value per row, NaN where not yet evaluated); UserError naming ``what`` (the
+        optimizer, as the checkpoint calls it) when the counts differ."""
+        self._sample()
+        if len(fitness) != len(self.population):
+            raise UserError(f"checkpoint: the {what} state's fitness must have {len(self.population)} values (finite or null)")
+        self.fitness = np.array(fitness, float)
+
     def state_from(self, table: Any) -> OptimizerState:
         """The state a checkpoint's table holds (UserError naming the field when it is malformed, or when
         another optimizer wrote it)."""

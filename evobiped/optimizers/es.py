@@ -239,10 +239,7 @@ class EvolutionStrategy(Optimizer):
             raise UserError(f"checkpoint: the ES state's theta, m and v must have {G} genes each")
         self.generation = state.generation
         self.theta, self.m, self.v = (np.array(a, float) for a in (state.theta, state.m, state.v))
-        self._sample()
-        if len(state.fitness) != len(self.population):
-            raise UserError(f"checkpoint: the ES state's fitness must have {len(self.population)} values (finite or null)")
-        self.fitness = np.array(state.fitness, float)
+        self._resample_with_fitness(state.fitness, "ES")
 
     def _state_from(self, table: dict) -> ESState:
         gen = ESState.generation_of(table)

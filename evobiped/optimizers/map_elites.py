@@ -273,10 +273,7 @@ class MapElites(Optimizer):
         self.generation = state.generation
         self.progress = state.progress.tolist()
         self.evaluations = int(self.progress[-1][0]) if self.progress else 0
-        self._sample()
-        if len(state.fitness) != len(self.population):
-            raise UserError(f"checkpoint: the map-elites state's fitness must have {len(self.population)} values (finite or null)")
-        self.fitness = np.array(state.fitness, float)
+        self._resample_with_fitness(state.fitness, "map-elites")
 
     def _state_from(self, table: dict) -> MapElitesState:
         gen = MapElitesState.generation_of(table)
