@@ -23,6 +23,7 @@ both axes.
 from __future__ import annotations
 
 import io
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -92,7 +93,9 @@ def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: st
     from matplotlib.ticker import MaxNLocator
 
     ax.set_xlabel("generation (from 0)")
-    ax.set_ylabel(ylabel, fontsize=8 if len(ylabel) > 45 else 10)
+    # a weighted fitness's label names every term: wrapped to the axis's height rather than stretching the figure
+    long = len(ylabel) > 45
+    ax.set_ylabel(textwrap.fill(ylabel, 50) if long else ylabel, fontsize=7 if long else 10)
     lo, hi = int(g.min()), int(max(g.max(), g.min() + 1))
     ticks = [t for t in MaxNLocator(nbins=7, integer=True).tick_values(lo, hi) if lo <= t <= hi]
     if hi - ticks[-1] < 0.08 * (hi - lo):
