@@ -154,6 +154,40 @@ def test_the_gp_after_one_trial_and_the_search_on_a_known_damage():
     assert strict[-1].performance >= 1.45 > max(t.performance for t in strict[:-1]) and len(strict) <= 20
 
 
+def test_the_baseline_orders_try_elites_by_prior_or_at_random_and_stop_by_the_same_rule():
+    """``prior`` tries the untried elite with the best prior whatever the trials showed; ``random`` a permutation drawn
+    from its seed (another seed, another order); both stop by Cully's rule on the GP's posterior, as ``ucb`` does (an
+    intact body: after one trial), and never try an elite twice, even when trials outnumber the elites."""
+    x = np.linspace(0, 1, 50)[:, None]
+    prior = 1 + x[:, 0]
+    broken = lambda k: (0.0, True, 1.0, 50.0)  # noqa: E731: every trial falls at once
+    by_prior = TrialAndError(order="prior").run(x, prior, broken)
+    assert [t.elite for t in by_prior] == list(range(49, 29, -1))
+    first = [t.elite for t in TrialAndError(order="random", seed=1).run(x, prior, broken)]
+    assert first == list(np.random.default_rng(1).permutation(50)[:20])
+    assert first != [t.elite for t in TrialAndError(order="random", seed=2).run(x, prior, broken)]
+    intact = lambda k: (float(prior[k]), False, 50.0, 50.0)  # noqa: E731
+    assert [len(TrialAndError(order=o).run(x, prior, intact)) for o in ("ucb", "prior")] == [1, 1]
+    assert len(TrialAndError(order="random", trials=80).run(x[:5], prior[:5], broken)) == 5
+    with pytest.raises(ValueError, match="order must be one of ucb, prior, random"):
+        TrialAndError(order="best")
+
+
+def test_noisy_trials_are_drawn_per_trial_and_seed(capsys):
+    """``--pose-noise``: the same seed gives the same search, another seed other trials; no noise is the nominal search.
+    ``--kappa`` below 0 and an unknown ``--order``: one line, exit 2."""
+    args = (WALKERS.parent / "repertoire", "--damage", "weak:left_knee:0.5", "--trials", "2", "--order", "prior")
+    runs = []
+    for extra in (("--pose-noise", "0.05", "--seed", "1"), ("--pose-noise", "0.05", "--seed", "1"), ("--pose-noise", "0.05", "--seed", "2"), ()):
+        assert cli("adapt", *args, *extra) == 0
+        runs.append([line.split(": ", 1)[1] for line in capsys.readouterr().out.splitlines() if line.strip().startswith("trial ")])
+    assert runs[0] == runs[1] and runs[0] != runs[2] and runs[3] != runs[0]
+    for bad in (("--kappa", "-1"), ("--order", "best")):
+        assert cli("adapt", *args, *bad) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "error: argument --" in err
+
+
 def false_if(performance: float) -> bool:
     return performance == 0.0
 

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 
+from ..analysis.retest import FRESH_GENERATION
 from .damage import Damage, damaged_episode
 from .elites import Repertoire
 from .trial_error import Attempt, TrialAndError, prior_distance
@@ -23,17 +24,24 @@ def candidates(rep: Repertoire, seconds: float) -> tuple[np.ndarray, np.ndarray,
     return rows, x, prior_distance(rep.measure("speed")[rows], rep.measure("turning")[rows], seconds)
 
 
-def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], search: TrialAndError = TrialAndError()
-          ) -> tuple[list[Attempt], np.ndarray]:
-    """Intelligent trial and error on the body with ``damage``, each trial ``seconds`` s (nominal, no perturbations);
-    only a trial that walks (:func:`walks`) ends the search early.
-    Returns the trials (``Attempt.elite``: a row of the archive) and the prior distances of the candidates ``(E,)``."""
-    episode = dataclasses.replace(rep.episode.nominal(), seconds=seconds)
+def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], search: TrialAndError = TrialAndError(),
+          pose_noise: float = 0.0, seed: int = 0) -> tuple[list[Attempt], np.ndarray]:
+    """Intelligent trial and error on the body with ``damage``, each trial ``seconds`` s, nominal, or with
+    ``pose_noise`` > 0 each trial's initial joint angles off by Gaussian noise of that sd (rad), the n-th trial of a
+    search drawn under the key (``seed``, 10⁷ + n) whichever elite it tries (a generation no run reaches: no schedule
+    or assistance of the archive's run applies); only a trial that walks (:func:`walks`) ends the
+    search early.  Returns the trials (``Attempt.elite``: a row of the archive) and the prior distances of the
+    candidates ``(E,)``."""
+    perturbations = {"presentations": 1, "pose_noise": float(pose_noise)} if pose_noise > 0 else {}
+    episode = dataclasses.replace(rep.episode, seconds=seconds, perturbations=perturbations)
     ep = damaged_episode(episode, damage)
     rows, x, prior = candidates(rep, seconds)
+    done = [0]
 
     def trial(k: int) -> tuple[float, bool, float, float]:
-        r = ep.run(rep.archive.genome[rows[k]][None])
+        key = (seed, FRESH_GENERATION + done[0]) if perturbations else None
+        done[0] += 1
+        r = ep.run(rep.archive.genome[rows[k]][None], trials=ep.trials_for(key))
         return float(r.walk()["distance"]), bool(r.fell[0]), float(r.end_time[0]), seconds
 
     trials = search.run(x, prior, trial, acceptable=walks)

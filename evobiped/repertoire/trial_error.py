@@ -14,6 +14,11 @@ when a trial's performance reaches ``alpha`` times the best mu of any elite (Cul
 trial is acceptable (here: it walked; a caller's test, by default any), or after ``trials`` trials.  A trial's
 performance: the distance from the start (m) times the fraction of the episode the walker stayed up (a fall costs
 what it did not walk).  Cully's values: alpha 0.9, kappa 0.05, noise 1e-3.
+
+Two baselines choose the next trial without the GP (``order``): ``prior`` tries the untried elite with the best
+prior (the archive's prediction on the intact body, in order), ``random`` an untried elite drawn at random (a
+seeded generator).  Both keep the GP's posterior only for the stopping rule, so the three orders differ in the
+choice of trial and in nothing else.
 """
 
 from __future__ import annotations
@@ -64,6 +69,10 @@ def posterior(x: np.ndarray, prior: np.ndarray, tried: list[int], y: np.ndarray,
     return mean, np.sqrt(np.maximum(var, 0.0))
 
 
+#: how the next trial is chosen (:attr:`TrialAndError.order`)
+ORDERS = ("ucb", "prior", "random")
+
+
 @dataclass(frozen=True)
 class TrialAndError:
     """Cully et al. 2015's settings (see the module docstring)."""
@@ -73,6 +82,12 @@ class TrialAndError:
     rho: float = 0.15
     noise: float = 1e-3
     trials: int = 20
+    order: str = "ucb"  # `ucb` (the GP's upper confidence bound), `prior` (best prior first) or `random`
+    seed: int = 0  # the random order's generator
+
+    def __post_init__(self):
+        if self.order not in ORDERS:
+            raise ValueError(f"order must be one of {', '.join(ORDERS)}, got {self.order!r}")
 
     def run(self, x: np.ndarray, prior_m: np.ndarray, trial: Callable[[int], tuple[float, bool, float, float]],
             acceptable: Callable[[Attempt], bool] = lambda attempt: True) -> list[Attempt]:
@@ -85,17 +100,24 @@ class TrialAndError:
         tried: list[int] = []
         y: list[float] = []
         out: list[Attempt] = []
-        while len(out) < self.trials:
+        shuffled = np.random.default_rng(self.seed).permutation(len(x)) if self.order == "random" else None
+        while len(out) < min(self.trials, len(x)):
             mean, sd = posterior(x, prior, tried, np.array(y), rho=self.rho, noise=self.noise)
             ok = [i for i, a in enumerate(out) if acceptable(a)]
             if ok and max(y[i] for i in ok) >= self.alpha * mean.max():
                 break
-            ucb = mean + self.kappa * sd
-            ucb[tried] = -np.inf
-            k = int(np.argmax(ucb))
+            k = self._next(mean, sd, prior, tried, shuffled)
             distance, fell, end_time, seconds = trial(k)
             perf = distance * end_time / seconds
             tried.append(k)
             y.append(perf / scale)
             out.append(Attempt(k, float(mean[k] * scale), float(perf), float(distance), bool(fell), float(end_time)))
         return out
+
+    def _next(self, mean: np.ndarray, sd: np.ndarray, prior: np.ndarray, tried: list[int], shuffled: np.ndarray | None) -> int:
+        """The next elite to try (an index of the candidates) by ``order``."""
+        if shuffled is not None:
+            return int(shuffled[len(tried)])
+        score = mean + self.kappa * sd if self.order == "ucb" else prior.copy()
+        score[tried] = -np.inf
+        return int(np.argmax(score))
