@@ -94,6 +94,23 @@ def test_the_hearing_start_replaces_the_heading_by_the_ear_signal(tmp_path):
     assert cfg.controller_options.inputs == table["episode"]["controller_options"]["inputs"]
 
 
+def test_a_walking_network_hears_under_its_own_integration(tmp_path):
+    """hearing-start --preset steer-walk from the walking route's network: the steer-walk episode, integrated exactly as
+    the walker was evolved; with the source straight ahead 5 km away (s near 0) the hearing walker walks its first 10 s
+    as the walker did (within 10 % of its distance: the ear signal is not the heading it held)."""
+    walker = WALKERS / "ctrnn_walk_preset_seed1.json"
+    out = tmp_path / "h.json"
+    assert cli("genome", "hearing-start", out, "--walker", walker, "--preset", "steer-walk") == 0
+    g, cfg, _ = load_genome(out)
+    old_g, old, _ = load_genome(walker)
+    assert cfg.controller_options.integration == old.controller_options.integration == "exponential"
+    heard = dataclasses.replace(cfg.nominal(), seconds=10.0, task_options={**given(cfg.task_options), "sources": [[5000.0, 0.0]], "random_sources": 0})
+    walked = dataclasses.replace(old.nominal(), seconds=10.0)
+    a, b = heard.build().run(g[None]), walked.build().run(old_g[None])
+    assert not a.fell[0] and not b.fell[0] and b.walk()["distance"] > 5.0
+    assert a.walk()["distance"] == pytest.approx(b.walk()["distance"], rel=0.1)
+
+
 @pytest.mark.parametrize("options, words", [
     ({"source_distance": [0.2, 8.0]}, "inside the walker's start"),
     ({"source_bearing": [-200.0, 60.0]}, "[-180, 180]"),

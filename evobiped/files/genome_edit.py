@@ -25,7 +25,7 @@ from ..core.options import given
 from ..episode import EpisodeConfig
 from ..episode.remap import input_widths, remap_inputs, remap_norm
 from .genome_file import load_genome
-from .presets import path as preset_path
+from .presets import names as preset_names, path as preset_path
 
 #: m, the Reil ears either side of the pelvis centre
 EAR = 0.25
@@ -73,8 +73,10 @@ def rewired(walker: str | Path, drop: list[str], add: list[str]) -> tuple[np.nda
     return _remapped(walker, genome, old, new), new
 
 
-def hearing_genome(walker: str | Path, reference: float = 4.0, direct: bool = True) -> tuple[np.ndarray, EpisodeConfig]:
-    """(genome (G,), EpisodeConfig) of ``--preset steer-es``'s hearing walker made from the genome file ``walker``.
+def hearing_genome(walker: str | Path, reference: float = 4.0, direct: bool = True, preset: str = "steer-es"
+                   ) -> tuple[np.ndarray, EpisodeConfig]:
+    """(genome (G,), EpisodeConfig) of the hearing walker of ``--preset steer-es`` (or another steering ``preset``,
+    e.g. ``steer-walk``) made from the genome file ``walker``.
 
     The walker read ``heading_error`` (rad) and turned back to its first facing.  For a source at distance D (m)
     and a small bearing theta (rad, left positive) the ear signal is s ~ 2 e theta / D (ears at +-e = :data:`EAR`),
@@ -89,7 +91,7 @@ def hearing_genome(walker: str | Path, reference: float = 4.0, direct: bool = Tr
     if old.controller_options.input_norm is None:
         raise UserError(f"{walker}: the walker has no frozen input_norm; the ear signal's scale is the heading's")
     sigma_h = old.controller_options.input_norm["std"][_offset(old, "heading_error")]
-    genome, new = _onto_preset(walker, genome, old, "steer-es", extra={"sound": ([0.0], [2 * EAR * sigma_h / reference])},
+    genome, new = _onto_preset(walker, genome, old, preset, extra={"sound": ([0.0], [2 * EAR * sigma_h / reference])},
                                copy={"sound": ("heading_error", -1.0)})
     if not direct:  # the ear signal into the neurons only (they saturate; the direct path is linear)
         c = new.parts()[1]
@@ -110,12 +112,34 @@ def command_genome(walker: str | Path) -> tuple[np.ndarray, EpisodeConfig]:
 def _onto_preset(walker, genome: np.ndarray, old: EpisodeConfig, preset: str, *, extra: dict | None = None,
                  copy: dict | None = None) -> tuple[np.ndarray, EpisodeConfig]:
     """``genome`` of episode ``old`` moved onto the episode of the preset named ``preset``, its frozen input
-    normalisation with it (a new input: ``extra[name]`` = (means, stds), else its declared centre and scale)."""
+    normalisation with it (a new input: ``extra[name]`` = (means, stds), else its declared centre and scale).  A walker
+    integrated otherwise than the preset's network (``integration``) is refused in one line: its network would change."""
     new = EpisodeConfig(**tomllib.loads(preset_path(preset).read_text())["episode"])
+    was, now = (getattr(e.controller_options, "integration", None) for e in (old, new))
+    if was != now and old.controller == new.controller:
+        others = [name for name in _presets_reading(new.task) if _integration(name) == was]
+        raise UserError(f"{walker}: the walker's network is integrated by {was!r}, --preset {preset}'s by {now!r}"
+                        + (f" (take --preset {' or '.join(others)})" if others else ""))
     norm = old.controller_options.input_norm
     if norm is not None:
         new = dataclasses.replace(new, controller_options={**given(new.controller_options), "input_norm": remap_norm(norm, old, new, extra)})
     return _remapped(walker, genome, old, new, copy), new
+
+
+def _integration(preset: str) -> str:
+    """The CTRNN integration of preset ``preset``'s episode (``euler`` where it names none)."""
+    return tomllib.loads(preset_path(preset).read_text())["episode"].get("controller_options", {}).get("integration", "euler")
+
+
+def _presets_reading(task: str) -> list[str]:
+    """The shipped presets that need a start genome, evolve a CTRNN and run task ``task``, by name."""
+    out = []
+    for name in preset_names():
+        d = tomllib.loads(preset_path(name).read_text())
+        e = d.get("episode", {})
+        if d.get("preset", {}).get("needs_start") and e.get("controller") == "ctrnn" and e.get("task") == task:
+            out.append(name)
+    return out
 
 
 def _remapped(walker, genome: np.ndarray, old: EpisodeConfig, new: EpisodeConfig, copy: dict | None = None) -> np.ndarray:

@@ -35,6 +35,9 @@ def add_genome(sub) -> None:
                      "facing; every other gene and input normalisation kept.")
     h.add_argument("--reference-distance", type=positive_float, default=4.0, metavar="M",
                    help="the source distance in m at which it turns as it held its heading (default 4)")
+    h.add_argument("--preset", default="steer-es", metavar="NAME",
+                   help="the steering preset it starts (default steer-es; steer-walk for a walker whose network is integrated "
+                   "exactly, as the walking route's are)")
     h.add_argument("--neurons-only", action="store_true",
                    help="the ear signal into the neurons only, not on the direct input-to-motor path (the walker then hardly turns)")
     w = _from_walker(actions, "rewire", SCRATCH_WALKER, run_genome_rewire,
@@ -87,9 +90,22 @@ def _walker(args) -> str:
 def run_genome_hearing(args) -> int:
     from ...files.genome_edit import hearing_genome
 
-    _save(args, *hearing_genome(_walker(args), args.reference_distance, not args.neurons_only))
+    _save(args, *hearing_genome(_walker(args), args.reference_distance, not args.neurons_only, _steering_preset(args.preset)))
     print(args.out)
     return 0
+
+
+def _steering_preset(name: str) -> str:
+    """``--preset``: a shipped preset of the steer task (one line naming them otherwise)."""
+    import tomllib
+
+    from ...files.presets import names, path
+
+    steering = [n for n in names() if tomllib.loads(path(n).read_text()).get("episode", {}).get("task") == "steer"
+                and "sound" in tomllib.loads(path(n).read_text())["episode"].get("controller_options", {}).get("inputs", [])]
+    if name not in steering:
+        raise UserError(f"--preset: must be a steering preset of a network that hears ({', '.join(steering)}), got {name!r}")
+    return name
 
 
 def run_genome_command(args) -> int:
