@@ -103,6 +103,24 @@ def test_a_fall_anywhere_scores_below_any_walker_that_stays_up():
     assert later[0] == pytest.approx(-(100 + 20)) and F[1] > later[0]  # a later fall costs less
 
 
+def test_gait_weights_add_the_weighted_gait_terms_to_each_presentation():
+    """gait_weights: each presentation's fitness is the fitness without them plus sum w * term, the gait lab's terms of
+    that presentation, which join the task's terms (the same episode otherwise: the distances to the sources agree)."""
+    from evobiped.core.options import given
+    from evobiped.files.genome_file import load_genome
+
+    genome, cfg, _ = load_genome(WALKERS / "steer_ctrnn_es_seed0.json")
+    plain = dataclasses.replace(cfg.nominal(), seconds=4.0)
+    weights = {"airborne": -100.0, "sliding": -200.0, "duty_asymmetry": -50.0}
+    gaited = dataclasses.replace(plain, task_options={**given(plain.task_options), "gait_weights": weights})
+    a, b = plain.build().run(genome[None]), gaited.build().run(genome[None])
+    assert np.array_equal(a.terms["distance_to_source"], b.terms["distance_to_source"])
+    assert "airborne" not in a.terms and b.terms["airborne"].shape == a.terms["distance"].shape
+    added = sum(w * b.terms[k] for k, w in weights.items())  # (1, S): per presentation
+    assert added.min() < -1.0  # this skipping walker is in the air and slides: a real penalty
+    assert b.fitness[0] == pytest.approx(a.fitness[0] + added.mean(), abs=1e-9)
+
+
 def test_arrive_fitness_of_real_episodes_follows_the_formula():
     """The six-source walker (up) and random balance controllers (they fall) for 3 s: each genome's fitness is
     the formula of its rows' ends, and the distances are the paper fitness's."""
@@ -165,6 +183,8 @@ def test_unclamped_cpg_weights_do_change(walker, tmp_path):
         ("no-sources", "sources must be a list of [x, y] positions"),
         ("bad-fitness", "episode.task_options.fitness: must be one of distance, arrive"),
         ("no-penalty", "episode.task_options.fall_penalty: must be > 0"),
+        ("bad-gait-term", "episode.task_options.gait_weights: names no gait term: stride"),
+        ("nan-gait-weight", "episode.task_options.gait_weights: must be a table of finite weights"),
     ],
 )
 def test_bad_input(tmp_path, capsys, setup, words):
@@ -178,10 +198,12 @@ def test_bad_input(tmp_path, capsys, setup, words):
         cfg = tmp_path / "c.toml"
         cfg.write_text("[episode.task_options]\nsources = 3\n")
         args += ["--config", cfg]
-    elif setup in ("no-sources", "bad-fitness", "no-penalty"):
+    elif setup in ("no-sources", "bad-fitness", "no-penalty", "bad-gait-term", "nan-gait-weight"):
         cfg = tmp_path / "c.toml"
         cfg.write_text("[episode.task_options]\n" + {"no-sources": "sources = []", "bad-fitness": 'fitness = "near"',
-                                                     "no-penalty": 'fitness = "arrive"\nfall_penalty = 0'}[setup] + "\n")
+                                                     "no-penalty": 'fitness = "arrive"\nfall_penalty = 0',
+                                                     "bad-gait-term": "gait_weights = {stride = -1.0}",
+                                                     "nan-gait-weight": "gait_weights = {airborne = nan}"}[setup] + "\n")
         args += ["--config", cfg]
     elif setup == "taga":
         args += ["--body", "taga"]

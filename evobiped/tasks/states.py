@@ -50,6 +50,8 @@ class SteerState(TaskState):
     #: control ticks each row spent within reach of its source, up ``(n,)``; control ticks of the episode
     near: np.ndarray
     ticks: int = 0
+    #: the gait lab's meter, under ``gait_weights``
+    gait_lab: GaitMeter | None = None
 
 
 @dataclass(eq=False, kw_only=True)

@@ -78,10 +78,12 @@ import numpy as np
 
 from dataclasses import dataclass
 
+from ..physics import gait_lab
 from ..core.errors import ConfigError
 from ..core.options import given, option
 from .base import Task
 from .states import SteerState
+from .walk import LAB_TERMS
 
 #: the paper's (-3, -10) and (3, -10) in its x-z frame (walking towards -z), in ours (facing +x)
 DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
@@ -166,6 +168,14 @@ FITNESS = {"distance": "the paper's: minus the distance to the source when the e
            "arrive": "minus the distance to the source at the end, minus fall_penalty + fall_time_cost (T - t) per fall (m)"}
 
 
+def _gait_weights(v) -> None:
+    if not isinstance(v, dict) or not all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in v.values()):
+        raise ConfigError(f"must be a table of finite weights by gait term, got {v!r}")
+    unknown = [k for k in v if k not in LAB_TERMS]
+    if unknown:
+        raise ConfigError(f"names no gait term: {', '.join(unknown)} (terms: {', '.join(LAB_TERMS)})")
+
+
 @dataclass(frozen=True, kw_only=True)
 class SteerOptions:
     """Options of the steer task."""
@@ -192,6 +202,9 @@ class SteerOptions:
     reach_bonus: float = option(0.0, "under the arrive fitness: paid times the fraction of the episode spent within reach, up",
                                 unit="m", low=0)
     loudness: bool = option(False, "offer the distance cue `loudness` = min(1, 1 m^2 / D^2), D the ears' distance (m) to the source")
+    gait_weights: dict = option({}, "the gait lab's terms (airborne, sliding, duty_asymmetry, steps_per_s, ...), weighted and "
+                                "added to each presentation's fitness, e.g. {airborne = -100, sliding = -200}: pays a walk on the "
+                                "way; the terms join history.csv", check=_gait_weights)
 
     def __post_init__(self):
         from ..core.options import check_fields
@@ -225,6 +238,10 @@ class SteerTask(Task):
         self.sources = parse_sources(self.options.sources)
         self.presentations = len(self.sources)
         self.fitness_name = self.options.fitness
+        self.gait_weights = dict(self.options.gait_weights)
+        if self.gait_weights:
+            self.term_names = type(self).term_names + LAB_TERMS
+        self._lab_constants = None  # the body's mass and leg length, once known
 
     def bind_model(self, model) -> None:
         try:
@@ -243,7 +260,13 @@ class SteerTask(Task):
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        return SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)], near=np.zeros(sims.n))
+        state = SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)], near=np.zeros(sims.n))
+        if self.gait_weights:
+            if not body.contact_sensor:
+                raise ConfigError(f"gait_weights: the {body.name} body declares no feet to measure a gait by")
+            self._lab_constants = self._lab_constants or body.gait_constants(sims.model)
+            state.gait_lab = gait_lab.GaitMeter(sims.n, body.contact_sensor[1], *self._lab_constants, float(sims.time.max()))
+        return state
 
     def draw_sources(self, key) -> np.ndarray | None:
         """This generation's random sources ``(S, 2)`` m (None: the fixed ones); :func:`draw_sources`."""
@@ -268,6 +291,8 @@ class SteerTask(Task):
         if self.options.reach > 0:
             near = np.linalg.norm(state.position[ok] - state.source[ok], axis=1) <= self.options.reach
             state.near[ok[near]] += 1
+        if state.gait_lab is not None:
+            state.gait_lab.tick(body.feet(sims), ok, sims.time[ok])
 
     def fitness(self, state):
         distance = np.linalg.norm(state.position - state.source, axis=1)
@@ -278,11 +303,26 @@ class SteerTask(Task):
         lost = state.seconds - state.end_time  # s of the episode lost to a fall, 0 for a walker up to the end
         fall = np.where(lost > 0, R + b + c * lost, 0.0)
         linger = b * state.near / max(state.ticks, 1) if b else 0.0
-        return -np.minimum(distance, R) + linger - self.presentations * fall
+        return -np.minimum(distance, R) + linger - self.presentations * fall + self._gait(state)
+
+    def _gait(self, state) -> np.ndarray | float:
+        """The weighted gait terms of each row (0 without ``gait_weights``; a row with no tick up adds nothing)."""
+        if state.gait_lab is None:
+            return 0.0
+        lab = self._lab(state)
+        return sum(float(w) * np.nan_to_num(lab[k]) for k, w in self.gait_weights.items())
+
+    def _lab(self, state) -> dict[str, np.ndarray]:
+        """The gait lab's measures of each row, its distance from the start (m) the path it measures speed by."""
+        return state.gait_lab.measure(np.linalg.norm(state.position - state.start, axis=1))
 
     def terms(self, state):
-        return {"distance": np.linalg.norm(state.position - state.start, axis=1),
-                "distance_to_source": np.linalg.norm(state.position - state.source, axis=1)}
+        out = {"distance": np.linalg.norm(state.position - state.start, axis=1),
+               "distance_to_source": np.linalg.norm(state.position - state.source, axis=1)}
+        if state.gait_lab is not None:
+            lab = self._lab(state)
+            out.update({k: lab[k] for k in LAB_TERMS})
+        return out
 
     def end_position(self, body, sims, state):
         return state.position
@@ -291,6 +331,12 @@ class SteerTask(Task):
         return self.sources
 
     def fitness_label(self):
+        gait = "".join(f" {'+' if w >= 0 else '-'} {abs(w):g} × {k}" for k, w in self.gait_weights.items())
+        if gait:
+            return self._label() + gait
+        return self._label()
+
+    def _label(self):
         if self.fitness_name == "arrive":
             return f"fitness (m): -distance to the source - ({self.options.fall_penalty:g} m + {self.options.fall_time_cost:g} m/s × time lost) per fall"
         return "fitness: -distance to the source (m)"
