@@ -15,7 +15,7 @@ import sys
 import numpy as np
 
 from evobiped.files.genome_file import load_genome
-from evobiped.tasks.steer import with_sources
+from evobiped.tasks.sound import with_sources
 
 TEST_SOURCES = [(r * np.cos(np.radians(b)), r * np.sin(np.radians(b))) for r in (6.0, 10.0, 14.0) for b in (-60, -30, 0, 30, 60)]
 

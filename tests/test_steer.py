@@ -8,7 +8,7 @@ import pytest
 
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
-from evobiped.tasks.steer import ear_signal
+from evobiped.tasks.sound import ear_signal
 
 from .conftest import WALKERS, cli
 
@@ -249,7 +249,7 @@ def test_evolve_takes_its_sources_from_the_command_line(hearing_walker):
 
 def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys):
     from evobiped.files.genome_file import load_genome
-    from evobiped.tasks.steer import with_sources
+    from evobiped.tasks.sound import with_sources
 
     sources = [[6.0, 0.0], [12.0, 5.0], [3.0, -6.0]]
     argv = [a for q in sources for a in ("--source", str(q[0]), str(q[1]))]

@@ -39,7 +39,7 @@ def test_a_generation_draws_its_sources_from_the_declared_distribution_and_every
                           task_options={**RANDOM, "sources": a.tolist()}).build().run(g)
     assert drawn.fitness[0] == drawn.fitness[1] == pytest.approx(fixed.fitness[0], abs=1e-12)
     assert ep.trials_for(None) is None  # a nominal episode (replay, battery) presents the fixed sources
-    from evobiped.tasks.steer import with_sources
+    from evobiped.tasks.sound import with_sources
 
     given_sources = with_sources(EpisodeConfig(task="steer", controller="simbicon", task_options=RANDOM), [[6, 0]])
     assert given_sources.build().task.presentations == 1  # --source X Y: fixed sources replace the distribution

@@ -82,7 +82,7 @@ def test_the_six_source_steering_walker_reaches_sources_it_never_heard():
     it falls on arrival)."""
     import numpy as np
 
-    from evobiped.tasks.steer import with_sources
+    from evobiped.tasks.sound import with_sources
 
     genome, cfg, _ = load_genome(WALKERS / "steer_simbicon_six_sources.json")
     sources = [[3, -5.196], [5.196, -3], [6, 0], [5.196, 3], [3, 5.196], [5, -8.66], [8.66, -5], [10, 0], [8.66, 5], [5, 8.66],
@@ -97,7 +97,7 @@ def test_the_generalist_steering_walker_reaches_a_source_it_never_heard_and_stay
     within 1.0 m of it at 20 s and still up at 50 s (documented: 0.43 m at 20 s, up 50 s)."""
     import numpy as np
 
-    from evobiped.tasks.steer import with_sources
+    from evobiped.tasks.sound import with_sources
 
     genome, cfg, _ = load_genome(WALKERS / "steer_generalist_seed0.json")
     assert cfg.task_options.fitness == "arrive" and cfg.controller_options.sound_limit == 0.1

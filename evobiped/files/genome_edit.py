@@ -114,10 +114,10 @@ def _onto_preset(walker, genome: np.ndarray, old: EpisodeConfig, preset: str, *,
     """``genome`` of episode ``old`` moved onto the episode of the preset named ``preset``, its frozen input
     normalisation with it (a new input: ``extra[name]`` = (means, stds), else its declared centre and scale).  A walker
     integrated otherwise than the preset's network (``integration``) is refused in one line: its network would change."""
-    new = EpisodeConfig(**tomllib.loads(preset_path(preset).read_text())["episode"])
+    new = _preset_episode(preset)
     was, now = (getattr(e.controller_options, "integration", None) for e in (old, new))
     if was != now and old.controller == new.controller:
-        others = [name for name in _presets_reading(new.task) if _integration(name) == was]
+        others = [name for name in start_presets(new.task) if _preset_episode(name).controller_options.integration == was]
         raise UserError(f"{walker}: the walker's network is integrated by {was!r}, --preset {preset}'s by {now!r}"
                         + (f" (take --preset {' or '.join(others)})" if others else ""))
     norm = old.controller_options.input_norm
@@ -126,13 +126,13 @@ def _onto_preset(walker, genome: np.ndarray, old: EpisodeConfig, preset: str, *,
     return _remapped(walker, genome, old, new, copy), new
 
 
-def _integration(preset: str) -> str:
-    """The CTRNN integration of preset ``preset``'s episode (``euler`` where it names none)."""
-    return tomllib.loads(preset_path(preset).read_text())["episode"].get("controller_options", {}).get("integration", "euler")
+def _preset_episode(preset: str) -> EpisodeConfig:
+    """The episode of the shipped preset named ``preset``."""
+    return EpisodeConfig(**tomllib.loads(preset_path(preset).read_text())["episode"])
 
 
-def _presets_reading(task: str) -> list[str]:
-    """The shipped presets that need a start genome, evolve a CTRNN and run task ``task``, by name."""
+def start_presets(task: str) -> list[str]:
+    """The shipped presets that start from a network walker (a CTRNN's start genome) and run task ``task``, by name."""
     out = []
     for name in preset_names():
         d = tomllib.loads(preset_path(name).read_text())

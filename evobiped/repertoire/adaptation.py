@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import numpy as np
 
@@ -36,12 +37,11 @@ def adapt(rep: Repertoire, damage: Damage | None, *, seconds: float = WALKS[1], 
     episode = dataclasses.replace(rep.episode, seconds=seconds, perturbations=perturbations)
     ep = damaged_episode(episode, damage)
     rows, x, prior = candidates(rep, seconds)
-    done = [0]
+    drawn = itertools.count(FRESH_GENERATION)  # the n-th trial's key: (seed, 10^7 + n)
 
     def trial(k: int) -> tuple[float, bool, float, float]:
-        key = (seed, FRESH_GENERATION + done[0]) if perturbations else None
-        done[0] += 1
-        r = ep.run(rep.archive.genome[rows[k]][None], trials=ep.trials_for(key))
+        key = (seed, next(drawn))
+        r = ep.run(rep.archive.genome[rows[k]][None], trials=ep.trials_for(key) if perturbations else None)
         return float(r.walk()["distance"]), bool(r.fell[0]), float(r.end_time[0]), seconds
 
     trials = search.run(x, prior, trial, acceptable=walks)

@@ -21,6 +21,7 @@ import numpy as np
 from ..bodies.base import Body
 from ..core.errors import ConfigError
 from ..core.options import NoOptions, taken
+from ..physics.gait_lab import GaitMeter
 from ..physics.sim import Sims
 
 
@@ -53,6 +54,15 @@ class Task:
 
     def __init__(self, options: Any = None, **given):
         self.options = taken(self.Options, options, given, f"{self.name} task_options")
+        self._gait_constants: tuple[float, float] | None = None  # the body's mass and leg length, once read
+
+    def gait_meter(self, body: Body, sims: Sims) -> GaitMeter:
+        """The gait lab's meter (:class:`~evobiped.physics.gait_lab.GaitMeter`) for every row of ``sims`` on ``body``'s
+        feet, its clock at the rows' time now; the body's mass and leg length are read once per task.  ConfigError for
+        a body that declares no feet."""
+        if self._gait_constants is None:
+            self._gait_constants = body.gait_constants(sims.model)
+        return GaitMeter(sims.n, body.contact_sensor[1], *self._gait_constants, float(sims.time.max()))
 
     @classmethod
     def criterion(cls, name: str, flag: str) -> dict:

@@ -78,12 +78,10 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from ..physics import gait_lab
 from ..core.errors import ConfigError
 from ..core.options import option
 from .base import Task
-from .sound import (DEFAULT_SOURCES, MIN_SOURCE_DISTANCE, check_range, draw_sources, ear_signal, intensity,  # noqa: F401: with_sources
-                    parse_sources, with_sources)
+from .sound import DEFAULT_SOURCES, MIN_SOURCE_DISTANCE, check_range, draw_sources, ear_signal, intensity, parse_sources
 from .states import SteerState
 from .walk import LAB_TERMS
 
@@ -165,7 +163,6 @@ class SteerTask(Task):
         self.gait_weights = dict(self.options.gait_weights)
         if self.gait_weights:
             self.term_names = type(self).term_names + LAB_TERMS
-        self._lab_constants = None  # the body's mass and leg length, once known
 
     def bind_model(self, model) -> None:
         try:
@@ -186,10 +183,7 @@ class SteerTask(Task):
         p0 = body.planar_position(sims).copy()
         state = SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)], near=np.zeros(sims.n))
         if self.gait_weights:
-            if not body.contact_sensor:
-                raise ConfigError(f"gait_weights: the {body.name} body declares no feet to measure a gait by")
-            self._lab_constants = self._lab_constants or body.gait_constants(sims.model)
-            state.gait_lab = gait_lab.GaitMeter(sims.n, body.contact_sensor[1], *self._lab_constants, float(sims.time.max()))
+            state.gait_lab = self.gait_meter(body, sims)
         return state
 
     def draw_sources(self, key) -> np.ndarray | None:
@@ -255,10 +249,7 @@ class SteerTask(Task):
         return self.sources
 
     def fitness_label(self):
-        gait = "".join(f" {'+' if w >= 0 else '-'} {abs(w):g} × {k}" for k, w in self.gait_weights.items())
-        if gait:
-            return self._label() + gait
-        return self._label()
+        return self._label() + "".join(f" {'+' if w >= 0 else '-'} {abs(w):g} × {k}" for k, w in self.gait_weights.items())
 
     def _label(self):
         if self.fitness_name == "arrive":

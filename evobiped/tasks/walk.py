@@ -172,7 +172,6 @@ class WalkTask(Task):
         self.gait_lab = o.gait_terms or (self.fitness_name == "weighted" and any(k in LAB_TERMS for k in self.weights))
         self.term_names = ((TERMS if self.counts_steps else TERMS[:3]) + (GAIT_TERMS if o.gait_measures else ())
                            + (LAB_TERMS if self.gait_lab else ()) + (("pace",) if "pace" in self.weights else ()))
-        self._lab_constants = None  # the body's mass and leg length, once known
 
     def sensor_widths(self):
         return {"heading_error": 1} if self.heading_sense else {}
@@ -200,9 +199,7 @@ class WalkTask(Task):
             state.stance = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
             state.steps = np.zeros(sims.n)
         if self.gait_lab:
-            self._lab_constants = self._lab_constants or body.gait_constants(sims.model)
-            feet = body.contact_sensor[1] if body.contact_sensor else ()
-            state.gait_lab = gait_lab.GaitMeter(sims.n, feet, *self._lab_constants, float(sims.time.max()))
+            state.gait_lab = self.gait_meter(body, sims)
         if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
             state.travel, state.yaw, state.facing_now = np.zeros(sims.n), np.zeros(sims.n), state.facing.copy()
         return state

@@ -23,7 +23,7 @@ from ..files.rundir.output_set import output_set
 from ..core.provenance import differences
 from ..record.source import Source
 from ..record.trajectory import Trajectory, TrajectoryRecorder
-from ..tasks.steer import with_sources
+from ..tasks.sound import with_sources
 
 
 @dataclass

@@ -96,13 +96,10 @@ def run_genome_hearing(args) -> int:
 
 
 def _steering_preset(name: str) -> str:
-    """``--preset``: a shipped preset of the steer task (one line naming them otherwise)."""
-    import tomllib
+    """``--preset``: a shipped preset that steers a network walker (one line naming them otherwise)."""
+    from ...files.genome_edit import start_presets
 
-    from ...files.presets import names, path
-
-    steering = [n for n in names() if tomllib.loads(path(n).read_text()).get("episode", {}).get("task") == "steer"
-                and "sound" in tomllib.loads(path(n).read_text())["episode"].get("controller_options", {}).get("inputs", [])]
+    steering = start_presets("steer")
     if name not in steering:
         raise UserError(f"--preset: must be a steering preset of a network that hears ({', '.join(steering)}), got {name!r}")
     return name

@@ -8,7 +8,7 @@ import json
 import numpy as np
 
 from ...flags import add_source_flag, choices_text, positive_float, refuse, walk_line
-from ...tasks.steer import with_sources
+from ...tasks.sound import with_sources
 
 
 def add_episode(sub) -> None:

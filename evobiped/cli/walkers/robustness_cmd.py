@@ -9,7 +9,7 @@ import sys
 from ...core.errors import UserError
 from ...flags import add_stored_walker, positive_float
 from ...core.progress import Progress
-from ...tasks.steer import with_sources
+from ...tasks.sound import with_sources
 
 
 def add_robustness(sub) -> None:
