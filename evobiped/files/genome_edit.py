@@ -9,7 +9,8 @@ did until a search moves it.
 - :func:`rewired`: the walker reading its inputs less some plus others (new rows zero,
   :func:`evobiped.episode.remap.remap_inputs`);
 - :func:`hearing_genome`: the start of ``--preset steer-es``, the heading sense replaced by the ear signal;
-- :func:`command_genome`: the start of ``--preset walker-command-tune``, the command senses added at zero weight.
+- :func:`command_genome`: the start of ``--preset walker-command-tune``, the command senses added at zero weight, or
+  the speed command moving the frame the walker's velocity sense reads.
 """
 
 from __future__ import annotations
@@ -101,12 +102,40 @@ def hearing_genome(walker: str | Path, reference: float = 4.0, direct: bool = Tr
     return genome, new
 
 
-def command_genome(walker: str | Path) -> tuple[np.ndarray, EpisodeConfig]:
+def command_genome(walker: str | Path, speed_gain: float = 0.0, reference_speed: float | None = None
+                   ) -> tuple[np.ndarray, EpisodeConfig]:
     """(genome (G,), EpisodeConfig) of ``--preset walker-command-tune``'s commanded walker made from the genome file
-    ``walker``: every gene and its frozen input normalisation kept, ``command_speed`` and ``command_turning`` added
-    with zero weights and their declared centre and scale."""
+    ``walker``: every gene and its frozen input normalisation kept, ``command_speed`` and ``command_turning`` added.
+
+    ``command_turning`` starts at zero weight (the commanded facing of the heading sense turns the walker).  With
+    ``speed_gain`` k = 0, so does ``command_speed``.  With k > 0 the walker reads its forward velocity v (m/s,
+    ``com_velocity``'s first column) in a frame moving at k (v* - v_ref) (v* the commanded speed, v_ref =
+    ``reference_speed``, the speed it walks at, m/s): ``command_speed``'s rows of weights (into the neurons and on
+    the direct path) are minus those of v, and its normalisation is (v* - v_ref) / (sigma_v / k) with sigma_v v's
+    frozen scale, so the network sees (v - k (v* - v_ref) - m_v) / sigma_v where it saw (v - m_v) / sigma_v.  At
+    v* = v_ref it is the walker; a faster command makes it feel slow, and its own speed regulation speeds it up
+    (a walker that holds its pace through its velocity sense; k = 1 / (d v / d offset) makes the change one to one)."""
+    if not (np.isfinite(speed_gain) and speed_gain >= 0):
+        raise UserError(f"--speed-gain must be a finite number >= 0, got {speed_gain:g}")
     genome, old, _ = load_genome(walker)
-    return _onto_preset(walker, genome, old, "walker-command-tune")
+    if not speed_gain:
+        return _onto_preset(walker, genome, old, "walker-command-tune")
+    if reference_speed is None or not (np.isfinite(reference_speed) and reference_speed > 0):
+        raise UserError(f"--reference-speed must be a finite speed above 0 m/s with --speed-gain, got {reference_speed!r}")
+    if "com_velocity" not in (old.controller_options.inputs or ()) or old.controller_options.input_norm is None:
+        raise UserError(f"{walker}: the walker does not read com_velocity through a frozen input_norm; "
+                        "a speed command cannot move its velocity sense")
+    sigma_v = old.controller_options.input_norm["std"][_offset(old, "com_velocity")]
+    genome, new = _onto_preset(walker, genome, old, "walker-command-tune",
+                               extra={"command_speed": ([float(reference_speed)], [sigma_v / speed_gain])})
+    c = new.parts()[1]
+    v, cmd = _offset(new, "com_velocity"), _offset(new, "command_speed")
+    for block in ("input_weights", "direct_weights"):
+        if block in c.layout.slices():
+            rows = genome[c.layout.slices()[block]].reshape(c.n_inputs, -1)
+            rows[cmd] = -rows[v]
+            genome[c.layout.slices()[block]] = rows.ravel()
+    return genome, new
 
 
 def _onto_preset(walker, genome: np.ndarray, old: EpisodeConfig, preset: str, *, extra: dict | None = None,

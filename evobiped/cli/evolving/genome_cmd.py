@@ -47,10 +47,16 @@ def add_genome(sub) -> None:
                      "lines of the controller's table a run's config needs.")
     w.add_argument("--drop", action="append", metavar="SENSE", help="an input to drop (repeat; default: heading_error)")
     w.add_argument("--add", action="append", metavar="SENSE", help="an input to add (repeat; default: stance_side)")
-    _from_walker(actions, "command-start", WALKING_WALKER, run_genome_command,
-                 "the start genome of --preset walker-command-tune: the command senses added at zero weight",
-                 "Write the start genome of --preset walker-command-tune: the walker with command_speed and command_turning "
-                 "added at zero weight (they change nothing until the search moves them).")
+    c = _from_walker(actions, "command-start", WALKING_WALKER, run_genome_command,
+                     "the start genome of --preset walker-command-tune: the command senses added",
+                     "Write the start genome of --preset walker-command-tune: the walker with command_speed and command_turning "
+                     "added at zero weight (they change nothing until the search moves them), or with --speed-gain K the speed "
+                     "command moving the frame its velocity sense reads: it feels K (v* - V) m/s slower than it walks, "
+                     "V the --reference-speed.")
+    c.add_argument("--speed-gain", type=float, default=0.0, metavar="K",
+                   help="the velocity sense's frame moves at K (v* - V) m/s (default 0: command_speed at zero weight)")
+    c.add_argument("--reference-speed", type=positive_float, default=None, metavar="V",
+                   help="with --speed-gain: the speed in m/s the walker walks at, where the command changes nothing")
 
 
 def _from_walker(actions, name: str, walker: str, run, about: str, description: str):
@@ -108,7 +114,7 @@ def _steering_preset(name: str) -> str:
 def run_genome_command(args) -> int:
     from ...files.genome_edit import command_genome
 
-    _save(args, *command_genome(_walker(args)))
+    _save(args, *command_genome(_walker(args), args.speed_gain, args.reference_speed))
     print(args.out)
     return 0
 

@@ -21,6 +21,14 @@ def add_gait(sub) -> None:
     p.add_argument("--json", action="store_true", help="a commanded walker: print the report as JSON")
     p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: the "
                    "run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
+    p.add_argument("--battery", type=int, default=None, metavar="N", help="a commanded walker: N random schedules of "
+                   "--stretches speeds drawn uniformly in its evolved speed range (or --range), --hold s each, straight "
+                   "ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, falls, and its "
+                   "gait at constant commands; writes <stem>_speed_battery.json")
+    p.add_argument("--stretches", type=int, default=6, metavar="K", help="--battery: stretches per schedule (default 6)")
+    p.add_argument("--range", dest="speed_range", metavar="LOW,HIGH", help="--battery: the speeds drawn, m/s (default: "
+                   "the speed range the walker was evolved for)")
+    p.add_argument("--seed", type=int, default=0, help="--battery: the seed of the schedules (default 0)")
     p.add_argument("--ramp", type=float, default=None, metavar="A", help="the knob speeds up by at most A m/s per s, "
                    "switching elites every second (default 0.1; 0: at once)")
     p.add_argument("--ramp-down", type=float, default=None, metavar="A", help="the knob slows down by at most A m/s per s "
@@ -119,6 +127,10 @@ def _run_commanded(args, speeds, turnings) -> int:
     out = Path(args.out) if args.out else source.outputs
     if out.exists() and not out.is_dir():
         refuse("--out", f"{out} exists and is not a directory")
+    if args.battery is not None:
+        if args.speed is not None or turnings != [0.0]:
+            refuse("--battery", "draws its own speeds, straight ahead: give it without --speed and --turning")
+        return _run_battery(args, source, out)
     if speeds is None:
         if turnings != [0.0]:
             refuse("--turning", "needs --speed (without it the walker follows its own nominal schedule)")
@@ -144,6 +156,60 @@ def _run_commanded(args, speeds, turnings) -> int:
     mean = f"mean speed error {sum(s['speed_error_pct'] for s in done) / len(done):.1f} % over {len(done)} walking stretches; " if done else ""
     print(mean + ("no fall" if not report["fell"] else f"fell at {report['end_time']:.1f} s"))
     print(f"results: {out / (stem + '.json')}\nfigure: {png}")
+    return 0
+
+
+def _run_battery(args, source, out) -> int:
+    """``--battery N``: the speed battery of :mod:`evobiped.analysis.speed_battery`, a line per schedule, a summary, the
+    gait at constant commands, and <stem>_speed_battery.json."""
+    import json
+    import math
+
+    from ...analysis.speed_battery import gait_at_speeds, speed_battery
+    from ...core.fileio import write_json
+    from ...tasks.command_schedule import trained_range
+
+    if args.battery < 1 or args.stretches < 1:
+        refuse("--battery/--stretches", f"must be at least 1, got {args.battery} and {args.stretches}")
+    (lo, hi), _, _ = trained_range(source.config.task_options)
+    if args.speed_range is not None:
+        pair = _numbers("--range", args.speed_range)
+        if len(pair) != 2 or not 0 < pair[0] <= pair[1]:
+            refuse("--range", f"expected LOW,HIGH m/s with 0 < LOW <= HIGH, got {args.speed_range!r}")
+        if pair[0] < lo - 1e-9 or pair[1] > hi + 1e-9:
+            print(f"note: --range {pair[0]:g}-{pair[1]:g} m/s is beyond the {lo:g}-{hi:g} m/s this walker was evolved for; "
+                  "the commands are clipped to it")
+        lo, hi = max(pair[0], lo), min(pair[1], hi)
+    if not 0 < lo <= hi:
+        refuse("--battery", f"the walker was evolved for no walking speed range ({lo:g}-{hi:g} m/s); give --range")
+    report = speed_battery(source.config, source.genome, n=args.battery, stretches=args.stretches, stretch=args.hold,
+                           low=lo, high=hi, seed=args.seed,
+                           progress=None if args.json else lambda i, n: print(f"schedule {i} of {n} done", flush=True))
+    speeds = [v for v in (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8) if lo - 1e-9 <= v <= hi + 1e-9]
+    report["gait"] = gait_at_speeds(source.config, source.genome, speeds)
+    report["source"] = str(source.genome_path)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"{source.genome_path.stem}_speed_battery" if source.run_dir is None else f"{source.label}_speed_battery"
+    write_json(out / f"{stem}.json", report)
+    if args.json:
+        print(json.dumps({k: v for k, v in report.items() if k != "schedules"}, default=lambda v: None))
+        return 0
+    for i, r in enumerate(report["schedules"]):
+        errs = " ".join(f"{s['commanded']:.2f}->{s['walked']:.2f}" if s["walked"] is not None else f"{s['commanded']:.2f}->down"
+                        for s in r["stretches"])
+        print(f"schedule {i:2d}: {errs}  " + ("passed" if r["passed"] else f"FELL at {r['end_time']:.1f} s" if r["fell"]
+                                              else f"{sum(not s['within'] for s in r['stretches'])} stretch(es) off"))
+    m = report["summary"]
+    se, we = m["stretch_error_pct"], m["window_error_pct"]
+    print(f"{m['no_fall']} of {m['schedules']} schedules without a fall; {m['passed']} with every stretch within "
+          f"{100 * report['tolerance']:g} %; {m['within']} of {m['stretches']} stretches within; stretch error median "
+          f"{se['median']:.1f} %, p90 {se['p90']:.1f} %, max {se['max']:.1f} %; {report['window']:g} s windows median "
+          f"{we['median']:.1f} %, p90 {we['p90']:.1f} %")
+    for g in report["gait"]:
+        print(f"gait at {g['commanded']:.1f} m/s: walked {g['speed']:.2f} m/s, duty min {g['duty_min']:.2f}, airborne "
+              f"{100 * g['airborne']:.1f} %, slip {100 * g['slip_share']:.1f} %, {g['steps_per_s']:.1f} steps/s of "
+              f"{g['step_length']:.3f} m: " + ("a walk" if g["walks"] else "not a walk (" + ", ".join(g["failed"]) + ")"))
+    print(f"results: {out / (stem + '.json')}")
     return 0
 
 

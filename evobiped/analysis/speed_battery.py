@@ -1,0 +1,109 @@
+"""A commanded walker's speed battery: random schedules of commanded speeds, every stretch's speed against its command,
+and its gait at each speed.
+
+:func:`random_schedules` draws ``n`` schedules of ``stretches`` speeds, each uniform in [low, high] m/s (steps of any
+size inside the range), from one seed.  :func:`speed_battery` follows each with :func:`~evobiped.analysis.commanded.
+follow_commands` (straight ahead, ``stretch`` s per command) and scores every stretch by its mean speed from
+``settle`` s after it begins (its error in % of the command, within ``tolerance`` or not) and, inside it, by
+``window`` s windows (the error of each window's mean speed), so a walker whose speed swings about the command shows
+it.  A schedule passes when the walker does not fall and every stretch is within the tolerance.
+:func:`gait_at_speeds` measures the gait lab's criteria under constant commands (what a walk at each speed is).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..core.errors import UserError
+from ..core.options import given
+from ..episode import EpisodeConfig
+from .commanded import SETTLE, follow_commands
+from .gait_report import gait_report
+
+#: the battery's defaults: schedules, stretches per schedule, s per stretch, the tolerance (a fraction), s per window
+SCHEDULES, STRETCHES, STRETCH, TOLERANCE, WINDOW = 30, 6, 10.0, 0.10, 1.0
+
+
+def random_schedules(n: int, stretches: int, low: float, high: float, seed: int) -> np.ndarray:
+    """``(n, stretches)`` commanded speeds (m/s), uniform in [``low``, ``high``], from ``seed``."""
+    if not (n >= 1 and stretches >= 1 and 0 < low <= high and np.isfinite(high)):
+        raise UserError(f"a speed battery needs n >= 1 schedules of >= 1 stretches and 0 < low <= high m/s, got n {n}, "
+                        f"stretches {stretches}, low {low:g}, high {high:g}")
+    return np.random.default_rng(seed).uniform(low, high, (n, stretches))
+
+
+def _windows(trace: dict, start: float, end: float, command: float, window: float) -> list[float]:
+    """The errors (% of ``command``) of the mean walked speed over each whole ``window`` s in [start, end] s."""
+    t, v = np.asarray(trace["time"]), np.asarray(trace["walked_speed"])
+    dt = np.diff(np.append(t, 2 * t[-1] - t[-2])) if len(t) > 1 else np.ones_like(t)
+    out = []
+    for a in np.arange(start, end - window + 1e-9, window):
+        k = (t >= a - 1e-9) & (t < a + window - 1e-9)
+        if dt[k].sum() >= window - 1e-6:  # a whole window (a fall ends the trace)
+            out.append(float(100 * abs(np.sum(v[k] * dt[k]) / dt[k].sum() - command) / command))
+    return out
+
+
+def speed_battery(config: EpisodeConfig, genome: np.ndarray, *, n: int = SCHEDULES, stretches: int = STRETCHES,
+                  stretch: float = STRETCH, low: float = 0.2, high: float = 0.8, seed: int = 0,
+                  tolerance: float = TOLERANCE, window: float = WINDOW, settle: float = SETTLE, progress=None) -> dict:
+    """The commanded walker ``genome`` ``(G,)`` of ``config`` through ``n`` random schedules (module docstring): a dict
+    with ``schedules`` (per schedule its speeds, per stretch the walked speed, error % and whether it is within the
+    tolerance, the window errors, fell, passed) and ``summary`` (schedules without a fall and passed, stretches within
+    the tolerance, the stretch and window errors' median, 90th percentile and maximum).  ``progress(i, n)`` after each."""
+    if not (stretch > settle + window and 0 < tolerance < 1 and window > 0):
+        raise UserError(f"a stretch ({stretch:g} s) must be longer than the settling time ({settle:g} s) and a window "
+                        f"({window:g} s), and the tolerance a fraction in (0, 1) (got {tolerance:g})")
+    speeds = random_schedules(n, stretches, low, high, seed)
+    times = [i * stretch for i in range(stretches)]
+    rows = []
+    for i, schedule in enumerate(speeds):
+        r = follow_commands(config, genome, times, list(map(float, schedule)), [0.0] * stretches, stretch * stretches,
+                            settle=settle)
+        out = []
+        for s in r["stretches"]:
+            measured = s["walked_speed"] is not None and not s["down"]
+            err = s["speed_error_pct"] if measured else None
+            out.append({"commanded": s["commanded_speed"], "walked": s["walked_speed"] if measured else None,
+                        "error_pct": err, "within": err is not None and err <= 100 * tolerance and not s["fell"],
+                        "windows_pct": _windows(r["trace"], s["measured_from"], s["end"], s["commanded_speed"], window)
+                        if measured else [], "fell": s["fell"]})
+        rows.append({"speeds": [float(v) for v in schedule], "stretches": out, "fell": r["fell"], "end_time": r["end_time"],
+                     "passed": not r["fell"] and all(s["within"] for s in out)})
+        if progress is not None:
+            progress(i + 1, n)
+    return {"n": n, "stretches": stretches, "stretch": stretch, "low": low, "high": high, "seed": seed,
+            "tolerance": tolerance, "window": window, "settle": settle, "schedules": rows, "summary": summarise(rows)}
+
+
+def _spread(values: list[float]) -> dict:
+    if not values:
+        return {"median": None, "p90": None, "max": None}
+    v = np.asarray(values, float)
+    return {"median": float(np.median(v)), "p90": float(np.percentile(v, 90)), "max": float(v.max())}
+
+
+def summarise(rows: list[dict]) -> dict:
+    """The battery's counts and error spreads over the schedules ``rows`` of :func:`speed_battery`."""
+    stretches = [s for r in rows for s in r["stretches"]]
+    return {"schedules": len(rows), "no_fall": sum(not r["fell"] for r in rows), "passed": sum(r["passed"] for r in rows),
+            "stretches": len(stretches), "within": sum(s["within"] for s in stretches),
+            "stretch_error_pct": _spread([s["error_pct"] for s in stretches if s["error_pct"] is not None]),
+            "window_error_pct": _spread([w for s in stretches for w in s["windows_pct"]])}
+
+
+def gait_at_speeds(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, seconds: float = 30.0) -> list[dict]:
+    """The gait lab's report (:func:`~evobiped.analysis.gait_report.gait_report`, its first ``seconds`` s) of the
+    commanded walker under each constant speed command (m/s, straight ahead)."""
+    out = []
+    for v in speeds:
+        options = {**given(config.task_options), "schedule": "constant", "speed": float(v), "turning": 0.0}
+        cfg = dataclasses.replace(config, task_options=options)
+        report = gait_report(cfg, genome, seconds=seconds)
+        out.append({"commanded": float(v), **{k: report[k] for k in ("up", "speed", "duty_min", "duty_asymmetry",
+                                                                        "airborne", "slip_share", "steps_per_s",
+                                                                        "step_length", "cost_of_transport", "walks", "failed")
+                                                 if k in report}})
+    return out

@@ -1,0 +1,118 @@
+"""The speed command through the velocity sense's frame (``evobiped genome command-start --speed-gain``), and the
+speed battery of ``evobiped gait --battery``: a commanded speed changes the walk, the battery's numbers are the
+walk's, and bad input is one line."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from evobiped.analysis.commanded import follow_commands
+from evobiped.analysis.gait_report import gait_report
+from evobiped.analysis.speed_battery import _windows, random_schedules, speed_battery
+from evobiped.core.errors import UserError
+from evobiped.core.options import given
+from evobiped.episode.remap import input_widths
+from evobiped.files.genome_edit import command_genome
+from evobiped.files.genome_file import load_genome, save_genome
+
+from .conftest import WALKERS, cli
+
+ROBUST = WALKERS / "ctrnn_walk_robust_seed0.json"
+
+
+@pytest.fixture(scope="module")
+def framed(tmp_path_factory):
+    """The robust walking network with the speed command moving its velocity sense's frame (k 0.77, at 0.59 m/s)."""
+    path = tmp_path_factory.mktemp("framed") / "framed.json"
+    genome, cfg = command_genome(ROBUST, 0.77, 0.59)
+    save_genome(path, genome, cfg)
+    return path
+
+
+def test_at_the_reference_speed_the_framed_walker_is_the_walker(framed):
+    g, cfg, _ = load_genome(framed)
+    old_g, old, _ = load_genome(ROBUST)
+    at_ref = dataclasses.replace(cfg, task_options={**given(cfg.task_options), "schedule": "constant", "speed": 0.59,
+                                                    "turning": 0.0})
+    new, was = gait_report(at_ref, g, seconds=8.0), gait_report(old, old_g, seconds=8.0)
+    assert new["forward"] == pytest.approx(was["forward"], abs=1e-9)
+    assert new["displacement"] == pytest.approx(was["displacement"], abs=1e-9)
+
+
+def test_command_speed_rows_are_minus_the_forward_velocity_rows(framed):
+    g, cfg, _ = load_genome(framed)
+    c = cfg.build().controller
+    at, where = 0, {}
+    for n, w in zip(c.input_names, input_widths(cfg)):
+        where[n], at = at, at + w
+    s = c.layout.slices()
+    for block in ("input_weights", "direct_weights"):
+        rows = g[s[block]].reshape(c.n_inputs, -1)
+        assert np.array_equal(rows[where["command_speed"]], -rows[where["com_velocity"]])
+        assert not rows[where["command_turning"]].any()
+
+
+def test_a_faster_command_walks_faster(framed):
+    g, cfg, _ = load_genome(framed)
+    r = follow_commands(cfg, g, [0.0, 10.0], [0.3, 0.7], [0.0, 0.0], 20.0)
+    slow, fast = (s["walked_speed"] for s in r["stretches"])
+    assert not r["fell"]
+    assert slow == pytest.approx(0.3, rel=0.15) and fast == pytest.approx(0.7, rel=0.15)
+
+
+def test_the_speed_battery_scores_the_walk_it_follows(framed):
+    g, cfg, _ = load_genome(framed)
+    b = speed_battery(cfg, g, n=2, stretches=2, stretch=6.0, low=0.3, high=0.7, seed=4)
+    speeds = random_schedules(2, 2, 0.3, 0.7, 4)
+    assert np.array_equal(speeds, random_schedules(2, 2, 0.3, 0.7, 4)) and ((speeds >= 0.3) & (speeds <= 0.7)).all()
+    for row, schedule in zip(b["schedules"], speeds):
+        again = follow_commands(cfg, g, [0.0, 6.0], list(schedule), [0.0, 0.0], 12.0)
+        for s, t in zip(row["stretches"], again["stretches"]):
+            assert s["walked"] == t["walked_speed"]
+            assert s["error_pct"] == pytest.approx(100 * abs(t["walked_speed"] - s["commanded"]) / s["commanded"])
+            assert len(s["windows_pct"]) == 3  # measured from 3 s into the 6 s stretch: three whole 1 s windows
+            assert s["within"] == (s["error_pct"] <= 10.0)
+    m = b["summary"]
+    assert m["schedules"] == 2 and m["stretches"] == 4 and m["within"] == sum(s["within"] for r in b["schedules"] for s in r["stretches"])
+
+
+def test_window_errors_match_a_hand_calculation():
+    trace = {"time": [0.0, 0.5, 1.0, 1.5, 2.0, 2.5], "walked_speed": [1.0, 1.0, 0.5, 1.5, 2.0, 2.0]}
+    assert _windows(trace, 0.0, 3.0, 1.0, 1.0) == pytest.approx([0.0, 0.0, 100.0])
+    assert _windows(trace, 0.0, 3.0, 1.0, 2.0) == pytest.approx([0.0])
+
+
+def test_bad_speed_gains_are_refused():
+    with pytest.raises(UserError, match="--speed-gain"):
+        command_genome(ROBUST, -1.0, 0.5)
+    with pytest.raises(UserError, match="--reference-speed"):
+        command_genome(ROBUST, 0.7, None)
+
+
+@pytest.mark.parametrize("flags, words", [
+    (["--battery", "0"], "at least 1"),
+    (["--battery", "2", "--range", "0.5"], "LOW,HIGH"),
+    (["--battery", "2", "--range", "0.6,0.3"], "LOW,HIGH"),
+    (["--battery", "2", "--speed", "0.4"], "without --speed"),
+    (["--battery", "2", "--hold", "2"], "longer than the settling time"),
+])
+def test_bad_battery_input_is_one_line_and_writes_nothing(framed, tmp_path, capsys, flags, words):
+    out = tmp_path / "out"
+    assert cli("gait", framed, "--out", out, *flags) == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_the_battery_command_writes_its_json(framed, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli("gait", framed, "--battery", "1", "--stretches", "2", "--hold", "5", "--range", "0.4,0.6", "--json",
+               "--out", out) == 0
+    printed = json.loads(capsys.readouterr().out)
+    stored = json.loads((out / "framed_speed_battery.json").read_text())
+    assert printed["summary"] == stored["summary"] and stored["summary"]["schedules"] == 1
+    assert [g["commanded"] for g in stored["gait"]] == [0.4, 0.5, 0.6]
