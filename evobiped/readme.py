@@ -68,6 +68,7 @@ SENSOR_TEXT = {
     "sound": "the steer task's ear signal s (its sensor, after the body's)",
     "command_speed": "the command task's commanded forward speed (m/s)",
     "command_turning": "the command task's commanded turning rate (rad/s, + left; its sign changes in the stance frame's mirror)",
+    "command_stop": "the command task's stop: 1 at a zero speed command, else 0",
 }
 
 

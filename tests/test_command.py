@@ -175,19 +175,26 @@ def test_bad_input_to_gait_is_one_line_and_writes_nothing(tmp_path, capsys):
                       controller_options={"inputs": ["command_speed"]}).parts()
 
 
-def test_the_steering_rule():
-    speed, turning = steering_command(np.array([0.1, -0.1, 0.0, 0.5]), np.array([0.01, 0.01, 0.01, 0.01]))
-    assert turning.tolist() == pytest.approx([0.35, -0.35, 0.0, 0.35])  # 4 rad/s per unit of s, clipped
-    assert (speed == 0.6).all()  # 10 m away: full speed
-    s, w = steering_command(0.02, 0.0)
-    assert w == pytest.approx(0.08) and s == 0.6  # turning proportional to s
-    L = np.array([1 / 9, 1 / 4, 1 / 2, 1.0])  # 3 m, 2 m, 1.41 m, 1 m (the reach)
-    s, _ = steering_command(np.zeros(4), L)
-    assert s[0] == pytest.approx(0.6) and s[-1] == 0.0 and (np.diff(s) < 0).all()  # slower as it gets loud, 0 at reach
-    s, _ = steering_command(np.zeros(2), np.array([1 / 1.5 ** 2, 1 / 1.2 ** 2]), reach=1.5)
-    assert s.tolist() == [0.0, 0.0]  # at and inside the reach radius
+def test_the_steering_rule_reads_bearing_and_distance_from_the_ears():
+    from evobiped.tasks.sound import ear_signal, intensity
+
+    e = 0.25
+    left, right = np.array([[0.0, e]] * 4), np.array([[0.0, -e]] * 4)  # ears of a walker at the origin facing +x
+    D, theta = np.array([8.0, 3.0, 1.0, 0.5]), np.radians([20.0, -50.0, 80.0, 5.0])
+    q = np.stack([D * np.cos(theta), D * np.sin(theta)], axis=1)
+    a, b = intensity(left, q), intensity(right, q)
+    speed, turning, heard = steering_command(ear_signal(left, right, q), (a + b) / 2, ear=e, gain=1.0, turning_max=10.0)
+    c = 2 * D * e * np.sin(theta)  # the law of cosines from each ear: |e - q|^2 = D^2 + e^2 -+ c
+    assert heard == pytest.approx(1 / np.sqrt((1 / (D ** 2 + e ** 2 - c) + 1 / (D ** 2 + e ** 2 + c)) / 2), rel=1e-9)
+    assert turning[[0, 1, 3]] == pytest.approx(theta[[0, 1, 3]], abs=0.01)  # the bearing, within the distance estimate's error
+    assert 1.0 < turning[2] < theta[2]  # 1 m away at 80 deg it reads 66 deg: the loudness overstates the nearness
+    assert speed[0] == pytest.approx(0.6) and speed[1] == pytest.approx(0.6)  # farther than slow_from (2 m): full speed
+    assert speed[2] == pytest.approx(0.2 + 0.4 * (heard[2] - 0.3) / 1.7)  # slower as it gets near
+    behind = np.array([[-5.0, 1.0]])  # a source behind on the left is heard as its mirror in front, on the left
+    s, w, _ = steering_command(ear_signal(left[:1], right[:1], behind), (intensity(left[:1], behind) + intensity(right[:1], behind)) / 2, ear=e)
+    assert w[0] > 0
     with pytest.raises(ConfigError):
-        steering_command(0.0, 0.5, reach=4.0)
+        steering_command(0.0, 0.5, ear=e, reach=4.0)
 
 
 def test_standing_needs_both_feet_down(monkeypatch):

@@ -12,7 +12,7 @@ import pytest
 
 from evobiped.analysis.commanded import follow_commands
 from evobiped.analysis.gait_report import gait_report
-from evobiped.analysis.speed_battery import _windows, random_schedules, speed_battery
+from evobiped.analysis.speed_battery import _windows, random_schedules, speed_battery, stop_and_go
 from evobiped.core.errors import UserError
 from evobiped.core.options import given
 from evobiped.episode.remap import input_widths
@@ -29,6 +29,15 @@ def framed(tmp_path_factory):
     """The robust walking network with the speed command moving its velocity sense's frame (k 0.77, at 0.59 m/s)."""
     path = tmp_path_factory.mktemp("framed") / "framed.json"
     genome, cfg = command_genome(ROBUST, 0.77, 0.59)
+    save_genome(path, genome, cfg)
+    return path
+
+
+@pytest.fixture(scope="module")
+def stopping(tmp_path_factory):
+    """``framed`` with a stop: at a zero command the frame of a 0.09 m/s command, where it marks time."""
+    path = tmp_path_factory.mktemp("stopping") / "stopping.json"
+    genome, cfg = command_genome(ROBUST, 0.77, 0.59, 0.09)
     save_genome(path, genome, cfg)
     return path
 
@@ -116,3 +125,20 @@ def test_the_battery_command_writes_its_json(framed, tmp_path, capsys):
     stored = json.loads((out / "framed_speed_battery.json").read_text())
     assert printed["summary"] == stored["summary"] and stored["summary"]["schedules"] == 1
     assert [g["commanded"] for g in stored["gait"]] == [0.4, 0.5, 0.6]
+
+
+def test_a_stop_marks_time_and_it_walks_off_again(stopping):
+    g, cfg, _ = load_genome(stopping)
+    (r,) = stop_and_go(cfg, g, [0.5], walk=8.0, stop=12.0)
+    assert not r["fell"] and r["time_to_stop"] is not None and r["time_to_stop"] <= 6.0
+    assert abs(r["stop_speed"]) <= 0.05 and r["double_support"] < 0.5  # on the spot, stepping: it does not stand
+    assert r["walk_off"] == pytest.approx(0.5, rel=0.10)
+
+
+def test_a_commanded_walker_walks_to_sources_through_its_ears(stopping, capsys):
+    assert cli("episode", "--genome", stopping, "--source", "4", "1.5", "--source", "-3.5", "0.05", "--seconds", "40",
+               "--json") == 0
+    out = json.loads(capsys.readouterr().out)
+    for s in out["sources"]:  # one ahead, one straight behind (heard as if in front until its fading tells)
+        assert not s["fell"] and s["final_distance"] <= 0.5 and s["arrival_time"] is not None and s["stood"]
+    assert out["sources"][1]["arrival_time"] <= 22.0  # 17 s; turning round only where noise bends its path: 28 s

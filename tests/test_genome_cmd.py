@@ -33,7 +33,7 @@ def test_command_start_adds_the_command_senses_at_zero_weight_and_keeps_every_ot
     assert cfg.controller_options.inputs == read_toml(preset_path("walker-command-tune"))["episode"]["controller_options"]["inputs"]
     c, c_old = cfg.build().controller, old.build().controller
     columns, old_columns = _columns(cfg), _columns(old)
-    assert set(columns) - set(old_columns) == {"command_speed", "command_turning"}
+    assert set(columns) - set(old_columns) == {"command_speed", "command_turning", "command_stop"}
     s, s_old = c.layout.slices(), c_old.layout.slices()
     for block in ("input_weights", "direct_weights"):
         rows, rows_old = g[s[block]].reshape(c.n_inputs, -1), old_g[s_old[block]].reshape(c_old.n_inputs, -1)

@@ -73,10 +73,10 @@ def nominal_plan(config: EpisodeConfig, hold: float) -> tuple[list[float], list[
 
 
 class _Trace:
-    """Listener: row 0's time (s), planar position (m) and facing per tick."""
+    """Listener: row 0's time (s), planar position (m), facing and whether both feet are down, per tick."""
 
     def __init__(self):
-        self.t, self.xy, self.f = [], [], []
+        self.t, self.xy, self.f, self.both = [], [], [], []
 
     def start(self, episode, sims):
         self.body = episode.body
@@ -89,6 +89,7 @@ class _Trace:
             self.t.append(float(t))
             self.xy.append(self.body.planar_position(sims)[0].copy())
             self.f.append(self.body.heading(sims)[0].copy())
+            self.both.append(bool(self.body.contacts(sims)[0].all()))
 
     def end(self, result):
         pass
@@ -99,7 +100,8 @@ def follow_commands(config: EpisodeConfig, genome: np.ndarray, times: list[float
     """``genome`` of the commanded walker ``config`` alone in a nominal episode of ``seconds`` s whose commands switch
     at ``times`` (s) to ``speeds`` (m/s) and ``turnings`` (rad/s): a dict with ``stretches`` (per stretch: start, end,
     commanded and walked speed and turning, errors, fell), ``fell``, ``end_time`` and ``trace`` (per tick: time,
-    the tick's start, its commands, the walked speed and turning rate over it)."""
+    the tick's start, its commands, the walked speed and turning rate over it, and ``both_down``: both feet on the
+    ground at its end)."""
     options = {**given(config.task_options), "schedule": "piecewise", "times": [float(t) for t in times],
                "speed": [float(v) for v in speeds], "turning": [float(w) for w in turnings]}
     cfg = dataclasses.replace(config.nominal(), task_options=options, seconds=float(seconds))
@@ -129,7 +131,8 @@ def follow_commands(config: EpisodeConfig, genome: np.ndarray, times: list[float
     return {"stretches": stretches, "fell": fell, "end_time": end, "seconds": float(seconds),
             "trace": {"time": t[:-1].tolist(), "commanded_speed": np.asarray(speeds)[np.maximum(k, 0)].tolist(),
                       "commanded_turning": np.asarray(turnings)[np.maximum(k, 0)].tolist(),
-                      "walked_speed": (along / np.maximum(dt, 1e-12)).tolist(), "walked_turning": (turn / np.maximum(dt, 1e-12)).tolist()}}
+                      "walked_speed": (along / np.maximum(dt, 1e-12)).tolist(), "walked_turning": (turn / np.maximum(dt, 1e-12)).tolist(),
+                      "both_down": trace.both}}
 
 
 def stretch_line(s: dict) -> str:

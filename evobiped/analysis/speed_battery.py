@@ -75,7 +75,7 @@ def speed_battery(config: EpisodeConfig, genome: np.ndarray, *, n: int = SCHEDUL
         if progress is not None:
             progress(i + 1, n)
     return {"n": n, "stretches": stretches, "stretch": stretch, "low": low, "high": high, "seed": seed,
-            "tolerance": tolerance, "window": window, "settle": settle, "schedules": rows, "summary": summarise(rows)}
+            "tolerance": tolerance, "window": window, "settle": settle, "schedules": rows, "summary": battery_summary(rows)}
 
 
 def _spread(values: list[float]) -> dict:
@@ -85,7 +85,7 @@ def _spread(values: list[float]) -> dict:
     return {"median": float(np.median(v)), "p90": float(np.percentile(v, 90)), "max": float(v.max())}
 
 
-def summarise(rows: list[dict]) -> dict:
+def battery_summary(rows: list[dict]) -> dict:
     """The battery's counts and error spreads over the schedules ``rows`` of :func:`speed_battery`."""
     stretches = [s for r in rows for s in r["stretches"]]
     return {"schedules": len(rows), "no_fall": sum(not r["fell"] for r in rows), "passed": sum(r["passed"] for r in rows),
@@ -106,4 +106,39 @@ def gait_at_speeds(config: EpisodeConfig, genome: np.ndarray, speeds: list[float
                                                                         "airborne", "slip_share", "steps_per_s",
                                                                         "step_length", "cost_of_transport", "walks", "failed")
                                                  if k in report}})
+    return out
+
+
+#: m/s: a walker whose every 1 s window's mean speed stays within this of 0 has stopped
+STOPPED = 0.05
+
+
+def stop_and_go(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, walk: float = 10.0, stop: float = 20.0,
+                window: float = WINDOW) -> list[dict]:
+    """Per speed v (m/s): ``walk`` s at v, a stop (speed 0) for ``stop`` s, ``walk`` s at v again, straight ahead.  Each
+    dict: ``time_to_stop`` (s from the stop command to the start of the first ``window`` s window from which every
+    window's mean speed is within :data:`STOPPED` of 0; None: it never stopped), ``stop_speed`` (mean speed over the
+    stop's last half, m/s), ``drift`` (m moved along its facing over the whole stop), ``double_support`` (share of the
+    stop's last half with both feet down: 1 is standing, about a tenth is marking time), ``walk_off`` (the speed walked
+    in the last stretch, measured as :func:`~evobiped.analysis.commanded.follow_commands` measures), ``fell``."""
+    out = []
+    for v in speeds:
+        r = follow_commands(config, genome, [0.0, walk, walk + stop], [float(v), 0.0, float(v)], [0.0] * 3, 2 * walk + stop)
+        tr = r["trace"]
+        t, w, both = np.asarray(tr["time"]), np.asarray(tr["walked_speed"]), np.asarray(tr["both_down"], bool)
+        dt = np.diff(np.append(t, t[-1] + (t[-1] - t[-2] if len(t) > 1 else 0.0)))
+        starts = np.arange(walk, walk + stop - window + 1e-9, window)
+        means = []
+        for a in starts:
+            k = (t >= a - 1e-9) & (t < a + window - 1e-9)
+            means.append(float(np.sum(w[k] * dt[k]) / dt[k].sum()) if dt[k].sum() >= window - 1e-6 else np.inf)
+        still = np.abs(means) <= STOPPED
+        first = next((i for i in range(len(still)) if still[i:].all()), None)
+        late = (t >= walk + stop / 2 - 1e-9) & (t < walk + stop - 1e-9)
+        during = (t >= walk - 1e-9) & (t < walk + stop - 1e-9)
+        out.append({"speed": float(v), "time_to_stop": None if first is None else float(starts[first] - walk),
+                    "stop_speed": float(np.sum(w[late] * dt[late]) / dt[late].sum()) if late.any() else None,
+                    "drift": float(np.sum(w[during] * dt[during])),
+                    "double_support": float(both[late].mean()) if late.any() else None,
+                    "walk_off": r["stretches"][2]["walked_speed"], "fell": r["fell"], "end_time": r["end_time"]})
     return out

@@ -102,8 +102,8 @@ def hearing_genome(walker: str | Path, reference: float = 4.0, direct: bool = Tr
     return genome, new
 
 
-def command_genome(walker: str | Path, speed_gain: float = 0.0, reference_speed: float | None = None
-                   ) -> tuple[np.ndarray, EpisodeConfig]:
+def command_genome(walker: str | Path, speed_gain: float = 0.0, reference_speed: float | None = None,
+                   stop_speed: float = 0.0) -> tuple[np.ndarray, EpisodeConfig]:
     """(genome (G,), EpisodeConfig) of ``--preset walker-command-tune``'s commanded walker made from the genome file
     ``walker``: every gene and its frozen input normalisation kept, ``command_speed`` and ``command_turning`` added.
 
@@ -114,9 +114,14 @@ def command_genome(walker: str | Path, speed_gain: float = 0.0, reference_speed:
     the direct path) are minus those of v, and its normalisation is (v* - v_ref) / (sigma_v / k) with sigma_v v's
     frozen scale, so the network sees (v - k (v* - v_ref) - m_v) / sigma_v where it saw (v - m_v) / sigma_v.  At
     v* = v_ref it is the walker; a faster command makes it feel slow, and its own speed regulation speeds it up
-    (a walker that holds its pace through its velocity sense; k = 1 / (d v / d offset) makes the change one to one)."""
+    (a walker that holds its pace through its velocity sense; k = 1 / (d v / d offset) makes the change one to one).
+    ``stop_speed`` V0 > 0 m/s: at a stop (``command_stop`` 1) the frame is that of a V0 command, where the walker
+    marks time (the speed a zero command would otherwise ask may be beyond what it can do); 0: ``command_stop`` at
+    zero weight."""
     if not (np.isfinite(speed_gain) and speed_gain >= 0):
         raise UserError(f"--speed-gain must be a finite number >= 0, got {speed_gain:g}")
+    if not (np.isfinite(stop_speed) and stop_speed >= 0) or (stop_speed and not speed_gain):
+        raise UserError(f"--stop-speed must be a finite speed >= 0 m/s, and needs --speed-gain, got {stop_speed:g}")
     genome, old, _ = load_genome(walker)
     if not speed_gain:
         return _onto_preset(walker, genome, old, "walker-command-tune")
@@ -126,15 +131,17 @@ def command_genome(walker: str | Path, speed_gain: float = 0.0, reference_speed:
         raise UserError(f"{walker}: the walker does not read com_velocity through a frozen input_norm; "
                         "a speed command cannot move its velocity sense")
     sigma_v = old.controller_options.input_norm["std"][_offset(old, "com_velocity")]
-    genome, new = _onto_preset(walker, genome, old, "walker-command-tune",
-                               extra={"command_speed": ([float(reference_speed)], [sigma_v / speed_gain])})
+    extra = {"command_speed": ([float(reference_speed)], [sigma_v / speed_gain])}
+    if stop_speed:
+        extra["command_stop"] = ([0.0], [sigma_v / (speed_gain * stop_speed)])
+    genome, new = _onto_preset(walker, genome, old, "walker-command-tune", extra=extra)
     c = new.parts()[1]
-    v, cmd = _offset(new, "com_velocity"), _offset(new, "command_speed")
+    v = _offset(new, "com_velocity")
     for block in ("input_weights", "direct_weights"):
-        if block in c.layout.slices():
-            rows = genome[c.layout.slices()[block]].reshape(c.n_inputs, -1)
-            rows[cmd] = -rows[v]
-            genome[c.layout.slices()[block]] = rows.ravel()
+        rows = genome[c.layout.slices()[block]].reshape(c.n_inputs, -1)
+        for name in extra:
+            rows[_offset(new, name)] = -rows[v]
+        genome[c.layout.slices()[block]] = rows.ravel()
     return genome, new
 
 

@@ -2,7 +2,7 @@
 
 Senses.  The task adds ``command_speed`` (m/s) and ``command_turning`` (rad/s, + left), the commands of the tick's
 time under the task's schedule (:mod:`evobiped.tasks.command_schedule`: ``constant``, ``piecewise`` or ``drawn``
-per generation).  Under the stance frame's left/right mirror the speed keeps its sign and the turning rate changes
+per generation), and ``command_stop`` (1 at a zero speed command, else 0: a stop told apart from a slow walk).  Under the stance frame's left/right mirror the speed keeps its sign and the turning rate changes
 sign.  With ``heading_sense`` the walk task's ``heading_error`` is the angle of the facing from the *commanded*
 facing (the initial facing turned by the integral of the commanded turning rate, + when turned left of it), held
 within +-pi/2 (:data:`HEADING_LEASH`: a walker that lags further behind a commanded turn is told "turn left" or
@@ -138,13 +138,15 @@ class CommandTask(WalkTask):
         self.nominal = schedule_of(self.options)
 
     def sensor_widths(self):
-        return {**super().sensor_widths(), "command_speed": 1, "command_turning": 1}
+        return {**super().sensor_widths(), "command_speed": 1, "command_turning": 1, "command_stop": 1}
 
     def sensor_norms(self):
-        return {**super().sensor_norms(), "command_speed": ((0.0,), (0.5,)), "command_turning": ((0.0,), (0.35,))}
+        return {**super().sensor_norms(), "command_speed": ((0.0,), (0.5,)), "command_turning": ((0.0,), (0.35,)),
+                "command_stop": ((0.0,), (1.0,))}
 
     def sensor_mirror(self):  # a turn to the left is a turn to the right of the mirrored body; the speed is the same
-        return {**super().sensor_mirror(), "command_speed": ((0,), (1,)), "command_turning": ((0,), (-1,))}
+        return {**super().sensor_mirror(), "command_speed": ((0,), (1,)), "command_turning": ((0,), (-1,)),
+                "command_stop": ((0,), (1,))}
 
     def draw_sources(self, key):
         """This generation's drawn commands (None: the schedule is not drawn); the episode hands them to
@@ -174,7 +176,8 @@ class CommandTask(WalkTask):
 
     def sensors(self, body, sims, state):
         speed, turning = self.commands(state)
-        out = {"command_speed": speed[:, None], "command_turning": turning[:, None]}
+        out = {"command_speed": speed[:, None], "command_turning": turning[:, None],
+               "command_stop": (speed == 0).astype(float)[:, None]}
         if self.heading_sense:
             f = body.heading(sims)
             out["heading_error"] = _wrap(np.arctan2(f[:, 1], f[:, 0]) - state.yaw_cmd)[:, None]

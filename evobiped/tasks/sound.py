@@ -53,19 +53,22 @@ def parse_sources(sources) -> np.ndarray:
 
 def with_sources(config, sources):
     """``config`` (an EpisodeConfig of the steer task) with these sources ``[[x, y], ...]`` m, one presentation
-    each (fixed: they replace random sources drawn per generation); ``sources`` None leaves it as it is.  UserError for an
-    episode of another task."""
+    each (fixed: they replace random sources drawn per generation); a commanded walker's (the command task) becomes the
+    steer-command task's, its commands from its ears; ``sources`` None leaves it as it is.  UserError for an episode of
+    another task."""
     import dataclasses
 
     from ..core.errors import UserError
 
     if sources is None:
         return config
-    if config.task != "steer":
-        raise UserError(f"--source applies to the steer task (--task steer); this episode's task is {config.task!r}")
+    if config.task not in ("steer", "command", "steer-command"):
+        raise UserError(f"--source applies to the steer task (--task steer) and to a commanded walker (--task command); "
+                        f"this episode's task is {config.task!r}")
     options = {**given(config.task_options), "sources": [list(map(float, s)) for s in sources]}
     options.pop("random_sources", None)  # these sources, fixed, replace a distribution drawn per generation
-    return dataclasses.replace(config, task_options=options)
+    # a commanded walker hears them through the steering rule's commands (evobiped.tasks.steer_command)
+    return dataclasses.replace(config, task_options=options, task="steer" if config.task == "steer" else "steer-command")
 
 
 def check_range(v) -> None:

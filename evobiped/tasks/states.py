@@ -72,3 +72,17 @@ class CommandState(WalkState):
     measured: np.ndarray
     sums: np.ndarray
     first: np.ndarray
+
+
+@dataclass(eq=False, kw_only=True)
+class SteerCommandState(CommandState):
+    """The steer-command task's (:mod:`evobiped.tasks.steer_command`): the command task's and its own."""
+
+    #: m ``(n, 2)``: each row's source; whether the rule has it stopped ``(n,)``; its commands now (speed m/s,
+    #: turning rad/s) ``(n, 2)``; the first time it was within reach (s, NaN: not yet) ``(n,)``; the distance it hears
+    #: (m, low-passed), its rate (m/s, low-passed) and when it last heard (s) ``(n, 3)`` (NaN: not yet heard)
+    source: np.ndarray
+    stopped: np.ndarray
+    current: np.ndarray
+    arrival: np.ndarray
+    heard: np.ndarray

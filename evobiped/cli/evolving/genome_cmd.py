@@ -55,6 +55,9 @@ def add_genome(sub) -> None:
                      "V the --reference-speed.")
     c.add_argument("--speed-gain", type=float, default=0.0, metavar="K",
                    help="the velocity sense's frame moves at K (v* - V) m/s (default 0: command_speed at zero weight)")
+    c.add_argument("--stop-speed", type=float, default=0.0, metavar="V0",
+                   help="with --speed-gain: at a stop (command_stop) the frame of a V0 m/s command, where the walker marks "
+                   "time (default 0: command_stop at zero weight)")
     c.add_argument("--reference-speed", type=positive_float, default=None, metavar="V",
                    help="with --speed-gain: the speed in m/s the walker walks at, where the command changes nothing")
 
@@ -114,7 +117,7 @@ def _steering_preset(name: str) -> str:
 def run_genome_command(args) -> int:
     from ...files.genome_edit import command_genome
 
-    _save(args, *command_genome(_walker(args), args.speed_gain, args.reference_speed))
+    _save(args, *command_genome(_walker(args), args.speed_gain, args.reference_speed, args.stop_speed))
     print(args.out)
     return 0
 

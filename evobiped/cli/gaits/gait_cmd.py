@@ -23,8 +23,9 @@ def add_gait(sub) -> None:
                    "run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
     p.add_argument("--battery", type=int, default=None, metavar="N", help="a commanded walker: N random schedules of "
                    "--stretches speeds drawn uniformly in its evolved speed range (or --range), --hold s each, straight "
-                   "ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, falls, and its "
-                   "gait at constant commands; writes <stem>_speed_battery.json")
+                   "ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, falls, its "
+                   "gait at constant commands, and (a walker evolved with stops) a 20 s stop between two walks at its "
+                   "slowest, middle and fastest speed; writes <stem>_speed_battery.json")
     p.add_argument("--stretches", type=int, default=6, metavar="K", help="--battery: stretches per schedule (default 6)")
     p.add_argument("--range", dest="speed_range", metavar="LOW,HIGH", help="--battery: the speeds drawn, m/s (default: "
                    "the speed range the walker was evolved for)")
@@ -165,13 +166,13 @@ def _run_battery(args, source, out) -> int:
     import json
     import math
 
-    from ...analysis.speed_battery import gait_at_speeds, speed_battery
+    from ...analysis.speed_battery import gait_at_speeds, speed_battery, stop_and_go
     from ...core.fileio import write_json
     from ...tasks.command_schedule import trained_range
 
     if args.battery < 1 or args.stretches < 1:
         refuse("--battery/--stretches", f"must be at least 1, got {args.battery} and {args.stretches}")
-    (lo, hi), _, _ = trained_range(source.config.task_options)
+    (lo, hi), stops, _ = trained_range(source.config.task_options)
     if args.speed_range is not None:
         pair = _numbers("--range", args.speed_range)
         if len(pair) != 2 or not 0 < pair[0] <= pair[1]:
@@ -187,6 +188,7 @@ def _run_battery(args, source, out) -> int:
                            progress=None if args.json else lambda i, n: print(f"schedule {i} of {n} done", flush=True))
     speeds = [v for v in (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8) if lo - 1e-9 <= v <= hi + 1e-9]
     report["gait"] = gait_at_speeds(source.config, source.genome, speeds)
+    report["stop_and_go"] = stop_and_go(source.config, source.genome, [lo, (lo + hi) / 2, hi]) if stops else []
     report["source"] = str(source.genome_path)
     out.mkdir(parents=True, exist_ok=True)
     stem = f"{source.genome_path.stem}_speed_battery" if source.run_dir is None else f"{source.label}_speed_battery"
@@ -209,6 +211,11 @@ def _run_battery(args, source, out) -> int:
         print(f"gait at {g['commanded']:.1f} m/s: walked {g['speed']:.2f} m/s, duty min {g['duty_min']:.2f}, airborne "
               f"{100 * g['airborne']:.1f} %, slip {100 * g['slip_share']:.1f} %, {g['steps_per_s']:.1f} steps/s of "
               f"{g['step_length']:.3f} m: " + ("a walk" if g["walks"] else "not a walk (" + ", ".join(g["failed"]) + ")"))
+    for g in report["stop_and_go"]:
+        stopped = f"stopped {g['time_to_stop']:g} s after the command" if g["time_to_stop"] is not None else "never stopped"
+        print(f"stop and go from {g['speed']:.2f} m/s: " + (f"FELL at {g['end_time']:.1f} s" if g["fell"] else
+              f"{stopped}, {g['stop_speed']:+.3f} m/s over the stop's second half (both feet down {100 * g['double_support']:.0f} % "
+              f"of it), drifted {g['drift']:+.2f} m in 20 s, walked off at {g['walk_off']:.2f} m/s"))
     print(f"results: {out / (stem + '.json')}")
     return 0
 

@@ -55,7 +55,7 @@ def run_episode_cmd(args) -> int:
     if targets is not None:  # the final distance to each presentation's target (a steering walker's sources)
         rows = r.rows if r.rows is not None else r
         out["sources"] = [{"source": list(map(float, q)), "final_distance": float(np.linalg.norm(rows.end_position[j] - q)),
-                           "fell": bool(rows.fell[j]), "end_time": float(rows.end_time[j])}
+                           "fell": bool(rows.fell[j]), "end_time": float(rows.end_time[j]), **_arrival(rows.terms, j)}
                           for j, q in enumerate(targets)]
         final = [s["final_distance"] for s in out["sources"]]
         out["median_final_distance"], out["worst_final_distance"] = float(np.median(final)), float(np.max(final))
@@ -67,11 +67,24 @@ def run_episode_cmd(args) -> int:
         print(f"fitness = {out['fitness']:.3f}; {state}; {walk_line(out)}")
         for s in out.get("sources", []):
             how = f"fell at t = {s['end_time']:.2f} s" if s["fell"] else f"up for {s['end_time']:.1f} s"
-            print(f"source ({s['source'][0]:g}, {s['source'][1]:g}) m: final distance {s['final_distance']:.2f} m ({how})")
+            came = "" if "arrival_time" not in s else (f"; arrived at {s['arrival_time']:.1f} s" if s["arrival_time"] is not None
+                                                       else "; never arrived") + ("; stood there at the end" if s["stood"] else "")
+            print(f"source ({s['source'][0]:g}, {s['source'][1]:g}) m: final distance {s['final_distance']:.2f} m ({how}){came}")
         if out.get("sources"):
+            stood = sum(s.get("stood", False) for s in out["sources"])
             print(f"over {len(out['sources'])} source(s): median final distance {out['median_final_distance']:.2f} m, "
-                  f"worst {out['worst_final_distance']:.2f} m; fell in {out['falls']} of {len(out['sources'])}")
+                  f"worst {out['worst_final_distance']:.2f} m; fell in {out['falls']} of {len(out['sources'])}"
+                  + (f"; stood at {stood} of them at the end" if "stood" in out["sources"][0] else ""))
     return 0
+
+
+def _arrival(terms: dict, j: int) -> dict:
+    """A commanded walker steered by its ears (the steer-command task): when presentation ``j`` first came within reach
+    (s, None: never) and whether it stood there at the end; {} for another task."""
+    if "arrival_time" not in terms:
+        return {}
+    t = float(np.ravel(terms["arrival_time"])[j])
+    return {"arrival_time": None if np.isnan(t) else t, "stood": bool(np.ravel(terms["stood"])[j])}
 
 
 SUBCOMMANDS = (add_episode,)
