@@ -12,7 +12,7 @@ import pytest
 
 from evobiped.analysis.commanded import follow_commands
 from evobiped.analysis.gait_report import gait_report
-from evobiped.analysis.speed_battery import _windows, random_schedules, speed_battery, stop_and_go
+from evobiped.analysis.speed_battery import _windows, calibrate_speed, random_schedules, speed_battery, stop_and_go
 from evobiped.core.errors import UserError
 from evobiped.core.options import given
 from evobiped.episode.remap import input_widths
@@ -142,3 +142,30 @@ def test_a_commanded_walker_walks_to_sources_through_its_ears(stopping, capsys):
     for s in out["sources"]:  # one ahead, one straight behind (heard as if in front until its fading tells)
         assert not s["fell"] and s["final_distance"] <= 0.5 and s["arrival_time"] is not None and s["stood"]
     assert out["sources"][1]["arrival_time"] <= 22.0  # 17 s; turning round only where noise bends its path: 28 s
+
+
+def test_calibration_makes_a_walker_told_half_as_hard_walk_as_told(stopping, tmp_path):
+    g, cfg, _ = load_genome(stopping)
+    norm = dict(given(cfg.controller_options)["input_norm"])
+    at = dict(zip(cfg.parts()[1].input_names, np.cumsum([0] + list(input_widths(cfg)))[:-1]))
+    i, j = at["command_speed"], at["command_stop"]
+    std = list(norm["std"])
+    std[i] *= 2  # every command now moves its frame half as far: it walks nearer its reference speed
+    weak = dataclasses.replace(cfg, controller_options={**given(cfg.controller_options), "input_norm": {**norm, "std": std}})
+    off = follow_commands(weak, g, [0.0], [0.3], [0.0], 15.0)["stretches"][0]["walked_speed"]
+    assert off > 0.4  # told 0.3 m/s, it walks well above
+    fixed, fit = calibrate_speed(weak, g, [0.3, 0.45, 0.6, 0.75])
+    assert 0.3 < fit["slope"] < 0.7
+    on = follow_commands(fixed, g, [0.0, 15.0], [0.4, 0.7], [0.0, 0.0], 30.0)["stretches"]
+    assert [s["walked_speed"] for s in on] == pytest.approx([0.4, 0.7], rel=0.10)  # within the speeds it was fitted on
+    m0, s0 = weak.controller_options.input_norm["mean"], weak.controller_options.input_norm["std"]
+    m1, s1 = fixed.controller_options.input_norm["mean"], fixed.controller_options.input_norm["std"]
+    assert -m0[i] / s0[i] + 1 / s0[j] == pytest.approx(-m1[i] / s1[i] + 1 / s1[j])  # the stop's frame kept
+
+
+def test_calibrating_a_walker_without_commands_is_one_line(tmp_path, capsys):
+    out = tmp_path / "x.json"
+    assert cli("genome", "command-calibrate", ROBUST, out) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not a commanded walker" in err and "\n" not in err and not out.exists()
+    assert cli("genome", "command-calibrate", ROBUST, out, "--speeds", "0.4") == 2

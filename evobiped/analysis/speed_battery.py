@@ -142,3 +142,43 @@ def stop_and_go(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], 
                     "double_support": float(both[late].mean()) if late.any() else None,
                     "walk_off": r["stretches"][2]["walked_speed"], "fell": r["fell"], "end_time": r["end_time"]})
     return out
+
+
+def calibrate_speed(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, seconds: float = 20.0
+                    ) -> tuple[EpisodeConfig, dict]:
+    """``config`` with the commanded walker's ``command_speed`` normalisation rescaled so that the speed it walks
+    follows the command one to one, and the fit: the walker follows each constant command v of ``speeds`` (m/s) for
+    ``seconds`` s, its walked speed w (from 3 s on) is fitted as w = a + b v, and the sense then reads (a + b v -
+    m) / (b s) where it read (v - m) / s (m, s its frozen centre and scale), so a command v reaches the network as
+    (v - a) / b did: the genes stay, only the input's scale and centre move.  A ``command_stop`` row keeps the
+    frame it gave at a stop.  UserError for a walker without a frozen ``command_speed`` normalisation, fewer than two
+    speeds, a fall, or a walker whose speed does not rise with the command (b <= 0)."""
+    from ..episode.remap import input_widths
+
+    norm = getattr(config.controller_options, "input_norm", None)
+    names = list(config.parts()[1].input_names)
+    if norm is None or "command_speed" not in names:
+        raise UserError("calibrating the speed command needs a commanded walker with a frozen input_norm")
+    if len(set(speeds)) < 2:
+        raise UserError(f"calibrating the speed command needs at least two speeds, got {speeds}")
+    walked = []
+    for v in speeds:
+        r = follow_commands(config, genome, [0.0], [float(v)], [0.0], seconds)
+        if r["fell"]:
+            raise UserError(f"the walker fell at {r['end_time']:.1f} s under a constant {v:g} m/s command: not calibrated")
+        walked.append(r["stretches"][0]["walked_speed"])
+    b, a = np.polyfit(np.asarray(speeds, float), np.asarray(walked, float), 1)
+    if not b > 0:
+        raise UserError(f"the walker's speed does not rise with the command (slope {b:.3f}): not calibrated")
+    at = dict(zip(names, np.cumsum([0] + list(input_widths(config)))[:-1]))
+    mean, std = list(map(float, norm["mean"])), list(map(float, norm["std"]))
+    i = at["command_speed"]
+    before = -mean[i] / std[i]  # what a zero command read
+    mean[i], std[i] = a + b * mean[i], b * std[i]
+    if "command_stop" in at:  # the stop's frame as it was: zero command plus the stop's row, as before
+        j = at["command_stop"]
+        stop_before = before + 1.0 / std[j]
+        std[j] = 1.0 / (stop_before + mean[i] / std[i])
+    options = {**given(config.controller_options), "input_norm": {**norm, "mean": mean, "std": std}}
+    fit = {"speeds": [float(v) for v in speeds], "walked": walked, "intercept": float(a), "slope": float(b)}
+    return dataclasses.replace(config, controller_options=options), fit

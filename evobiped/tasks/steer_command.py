@@ -103,9 +103,10 @@ class SteerCommandTask(CommandTask):
     def start(self, body, sims):
         state = super().start(body, sims)
         n = sims.n
-        return SteerCommandState(**vars(state), source=self.sources[self.presentation_of(n)], stopped=np.zeros(n, bool),
-                                 current=np.zeros((n, 2)), arrival=np.full(n, np.nan),
-                                 heard=np.stack([np.full(n, np.nan), np.full(n, np.nan), np.asarray(sims.time, float)], axis=1))
+        state = SteerCommandState(**vars(state), source=self.sources[self.presentation_of(n)], stopped=np.zeros(n, bool),
+                                  current=np.zeros((n, 2)), arrival=np.full(n, np.nan), heard=np.full((n, 3), np.nan))
+        self._hear(sims, state)
+        return state
 
     def draw_sources(self, key):  # the commands come from the ears, never from a draw
         return None
@@ -114,7 +115,9 @@ class SteerCommandTask(CommandTask):
         rows = slice(None) if rows is None else rows
         return state.current[rows, 0], state.current[rows, 1]
 
-    def sensors(self, body, sims, state):
+    def _hear(self, sims, state) -> None:
+        """The rule's commands for the next tick, from where the ears are now (kept in ``state``; the senses read them,
+        so reading the senses changes nothing)."""
         o = self.options
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
         a, b = intensity(left, state.source), intensity(right, state.source)
@@ -122,25 +125,26 @@ class SteerCommandTask(CommandTask):
                                              turning_max=o.turning_max, speed_min=o.speed_min, speed_max=o.speed_max,
                                              slow_from=o.slow_from, reach=o.reach)
         t = np.asarray(sims.time, float)
-        a = np.where(np.isnan(state.heard[:, 0]), 1.0, 1.0 - np.exp(-(t - state.heard[:, 2]) / RECEDE_TAU))
-        previous = np.where(np.isnan(state.heard[:, 0]), D, state.heard[:, 0])
+        new = np.isnan(state.heard[:, 0])
+        a = np.where(new, 1.0, 1.0 - np.exp(-(t - state.heard[:, 2]) / RECEDE_TAU))
+        previous = np.where(new, D, state.heard[:, 0])
         heard = previous + a * (D - previous)
-        rate = np.where(t > state.heard[:, 2], (heard - previous) / np.maximum(t - state.heard[:, 2], 1e-9), 0.0)
-        rate = np.where(np.isnan(state.heard[:, 1]), 0.0, state.heard[:, 1] + a * (rate - state.heard[:, 1]))
+        rate = np.where(new, 0.0, state.heard[:, 1] + a * ((heard - previous) / np.maximum(t - state.heard[:, 2], 1e-9)
+                                                           - state.heard[:, 1]))
         state.heard = np.stack([heard, rate, t], axis=1)
         behind = rate > RECEDING  # walking on, it hears the source fade: it is behind, turn round towards its side
         turning = np.where(behind, np.where(turning < 0, -o.turning_max, o.turning_max), turning)
         speed = np.where(behind, o.speed_min, speed)
         state.stopped = np.where(D <= o.reach, True, np.where(D > o.resume, False, state.stopped))
         state.current = np.where(state.stopped[:, None], 0.0, np.stack([speed, turning], axis=1))
-        return super().sensors(body, sims, state)
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
-        super().on_tick(body, sims, state, ids, healthy, neurons)
+        super().on_tick(body, sims, state, ids, healthy, neurons)  # scored against the commands of the tick just run
         ok = ids[healthy]
         near = np.linalg.norm(state.position[ok] - state.source[ok], axis=1) <= self.options.reach
         first = ok[near & np.isnan(state.arrival[ok])]
         state.arrival[first] = np.asarray(sims.time, float)[first]
+        self._hear(sims, state)
 
     def terms(self, state):
         out = super().terms(state)

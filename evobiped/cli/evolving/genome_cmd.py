@@ -1,6 +1,6 @@
 """``evobiped genome``: a genome file made from a walker's (other gene ranges, senses rewired, a preset's start).
 
-Four actions over :mod:`evobiped.files.genome_edit`; each writes only the OUT it is given and prints it.
+Five actions over :mod:`evobiped.files.genome_edit` (``command-calibrate`` over :mod:`evobiped.analysis.speed_battery`); each writes only the OUT it is given and prints it.
 """
 
 from __future__ import annotations
@@ -58,6 +58,16 @@ def add_genome(sub) -> None:
     c.add_argument("--stop-speed", type=float, default=0.0, metavar="V0",
                    help="with --speed-gain: at a stop (command_stop) the frame of a V0 m/s command, where the walker marks "
                    "time (default 0: command_stop at zero weight)")
+    k = actions.add_parser("command-calibrate", help="a commanded walker with its command_speed sense rescaled so that "
+                           "it walks at the speed it is told",
+                           description="Write IN as OUT with its command_speed input normalisation rescaled: IN follows each "
+                           "--speeds command for 20 s, its walked speed w is fitted as a + b v, and OUT reads a command v as "
+                           "IN read (v - a) / b. The genes stay; a command_stop row keeps its frame at a stop.")
+    k.add_argument("genome", metavar="IN", help="a commanded walker's genome file or run directory")
+    k.add_argument("out", metavar="OUT", help="the genome file to write")
+    k.add_argument("--speeds", default="0.3,0.45,0.6,0.75", metavar="V,V[,...]",
+                   help="the constant commands it follows, m/s (default 0.3,0.45,0.6,0.75)")
+    k.set_defaults(func=run_genome_calibrate)
     c.add_argument("--reference-speed", type=positive_float, default=None, metavar="V",
                    help="with --speed-gain: the speed in m/s the walker walks at, where the command changes nothing")
 
@@ -118,6 +128,32 @@ def run_genome_command(args) -> int:
     from ...files.genome_edit import command_genome
 
     _save(args, *command_genome(_walker(args), args.speed_gain, args.reference_speed, args.stop_speed))
+    print(args.out)
+    return 0
+
+
+def run_genome_calibrate(args) -> int:
+    import math
+
+    from ...analysis.commanded import is_commanded
+    from ...analysis.speed_battery import calibrate_speed
+    from ...files.genome_file import save_genome
+    from ...record.source import resolve
+
+    try:
+        speeds = [float(v) for v in args.speeds.split(",")]
+    except ValueError:
+        speeds = []
+    if len(speeds) < 2 or not all(math.isfinite(v) and v > 0 for v in speeds):
+        raise UserError(f"--speeds: expected two or more speeds above 0 m/s, comma-separated, got {args.speeds!r}")
+    source = resolve(args.genome)
+    if not is_commanded(source.config):
+        raise UserError(f"{source.genome_path} is not a commanded walker (task {source.config.task!r}): it has no speed "
+                        "command to calibrate")
+    cfg, fit = calibrate_speed(source.config, source.genome, speeds)
+    save_genome(args.out, source.genome, cfg, source=str(source.genome_path))
+    print(f"walked {', '.join(f'{w:.3f}' for w in fit['walked'])} m/s at {', '.join(f'{v:g}' for v in speeds)} m/s: "
+          f"w = {fit['intercept']:.3f} + {fit['slope']:.3f} v", file=sys.stderr)
     print(args.out)
     return 0
 

@@ -68,7 +68,9 @@ def run_replay_cmd(args) -> int:
         frames.finish()
     state = f"fell at t = {r.end_time:.2f} s" if r.fell else f"stayed up for {r.end_time:.1f} s"
     print(f"replayed fitness = {r.fitness!r}; {state}; {walk_line(r.walk)}")
-    if source.config.task == "command":  # a commanded walker replays its nominal schedule: say which
+    if source.config.task == "command" and args.sources:
+        print("commands: from its ears (the steering rule of evobiped.tasks.steer_command), towards the --source given")
+    elif source.config.task == "command":  # a commanded walker replays its nominal schedule: say which
         from ...analysis.commanded import nominal_words
 
         print(nominal_words(source.config))

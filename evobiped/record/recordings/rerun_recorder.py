@@ -18,6 +18,8 @@ Entity tree (time series on the ``sim_time`` timeline, in s)::
     joints/<actuator>/target       Scalars: PD target (rad) or torque (N m)
     contacts/<touch sensor>        Scalars: 1 while touching
     sensors/<name>                 Scalars: every body and task sensor (e.g. the ear signal)
+    commands/speed, commands/turning  Scalars: a commanded walker's commanded and walked speed (m/s) and turning rate
+                                   (deg/s), walked as 1 s running means
     fitness                        Scalars: fitness so far
 
 Whole trajectories go in with ``send_columns`` (one call per entity); every
@@ -94,6 +96,27 @@ def _cols(times) -> list:
     return [rr.TimeColumn(TIMELINE, duration=np.asarray(times, float))]
 
 
+def _log_commands(rec, traj: Trajectory) -> None:
+    """A commanded walker's commands (its ``command_speed`` and ``command_turning`` senses, as told) beside what it
+    walked: the pelvis's path along its facing and its facing's turn per tick, each a 1 s running mean."""
+    import rerun as rr
+
+    tk = _cols(traj.tick_time)
+    R = quat_to_mat(traj.body_quat[:, 1])  # the root body (the pelvis): its x axis on the ground is the facing
+    facing = np.arctan2(R[:, 1, 0], R[:, 0, 0])
+    dt = np.diff(traj.state_time)
+    step = np.diff(traj.planar, axis=0)
+    along = np.einsum("ki,ki->k", step, np.stack([np.cos(facing[1:]), np.sin(facing[1:])], axis=1)) / dt
+    turn = np.degrees(np.diff(np.unwrap(facing)) / dt)
+    k = max(1, int(round(1.0 / traj.dt)))
+    mean = lambda x: np.convolve(x, np.ones(k) / k, mode="full")[: len(x)] * k / np.minimum(np.arange(1, len(x) + 1), k)
+    told = {"speed": traj.sensors["command_speed"][:, 0], "turning": np.degrees(traj.sensors["command_turning"][:, 0])}
+    for name, walked, unit in (("speed", along, "m/s"), ("turning", turn, "deg/s")):
+        rec.log(f"commands/{name}", rr.SeriesLines(names=[f"commanded ({unit})", f"walked, 1 s mean ({unit})"],
+                                                   colors=[[0, 0, 0], [220, 60, 30]], widths=[2.0, 1.5]), static=True)
+        rec.send_columns(f"commands/{name}", indexes=tk, columns=rr.Scalars.columns(scalars=np.column_stack([told[name], mean(walked)])))
+
+
 def log_trajectory(rec, traj: Trajectory) -> None:
     """Every time series of ``traj`` on the ``sim_time`` timeline (geometry: :func:`log_geometry`)."""
     import rerun as rr
@@ -130,6 +153,8 @@ def log_trajectory(rec, traj: Trajectory) -> None:
         k = vals.shape[1]
         rec.log(f"sensors/{name}", rr.SeriesLines(names=[f"{name}[{i}]" for i in range(k)] if k > 1 else [name]), static=True)
         rec.send_columns(f"sensors/{name}", indexes=tk, columns=rr.Scalars.columns(scalars=vals))
+    if "command_speed" in traj.sensors:
+        _log_commands(rec, traj)
     if traj.source is not None:
         src = np.column_stack([traj.source, np.zeros(len(traj.source))])
         rec.log("world/source", rr.Points3D.from_fields(radii=[0.12], colors=[[255, 140, 0]], labels=["sound source"]), static=True)
