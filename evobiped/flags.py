@@ -81,8 +81,9 @@ def add_stored_walker(p, dest: str = "source", metavar: str = "SOURCE", *, also:
 
 def add_source_flag(p) -> None:
     p.add_argument("--source", dest="sources", nargs=2, type=float, action="append", metavar=("X", "Y"),
-                   help="a sound source at (X, Y) m for the steer task, one presentation each; repeat it for several "
-                        "(default: the config's, or the paper's (10, 3) and (10, -3))")
+                   help="a sound source at (X, Y) m for the steer task, or for a commanded walker (its commands then come from "
+                        "its ears), one presentation each; repeat it for several (default: the config's, or the paper's "
+                        "(10, 3) and (10, -3))")
 
 
 def refuse(flags: str, why: str) -> None:

@@ -33,13 +33,20 @@ def framed(tmp_path_factory):
     return path
 
 
+SHIPPED = WALKERS / "ctrnn_command_robust_seed0.json"
+
+
 @pytest.fixture(scope="module")
-def stopping(tmp_path_factory):
-    """``framed`` with a stop: at a zero command the frame of a 0.09 m/s command, where it marks time."""
-    path = tmp_path_factory.mktemp("stopping") / "stopping.json"
-    genome, cfg = command_genome(ROBUST, 0.77, 0.59, 0.09)
-    save_genome(path, genome, cfg)
-    return path
+def stopping():
+    """The shipped commanded walker: ``framed`` with a stop (at a zero command the frame of a 0.09 m/s command)."""
+    return SHIPPED
+
+
+def test_the_shipped_commanded_walker_is_the_documented_construction():
+    built, cfg = command_genome(ROBUST, 0.77, 0.59, 0.09)
+    shipped, shipped_cfg, meta = load_genome(SHIPPED)
+    assert np.array_equal(built, shipped) and meta["source"].endswith("ctrnn_walk_robust_seed0.json")
+    assert given(cfg.controller_options)["input_norm"] == given(shipped_cfg.controller_options)["input_norm"]
 
 
 def test_at_the_reference_speed_the_framed_walker_is_the_walker(framed):
