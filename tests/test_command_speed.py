@@ -176,3 +176,21 @@ def test_calibrating_a_walker_without_commands_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "not a commanded walker" in err and "\n" not in err and not out.exists()
     assert cli("genome", "command-calibrate", ROBUST, out, "--speeds", "0.4") == 2
+
+
+def test_sources_for_a_walker_that_takes_no_commands_are_one_line(tmp_path, capsys):
+    assert cli("episode", "--genome", WALKERS / "simbicon_cma_seed5.json", "--source", "3", "1") == 2
+    err = capsys.readouterr().err.strip()
+    assert "--source applies to the steer task" in err and "commanded walker" in err and "\n" not in err
+
+
+def test_a_steering_rule_out_of_order_is_one_line(stopping, tmp_path):
+    import subprocess
+    import sys
+
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text('[episode]\ntask = "steer-command"\n[episode.task_options]\nreach = 3.0\nslow_from = 2.0\n')
+    r = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--config", cfg, "--generations", "1", "--out",
+                        tmp_path / "run"], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 2 and "reach < slow_from" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "run").exists()
