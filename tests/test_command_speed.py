@@ -12,7 +12,7 @@ import pytest
 
 from evobiped.analysis.commanded import follow_commands
 from evobiped.analysis.gait_report import gait_report
-from evobiped.analysis.speed_battery import _windows, calibrate_speed, random_schedules, speed_battery, stop_and_go
+from evobiped.analysis.speed_battery import _windows, calibrate_speed, gait_at_speeds, random_schedules, speed_battery, stop_and_go
 from evobiped.core.errors import UserError
 from evobiped.core.options import given
 from evobiped.episode.remap import input_widths
@@ -194,3 +194,12 @@ def test_a_steering_rule_out_of_order_is_one_line(stopping, tmp_path):
                         tmp_path / "run"], capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 2 and "reach < slow_from" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "run").exists()
+
+
+def test_the_calibrated_quick_start_walker_walks_as_told_by_every_criterion():
+    g, cfg, meta = load_genome(WALKERS / "ctrnn_command_seed1.json")
+    assert meta["source"].endswith("ctrnn_walk_preset_seed1.json") and len(meta["calibrations"]) == 2
+    r = follow_commands(cfg, g, [0.0, 12.0], [0.4, 0.7], [0.0, 0.0], 24.0)
+    assert not r["fell"] and [s["walked_speed"] for s in r["stretches"]] == pytest.approx([0.4, 0.7], rel=0.10)
+    (gait,) = gait_at_speeds(cfg, g, [0.5], seconds=20.0)
+    assert gait["walks"], gait["failed"]  # duty >= 0.5 each foot, no flight, slip <= 5 %, as the docs' table says

@@ -137,7 +137,7 @@ def run_genome_calibrate(args) -> int:
 
     from ...analysis.commanded import is_commanded
     from ...analysis.speed_battery import calibrate_speed
-    from ...files.genome_file import save_genome
+    from ...files.genome_file import load_genome, save_genome
     from ...record.source import resolve
 
     try:
@@ -151,7 +151,9 @@ def run_genome_calibrate(args) -> int:
         raise UserError(f"{source.genome_path} is not a commanded walker (task {source.config.task!r}): it has no speed "
                         "command to calibrate")
     cfg, fit = calibrate_speed(source.config, source.genome, speeds)
-    save_genome(args.out, source.genome, cfg, source=str(source.genome_path))
+    _, _, meta = load_genome(source.genome_path)  # the walker it was made from stays its source; each fit is kept
+    save_genome(args.out, source.genome, cfg, source=meta.get("source", str(source.genome_path)),
+                calibrations=[*meta.get("calibrations", []), fit])
     print(f"walked {', '.join(f'{w:.3f}' for w in fit['walked'])} m/s at {', '.join(f'{v:g}' for v in speeds)} m/s: "
           f"w = {fit['intercept']:.3f} + {fit['slope']:.3f} v", file=sys.stderr)
     print(args.out)
