@@ -80,14 +80,14 @@ def test_networks_of_different_substeps_in_one_batch_step_as_they_do_alone(rng):
 def test_euler_stays_the_default_and_no_stored_walker_names_another_integration():
     """A genome file writes back only the options its table gave: the network walkers shipped before the option name
     no integration, so they replay with Euler, as they were recorded; the walking networks evolved with the exact
-    leak step (walker-ctrnn-walk) name it."""
+    leak step (walker-ctrnn-walk) and the commanded walkers made from them name it."""
     assert CTRNN.Options().integration == "euler"
     files = sorted((ROOT / "docs" / "walkers").glob("*ctrnn*.json"))
     walkers = [f for f in files if "robustness" not in f.name]
     assert walkers
     for f in walkers:
         options = json.loads(f.read_text())["episode"].get("controller_options", {})
-        if f.name.startswith("ctrnn_walk_"):
+        if f.name.startswith(("ctrnn_walk_", "ctrnn_command_")):
             assert options["integration"] == "exponential", f.name
         else:
             assert "integration" not in options, f.name
