@@ -18,7 +18,7 @@ def add_episode(sub) -> None:
     src.add_argument("--seed", type=int, default=0, help="seed of the random genome (default 0)")
     p.add_argument("--body", help=f"body: {choices_text('body')} (default reil; not with --genome, whose file names it)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn; not with --genome)")
-    p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50)")
+    p.add_argument("--seconds", type=positive_float, help="episode length in s (default: the genome file's episode, else 50)")
     add_source_flag(p)
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_episode_cmd)
