@@ -86,6 +86,19 @@ def add_source_flag(p) -> None:
                         "(10, 3) and (10, -3))")
 
 
+def number_list(flag: str, text: str | None) -> list[float] | None:
+    """A comma-separated list of finite numbers (None: not given); one line, exit 2, for anything else."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(np.isfinite(v) for v in values):
+        refuse(flag, f"expected finite numbers, comma-separated, got {text!r}")
+    return values
+
+
 def refuse(flags: str, why: str) -> None:
     """A flag that does not apply here: one line, exit 2."""
     raise UserError(f"{flags}: {why}")

@@ -203,3 +203,25 @@ def test_the_calibrated_quick_start_walker_walks_as_told_by_every_criterion():
     assert not r["fell"] and [s["walked_speed"] for s in r["stretches"]] == pytest.approx([0.4, 0.7], rel=0.10)
     (gait,) = gait_at_speeds(cfg, g, [0.5], seconds=20.0)
     assert gait["walks"], gait["failed"]  # duty >= 0.5 each foot, no flight, slip <= 5 %, as the docs' table says
+
+
+def test_the_replay_recording_logs_commanded_against_walked(tmp_path):
+    """The recording's commands/speed holds the commands the walker was told and the speed it walked (1 s mean): on
+    its tour, 0.5 m/s then 0.8 m/s from 5 s, the walked mean late in each stretch is near its command."""
+    import rerun as rr
+
+    out = tmp_path / "c.rrd"
+    assert cli("replay", SHIPPED, "--seconds", "10", "--out", out) == 0
+    series = {}
+    for c in rr.chunk.RrdReader(out).stream():
+        if c.entity_path in ("/commands/speed", "/commands/turning") and not c.is_static:
+            rb = c.to_record_batch()
+            t = np.array([x.total_seconds() if hasattr(x, "total_seconds") else x for x in rb.column("sim_time").to_pylist()])
+            series[c.entity_path] = (t, np.array(rb.column("Scalars:scalars").to_pylist(), float))
+    t, v = series["/commands/speed"]
+    told, walked = v[:, 0], v[:, 1]  # a row at t holds the command from t on (the last, at 10 s, the next stretch's)
+    assert (told[(t > 5.01) & (t < 9.99)] == 0.8).all() and (told[t < 4.99] == 0.5).all()
+    assert np.mean(walked[(t > 3.5) & (t < 5)]) == pytest.approx(0.5, rel=0.15)
+    assert np.mean(walked[(t > 9) & (t < 10)]) == pytest.approx(0.8, rel=0.15)
+    _, w = series["/commands/turning"]
+    assert (w[t < 9.99, 0] == 0).all() and w[-1, 0] == pytest.approx(0.35 * 180 / np.pi)  # the turn from 10 s

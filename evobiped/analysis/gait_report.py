@@ -141,7 +141,7 @@ def gait_line(report: dict) -> str:
     duty = "/".join(f"{report[f'duty_{f}']:.2f}" for f in feet)
     return (f"{report['speed']:.2f} m/s, duty {duty} ({'/'.join(f[0].upper() for f in feet)}), airborne "
             f"{100 * report['airborne']:.1f} %, {report['steps_per_s']:.1f} steps/s of {report['step_length']:.2f} m, "
-            f"slip {100 * report['slip_share']:.0f} % of the speed, {report['power']:.0f} W/kg, "
+            f"slip {100 * report['slip_share']:.1f} % of the speed, {report['power']:.0f} W/kg, "
             f"CoT {report['cost_of_transport']:.2f}")
 
 

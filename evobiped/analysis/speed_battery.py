@@ -34,16 +34,29 @@ def random_schedules(n: int, stretches: int, low: float, high: float, seed: int)
     return np.random.default_rng(seed).uniform(low, high, (n, stretches))
 
 
+def _tick_lengths(t: np.ndarray) -> np.ndarray:
+    """Each tick's length (s) from the ticks' start times ``t`` ``(T,)`` (the last as long as the one before)."""
+    return np.diff(np.append(t, 2 * t[-1] - t[-2])) if len(t) > 1 else np.ones_like(t)
+
+
+def _window_means(trace: dict, start: float, end: float, window: float) -> tuple[np.ndarray, np.ndarray]:
+    """The starts (s) of the ``window`` s windows in [start, end] s and the mean walked speed (m/s) over each; NaN for
+    a window the trace does not cover whole (a fall ends it)."""
+    t, v = np.asarray(trace["time"]), np.asarray(trace["walked_speed"])
+    dt = _tick_lengths(t)
+    starts = np.arange(start, end - window + 1e-9, window)
+    means = np.full(len(starts), np.nan)
+    for i, a in enumerate(starts):
+        k = (t >= a - 1e-9) & (t < a + window - 1e-9)
+        if dt[k].sum() >= window - 1e-6:
+            means[i] = np.sum(v[k] * dt[k]) / dt[k].sum()
+    return starts, means
+
+
 def _windows(trace: dict, start: float, end: float, command: float, window: float) -> list[float]:
     """The errors (% of ``command``) of the mean walked speed over each whole ``window`` s in [start, end] s."""
-    t, v = np.asarray(trace["time"]), np.asarray(trace["walked_speed"])
-    dt = np.diff(np.append(t, 2 * t[-1] - t[-2])) if len(t) > 1 else np.ones_like(t)
-    out = []
-    for a in np.arange(start, end - window + 1e-9, window):
-        k = (t >= a - 1e-9) & (t < a + window - 1e-9)
-        if dt[k].sum() >= window - 1e-6:  # a whole window (a fall ends the trace)
-            out.append(float(100 * abs(np.sum(v[k] * dt[k]) / dt[k].sum() - command) / command))
-    return out
+    _, means = _window_means(trace, start, end, window)
+    return [float(100 * abs(m - command) / command) for m in means if np.isfinite(m)]
 
 
 def speed_battery(config: EpisodeConfig, genome: np.ndarray, *, n: int = SCHEDULES, stretches: int = STRETCHES,
@@ -95,17 +108,15 @@ def battery_summary(rows: list[dict]) -> dict:
 
 
 def gait_at_speeds(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, seconds: float = 30.0) -> list[dict]:
-    """The gait lab's report (:func:`~evobiped.analysis.gait_report.gait_report`, its first ``seconds`` s) of the
-    commanded walker under each constant speed command (m/s, straight ahead)."""
+    """The gait lab's report (:func:`~evobiped.analysis.gait_report.gait_report`, its first ``seconds`` s, less the
+    stance episodes) of the commanded walker under each constant speed command (m/s, straight ahead), with
+    ``commanded``."""
     out = []
     for v in speeds:
         options = {**given(config.task_options), "schedule": "constant", "speed": float(v), "turning": 0.0}
         cfg = dataclasses.replace(config, task_options=options)
         report = gait_report(cfg, genome, seconds=seconds)
-        out.append({"commanded": float(v), **{k: report[k] for k in ("up", "speed", "duty_min", "duty_asymmetry",
-                                                                        "airborne", "slip_share", "steps_per_s",
-                                                                        "step_length", "cost_of_transport", "walks", "failed")
-                                                 if k in report}})
+        out.append({"commanded": float(v), **{k: x for k, x in report.items() if k != "stance"}})
     return out
 
 
@@ -126,13 +137,9 @@ def stop_and_go(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], 
         r = follow_commands(config, genome, [0.0, walk, walk + stop], [float(v), 0.0, float(v)], [0.0] * 3, 2 * walk + stop)
         tr = r["trace"]
         t, w, both = np.asarray(tr["time"]), np.asarray(tr["walked_speed"]), np.asarray(tr["both_down"], bool)
-        dt = np.diff(np.append(t, t[-1] + (t[-1] - t[-2] if len(t) > 1 else 0.0)))
-        starts = np.arange(walk, walk + stop - window + 1e-9, window)
-        means = []
-        for a in starts:
-            k = (t >= a - 1e-9) & (t < a + window - 1e-9)
-            means.append(float(np.sum(w[k] * dt[k]) / dt[k].sum()) if dt[k].sum() >= window - 1e-6 else np.inf)
-        still = np.abs(means) <= STOPPED
+        dt = _tick_lengths(t)
+        starts, means = _window_means(tr, walk, walk + stop, window)
+        still = np.abs(np.nan_to_num(means, nan=np.inf)) <= STOPPED
         first = next((i for i in range(len(still)) if still[i:].all()), None)
         late = (t >= walk + stop / 2 - 1e-9) & (t < walk + stop - 1e-9)
         during = (t >= walk - 1e-9) & (t < walk + stop - 1e-9)

@@ -15,6 +15,15 @@ DEFAULT_SOURCES = ((10.0, 3.0), (10.0, -3.0))
 MIN_SOURCE_DISTANCE = 0.5
 
 
+def ear_sites(model, task: str) -> tuple[int, int]:
+    """The site ids of the body's ears (``left_ear``, ``right_ear``) in ``model``; ConfigError naming ``task`` for a
+    body without them."""
+    try:
+        return model.site("left_ear").id, model.site("right_ear").id
+    except KeyError:
+        raise ConfigError(f"{task} task: the body has no ears (sites 'left_ear' and 'right_ear')") from None
+
+
 def intensity(ear: np.ndarray, source: np.ndarray) -> np.ndarray:
     """I = 1 / |e - q|^2 (1/m^2) at ear ground positions ``(n, 2)`` from sources ``(n, 2)`` -> ``(n,)``."""
     return 1.0 / np.maximum(np.sum((ear - source) ** 2, axis=1), 1e-12)

@@ -81,7 +81,8 @@ from dataclasses import dataclass
 from ..core.errors import ConfigError
 from ..core.options import option
 from .base import Task
-from .sound import DEFAULT_SOURCES, MIN_SOURCE_DISTANCE, check_range, draw_sources, ear_signal, intensity, parse_sources
+from .sound import (DEFAULT_SOURCES, MIN_SOURCE_DISTANCE, check_range, draw_sources, ear_signal, ear_sites, intensity,
+                    parse_sources)
 from .states import SteerState
 from .walk import LAB_TERMS
 
@@ -165,10 +166,7 @@ class SteerTask(Task):
             self.term_names = type(self).term_names + LAB_TERMS
 
     def bind_model(self, model) -> None:
-        try:
-            self._ears = (model.site("left_ear").id, model.site("right_ear").id)
-        except KeyError:
-            raise ConfigError("steer task: the body has no ears (sites 'left_ear' and 'right_ear')") from None
+        self._ears = ear_sites(model, "steer")
 
     def sensor_widths(self):
         return {"sound": 1, **({"loudness": 1} if self.options.loudness else {})}

@@ -31,7 +31,7 @@ import numpy as np
 from ..core.errors import ConfigError
 from ..core.options import option
 from .command import CommandOptions, CommandTask
-from .sound import DEFAULT_SOURCES, intensity, parse_sources
+from .sound import DEFAULT_SOURCES, ear_sites, intensity, parse_sources
 from .states import SteerCommandState
 
 #: s: the time constant of the low-pass on the distance the walker hears (the stride sways the ears)
@@ -93,10 +93,7 @@ class SteerCommandTask(CommandTask):
 
     def bind_model(self, model) -> None:
         super().bind_model(model)
-        try:
-            self._ears = (model.site("left_ear").id, model.site("right_ear").id)
-        except KeyError:
-            raise ConfigError("steer-command task: the body has no ears (sites 'left_ear' and 'right_ear')") from None
+        self._ears = ear_sites(model, "steer-command")
         left, right = (model.site_pos[i] for i in self._ears)
         self._ear = float(np.linalg.norm(left[:2] - right[:2]) / 2)
 
@@ -126,10 +123,10 @@ class SteerCommandTask(CommandTask):
                                              slow_from=o.slow_from, reach=o.reach)
         t = np.asarray(sims.time, float)
         new = np.isnan(state.heard[:, 0])
-        a = np.where(new, 1.0, 1.0 - np.exp(-(t - state.heard[:, 2]) / RECEDE_TAU))
+        k = np.where(new, 1.0, 1.0 - np.exp(-(t - state.heard[:, 2]) / RECEDE_TAU))  # the low-pass's step
         previous = np.where(new, D, state.heard[:, 0])
-        heard = previous + a * (D - previous)
-        rate = np.where(new, 0.0, state.heard[:, 1] + a * ((heard - previous) / np.maximum(t - state.heard[:, 2], 1e-9)
+        heard = previous + k * (D - previous)
+        rate = np.where(new, 0.0, state.heard[:, 1] + k * ((heard - previous) / np.maximum(t - state.heard[:, 2], 1e-9)
                                                            - state.heard[:, 1]))
         state.heard = np.stack([heard, rate, t], axis=1)
         behind = rate > RECEDING  # walking on, it hears the source fade: it is behind, turn round towards its side

@@ -133,25 +133,21 @@ def run_genome_command(args) -> int:
 
 
 def run_genome_calibrate(args) -> int:
-    import math
-
     from ...analysis.commanded import is_commanded
     from ...analysis.speed_battery import calibrate_speed
-    from ...files.genome_file import load_genome, save_genome
+    from ...files.genome_file import save_genome
+    from ...flags import number_list
     from ...record.source import resolve
 
-    try:
-        speeds = [float(v) for v in args.speeds.split(",")]
-    except ValueError:
-        speeds = []
-    if len(speeds) < 2 or not all(math.isfinite(v) and v > 0 for v in speeds):
+    speeds = number_list("--speeds", args.speeds)
+    if len(speeds) < 2 or not all(v > 0 for v in speeds):
         raise UserError(f"--speeds: expected two or more speeds above 0 m/s, comma-separated, got {args.speeds!r}")
     source = resolve(args.genome)
     if not is_commanded(source.config):
         raise UserError(f"{source.genome_path} is not a commanded walker (task {source.config.task!r}): it has no speed "
                         "command to calibrate")
     cfg, fit = calibrate_speed(source.config, source.genome, speeds)
-    _, _, meta = load_genome(source.genome_path)  # the walker it was made from stays its source; each fit is kept
+    meta = source.meta  # the walker it was made from stays its source; each fit is kept
     save_genome(args.out, source.genome, cfg, source=meta.get("source", str(source.genome_path)),
                 calibrations=[*meta.get("calibrations", []), fit])
     print(f"walked {', '.join(f'{w:.3f}' for w in fit['walked'])} m/s at {', '.join(f'{v:g}' for v in speeds)} m/s: "

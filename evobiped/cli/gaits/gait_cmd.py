@@ -3,7 +3,7 @@ commanded walker's genome (the command task) following commanded speeds and turn
 
 from __future__ import annotations
 
-from ...flags import positive_float, refuse
+from ...flags import number_list, positive_float, refuse
 
 
 def add_gait(sub) -> None:
@@ -41,25 +41,10 @@ def add_gait(sub) -> None:
     p.set_defaults(func=run_gait_cmd)
 
 
-def _numbers(flag: str, text: str | None) -> list[float] | None:
-    """A comma-separated list of finite numbers (None: not given); one line, exit 2, for anything else."""
-    import math
-
-    if text is None:
-        return None
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if not values or not all(math.isfinite(v) for v in values):
-        refuse(flag, f"expected finite numbers, comma-separated, got {text!r}")
-    return values
-
-
 def run_gait_cmd(args) -> int:
     from pathlib import Path
 
-    speeds, turnings = _numbers("--speed", args.speed), _numbers("--turning", args.turning)
+    speeds, turnings = number_list("--speed", args.speed), number_list("--turning", args.turning)
     if not (Path(args.run) / "archive.json").is_file():
         return _run_commanded(args, speeds, turnings)
     if args.json or args.out:
@@ -166,6 +151,7 @@ def _run_battery(args, source, out) -> int:
     import json
     import math
 
+    from ...analysis.gait_report import gait_line
     from ...analysis.speed_battery import gait_at_speeds, speed_battery, stop_and_go
     from ...core.fileio import write_json
     from ...tasks.command_schedule import trained_range
@@ -174,7 +160,7 @@ def _run_battery(args, source, out) -> int:
         refuse("--battery/--stretches", f"must be at least 1, got {args.battery} and {args.stretches}")
     (lo, hi), stops, _ = trained_range(source.config.task_options)
     if args.speed_range is not None:
-        pair = _numbers("--range", args.speed_range)
+        pair = number_list("--range", args.speed_range)
         if len(pair) != 2 or not 0 < pair[0] <= pair[1]:
             refuse("--range", f"expected LOW,HIGH m/s with 0 < LOW <= HIGH, got {args.speed_range!r}")
         if pair[0] < lo - 1e-9 or pair[1] > hi + 1e-9:
@@ -208,9 +194,8 @@ def _run_battery(args, source, out) -> int:
           f"{se['median']:.1f} %, p90 {se['p90']:.1f} %, max {se['max']:.1f} %; {report['window']:g} s windows median "
           f"{we['median']:.1f} %, p90 {we['p90']:.1f} %")
     for g in report["gait"]:
-        print(f"gait at {g['commanded']:.1f} m/s: walked {g['speed']:.2f} m/s, duty min {g['duty_min']:.2f}, airborne "
-              f"{100 * g['airborne']:.1f} %, slip {100 * g['slip_share']:.1f} %, {g['steps_per_s']:.1f} steps/s of "
-              f"{g['step_length']:.3f} m: " + ("a walk" if g["walks"] else "not a walk (" + ", ".join(g["failed"]) + ")"))
+        print(f"gait at {g['commanded']:.1f} m/s: {gait_line(g)}; "
+              + ("a walk" if g["walks"] else "not a walk: " + ", ".join(g["failed"])))
     for g in report["stop_and_go"]:
         stopped = f"stopped {g['time_to_stop']:g} s after the command" if g["time_to_stop"] is not None else "never stopped"
         print(f"stop and go from {g['speed']:.2f} m/s: " + (f"FELL at {g['end_time']:.1f} s" if g["fell"] else
