@@ -17,7 +17,8 @@ from .core.errors import UserError
 from .tasks.sound import with_sources
 
 
-def _finite(text: str) -> float:
+def finite_float(text: str) -> float:
+    """A finite number (argparse type): ``nan``, ``inf`` and text are refused."""
     try:
         v = float(text)
     except ValueError:
@@ -28,27 +29,78 @@ def _finite(text: str) -> float:
 
 
 def positive_float(text: str) -> float:
-    v = _finite(text)
+    v = finite_float(text)
     if v <= 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
     return v
 
 
 def nonnegative_float(text: str) -> float:
-    v = _finite(text)
+    v = finite_float(text)
     if v < 0:
         raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
     return v
 
 
-def positive_int(text: str) -> int:
+def within(low: float, high: float, unit: str = "", why: str = ""):
+    """An argparse type: a finite number from ``low`` to ``high`` (in ``unit``); the refusal states the bound and
+    ``why`` it is the bound (e.g. ``"a step cycle"``)."""
+    def parse(text: str) -> float:
+        v = finite_float(text)
+        if not low <= v <= high:
+            u = f" {unit}" if unit else ""
+            raise argparse.ArgumentTypeError(f"must be from {low:g} to {high:g}{u}" + (f" ({why})" if why else "")
+                                             + f", got {text}")
+        return v
+
+    parse.__name__ = "number"  # argparse names a type by it in "invalid number value"
+    return parse
+
+
+def _whole(text: str) -> int:
+    """A whole number, written as one (``12``) or as an exact float (``1e3``)."""
     try:
-        v = int(text)
+        return int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        pass
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not (np.isfinite(v) and v == int(v)):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number")
+    return int(v)
+
+
+def positive_int(text: str) -> int:
+    v = _whole(text)
     if v <= 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
     return v
+
+
+#: the largest seed a flag takes (NumPy's generators take any whole number >= 0; 2^63 - 1 fits every integer type)
+MAX_SEED = 2**63 - 1
+
+
+def seed(text: str) -> int:
+    """A random seed (argparse type): a whole number from 0 to :data:`MAX_SEED`."""
+    v = _whole(text)
+    if not 0 <= v <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to 2^63 - 1 (a seed), got {text}")
+    return v
+
+
+def count(high: int, what: str):
+    """An argparse type: a whole number from 1 to ``high``, the bound ``what`` (e.g. ``"the memory of the table"``)."""
+    def parse(text: str) -> int:
+        v = _whole(text)
+        if not 1 <= v <= high:
+            raise argparse.ArgumentTypeError(f"must be a whole number from 1 to {high:,} ({what}), got {text}")
+        return v
+
+    parse.__name__ = "count"
+    return parse
 
 
 def choices_text(kind: str) -> str:
@@ -80,14 +132,15 @@ def add_stored_walker(p, dest: str = "source", metavar: str = "SOURCE", *, also:
 
 
 def add_source_flag(p) -> None:
-    p.add_argument("--source", dest="sources", nargs=2, type=float, action="append", metavar=("X", "Y"),
+    p.add_argument("--source", dest="sources", nargs=2, type=finite_float, action="append", metavar=("X", "Y"),
                    help="a sound source at (X, Y) m for the steer task, or for a commanded walker (its commands then come from "
                         "its ears), one presentation each; repeat it for several (default: the config's, or the paper's "
                         "(10, 3) and (10, -3))")
 
 
-def number_list(flag: str, text: str | None) -> list[float] | None:
-    """A comma-separated list of finite numbers (None: not given); one line, exit 2, for anything else."""
+def number_list(flag: str, text: str | None, bound: float | None = None, unit: str = "") -> list[float] | None:
+    """A comma-separated list of finite numbers (None: not given), each within +-``bound`` (in ``unit``) if given;
+    one line, exit 2, for anything else."""
     if text is None:
         return None
     try:
@@ -96,7 +149,15 @@ def number_list(flag: str, text: str | None) -> list[float] | None:
         values = []
     if not values or not all(np.isfinite(v) for v in values):
         refuse(flag, f"expected finite numbers, comma-separated, got {text!r}")
+    if bound is not None and not all(abs(v) <= bound for v in values):
+        refuse(flag, f"each value must be within -{bound:g} to {bound:g}{' ' + unit if unit else ''}, got {text!r}")
     return values
+
+
+#: the fastest commanded speed a flag takes, m/s (no walker here walks 1 m/s; a sprinter runs 10)
+MAX_SPEED = 10.0
+#: the fastest commanded turning rate a flag takes, deg/s (two turns a second)
+MAX_TURNING = 720.0
 
 
 def refuse(flags: str, why: str) -> None:

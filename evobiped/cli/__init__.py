@@ -15,6 +15,7 @@ import argparse
 import importlib
 import os
 import pkgutil
+import re
 import signal
 import sys
 import threading
@@ -31,7 +32,15 @@ CORE = ("walkers.episode_cmd", "evolving.evolve_cmd", "evolving.compare_cmd", "e
         "gaits.gait_cmd", "walkers.gait_report_cmd")
 
 
+#: what argparse reads as a negative number, a value and not a flag: -1, -.5, -1e308, -1.5E-3, -inf, -nan
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self._negative_number_matcher = NEGATIVE_NUMBER  # argparse's own misses exponents: -1e308 read as a flag
+
     def error(self, message):  # one line, exit 2, no usage dump; one prefix for every refusal (UserError's too)
         self.exit(2, f"{ERROR}{message}\n")
 

@@ -41,6 +41,8 @@ def with_ranges(path: str | Path, ranges: dict[str, tuple[float, float]]) -> tup
     for name, (lo, hi) in ranges.items():
         if not lo < hi:
             raise UserError(f"--block {name}: the range [{lo:g}, {hi:g}] is empty (give low < high)")
+        if not np.isfinite(hi - lo):
+            raise UserError(f"--block {name}: the range [{lo:g}, {hi:g}] must be finite and at most 1.8e308 wide")
         genes[name] = {**genes.get(name, {}), "low": float(lo), "high": float(hi)}
     new = dataclasses.replace(cfg, controller_options={**given(cfg.controller_options), "genes": genes})
     layout = new.parts()[1].layout  # ConfigError (a UserError) for an unknown block name

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ...core.errors import UserError
-from ...flags import choices_text, positive_int
+from ...flags import choices_text, positive_int, seed
 
 #: the comparison's settings a resume takes from its directory unless given again (then they must match)
 SETTINGS = ("seeds", "budget", "trials", "checkpoints", "noise", "measure", "success")
@@ -20,7 +20,7 @@ def add_compare(sub) -> None:
     p.add_argument("configs", nargs="*", metavar="CONFIG", help=f"a preset ({choices_text('preset')}) or a settings file (TOML, "
                    "as evolve --config takes)")
     p.add_argument("--seeds", type=positive_int, metavar="N", help="runs per configuration, seeds FIRST..FIRST+N-1")
-    p.add_argument("--first-seed", type=int, default=None, metavar="FIRST", help="the first seed (default 0)")
+    p.add_argument("--first-seed", type=seed, default=None, metavar="FIRST", help="the first seed (default 0)")
     p.add_argument("--budget", type=positive_int, metavar="EVALS", help="episodes each run evaluates: it stops at the first "
                    "generation boundary where it has evaluated this many (genomes x presentations each)")
     p.add_argument("--trials", type=positive_int, metavar="K", help="fresh presentations per re-evaluated policy (default 8)")
@@ -89,8 +89,6 @@ def run_compare_cmd(args) -> int:
     given = {"seeds": None if args.seeds is None else tuple(range(args.first_seed or 0, (args.first_seed or 0) + args.seeds)),
              "budget": args.budget, "trials": args.trials, "checkpoints": args.checkpoints, "noise": _noise(args.noise),
              "measure": args.measure, "success": args.success}
-    if args.first_seed is not None and args.first_seed < 0:
-        raise UserError(f"--first-seed: must be >= 0, got {args.first_seed}")
     if args.first_seed is not None and args.seeds is None:
         raise UserError("--first-seed: give --seeds N with it")
     names, configs = _configs(args.configs)

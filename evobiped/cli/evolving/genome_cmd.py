@@ -9,7 +9,7 @@ import json
 import sys
 
 from ...core.errors import UserError
-from ...flags import positive_float
+from ...flags import MAX_SPEED, finite_float, positive_float
 
 #: the shipped walkers the start genomes are made from by default (paths from the repository's root)
 SCRATCH_WALKER = "docs/walkers/ctrnn_es_seed5.json"
@@ -53,9 +53,9 @@ def add_genome(sub) -> None:
                      "added at zero weight (they change nothing until the search moves them), or with --speed-gain K the speed "
                      "command moving the frame its velocity sense reads: it feels K (v* - V) m/s slower than it walks, "
                      "V the --reference-speed.")
-    c.add_argument("--speed-gain", type=float, default=0.0, metavar="K",
+    c.add_argument("--speed-gain", type=finite_float, default=0.0, metavar="K",
                    help="the velocity sense's frame moves at K (v* - V) m/s (default 0: command_speed at zero weight)")
-    c.add_argument("--stop-speed", type=float, default=0.0, metavar="V0",
+    c.add_argument("--stop-speed", type=finite_float, default=0.0, metavar="V0",
                    help="with --speed-gain: at a stop (command_stop) the frame of a V0 m/s command, where the walker marks "
                    "time (default 0: command_stop at zero weight)")
     k = actions.add_parser("command-calibrate", help="a commanded walker with its command_speed sense rescaled so that "
@@ -139,7 +139,7 @@ def run_genome_calibrate(args) -> int:
     from ...flags import number_list
     from ...record.source import resolve
 
-    speeds = number_list("--speeds", args.speeds)
+    speeds = number_list("--speeds", args.speeds, MAX_SPEED, "m/s")
     if len(speeds) < 2 or not all(v > 0 for v in speeds):
         raise UserError(f"--speeds: expected two or more speeds above 0 m/s, comma-separated, got {args.speeds!r}")
     source = resolve(args.genome)

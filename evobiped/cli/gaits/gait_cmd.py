@@ -3,7 +3,11 @@ commanded walker's genome (the command task) following commanded speeds and turn
 
 from __future__ import annotations
 
-from ...flags import number_list, positive_float, refuse
+from ...flags import MAX_SPEED, MAX_TURNING, count, finite_float, number_list, positive_float, refuse, seed
+
+
+#: the most stretches a speed battery runs, all its schedules together (the docs' batteries: 180)
+MAX_STRETCHES = 10**5
 
 
 def add_gait(sub) -> None:
@@ -21,22 +25,22 @@ def add_gait(sub) -> None:
     p.add_argument("--json", action="store_true", help="a commanded walker: print the report as JSON")
     p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: the "
                    "run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
-    p.add_argument("--battery", type=int, default=None, metavar="N", help="a commanded walker: N random schedules of "
+    p.add_argument("--battery", type=count(10**4, "schedules of a battery"), default=None, metavar="N", help="a commanded walker: N random schedules of "
                    "--stretches speeds drawn uniformly in its evolved speed range (or --range), --hold s each, straight "
                    "ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, falls, its "
                    "gait at constant commands, and (a walker evolved with stops) a 20 s stop between two walks at its "
                    "slowest, middle and fastest speed; writes <stem>_speed_battery.json")
-    p.add_argument("--stretches", type=int, default=6, metavar="K", help="--battery: stretches per schedule (default 6)")
+    p.add_argument("--stretches", type=count(10**4, "stretches of a schedule"), default=6, metavar="K", help="--battery: stretches per schedule (default 6)")
     p.add_argument("--range", dest="speed_range", metavar="LOW,HIGH", help="--battery: the speeds drawn, m/s (default: "
                    "the speed range the walker was evolved for)")
-    p.add_argument("--seed", type=int, default=0, help="--battery: the seed of the schedules (default 0)")
-    p.add_argument("--ramp", type=float, default=None, metavar="A", help="the knob speeds up by at most A m/s per s, "
+    p.add_argument("--seed", type=seed, default=0, help="--battery: the seed of the schedules (default 0)")
+    p.add_argument("--ramp", type=finite_float, default=None, metavar="A", help="the knob speeds up by at most A m/s per s, "
                    "switching elites every second (default 0.1; 0: at once)")
-    p.add_argument("--ramp-down", type=float, default=None, metavar="A", help="the knob slows down by at most A m/s per s "
+    p.add_argument("--ramp-down", type=finite_float, default=None, metavar="A", help="the knob slows down by at most A m/s per s "
                    "(default 0.2; 0: at once)")
-    p.add_argument("--correction", type=float, default=None, metavar="S", help="the knob makes up a shortfall (or excess) in the distance "
+    p.add_argument("--correction", type=finite_float, default=None, metavar="S", help="the knob makes up a shortfall (or excess) in the distance "
                    "walked so far in a stretch within about S s (default 3; 0: no loop, the knob asks for the command itself)")
-    p.add_argument("--overshoot", type=float, default=None, metavar="F", help="the most the knob may ask above or below the command, "
+    p.add_argument("--overshoot", type=finite_float, default=None, metavar="F", help="the most the knob may ask above or below the command, "
                    "a fraction of it (default 0.2)")
     p.set_defaults(func=run_gait_cmd)
 
@@ -44,7 +48,8 @@ def add_gait(sub) -> None:
 def run_gait_cmd(args) -> int:
     from pathlib import Path
 
-    speeds, turnings = number_list("--speed", args.speed), number_list("--turning", args.turning)
+    speeds = number_list("--speed", args.speed, MAX_SPEED, "m/s")
+    turnings = number_list("--turning", args.turning, MAX_TURNING, "deg/s")
     if not (Path(args.run) / "archive.json").is_file():
         return _run_commanded(args, speeds, turnings)
     if args.json or args.out:
@@ -156,11 +161,12 @@ def _run_battery(args, source, out) -> int:
     from ...core.fileio import write_json
     from ...tasks.command_schedule import trained_range
 
-    if args.battery < 1 or args.stretches < 1:
-        refuse("--battery/--stretches", f"must be at least 1, got {args.battery} and {args.stretches}")
+    if args.battery * args.stretches > MAX_STRETCHES:
+        refuse("--battery/--stretches", f"{args.battery} schedules of {args.stretches} stretches are "
+               f"{args.battery * args.stretches:,} stretches; a battery runs at most {MAX_STRETCHES:,}")
     (lo, hi), stops, _ = trained_range(source.config.task_options)
     if args.speed_range is not None:
-        pair = number_list("--range", args.speed_range)
+        pair = number_list("--range", args.speed_range, MAX_SPEED, "m/s")
         if len(pair) != 2 or not 0 < pair[0] <= pair[1]:
             refuse("--range", f"expected LOW,HIGH m/s with 0 < LOW <= HIGH, got {args.speed_range!r}")
         if pair[0] < lo - 1e-9 or pair[1] > hi + 1e-9:

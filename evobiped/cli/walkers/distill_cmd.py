@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from ...core.errors import UserError
-from ...flags import add_stored_walker, positive_float, positive_int, walk_line
+from ...flags import add_stored_walker, positive_float, positive_int, seed, walk_line
 from ...core.progress import Progress
 
 
@@ -15,7 +15,7 @@ def add_distill(sub) -> None:
     p.add_argument("--config", metavar="FILE.toml", help="[distill] settings and [student] controller options")
     p.add_argument("--neurons", type=int, metavar="N", help="the student's neurons (default 40)")
     p.add_argument("--iterations", type=positive_int, metavar="I", help="DAgger iterations (default 5)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the rollouts' noise and the fit (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the rollouts' noise and the fit (default 0)")
     p.add_argument("--seconds", type=positive_float, default=50.0, metavar="S", help="the student's episode length in s (default 50)")
     p.add_argument("--out", metavar="FILE.json", help="the student's genome file (default runs/distill_<teacher run or file>_seed<S>/student.json)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")

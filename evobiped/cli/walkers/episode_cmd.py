@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 
-from ...flags import add_source_flag, choices_text, positive_float, refuse, walk_line
+from ...flags import add_source_flag, choices_text, positive_float, refuse, seed, walk_line
 from ...tasks.sound import with_sources
 
 
@@ -15,7 +15,7 @@ def add_episode(sub) -> None:
     p = sub.add_parser("episode", help="run one episode and print its fitness")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--genome", metavar="FILE", help="genome JSON file (default: a random genome)")
-    src.add_argument("--seed", type=int, default=0, help="seed of the random genome (default 0)")
+    src.add_argument("--seed", type=seed, default=0, help="seed of the random genome (default 0)")
     p.add_argument("--body", help=f"body: {choices_text('body')} (default reil; not with --genome, whose file names it)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn; not with --genome)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default: the genome file's episode, else 50)")

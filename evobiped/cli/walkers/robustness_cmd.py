@@ -7,7 +7,7 @@ import json
 import sys
 
 from ...core.errors import UserError
-from ...flags import add_stored_walker, positive_float
+from ...flags import add_stored_walker, finite_float, positive_float, seed
 from ...core.progress import Progress
 from ...tasks.sound import with_sources
 
@@ -18,10 +18,10 @@ def add_robustness(sub) -> None:
     p.add_argument("--seconds", type=positive_float, default=30.0, help="length of each trial in s (default 30)")
     p.add_argument("--push-after", type=positive_float, default=10.0, metavar="S",
                    help="pushes fall in the first stride after S s (default 10)")
-    p.add_argument("--phase-seed", type=int, metavar="N",
+    p.add_argument("--phase-seed", type=seed, metavar="N",
                    help="each push at its own phase of that stride, drawn uniformly from seed N (default: the fixed phases 0, 1/4, 1/2, 3/4)")
     p.add_argument("--out", metavar="DIR", help="where robustness.json and robustness.png go (with --phase-seed N: robustness_phasesN.*, <stem>_phasesN_robustness.*) (default: the run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
-    p.add_argument("--source", dest="sound_source", nargs=2, type=float, metavar=("X", "Y"),
+    p.add_argument("--source", dest="sound_source", nargs=2, type=finite_float, metavar=("X", "Y"),
                    help="a steering walker's sound source at (X, Y) m for every trial (the battery runs one presentation)")
     p.add_argument("--json", action="store_true", help="print the score and the summary per family as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -40,8 +40,6 @@ def run_robustness_cmd(args) -> int:
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
-    if args.phase_seed is not None and args.phase_seed < 0:
-        raise UserError(f"--phase-seed must be an integer >= 0, got {args.phase_seed}")
     source = resolve(args.source, args.generation)
     out = Path(args.out) if args.out else source.outputs
     if out.exists() and not out.is_dir():

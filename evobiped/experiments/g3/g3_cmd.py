@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from ...flags import positive_float, refuse
+from ...flags import finite_float, positive_float, refuse, within
 
 
 def add_g3(sub) -> None:
@@ -15,11 +15,11 @@ def add_g3(sub) -> None:
 
     p.add_argument("preset", nargs="?", help=f"parameter set: {', '.join(PRESETS)} (not with --reproduce)")
     lv = p.add_mutually_exclusive_group()
-    lv.add_argument("--go", type=float, nargs="+", metavar="I", help="GO level(s) (default: the preset's)")
-    lv.add_argument("--sweep", type=float, nargs=3, metavar=("START", "STOP", "STEP"), help="GO levels START..STOP (inclusive)")
+    lv.add_argument("--go", type=finite_float, nargs="+", metavar="I", help="GO level(s) (default: the preset's)")
+    lv.add_argument("--sweep", type=finite_float, nargs=3, metavar=("START", "STOP", "STEP"), help="GO levels START..STOP (inclusive)")
     p.add_argument("--continue", dest="mode", action="store_const", const="continue", default="reset",
                    help="one run through the levels keeping the state (default: reset to zero per level)")
-    p.add_argument("--from-go", type=float, metavar="I0", help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
+    p.add_argument("--from-go", type=finite_float, metavar="I0", help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
     p.add_argument("--switch-at", type=positive_float, help="time of the switch from --from-go (default 30; only with --from-go)")
     p.add_argument("--t-run", type=positive_float, help="time units per level (default: the preset's, 120)")
     p.add_argument("--dt", type=positive_float, default=0.005, help="RK4 step in model time units (default 0.005)")
@@ -28,11 +28,13 @@ def add_g3(sub) -> None:
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--reproduce", metavar="DIR", help="check the paper claim by claim: write summary.json, one CSV per sweep and "
                    "the figures into DIR (made if missing) and print the numbers docs/g3.md quotes; no PRESET, only --step and --t-run go with it")
-    p.add_argument("--step", type=positive_float, help="with --reproduce: GO increment of its sweeps (default 0.01, the paper's)")
+    p.add_argument("--step", type=within(1e-3, 1, "", "a sweep of at most some thousand levels"), help="with --reproduce: GO increment of its sweeps (default 0.01, the paper's)")
     p.set_defaults(func=run_g3_cmd)
     _DEFAULTS.update(vars(p.parse_args([])))
 
 
+#: the most GO levels one sweep runs (the paper's sweeps: 0.01 apart, some hundreds)
+MAX_LEVELS = 10**4
 _DEFAULTS: dict = {}  # every flag's default, to name the flags given with --reproduce
 _FLAG = {"preset": "PRESET", "mode": "--continue"}
 
@@ -88,11 +90,16 @@ def run_g3_cmd(args) -> int:
         a, b, step = args.sweep
         if not step > 0 or b < a:
             raise ConfigError("--sweep needs START <= STOP and STEP > 0")
+        if (b - a) / step + 1 > MAX_LEVELS:
+            raise ConfigError(f"--sweep {a:g} {b:g} {step:g} gives {(b - a) / step + 1:,.0f} GO levels; a sweep runs at most "
+                              f"{MAX_LEVELS:,} (each a run of --t-run time units)")
         levels = np.round(np.arange(a, b + step / 2, step), 10)
     else:
         levels = np.array(args.go if args.go else pre.go, float)
-    if (levels < 0).any() or (args.from_go is not None and args.from_go < 0):
-        raise ConfigError(f"GO levels must be >= 0, got {min(levels.min(), args.from_go or 0):g}")
+    if (levels < 0).any():
+        raise ConfigError(f"GO levels must be >= 0, got {levels.min():g}")
+    if args.from_go is not None and args.from_go < 0:
+        raise ConfigError(f"--from-go: a GO level must be >= 0, got {args.from_go:g}")
     s = go_sweep(pre, levels, mode=args.mode, t_run=args.t_run, from_go=args.from_go, switch_at=switch_at, dt=args.dt)
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
     files = []

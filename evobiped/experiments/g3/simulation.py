@@ -89,6 +89,7 @@ def simulate(net: G3Network, schedule, t_end: float, *, dt: float = 0.005, sampl
 
     n_steps = int(round(t_end / dt))
     n_samples = n_steps // stride + 1
+    check_size(n_steps, Bn * n_samples * (2 * N + 1) * 8, t_end, dt)
     xs = np.empty((Bn, n_samples, N))
     ys = np.empty((Bn, n_samples, N))
     gos = np.empty((Bn, n_samples))
@@ -115,6 +116,24 @@ def simulate(net: G3Network, schedule, t_end: float, *, dt: float = 0.005, sampl
             s = (k + 1) // stride
             xs[:, s], ys[:, s], gos[:, s] = x, y, cmd
     return OscillatorTrace(t=np.arange(n_samples) * stride * dt, x=xs, y=ys, go=gos)
+
+
+#: the most RK4 steps one run integrates (the paper's runs: 24,000 to 40,000)
+MAX_STEPS = 10**7
+
+
+def check_size(steps: int, trace_bytes: float, t_end: float, dt: float) -> None:
+    """ConfigError before a run of ``steps`` RK4 steps (``t_end`` time units at ``dt``) whose trace takes
+    ``trace_bytes`` bytes: at most :data:`MAX_STEPS` steps, in a quarter of this machine's memory."""
+    import os
+
+    if steps > MAX_STEPS:
+        raise ConfigError(f"G3: a run of {t_end:g} time units at dt {dt:g} takes {steps:.3g} RK4 steps, more than "
+                          f"{MAX_STEPS:.0e}: a shorter --t-run or a larger --dt")
+    room = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 4
+    if trace_bytes > room:
+        raise ConfigError(f"G3: the run's trace would take {trace_bytes / 2**30:.3g} GiB, more than this machine can hold "
+                          f"({room / 2**30:.3g} GiB): fewer GO levels or a shorter --t-run")
 
 
 # ------------------------------------------------------------------ sweeps

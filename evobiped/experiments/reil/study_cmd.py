@@ -6,7 +6,7 @@ import dataclasses
 import sys
 
 from ...core.errors import exit_status
-from ...flags import check_workers, choices_text, positive_float, positive_int, run_config
+from ...flags import check_workers, choices_text, positive_float, positive_int, run_config, seed
 
 
 def add_study(sub) -> None:
@@ -22,7 +22,7 @@ def add_study(sub) -> None:
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--seconds", "--episode-seconds", dest="episode_seconds", type=positive_float,
                    help="episode length in s (default 50; --episode-seconds: the same, its older name)")
-    p.add_argument("--first-seed", type=int, default=0, help="seeds are FIRST .. FIRST+K-1 (default 0)")
+    p.add_argument("--first-seed", type=seed, default=0, help="seeds are FIRST .. FIRST+K-1 (default 0)")
     p.add_argument("--recheck-seconds", type=positive_float, default=200.0, help="re-simulate stable best walkers this long (default 200)")
     p.add_argument("--backend", default="process", help=f"backend: {choices_text('backend')} (default process: one run per core)")
     p.add_argument("--workers", type=positive_int, help="runs at once (default: all cores; not with the serial backend)")
