@@ -101,3 +101,52 @@ SELECT_DAMAGE = {
                                                   "initial: must be a non-empty string"),
     "a NaN best in history.csv": (lambda d: _nan_best(d / "history.csv"), "best of row 1 is nan, not a fitness"),
 }
+
+#: a commanded walker shipped with the repository (from its root), for the commands that read one before they refuse
+COMMANDED = "docs/walkers/ctrnn_command_seed1.json"
+#: numbers a command must refuse before any work: name -> (the command's arguments, words of the refusal); ``{root}``
+#: stands for the repository's root, ``{tmp}`` for a folder that must stay empty.  None reaches a simulation.
+NUMBERS = {
+    "taga --push-delay inf": (["taga", "--push", "leg", "--push-delay", "inf"], "--push-delay: must be a finite number"),
+    "taga --push-delay nan": (["taga", "--push", "hip", "--push-delay", "nan"], "--push-delay: must be a finite number"),
+    "taga --push-delay 1e300": (["taga", "--push", "leg", "--push-delay", "1e300"], "from 0 to 2 s"),
+    "taga --push-delay -1": (["taga", "--push", "leg", "--push-delay", "-1"], "from 0 to 2 s"),
+    "taga --push-force nan": (["taga", "--push", "leg", "--push-force", "nan"], "--push-force: must be a finite number"),
+    "taga --push-force 1e300": (["taga", "--push", "hip", "--push-force", "1e300"], "from 0 to 10000 N"),
+    "taga --push-force -inf": (["taga", "--push", "leg", "--push-force", "-inf"], "--push-force: must be a finite number"),
+    "taga --seconds 1e12": (["taga", "--seconds", "1e12"], "--seconds must be <= 3600 s"),
+    "taga --u0 nan": (["taga", "--u0", "nan"], "--u0: must be a finite number"),
+    "adapt --rho 1e-300": (["adapt", "RUN", "--damage", "weak:hip:0.5", "--rho", "1e-300"], "from 0.001 to 1000"),
+    "adapt --rho inf": (["adapt", "RUN", "--damage", "weak:hip:0.5", "--rho", "inf"], "--rho: must be a finite number"),
+    "adapt --pose-noise 1e300": (["adapt", "RUN", "--damage", "weak:hip:0.5", "--pose-noise", "1e300"], "from 0 to 0.5 rad"),
+    "adapt --pose-noise nan": (["adapt", "RUN", "--damage", "weak:hip:0.5", "--pose-noise", "nan"], "--pose-noise: must be a finite"),
+    "adapt --seed -1": (["adapt", "RUN", "--damage", "weak:hip:0.5", "--seed", "-1"], "--seed: must be a whole number from 0"),
+    "episode --seed -1": (["episode", "--seed", "-1"], "--seed: must be a whole number from 0"),
+    "episode --seed 1e300": (["episode", "--seed", "1e300"], "--seed: must be a whole number from 0 to 2^63 - 1"),
+    "gait --battery --seed -1": (["gait", "{root}/" + COMMANDED, "--battery", "2", "--seed", "-1"], "--seed: must be a whole"),
+    "gait --battery 1e8 --stretches 1e8": (["gait", "{root}/" + COMMANDED, "--battery", "1e8", "--stretches", "1e8"],
+                                           "--battery: must be a whole number from 1 to 10,000"),
+    "gait --battery 10000 --stretches 10000": (["gait", "{root}/" + COMMANDED, "--battery", "10000", "--stretches", "10000"],
+                                               "a battery runs at most 100,000"),
+    "gait --speed 0.3,1e300": (["gait", "{root}/" + COMMANDED, "--speed", "0.3,1e300"], "within -10 to 10 m/s"),
+    "gait --turning 1e9": (["gait", "{root}/" + COMMANDED, "--speed", "0.3", "--turning", "1e9"], "within -720 to 720 deg/s"),
+    "command-calibrate --speeds 0.3,1e300": (["genome", "command-calibrate", "{root}/" + COMMANDED, "{tmp}/out.json",
+                                              "--speeds", "0.3,1e300"], "--speeds: each value must be within -10 to 10 m/s"),
+    "genome ranges --block -1e308 1e308": (["genome", "ranges", "{root}/docs/walkers/ctrnn_walk_seed1.json", "{tmp}/out.json",
+                                            "--block", "weights", "-1e308", "1e308"], "must be finite and at most 1.8e308 wide"),
+    "g3 --sweep 0 1 1e-12": (["g3", "fig4", "--sweep", "0", "1", "1e-12"], "a sweep runs at most 10,000"),
+    "g3 --from-go inf": (["g3", "fig4", "--from-go", "inf"], "--from-go: must be a finite number"),
+    "g3 --from-go -1": (["g3", "fig4", "--from-go", "-1"], "--from-go: a GO level must be >= 0, got -1"),
+    "g3 --dt 1e-9": (["g3", "fig4", "--dt", "1e-9"], "RK4 steps, more than 1e+07"),
+    "g3 --t-run 1e12": (["g3", "fig4", "--t-run", "1e12"], "RK4 steps, more than 1e+07"),
+    "g3 --reproduce --step 1e-12": (["g3", "--reproduce", "{tmp}/g3", "--step", "1e-12"], "--step: must be from 0.001 to 1"),
+    "compare --first-seed -3": (["compare", "A", "--seeds", "2", "--first-seed", "-3"], "--first-seed: must be a whole number"),
+    "robustness --phase-seed -1": (["robustness", "RUN", "--phase-seed", "-1"], "--phase-seed: must be a whole number"),
+    "distill --seed -1": (["distill", "RUN", "--seed", "-1"], "--seed: must be a whole number from 0"),
+}
+
+
+def number_case(name: str, root: Path, tmp: Path) -> tuple[list[str], str]:
+    """The arguments of :data:`NUMBERS`' case ``name`` with its paths filled in, and the words of its refusal."""
+    args, words = NUMBERS[name]
+    return [a.format(root=root, tmp=tmp) for a in args], words

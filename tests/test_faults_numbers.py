@@ -1,0 +1,65 @@
+"""Numbers a command must refuse before any work (non-finite, beyond a physical or memory bound, a negative seed), and
+an environment that MuJoCo's import would stop at: one line on stderr, exit status 2, nothing written, no traceback.
+The cases are :data:`tests.fault_cases.NUMBERS`, which the release campaign runs too."""
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from .conftest import ROOT, cli
+from .fault_cases import NUMBERS, number_case
+from .test_faults import one_line_error
+
+
+@pytest.mark.parametrize("name", list(NUMBERS))
+def test_a_number_beyond_its_bound_is_one_line_before_any_work(tmp_path, capsys, name):
+    args, words = number_case(name, ROOT, tmp_path)
+    t0 = time.perf_counter()
+    assert cli(*args) == 2
+    one_line_error(capsys.readouterr().err, words)
+    assert time.perf_counter() - t0 < 20, "refused only after work"
+    assert not list(tmp_path.iterdir()) and not list(Path.cwd().iterdir()), "something was written"
+
+
+@pytest.mark.parametrize("value", ["-1e3", "-10", "-.5"])
+def test_a_negative_number_is_a_value_not_a_flag(tmp_path, capsys, value):
+    out = tmp_path / "out.json"
+    assert cli("genome", "ranges", WALKER, out, "--block", "weights", value, "1e3") in (0, 2)
+    err = capsys.readouterr().err
+    assert "expected 3 arguments" not in err and "unrecognized" not in err, err
+
+
+WALKER = ROOT / "docs" / "walkers" / "ctrnn_walk_seed1.json"
+
+
+def _run(*args, env: dict) -> subprocess.CompletedProcess:
+    e = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, text=True, timeout=120,
+                          env={**e, "PYTHONPATH": str(ROOT), **env})
+
+
+@pytest.mark.parametrize("value", ["osmesa-not-a-backend", "bogus", "EGL "])
+def test_a_command_that_renders_nothing_runs_whatever_mujoco_gl_says(value):
+    r = _run("presets", env={"MUJOCO_GL": value})
+    assert r.returncode == 0 and "Traceback" not in r.stderr and "walker-ctrnn" in r.stdout, r.stderr
+
+
+def test_a_mujoco_gl_mujoco_rejects_is_one_line_naming_the_fix_when_rendering(tmp_path):
+    r = _run("replay", WALKER, "--seconds", "0.2", "--video", tmp_path / "v.mp4", "--out", tmp_path / "r.rrd",
+             env={"MUJOCO_GL": "bogus"})
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, "MUJOCO_GL=bogus cannot be used here", "unset MUJOCO_GL")
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_missing_headless_library_is_set_aside():
+    from evobiped.core.glbackend import rejected
+
+    assert rejected("osmesa", "linux", loadable=lambda names: False) == "libOSMesa.so.8 does not load"
+    assert rejected("osmesa", "linux", loadable=lambda names: True) is None
+    assert rejected("egl", "linux", loadable=lambda names: True) is None and rejected("glfw", "linux") is None
+    assert "MuJoCo takes" in rejected("wgl", "linux") and rejected("wgl", "win32") is None
