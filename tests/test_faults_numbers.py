@@ -63,3 +63,45 @@ def test_a_missing_headless_library_is_set_aside():
     assert rejected("osmesa", "linux", loadable=lambda names: True) is None
     assert rejected("egl", "linux", loadable=lambda names: True) is None and rejected("glfw", "linux") is None
     assert "MuJoCo takes" in rejected("wgl", "linux") and rejected("wgl", "win32") is None
+
+
+# ---- the project's exceptions cross process boundaries (a pool's worker to the command)
+def _exception_classes() -> list[type]:
+    import importlib
+    import pkgutil
+
+    import evobiped
+
+    for m in pkgutil.walk_packages(evobiped.__path__, "evobiped."):
+        if not m.name.endswith("__main__"):
+            importlib.import_module(m.name)
+    found, todo = set(), [BaseException]
+    while todo:
+        for c in todo.pop().__subclasses__():
+            todo.append(c)
+            if c.__module__.startswith("evobiped."):
+                found.add(c)
+    return sorted(found, key=lambda c: c.__qualname__)
+
+
+def _instance(cls: type) -> BaseException:
+    import inspect
+    import signal
+
+    params = [p for p in inspect.signature(cls.__init__).parameters.values() if p.name != "self" and p.default is p.empty]
+    if cls.__name__ == "Interrupted":
+        return cls(signal.SIGTERM)
+    if [p.name for p in params] == ["path", "exc"]:
+        return cls("/full/disk/f.json", OSError(28, "No space left on device"))
+    return cls("a reason")
+
+
+def test_every_exception_of_the_project_pickles_round_trip():
+    import pickle
+
+    classes = _exception_classes()
+    assert {"UserError", "ConfigError", "GenomeError", "WriteError", "Interrupted"} <= {c.__name__ for c in classes}
+    for cls in classes:
+        exc = _instance(cls)
+        back = pickle.loads(pickle.dumps(exc))
+        assert type(back) is cls and str(back) == str(exc) and vars(back) == vars(exc), cls

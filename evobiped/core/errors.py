@@ -31,6 +31,9 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
         super().__init__(signal.Signals(self.signum).name)
 
+    def __reduce__(self):  # pickled as its signal number, as it is made
+        return type(self), (self.signum,)
+
 
 #: the signals that stop a command as Ctrl-C does (a shell's ``kill``, a closed terminal)
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)

@@ -42,9 +42,12 @@ _replaces = 0
 class WriteError(UserError):
     """A file that cannot be written: ``cannot write PATH: reason`` (exit status 2, nothing half-written)."""
 
-    def __init__(self, path: str | Path, exc: OSError):
-        self.path, self.reason = Path(path), exc.strerror or str(exc)
+    def __init__(self, path: str | Path, exc: OSError | str):
+        self.path, self.reason = Path(path), exc if isinstance(exc, str) else exc.strerror or str(exc)
         super().__init__(f"cannot write {self.path}: {self.reason}")
+
+    def __reduce__(self):  # pickled as its path and reason: it crosses from a pool's worker to the command
+        return type(self), (self.path, self.reason)
 
 
 def _fault_point() -> None:
