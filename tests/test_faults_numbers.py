@@ -105,3 +105,16 @@ def test_every_exception_of_the_project_pickles_round_trip():
         exc = _instance(cls)
         back = pickle.loads(pickle.dumps(exc))
         assert type(back) is cls and str(back) == str(exc) and vars(back) == vars(exc), cls
+
+
+def test_too_few_file_descriptors_for_the_pool_is_one_line(tmp_path):
+    import resource
+
+    def few():
+        resource.setrlimit(resource.RLIMIT_NOFILE, (12, resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
+
+    r = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--population", "4", "--generations", "2", "--seconds", "0.5",
+                        "--backend", "process", "--workers", "2", "--quiet", "--out", str(tmp_path / "run")], capture_output=True,
+                       text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=few)
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, "too many open files", "ulimit -n")

@@ -12,6 +12,7 @@ argument) becomes one line on stderr and exit status 2.
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import pkgutil
@@ -91,6 +92,16 @@ def _interrupted(exc: BaseException) -> bool:
     return False
 
 
+def descriptors_line() -> str:
+    """What a command that ran out of file descriptors says: this process's limit and how to raise it."""
+    import resource
+
+    soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+    limit = "unlimited" if soft == resource.RLIM_INFINITY else f"{soft}"
+    return (f"too many open files: this process may open {limit} (ulimit -n); raise the limit (ulimit -n 1024) or give "
+            "fewer --workers")
+
+
 def main(argv: list[str] | None = None) -> int:
     restore = lambda: None  # noqa: E731
     try:
@@ -113,6 +124,9 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
         return 141
     except OSError as exc:  # a file or directory that cannot be read or written: one line, not a traceback
+        if exc.errno in (errno.EMFILE, errno.ENFILE):  # the descriptors a pool's pipes and semaphores take, past the limit
+            last_line(f"{ERROR}{descriptors_line()}")
+            return 2
         if exc.filename is None:
             raise
         from pathlib import Path
