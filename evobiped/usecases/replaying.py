@@ -155,11 +155,8 @@ def replay(
 
 
 def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options, not_compared):
-    from ..analysis.gait_report import FootRecorder, has_feet, measured
-    from ..episode import Listeners
-    from ..record.png.figures import fitness_label, replay_figures
+    from ..analysis.gait_report import FootRecorder, has_feet
     from ..record.recordings.replay_recording import ReplayRecording
-    from ..record.png.steering_figures import steering_figures
 
     streaming = spawn or connect is not None
     target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
@@ -169,6 +166,21 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)] if episode.task.targets() is not None else []
     feet = FootRecorder() if has_feet(episode.body) else None
     watchers = [recorder, *others] + ([feet] if feet is not None else []) + ([listener] if listener is not None else [])
+    try:
+        return _recorded(source, cfg, episode, history, recording, recorder, others, feet, watchers, figures_dir=figures_dir,
+                         video=video, video_options=video_options, not_compared=not_compared)
+    except BaseException:  # a stop signal, an error: the recording is dropped, with nothing said by Rerun at exit
+        recording.discard()
+        raise
+
+
+def _recorded(source, cfg, episode, history, recording, recorder, others, feet, watchers, *, figures_dir, video,
+              video_options, not_compared):
+    from ..analysis.gait_report import measured
+    from ..episode import Listeners
+    from ..record.png.figures import fitness_label, replay_figures
+    from ..record.png.steering_figures import steering_figures
+
     result = episode.run(source.genome[None, :], listener=Listeners(*watchers) if len(watchers) > 1 else recorder)
     first = result.rows if result.rows is not None else result  # the first presentation's row, as the recorder's
     gait = None if feet is None else measured(feet, episode, start=first.start_position[:1], end=first.end_position[:1],
@@ -211,7 +223,7 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
         fell=bool(result.fell[0]),
         end_time=float(result.end_time[0]),
         walk=result.walk(),
-        recording=target,
+        recording=recording.target,
         figures=figs,
         trajectory=traj,
         outcome=done,

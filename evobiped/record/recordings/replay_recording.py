@@ -65,7 +65,17 @@ class ReplayRecording:
         else:
             data = self._stream.read(flush=True) or b""
             self.rec.disconnect()
+            self._stream = None
             atomic_write(self.target, data)
+
+
+    def discard(self) -> None:
+        """Drop what was recorded (a replay stopped before :meth:`finish`): nothing is written, and Rerun has no data
+        left in memory to warn about at exit."""
+        self.rec.disconnect()
+        if self._stream is not None:
+            self._stream.read(flush=False)
+            self._stream = None
 
 
 def log_gait(rec, gait: dict, traj: Trajectory) -> None:
