@@ -160,6 +160,19 @@ MAX_SPEED = 10.0
 MAX_TURNING = 720.0
 
 
+def check_output_file(flag: str, path: str) -> None:
+    """A file a command will write at ``path`` (given with ``flag``), checked before any work: its folder must exist
+    and ``path`` must not be a folder; one line, exit 2, otherwise."""
+    from pathlib import Path
+
+    where = Path(path)
+    folder = where.parent
+    if where.is_dir():
+        refuse(flag, f"{where} is a directory; name a file in it")
+    if not folder.is_dir():
+        refuse(flag, f"the folder {folder} does not exist" if not folder.exists() else f"{folder} is not a folder")
+
+
 def refuse(flags: str, why: str) -> None:
     """A flag that does not apply here: one line, exit 2."""
     raise UserError(f"{flags}: {why}")

@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from .conftest import ROOT, WALKERS, cli
 from .test_faults import one_line_error
 
@@ -49,3 +51,34 @@ def test_a_replay_stopped_while_it_records_says_interrupted_and_nothing_else(tmp
             continue
         assert p.returncode == 128 + signal.SIGTERM and err == "evobiped: interrupted\n", (delay, err)
         assert not list(tmp_path.iterdir())
+
+
+def _odd(tmp_path: Path, kind: str) -> tuple[Path, str]:
+    """A path that is no genome file, and the words that say what it is."""
+    p = tmp_path / kind
+    if kind == "fifo":
+        os.mkfifo(p)
+        return p, "is a FIFO (a named pipe), not a file"
+    if kind == "loop":
+        p.symlink_to(p)
+        return p, "is a symbolic link in a loop"
+    p.symlink_to(tmp_path / "gone.json")
+    return p, "is a broken symbolic link"
+
+
+@pytest.mark.parametrize("kind", ["fifo", "loop", "broken"])
+@pytest.mark.parametrize("command", [["replay", "{p}", "--seconds", "0.5"], ["episode", "--genome", "{p}"],
+                                     ["gait-report", "{p}"], ["robustness", "{p}"], ["gait", "{p}", "--speed", "0.5"]])
+def test_a_genome_path_that_is_no_file_says_what_it_is(tmp_path, capsys, kind, command):
+    p, words = _odd(tmp_path, kind)
+    assert cli(*[a.format(p=p) for a in command]) == 2
+    err = capsys.readouterr().err
+    one_line_error(err, str(p), words)
+    assert "not found" not in err
+
+
+def test_a_figure_in_a_missing_folder_is_refused_before_the_episode(capsys):
+    t0 = time.perf_counter()
+    assert cli("gait-report", WALKERS / "ctrnn_walk_seed1.json", "--figure", "missing/f.png") == 2
+    one_line_error(capsys.readouterr().err, "--figure: the folder missing does not exist")
+    assert time.perf_counter() - t0 < 5 and not Path("missing").exists()

@@ -118,14 +118,37 @@ def depth_error(obj: Any, limit: int = MAX_DEPTH) -> str | None:
     return None
 
 
+def what_is_there(path: str | Path) -> str:
+    """What ``path`` is when it is no regular file, for a refusal: ``"is a directory, not a file"``, ``"is a FIFO (a
+    named pipe), not a file"``, ``"is a symbolic link in a loop"``, ``"is a broken symbolic link (to X)"``,
+    ``"not found"``, ..."""
+    import errno
+    import stat
+
+    path = Path(path)
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link in a loop"
+        if path.is_symlink():
+            return f"is a broken symbolic link (to {os.readlink(path)})"
+        if exc.errno == errno.ENOENT:
+            return "not found"
+        return f"cannot be read ({exc.strerror or exc})"
+    kinds = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (a named pipe)"), (stat.S_ISSOCK, "a socket"),
+             (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
+    kind = next((name for test, name in kinds if test(mode)), None)
+    return "is a regular file" if kind is None else f"is {kind}, not a file"
+
+
 def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, error: type[UserError] = UserError) -> Any:
     """``loads(text)`` of the file at ``path``; a missing, oversized, malformed or too deeply nested file is one
     line naming ``what`` (every file a command reads comes through here)."""
     path = Path(path)
-    if path.is_dir():
-        raise UserError(f"{what} {path} is a directory, not a file")
     if not path.is_file():
-        raise UserError(f"{what} not found: {path}")
+        there = what_is_there(path)
+        raise UserError(f"{what} not found: {path}" if there == "not found" else f"{what} {path} {there}")
     try:
         size = path.stat().st_size
         if size > MAX_BYTES:

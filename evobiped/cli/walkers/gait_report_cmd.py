@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 
-from ...flags import add_stored_walker
+from ...flags import add_stored_walker, check_output_file
 
 
 def add_gait_report(sub) -> None:
@@ -37,6 +37,8 @@ def run_gait_report_cmd(args) -> int:
         raise UserError(f"--up-for ({args.up_for:g} s) must be at least --seconds ({args.seconds:g} s)")
     if args.figure is not None and Path(args.figure).suffix.lower() != ".png":
         raise UserError(f"--figure must name a .png file, got {args.figure}")
+    if args.figure is not None:
+        check_output_file("--figure", args.figure)
     if len(args.source) > 1 and not (args.table or args.json):
         raise UserError("several sources need --table or --json")
     if len(args.source) > 1 and args.figure is not None:

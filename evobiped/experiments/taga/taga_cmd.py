@@ -7,7 +7,7 @@ import json
 import numpy as np
 
 from ...core.errors import UserError
-from ...flags import finite_float, positive_float, refuse, within
+from ...flags import check_output_file, finite_float, positive_float, refuse, within
 from ...core.progress import Progress
 
 
@@ -99,6 +99,7 @@ def run_taga_cmd(args) -> int:
     total = 10.0 + 2.0 + 0.2 + 8.0 if args.push else seconds
     progress = Progress("taga", total, "s simulated", quiet=args.quiet or args.json)
     if args.save_genome:
+        check_output_file("--save-genome", args.save_genome)
         from ...episode import EpisodeConfig
         from ...files.genome_file import save_genome
 

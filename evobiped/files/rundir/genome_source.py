@@ -14,6 +14,7 @@ import numpy as np
 
 from ...episode import EpisodeConfig
 from ...core.errors import UserError
+from ...core.fileio import what_is_there
 from ..genome_file import load_genome
 from .generation_check import check_generation_files
 from .layout import BEST, generation_file, generation_files
@@ -34,8 +35,9 @@ def genome_path(source: str | Path, generation: int | None = None) -> tuple[Path
     """``(the genome file, its run directory or None)`` that ``source`` names (``generation``: a run directory's
     best of that generation); UserError when there is none."""
     path = Path(source)
-    if not path.exists():
-        raise UserError(f"no such run directory or genome file: {path}")
+    if not path.is_dir() and not path.is_file():
+        there = what_is_there(path)
+        raise UserError(f"no such run directory or genome file: {path}" if there == "not found" else f"{path} {there}")
     if not path.is_dir():
         if generation is not None:
             raise UserError("--generation needs a run directory, not a genome file")
