@@ -118,3 +118,13 @@ def test_too_few_file_descriptors_for_the_pool_is_one_line(tmp_path):
                        text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=few)
     assert r.returncode == 2, r.stderr
     one_line_error(r.stderr, "too many open files", "ulimit -n")
+
+
+def test_mujocos_warnings_leave_no_log_file_in_the_current_folder(tmp_path):
+    code = ("import mujoco\nfrom evobiped.physics.models import load_model, models_dir\n"
+            "m = load_model(models_dir() / 'reil_biped.xml'); d = mujoco.MjData(m); d.qvel[:] = 1e300; mujoco.mj_step(m, d)\n"
+            "assert d.warning[mujoco.mjtWarning.mjWARN_BADQVEL].number == 1\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0 and "The simulation is unstable" in r.stderr, r.stderr
+    assert not list(tmp_path.iterdir()), "MuJoCo's log in the current folder"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import mujoco
@@ -11,6 +12,18 @@ from ..core.errors import UserError
 _PACKAGE = Path(__file__).resolve().parent.parent  # evobiped/
 # an installed wheel carries models/ inside the package; a checkout has it beside it
 _CANDIDATES = (_PACKAGE / "models", _PACKAGE.parent / "models")
+
+
+def _warned(message: str) -> None:
+    """MuJoCo's warnings (an unstable simulation, ...) on standard error as MuJoCo prints them, but without its
+    ``MUJOCO_LOG.TXT`` in the current folder (the simulation still counts them: an unstable one is a fall)."""
+    try:
+        sys.stderr.write(f"WARNING: {message}\n")
+    except (OSError, ValueError):  # no standard error left (a closed pipe): nothing to say it on
+        pass
+
+
+mujoco.set_mju_user_warning(_warned)  # every simulation's model is compiled here first
 
 
 def models_dir() -> Path:
