@@ -173,6 +173,11 @@ def check_output_file(flag: str, path: str) -> None:
         refuse(flag, f"the folder {folder} does not exist" if not folder.exists() else f"{folder} is not a folder")
 
 
+def note(line: str) -> None:
+    """A command's note on standard error (``evobiped: note: ...``): what it found and did about it."""
+    print(f"evobiped: note: {line}", file=sys.stderr)
+
+
 def refuse(flags: str, why: str) -> None:
     """A flag that does not apply here: one line, exit 2."""
     raise UserError(f"{flags}: {why}")

@@ -110,7 +110,7 @@ def test_bad_speed_gains_are_refused():
 
 
 @pytest.mark.parametrize("flags, words", [
-    (["--battery", "0"], "at least 1"),
+    (["--battery", "0"], "from 1 to 10,000"),
     (["--battery", "2", "--range", "0.5"], "LOW,HIGH"),
     (["--battery", "2", "--range", "0.6,0.3"], "LOW,HIGH"),
     (["--battery", "2", "--speed", "0.4"], "without --speed"),

@@ -82,3 +82,21 @@ def test_a_figure_in_a_missing_folder_is_refused_before_the_episode(capsys):
     assert cli("gait-report", WALKERS / "ctrnn_walk_seed1.json", "--figure", "missing/f.png") == 2
     one_line_error(capsys.readouterr().err, "--figure: the folder missing does not exist")
     assert time.perf_counter() - t0 < 5 and not Path("missing").exists()
+
+
+def _gait(out: Path, kill_at: int | None = None) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(ROOT), **({"EVOBIPED_FAULT_KILL_AT_REPLACE": str(kill_at)} if kill_at else {})}
+    return subprocess.run([sys.executable, "-m", "evobiped", "gait", str(WALKERS / "ctrnn_command_seed1.json"), "--speed", "0.5",
+                           "--hold", "3", "--out", str(out)], capture_output=True, text=True, env=env, timeout=120)
+
+
+def test_a_gait_killed_between_its_json_and_figure_leaves_no_old_figure_beside_a_new_json(tmp_path):
+    out = tmp_path / "g"
+    assert _gait(out).returncode == 0
+    files = sorted(p.name for p in out.iterdir())
+    assert len(files) == 2
+    assert _gait(out, kill_at=2).returncode == -signal.SIGKILL  # the set's mark, then killed at the JSON's rename
+    assert not all((out / f).exists() for f in files), "the previous figure beside a new JSON"
+    r = _gait(out)
+    assert r.returncode == 0 and "the previous gait was cut short" in r.stderr, r.stderr
+    assert sorted(p.name for p in out.iterdir()) == files, "a temporary or the mark left behind"

@@ -149,6 +149,8 @@ def test_cli_phase_seed_writes_its_own_report_and_refuses_a_negative_seed(tmp_pa
     report = json.loads((tmp_path / "simbicon_seed1_phases3_robustness.json").read_text())
     assert report["phase_seed"] == 3 and (tmp_path / "simbicon_seed1_phases3_robustness.png").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["simbicon_seed1_phases3_robustness.json", "simbicon_seed1_phases3_robustness.png"]
-    assert main(["robustness", WALKER, "--phase-seed", "-1", "--out", str(tmp_path / "o")]) == 2
+    with pytest.raises(SystemExit) as refused:  # an argument's refusal: argparse's exit, status 2
+        main(["robustness", WALKER, "--phase-seed", "-1", "--out", str(tmp_path / "o")])
+    assert refused.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--phase-seed" in err[0] and not (tmp_path / "o").exists()

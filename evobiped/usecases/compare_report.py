@@ -81,12 +81,16 @@ def markdown(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_comparison(directory: Path, comparison, retests: list[dict]) -> dict:
-    """results.json, results.md and success.png in ``directory``; returns the results."""
+def write_comparison(directory: Path, comparison, retests: list[dict], say=None) -> dict:
+    """results.json, results.md and success.png in ``directory``, one set (``say(line)`` hears that the previous
+    writing of them was cut short); returns the results."""
     from ..record.png.compare_figure import success_figure
 
+    from ..files.rundir.output_set import output_set
+
     results = comparison_results(comparison, retests)
-    write_json(directory / RESULTS_JSON, results)
-    atomic_write(directory / RESULTS_MD, markdown(results))
-    success_figure(results, directory / FIGURE)
+    with output_set("compare", [directory / RESULTS_JSON, directory / RESULTS_MD, directory / FIGURE], say=say):
+        write_json(directory / RESULTS_JSON, results)  # one set: never new tables beside an old figure
+        atomic_write(directory / RESULTS_MD, markdown(results))
+        success_figure(results, directory / FIGURE)
     return results

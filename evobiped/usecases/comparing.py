@@ -215,4 +215,4 @@ def compare_configurations(comparison: Comparison | None = None, *, out: str | P
         finally:
             stop_pool(pool)
     retests = [read_json(j[2], what="retest") for j in jobs]
-    return write_comparison(d, c, retests)
+    return write_comparison(d, c, retests, say=say)

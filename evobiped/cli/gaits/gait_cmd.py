@@ -3,7 +3,7 @@ commanded walker's genome (the command task) following commanded speeds and turn
 
 from __future__ import annotations
 
-from ...flags import MAX_SPEED, MAX_TURNING, count, finite_float, number_list, positive_float, refuse, seed
+from ...flags import MAX_SPEED, MAX_TURNING, count, finite_float, note, number_list, positive_float, refuse, seed
 
 
 #: the most stretches a speed battery runs, all its schedules together (the docs' batteries: 180)
@@ -132,15 +132,18 @@ def _run_commanded(args, speeds, turnings) -> int:
         times, seconds = [i * args.hold for i in range(len(speeds))], args.hold * len(speeds)
     report = follow_commands(source.config, source.genome, times, speeds, turnings, seconds)
     report.update(source=str(source.genome_path), notes=notes)
+    from ...files.rundir.output_set import output_set
+
     out.mkdir(parents=True, exist_ok=True)
     stem = f"{source.genome_path.stem}_command" if source.run_dir is None else f"{source.label}_command"
-    write_json(out / f"{stem}.json", report)
-    png = command_figure(report, out / f"{stem}.png", title=f"{source.name}: commanded and walked speed and turning rate")
+    with output_set("gait", [out / f"{stem}.json", out / f"{stem}.png"], say=note):  # one set: never a new JSON beside an old PNG
+        write_json(out / f"{stem}.json", report)
+        png = command_figure(report, out / f"{stem}.png", title=f"{source.name}: commanded and walked speed and turning rate")
     if args.json:
         print(json.dumps({k: v for k, v in report.items() if k != "trace"}, default=lambda v: None))
         return 0
-    for note in notes:
-        print(note)
+    for line in notes:
+        print(line)
     for s in report["stretches"]:
         print(stretch_line(s))
     done = [s for s in report["stretches"] if s["speed_error_pct"] is not None and not s["down"]]
@@ -182,9 +185,12 @@ def _run_battery(args, source, out) -> int:
     report["gait"] = gait_at_speeds(source.config, source.genome, speeds)
     report["stop_and_go"] = stop_and_go(source.config, source.genome, [lo, (lo + hi) / 2, hi]) if stops else []
     report["source"] = str(source.genome_path)
+    from ...files.rundir.output_set import output_set
+
     out.mkdir(parents=True, exist_ok=True)
     stem = f"{source.genome_path.stem}_speed_battery" if source.run_dir is None else f"{source.label}_speed_battery"
-    write_json(out / f"{stem}.json", report)
+    with output_set("gait battery", [out / f"{stem}.json"], say=note):  # its temporaries swept, a cut-short one said
+        write_json(out / f"{stem}.json", report)
     if args.json:
         print(json.dumps({k: v for k, v in report.items() if k != "schedules"}, default=lambda v: None))
         return 0

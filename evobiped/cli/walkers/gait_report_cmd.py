@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 
-from ...flags import add_stored_walker, check_output_file
+from ...flags import add_stored_walker, check_output_file, note
 
 
 def add_gait_report(sub) -> None:
@@ -54,9 +54,11 @@ def run_gait_report_cmd(args) -> int:
         if args.table:
             print(table_row(source.label, report), flush=True)
     if args.figure is not None:
+        from ...files.rundir.output_set import output_set
         from ...record.png.footfall_figure import footfall_figure
 
-        footfall_figure(reports[0], Path(args.figure), title=sources[0].label)
+        with output_set("gait-report", [Path(args.figure)], say=note):  # its temporaries swept, a cut-short one said
+            footfall_figure(reports[0], Path(args.figure), title=sources[0].label)
     if args.json:
         print(json.dumps(reports[0] if len(reports) == 1 else reports, indent=1, default=lambda v: None))
     if args.json or args.table:

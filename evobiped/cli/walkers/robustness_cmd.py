@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import sys
 
 from ...core.errors import UserError
-from ...flags import add_stored_walker, finite_float, positive_float, seed
+from ...flags import add_stored_walker, finite_float, note, positive_float, seed
 from ...core.progress import Progress
 from ...tasks.sound import with_sources
 
@@ -61,7 +60,7 @@ def run_robustness_cmd(args) -> int:
     seed = source.meta.get("seed")
     who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
     # the results and their figure are one set: the previous pair goes first; a cut-short one is said
-    with output_set("robustness", [out / f"{stem}.json", out / f"{stem}.png"], say=lambda line: print(f"evobiped: note: {line}", file=sys.stderr)):
+    with output_set("robustness", [out / f"{stem}.json", out / f"{stem}.png"], say=note):
         write_json(out / f"{stem}.json", report)
         png = robustness_figure(trials, out / f"{stem}.png", seconds=args.seconds,
                                 title=f"Robustness battery, {len(trials)} trials of {args.seconds:g} s (pushes after {args.push_after:g} s{'' if args.phase_seed is None else f', random phases, seed {args.phase_seed}'}): "
