@@ -129,6 +129,22 @@ def add_stored_walker(p, dest: str = "source", metavar: str = "SOURCE", *, also:
     :func:`evobiped.record.source.resolve` reads."""
     p.add_argument(dest, metavar=metavar, nargs=nargs, help=f"a run directory (its best.json) or a genome JSON file{also}")
     p.add_argument("--generation", type=int, metavar="N", help=generation)
+    add_allow_unfinished(p)
+
+
+def add_allow_unfinished(p) -> None:
+    """``--allow-unfinished``: read a run directory that an evolve is still writing (refused without it)."""
+    p.add_argument("--allow-unfinished", action="store_true", help="read a run that an evolve is still writing (its "
+                   "generations so far; said on stderr and recorded in what is written); without it such a run is refused")
+
+
+def unfinished_note(source) -> None:
+    """Say on stderr which generation of a run being written ``source`` (:class:`~evobiped.record.source.Source`) was
+    read, if it was."""
+    if source.unfinished is not None:
+        u = source.unfinished
+        note(f"{source.run_dir or source.genome_path.parent} is being written by process {u['writer']}: read as of its "
+             f"first {u['generations']} generations")
 
 
 def add_source_flag(p) -> None:

@@ -100,3 +100,43 @@ def test_a_gait_killed_between_its_json_and_figure_leaves_no_old_figure_beside_a
     r = _gait(out)
     assert r.returncode == 0 and "the previous gait was cut short" in r.stderr, r.stderr
     assert sorted(p.name for p in out.iterdir()) == files, "a temporary or the mark left behind"
+
+
+# ---- a run another process is writing
+@pytest.fixture
+def live_run(tmp_path):
+    """A run directory an evolve (serial, 400 generations of tiny episodes) is writing; the evolve ends with the test."""
+    d = tmp_path / "run"
+    p = _start("evolve", "--population", "4", "--generations", "400", "--seconds", "0.5", "--backend", "serial", "--quiet",
+               "--out", d)
+    _wait_for(p, d / "checkpoint.json")
+    yield d, p
+    p.kill()
+    p.communicate(timeout=60)
+
+
+@pytest.mark.parametrize("command", [["select", "{d}", "--seconds", "1", "--top", "1"], ["replay", "{d}", "--seconds", "0.5"],
+                                     ["replay", "{d}/best.json", "--seconds", "0.5"], ["gait-report", "{d}", "--seconds", "1"],
+                                     ["robustness", "{d}", "--seconds", "2", "--push-after", "1"]])
+def test_a_run_being_written_is_refused_in_one_line(live_run, capsys, command):
+    d, p = live_run
+    assert cli(*[a.format(d=d) for a in command]) == 2
+    one_line_error(capsys.readouterr().err, f"{d} is being written by process {p.pid}; wait or pass --allow-unfinished")
+    assert not [x for x in d.iterdir() if x.name.startswith(("selected", "replay", "robustness", ".select", ".replay"))]
+
+
+def test_a_selection_from_a_run_being_written_records_its_generation_and_is_not_reused_once_the_run_went_on(live_run, capsys):
+    import json
+
+    d, p = live_run
+    assert cli("select", d, "--seconds", "1", "--top", "1", "--allow-unfinished") == 0
+    assert f"is being written by process {p.pid}: chosen from its first" in capsys.readouterr().err
+    chosen = json.loads((d / "selected.json").read_text())["from_checkpoint"]
+    assert chosen["generations"] >= 1 and chosen["writer"] == p.pid and chosen["digest"]
+    deadline = time.time() + 60
+    while json.loads((d / "checkpoint.json").read_text())["history"].__len__() == chosen["generations"] and time.time() < deadline:
+        time.sleep(0.1)
+    p.kill()
+    p.communicate(timeout=60)
+    assert cli("replay", d / "selected.json", "--seconds", "0.5") == 2
+    one_line_error(capsys.readouterr().err, "selected.json was chosen when", f"choose again with evobiped select {d}")

@@ -71,7 +71,8 @@ class Source(rundir.GenomeSource):
         return name.encode(errors="surrogateescape").decode(errors="replace")  # a path's undecodable bytes: shown as �
 
 
-def resolve(source: str | Path, generation: int | None = None) -> Source:
-    """Load the genome named by ``source`` (``generation``: a run directory's best of that generation)."""
-    found = rundir.resolve_genome(source, generation)
+def resolve(source: str | Path, generation: int | None = None, allow_unfinished: bool = False) -> Source:
+    """Load the genome named by ``source`` (``generation``: a run directory's best of that generation; a run another
+    process is writing only with ``allow_unfinished``: :func:`evobiped.files.rundir.resolve_genome`)."""
+    found = rundir.resolve_genome(source, generation, allow_unfinished)
     return Source(**{f.name: getattr(found, f.name) for f in dataclasses.fields(found)})

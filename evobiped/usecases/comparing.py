@@ -198,6 +198,9 @@ def compare_configurations(comparison: Comparison | None = None, *, out: str | P
 
     d, c = open_comparison(comparison, out=out, resume=resume, given=given)
     jobs = c.jobs(d)
+    for j in jobs:  # another comparison still running here: one line before any run starts or is read
+        if Path(j[0]).is_dir():
+            rundir.check_at_rest(Path(j[0]), how="wait for the comparison running there to finish")
     todo = [j for j in jobs if not Path(j[2]).is_file()]
     if say:
         say(f"{len(c.names)} configurations x {len(c.seeds)} seeds at {c.budget} episodes each, {len(jobs) - len(todo)} runs "

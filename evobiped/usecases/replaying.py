@@ -78,13 +78,14 @@ class ReplayReport:
         return bits and not (self.outcome_checked and self.outcome_failures)
 
 
-def stored_walker(path: str | Path, generation: int | None = None, cell: str | None = None) -> Source:
+def stored_walker(path: str | Path, generation: int | None = None, cell: str | None = None,
+                  allow_unfinished: bool = False) -> Source:
     """What a replay re-simulates: the best of a run directory (of its generation ``generation``), a genome file,
     or the elite of grid cell ``cell`` (``"I,J"``) of a map-elites run's archive; UserError, one line, otherwise."""
     if cell is None:
         from ..record.source import resolve
 
-        return resolve(path, generation)
+        return resolve(path, generation, allow_unfinished)
     from ..repertoire.elites import load_repertoire, parse_cell
 
     if generation is not None:

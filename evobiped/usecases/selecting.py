@@ -34,14 +34,20 @@ class Selection:
 
 
 def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, heading_limit: float = 30.0,
-                  walking: bool = False, note=None) -> Selection:
+                  walking: bool = False, note=None, allow_unfinished: bool = False) -> Selection:
     """Simulate the bests of the ``top`` fittest generations of ``run_dir`` (and first its start genome, kept unless
     one beats it) for ``seconds``; write the best as selected.json and every candidate's row beside it.  ``walking``:
     a candidate that walks by the gait lab's criteria ranks first (:func:`~evobiped.analysis.selection.try_candidates`).
-    The two files are one set (``note(line)`` hears that the previous select was cut short between them)."""
+    The two files are one set (``note(line)`` hears that the previous select was cut short between them).  A run
+    another process is writing is one line unless ``allow_unfinished``; selected.json records the checkpoint it was
+    chosen from (:data:`~evobiped.files.rundir.FROM_CHECKPOINT`), so a later read of a run that went on is refused."""
     d = Path(run_dir)
     if not (d / rundir.CONFIG).is_file() or not (d / rundir.HISTORY).is_file():
         raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
+    live = rundir.check_at_rest(d, allow_unfinished)
+    if live is not None and note is not None:
+        note(f"{d} is being written by process {live['writer']}: chosen from its first {live['generations']} generations")
+    mark = live or rundir.checkpoint_mark(d)
     rundir.check_generation_files(d)  # every committed generation file is the run's (rewritten, or one line naming it)
     best = rundir.read_history(d / rundir.HISTORY)["best"]
     chosen_generations = [int(g) for g in np.argsort(-best, kind="stable")[:top]]
@@ -77,8 +83,8 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     done = episode.run(genome)
     with output_set("select", [out, d / CANDIDATES], say=note):  # one set: never a new selected.json beside old candidates
         save_genome(out, genome, episode_config, **{**meta, "selected_from": labels[k], "up_long_seconds": seconds if rows[k].get("up_long") else None,
-                                                   "outcome": outcome(done, episode.task.targets())})
-        write_json(d / CANDIDATES, {"seconds": seconds, "heading_limit": heading_limit,
+                                                   "outcome": outcome(done, episode.task.targets()), rundir.FROM_CHECKPOINT: mark})
+        write_json(d / CANDIDATES, {"seconds": seconds, "heading_limit": heading_limit, rundir.FROM_CHECKPOINT: mark,
                                     "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
     return Selection(labels=labels, rows=rows, chosen=k, path=out)
 

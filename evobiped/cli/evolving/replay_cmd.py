@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ...flags import add_source_flag, add_stored_walker, finite_float, positive_float, positive_int, refuse, walk_line
+from ...flags import add_source_flag, add_stored_walker, finite_float, positive_float, positive_int, refuse, unfinished_note, walk_line
 from ...core.progress import Progress
 
 
@@ -44,7 +44,8 @@ def run_replay_cmd(args) -> int:
         refuse("--video-size", f"width and height must be even (H.264), got {args.video_size[0]} {args.video_size[1]}")
     if args.video_window is not None and not 0 <= args.video_window[0] < args.video_window[1]:
         refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
-    source = stored_walker(args.source, args.generation, args.cell)
+    source = stored_walker(args.source, args.generation, args.cell, args.allow_unfinished)
+    unfinished_note(source)
     figures = args.figures
     if figures == "":
         base = Path(args.out).parent if args.out else source.outputs

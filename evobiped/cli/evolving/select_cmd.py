@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...flags import positive_float, positive_int
+from ...flags import add_allow_unfinished, note, positive_float, positive_int
 
 
 def add_select(sub) -> None:
@@ -16,16 +16,15 @@ def add_select(sub) -> None:
                    help="prefer walkers within DEG of their initial facing (default 30)")
     p.add_argument("--walking", action="store_true", help="prefer a walk: each candidate's gait over its first 50 s "
                    "against the walking criteria (evobiped gait-report), first in the ranking")
+    add_allow_unfinished(p)
     p.set_defaults(func=run_select_cmd)
 
 
 def run_select_cmd(args) -> int:
     from ...usecases.selecting import select_walker
 
-    import sys
-
     s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit, walking=args.walking,
-                      note=lambda line: print(f"evobiped: note: {line}", file=sys.stderr))
+                      note=note, allow_unfinished=args.allow_unfinished)
     print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}"
           + ("  walks" if args.walking else ""))
     for i, (label, r) in enumerate(zip(s.labels, s.rows)):

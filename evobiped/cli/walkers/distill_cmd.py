@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from ...core.errors import UserError
-from ...flags import add_stored_walker, positive_float, positive_int, seed, walk_line
+from ...flags import add_stored_walker, positive_float, positive_int, seed, unfinished_note, walk_line
 from ...core.progress import Progress
 
 
@@ -31,7 +31,8 @@ def run_distill_cmd(args) -> int:
     from ...files.outcome import outcome
     from ...record.source import resolve
 
-    source = resolve(args.teacher, args.generation)
+    source = resolve(args.teacher, args.generation, args.allow_unfinished)
+    unfinished_note(source)
     table = read_toml(args.config) if args.config else {}
     unknown = sorted(set(table) - {"distill", "student"})
     if unknown:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 
-from ...flags import add_stored_walker, check_output_file, note
+from ...flags import add_stored_walker, check_output_file, note, unfinished_note
 
 
 def add_gait_report(sub) -> None:
@@ -43,13 +43,17 @@ def run_gait_report_cmd(args) -> int:
         raise UserError("several sources need --table or --json")
     if len(args.source) > 1 and args.figure is not None:
         raise UserError("--figure draws one walker: give one source")
-    sources = [resolve(s, args.generation) for s in args.source]  # every source checked before any runs
+    sources = [resolve(s, args.generation, args.allow_unfinished) for s in args.source]  # all checked before any runs
+    for source in sources:
+        unfinished_note(source)
     reports = []
     if args.table:
         print(TABLE_HEAD, flush=True)
     for source in sources:
         report = gait_report(source.config, source.genome, seconds=args.seconds, up_for=args.up_for)
         report["source"] = str(source.genome_path)
+        if source.unfinished is not None:
+            report["unfinished_run"] = source.unfinished
         reports.append(report)
         if args.table:
             print(table_row(source.label, report), flush=True)

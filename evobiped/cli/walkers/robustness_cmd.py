@@ -6,7 +6,7 @@ import dataclasses
 import json
 
 from ...core.errors import UserError
-from ...flags import add_stored_walker, finite_float, note, positive_float, seed
+from ...flags import add_stored_walker, finite_float, note, positive_float, seed, unfinished_note
 from ...core.progress import Progress
 from ...tasks.sound import with_sources
 
@@ -39,7 +39,8 @@ def run_robustness_cmd(args) -> int:
 
     if args.push_after >= args.seconds:
         raise UserError(f"--push-after ({args.push_after:g} s) must be shorter than --seconds ({args.seconds:g} s)")
-    source = resolve(args.source, args.generation)
+    source = resolve(args.source, args.generation, args.allow_unfinished)
+    unfinished_note(source)
     out = Path(args.out) if args.out else source.outputs
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
@@ -56,7 +57,8 @@ def run_robustness_cmd(args) -> int:
     total = score(trials)
     out.mkdir(parents=True, exist_ok=True)
     report = {"source": str(source.genome_path), "seconds": args.seconds, "push_after": args.push_after, "phase_seed": args.phase_seed,
-              "score": total, "families": rows, "trials": [dataclasses.asdict(t) for t in trials]}
+              "score": total, "families": rows, "trials": [dataclasses.asdict(t) for t in trials],
+              **({"unfinished_run": source.unfinished} if source.unfinished is not None else {})}
     seed = source.meta.get("seed")
     who = f"{source.name}: {source.config.body}/{source.config.controller}" + (f", run seed {seed}" if seed is not None else "")
     # the results and their figure are one set: the previous pair goes first; a cut-short one is said

@@ -47,7 +47,7 @@ generation is duplicated or lost (:mod:`.individuals_file`).
 from .archive_file import ARCHIVE, ArchiveContents, archive_text
 from .checkpoint_check import OLD_OPTIMIZER_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, optimizer_table, validate_checkpoint
 from .generation_check import DIGESTS_KEY, check_generation_files, digest
-from .genome_source import GenomeSource, genome_path, resolve_genome
+from .genome_source import FROM_CHECKPOINT, GenomeSource, check_at_rest, checkpoint_mark, genome_path, resolve_genome
 from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, individuals_text, read_individuals
 from .history_file import HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history, write_history
 from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HISTORY, LOCK, OUTCOME, RECORDING, START, SUMMARY,
@@ -64,5 +64,5 @@ __all__ = [
     "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "genome_path",
     "history_columns", "history_text", "individuals_text", "is_unused", "label", "lock", "optimizer_table",
     "read_history", "read_individuals", "remove_stale_temporaries", "replay_file", "resolve_genome",
-    "robustness_stem", "unlock", "validate_checkpoint", "write_history",
+    "robustness_stem", "unlock", "validate_checkpoint", "write_history", "FROM_CHECKPOINT", "check_at_rest", "checkpoint_mark",
 ]

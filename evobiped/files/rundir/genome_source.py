@@ -7,6 +7,8 @@ A run directory (written by ``evobiped evolve``) stands for its best genome (``b
 
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +19,8 @@ from ...core.errors import UserError
 from ...core.fileio import what_is_there
 from ..genome_file import load_genome
 from .generation_check import check_generation_files
-from .layout import BEST, generation_file, generation_files
+from .layout import BEST, CHECKPOINT, CONFIG, generation_file, generation_files
+from .locking import writer
 
 
 @dataclass
@@ -29,6 +32,35 @@ class GenomeSource:
     meta: dict
     genome_path: Path  # the file read: a run directory's best.json or generation file, or the genome file itself
     run_dir: Path | None  # None for a lone genome file
+    #: read from a run another process was writing (``--allow-unfinished``): its checkpoint's mark (:func:`checkpoint_mark`)
+    #: and the writer's pid; None for a run at rest
+    unfinished: dict | None = None
+
+
+#: the metadata key of a genome chosen from a run (``select``): the run's checkpoint mark it was chosen from
+FROM_CHECKPOINT = "from_checkpoint"
+
+
+def checkpoint_mark(run_dir: Path) -> dict | None:
+    """``{"generations": committed generations, "digest": the checkpoint file's}`` of ``run_dir``; None without one."""
+    try:
+        data = (Path(run_dir) / CHECKPOINT).read_bytes()
+        history = json.loads(data).get("history", [])
+    except (OSError, ValueError, AttributeError):
+        return None
+    return {"generations": len(history) if isinstance(history, list) else None, "digest": hashlib.sha256(data).hexdigest()[:16]}
+
+
+def check_at_rest(run_dir: Path, allow_unfinished: bool = False, how: str = "wait or pass --allow-unfinished") -> dict | None:
+    """None when no other process writes ``run_dir``; else one line (UserError, ending in ``how``) unless
+    ``allow_unfinished``, and then the checkpoint's mark and the writer's pid (what a reader records of the generation
+    it read)."""
+    pid = writer(run_dir)
+    if pid is None:
+        return None
+    if not allow_unfinished:
+        raise UserError(f"{run_dir} is being written by process {pid}; {how}")
+    return {**(checkpoint_mark(run_dir) or {"generations": 0, "digest": None}), "writer": pid}
 
 
 def genome_path(source: str | Path, generation: int | None = None) -> tuple[Path, Path | None]:
@@ -55,14 +87,26 @@ def genome_path(source: str | Path, generation: int | None = None) -> tuple[Path
     return gpath, path
 
 
-def resolve_genome(source: str | Path, generation: int | None = None) -> GenomeSource:
+def resolve_genome(source: str | Path, generation: int | None = None, allow_unfinished: bool = False) -> GenomeSource:
     """The genome ``source`` names (:func:`genome_path`), read and checked against its episode's genome layout
-    (known from the declarations: nothing is compiled)."""
+    (known from the declarations: nothing is compiled).  A run that another process is writing (the run directory
+    named, or the one a genome file lies in) is one line unless ``allow_unfinished`` (then :attr:`GenomeSource.
+    unfinished` says which generation was read); a genome chosen from a run whose checkpoint has changed since is one
+    line naming the command that chooses again."""
+    given = Path(source)
+    home = given if given.is_dir() else given.parent if given.is_file() and (given.parent / CONFIG).is_file() else None
+    unfinished = check_at_rest(home, allow_unfinished) if home is not None else None  # before any file of it is read
     gpath, run_dir = genome_path(source, generation)
     genome, cfg, meta = load_genome(gpath)
+    chosen = meta.get(FROM_CHECKPOINT)
+    if isinstance(chosen, dict) and unfinished is None and home is not None:
+        now = checkpoint_mark(home)
+        if now is not None and now["digest"] != chosen.get("digest"):
+            raise UserError(f"{gpath} was chosen when {home} had {chosen.get('generations')} generations; it has "
+                            f"{now['generations']} now: choose again with evobiped select {home}")
     try:
         layout = cfg.layout()
     except UserError as exc:
         raise UserError(f"{gpath}: {exc}") from None
     layout.validate(genome, what=f"genome in {gpath}")
-    return GenomeSource(genome=genome, config=cfg, meta=meta, genome_path=gpath, run_dir=run_dir)
+    return GenomeSource(genome=genome, config=cfg, meta=meta, genome_path=gpath, run_dir=run_dir, unfinished=unfinished)

@@ -56,6 +56,37 @@ def lock(directory: str | Path) -> None:
     _held[key] = [fd, 1]
 
 
+def writer(directory: str | Path) -> int | None:
+    """The pid of another live process that holds the lock of run directory ``directory`` (an evolve writing it);
+    None when none does.  Read from the kernel's table of locks (``/proc/locks``) where there is one, so a reader
+    never takes the lock itself; elsewhere a shared lock is tried for an instant."""
+    path = Path(directory) / LOCK
+    try:
+        inode = os.stat(path).st_ino
+    except OSError:
+        return None
+    try:
+        table = Path("/proc/locks").read_text()
+    except OSError:
+        table = None
+    if table is not None:
+        for line in table.splitlines():  # "1: FLOCK  ADVISORY  WRITE 4242 08:01:1311 0 EOF"
+            parts = line.split()
+            if len(parts) > 5 and parts[1] == "FLOCK" and parts[5].rsplit(":", 1)[-1] == str(inode):
+                pid = int(parts[4]) if parts[4].isdigit() else None
+                return None if pid == os.getpid() else pid
+        return None
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError:
+        owner = os.pread(fd, 32, 0).decode(errors="replace").strip()
+        return int(owner) if owner.isdigit() else -1
+    finally:
+        os.close(fd)  # a shared lock taken goes with it
+    return None
+
+
 def _same_file(fd: int, path: Path) -> bool:
     """True while ``path`` still names the open file ``fd``."""
     try:
