@@ -42,7 +42,8 @@ import time
 from collections import Counter, defaultdict
 from pathlib import Path
 
-from .fault_cases import CHECKPOINT_EDITS, CONFIG_EDITS, DEEP, DIFFERS, GENOME_EDITS, SELECT_DAMAGE, SETTINGS, edit
+from .fault_cases import (CHECKPOINT_EDITS, CONFIG_EDITS, DEEP, DIFFERS, GENOME_EDITS, NUMBERS, SELECT_DAMAGE, SETTINGS, edit,
+                          number_case)
 from .test_faults import children, contents, files  # the fault tests' process tree, run contents and file snapshots
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -657,6 +658,157 @@ def latin1_cases(work: Path, done: Path) -> list[tuple[str, str]]:
 
 
 FIXED.update({"generation-file": generation_cases, "workers": worker_cases, "empty-string": empty_cases, "non-utf8": latin1_cases})
+
+
+# ---- the newer commands: numbers, the environment, paths that are no file, a run being written, gait's outputs
+def number_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """Every number of :data:`tests.fault_cases.NUMBERS`, in an empty folder that must stay empty, under the guard."""
+    out = []
+    for name in NUMBERS:
+        cwd = work / f"numbers-{len(out)}"
+        (cwd / "tmp").mkdir(parents=True)
+        args, words = number_case(name, ROOT, cwd / "tmp")
+        rc, err, _ = command(*args, cwd=cwd, guarded=True, timeout=60)
+        v = refusal(rc, err, words)
+        written = [p.name for p in cwd.rglob("*") if p != cwd / "tmp"]
+        out.append(_case(name, "residue" if v == "refused" and written else _checked(v, cwd)))
+    return out
+
+
+def _limited(args, files: int, cwd: Path) -> tuple[int | None, str]:
+    """``evobiped ARGS`` with at most ``files`` open file descriptors (``ulimit -n``)."""
+    import resource
+
+    def few():
+        resource.setrlimit(resource.RLIMIT_NOFILE, (files, resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
+
+    try:
+        r = subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                           timeout=LIMIT, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=few)
+    except subprocess.TimeoutExpired:
+        return None, ""
+    ANSWERS.append((r.stderr.strip().splitlines() or [""])[-1])
+    return r.returncode, r.stderr
+
+
+def environment_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """``MUJOCO_GL`` values MuJoCo's import stops at (commands that render nothing run; a video is one line), and too
+    few file descriptors for a pool."""
+    out = []
+    walker = ROOT / "docs" / "walkers" / "ctrnn_walk_seed1.json"
+    for value in ("bogus", "osmesa-x", "wgl", "EGL "):
+        for name, args in (("presets", ["presets"]), ("episode", ["episode", "--genome", walker, "--seconds", "0.5"]),
+                           ("replay", ["replay", walker, "--seconds", "0.5", "--out", "r.rrd"])):
+            cwd = work / f"env-{len(out)}"
+            cwd.mkdir()
+            rc, err, _ = command(*args, cwd=cwd, env={"MUJOCO_GL": value}, guarded=True, timeout=120)
+            out.append(_case(f"MUJOCO_GL={value!r} {name}", _checked(verdict(rc, err).replace("refused", "silent"), cwd)))
+        cwd = work / f"env-{len(out)}"
+        cwd.mkdir()
+        rc, err, _ = command("replay", walker, "--seconds", "0.5", "--video", "v.mp4", "--out", "r.rrd", cwd=cwd,
+                             env={"MUJOCO_GL": value}, guarded=True, timeout=120)
+        v = refusal(rc, err, "MUJOCO_GL") if value.strip().lower() != "egl" else verdict(rc, err)
+        out.append(_case(f"MUJOCO_GL={value!r} replay --video", _checked(v, cwd)))
+    for files in (12, 14):
+        for backend in ("process", "thread"):
+            cwd = work / f"env-{len(out)}"
+            cwd.mkdir()
+            rc, err = _limited(["evolve", *RUN, "--backend", backend, "--workers", "2", "--out", cwd / "run"], files, cwd)
+            v = "hang" if rc is None else refusal(rc, err, "too many open files") if rc != 0 else "identical"
+            out.append(_case(f"ulimit -n {files}, evolve --backend {backend}", _checked(v, cwd)))
+    return out
+
+
+def odd_path_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """A genome or run path that is a FIFO, a symbolic link loop, a broken link or a device, for every command that
+    reads a stored walker: one line saying what it is."""
+    out = []
+    for kind, words in (("fifo", "is a FIFO"), ("loop", "symbolic link in a loop"), ("broken", "broken symbolic link"),
+                        ("device", "is a character device")):
+        for args in (["replay", "{p}", "--seconds", "0.5"], ["episode", "--genome", "{p}"], ["gait-report", "{p}"],
+                     ["robustness", "{p}"], ["gait", "{p}", "--speed", "0.5"], ["distill", "{p}"],
+                     ["genome", "command-calibrate", "{p}", "out.json"], ["genome", "ranges", "{p}", "out.json", "--block", "weights", "-1", "1"]):
+            cwd = work / f"odd-{len(out)}"
+            cwd.mkdir()
+            p = Path("/dev/null") if kind == "device" else cwd / kind
+            if kind == "fifo":
+                os.mkfifo(p)
+            elif kind == "loop":
+                p.symlink_to(p)
+            elif kind == "broken":
+                p.symlink_to(cwd / "gone.json")
+            rc, err, _ = command(*[a.format(p=p) for a in args], cwd=cwd, guarded=True, timeout=60)
+            v = refusal(rc, err, words)
+            out.append(_case(f"{kind} to {args[0]}{' ' + args[1] if args[0] == 'genome' else ''}",
+                             "residue" if v == "refused" and [x for x in cwd.iterdir() if x != p] else _checked(v, cwd)))
+    return out
+
+
+def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """The commands that read a run, on one an evolve is writing: refused by name (or, ``--allow-unfinished``, the
+    generation recorded); a selection made then, read once the run went on: refused, never reused silently."""
+    d = work / "live"
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", "--population", "4", "--generations", "300", "--seconds",
+                          "0.5", "--backend", "serial", "--quiet", "--out", str(d)], env={**os.environ, "PYTHONPATH": str(ROOT)},
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    out = []
+    try:
+        deadline = time.time() + 120
+        while not (d / "checkpoint.json").exists() and time.time() < deadline:
+            time.sleep(0.05)
+        words = f"is being written by process {p.pid}; wait or pass --allow-unfinished"
+        for args in (["select", d, "--seconds", "1", "--top", "1"], ["replay", d, "--seconds", "0.5"],
+                     ["replay", d / "best.json", "--seconds", "0.5"], ["replay", d, "--generation", "0", "--seconds", "0.5"],
+                     ["gait-report", d, "--seconds", "1"], ["robustness", d, "--seconds", "2", "--push-after", "1"],
+                     ["distill", d, "--iterations", "1"]):
+            rc, err, _ = command(*args, guarded=True, timeout=60)
+            out.append(_case(f"{' '.join(map(str, args[:2]))} of a run being written", refusal(rc, err, words)))
+        rc, err, _ = command("select", d, "--seconds", "1", "--top", "1", "--allow-unfinished", guarded=True)
+        chosen = json.loads((d / "selected.json").read_text()).get("from_checkpoint") if rc == 0 else None
+        v = verdict(rc, err) if rc != 0 else "identical" if chosen and chosen.get("writer") == p.pid else "silent"
+        out.append(_case("select --allow-unfinished of a run being written", v))
+        for args in (["replay", d, "--seconds", "0.5", "--allow-unfinished"], ["gait-report", d, "--seconds", "1", "--allow-unfinished"]):
+            rc, err, _ = command(*args, guarded=True, timeout=60)
+            v = verdict(rc, err) if rc != 0 else "identical" if "is being written by process" in err else "silent"
+            out.append(_case(f"{args[0]} --allow-unfinished of a run being written", v))
+        while chosen and len(json.loads((d / "checkpoint.json").read_text())["history"]) == chosen["generations"]:
+            time.sleep(0.1)
+    finally:
+        p.kill()
+        p.communicate()
+    for args in (["replay", d / "selected.json", "--seconds", "0.5"], ["gait-report", d / "selected.json", "--seconds", "1"]):
+        rc, err, _ = command(*args, guarded=True, timeout=60)
+        out.append(_case(f"{args[0]} of a selection the run has gone past", refusal(rc, err, "choose again with evobiped select")))
+    return out
+
+
+def gait_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """A commanded walker's gait (its JSON and figure one set) SIGKILLed at each rename of its outputs, then run again."""
+    out = []
+    walker = ROOT / "docs" / "walkers" / "ctrnn_command_seed1.json"
+    args = ["gait", walker, "--speed", "0.5", "--hold", "3"]
+    for n in (1, 2, 3):
+        d = work / f"gait-{n}"
+        rc, err, _ = command(*args, "--out", d, guarded=True)
+        names = sorted(x.name for x in d.iterdir()) if d.is_dir() else []
+        rc, err, _ = command(*args, "--out", d, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(n)}, guarded=True)
+        if rc != -signal.SIGKILL:
+            out.append(_case(f"gait killed at rename {n}", verdict(rc, err)))
+            continue
+        if all((d / x).exists() for x in names):
+            out.append(_case(f"gait killed at rename {n}", "mixed"))
+            continue
+        rc, err, _ = command(*args, "--out", d, guarded=True)
+        v = verdict(rc, err)
+        if v == "identical":  # cut short after its mark: said; at the mark's own write: nothing of it to say
+            v = "rewritten" if "was cut short" in err else "identical" if n == 1 else "silent"
+        v = v if sorted(x.name for x in d.iterdir()) == names else "residue"
+        out.append(_case(f"gait killed at rename {n}, run again", _checked(v, d)))
+    return out
+
+
+FIXED.update({"numbers": number_cases, "environment": environment_cases, "odd-path": odd_path_cases, "live-run": live_run_cases,
+              "gait-output": gait_output_cases})
 
 
 def campaign(work: Path, classes: list[str], repeat: int, show: bool = False) -> tuple[dict[str, Counter], list[str]]:

@@ -25,12 +25,25 @@ def _work(job: tuple) -> EpisodeResult:
     return evaluate_batch(_worker_episode, *job)
 
 
+#: below this many file descriptors (``ulimit -n``) a pool's workers may die of too few: said when they do
+FEW_DESCRIPTORS = 256
+
+
 class ProcessPoolEvaluator(RetryingEvaluator):
     """A persistent pool of ``workers`` processes (:class:`~.base.RetryingEvaluator`: batches, retries).  A worker that
     dies (killed, out of memory) breaks the pool: a fresh pool evaluates the batches it lost again."""
 
     backend = "process"
-    lost = "evaluation workers died {n} times in one generation (out of memory? killed?)"
+    @property
+    def lost(self) -> str:
+        """Why the workers died, as far as this process can tell: a low ``ulimit -n`` (each worker takes pipes and
+        semaphores), else memory or a kill."""
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+        low = soft != resource.RLIM_INFINITY and soft < FEW_DESCRIPTORS
+        return ("evaluation workers died {n} times in one generation (" + (f"too many open files? this process may open {soft} "
+                "(ulimit -n): raise the limit (ulimit -n 1024) or give fewer --workers; " if low else "") + "out of memory? killed?)")
 
     def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None,
                  fault: FaultHook | None = None):
