@@ -135,7 +135,8 @@ def add_stored_walker(p, dest: str = "source", metavar: str = "SOURCE", *, also:
 def add_allow_unfinished(p) -> None:
     """``--allow-unfinished``: read a run directory that an evolve is still writing (refused without it)."""
     p.add_argument("--allow-unfinished", action="store_true", help="read a run that an evolve is still writing (its "
-                   "generations so far; said on stderr and recorded in what is written); without it such a run is refused")
+                   "generations so far; said on stderr and recorded in what is written); without it such a run is "
+                   "refused")
 
 
 def unfinished_note(source) -> None:

@@ -124,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes stdout
         return 141
     except OSError as exc:  # a file or directory that cannot be read or written: one line, not a traceback
-        if exc.errno in (errno.EMFILE, errno.ENFILE):  # the descriptors a pool's pipes and semaphores take, past the limit
+        if exc.errno in (errno.EMFILE, errno.ENFILE):  # a pool's pipes and semaphores, past the limit
             last_line(f"{ERROR}{descriptors_line()}")
             return 2
         if exc.filename is None:

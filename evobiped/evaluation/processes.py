@@ -42,8 +42,9 @@ class ProcessPoolEvaluator(RetryingEvaluator):
 
         soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
         low = soft != resource.RLIM_INFINITY and soft < FEW_DESCRIPTORS
-        return ("evaluation workers died {n} times in one generation (" + (f"too many open files? this process may open {soft} "
-                "(ulimit -n): raise the limit (ulimit -n 1024) or give fewer --workers; " if low else "") + "out of memory? killed?)")
+        files = (f"too many open files? this process may open {soft} (ulimit -n): raise the limit (ulimit -n 1024) or "
+                 "give fewer --workers; ") if low else ""
+        return "evaluation workers died {n} times in one generation (" + files + "out of memory? killed?)"
 
     def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None,
                  fault: FaultHook | None = None):

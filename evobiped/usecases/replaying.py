@@ -168,8 +168,8 @@ def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, 
     feet = FootRecorder() if has_feet(episode.body) else None
     watchers = [recorder, *others] + ([feet] if feet is not None else []) + ([listener] if listener is not None else [])
     try:
-        return _recorded(source, cfg, episode, history, recording, recorder, others, feet, watchers, figures_dir=figures_dir,
-                         video=video, video_options=video_options, not_compared=not_compared)
+        return _recorded(source, cfg, episode, history, recording, recorder, others, feet, watchers,
+                         figures_dir=figures_dir, video=video, video_options=video_options, not_compared=not_compared)
     except BaseException:  # a stop signal, an error: the recording is dropped, with nothing said by Rerun at exit
         recording.discard()
         raise

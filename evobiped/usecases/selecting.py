@@ -46,7 +46,8 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
         raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
     live = rundir.check_at_rest(d, allow_unfinished)
     if live is not None and note is not None:
-        note(f"{d} is being written by process {live['writer']}: chosen from its first {live['generations']} generations")
+        note(f"{d} is being written by process {live['writer']}: chosen from its first {live['generations']} "
+             "generations")
     mark = live or rundir.checkpoint_mark(d)
     rundir.check_generation_files(d)  # every committed generation file is the run's (rewritten, or one line naming it)
     best = rundir.read_history(d / rundir.HISTORY)["best"]
@@ -83,7 +84,8 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     done = episode.run(genome)
     with output_set("select", [out, d / CANDIDATES], say=note):  # one set: never a new selected.json beside old candidates
         save_genome(out, genome, episode_config, **{**meta, "selected_from": labels[k], "up_long_seconds": seconds if rows[k].get("up_long") else None,
-                                                   "outcome": outcome(done, episode.task.targets()), rundir.FROM_CHECKPOINT: mark})
+                                                   "outcome": outcome(done, episode.task.targets()),
+                                                   rundir.FROM_CHECKPOINT: mark})
         write_json(d / CANDIDATES, {"seconds": seconds, "heading_limit": heading_limit, rundir.FROM_CHECKPOINT: mark,
                                     "candidates": [{"candidate": lab, **r} for lab, r in zip(labels, rows)]})
     return Selection(labels=labels, rows=rows, chosen=k, path=out)

@@ -119,15 +119,16 @@ def run_compare_cmd(args) -> int:
     results_dir = args.resume or args.out or default_compare_dir(names)
     kwargs = {"resume": args.resume} if args.resume else {"out": results_dir}
     try:
-        results = compare_configurations(comparison, given=given if args.resume else None, workers=args.workers, say=line.say,
-                                         on_run=on_run, **kwargs)
+        results = compare_configurations(comparison, given=given if args.resume else None, workers=args.workers,
+                                         say=line.say, on_run=on_run, **kwargs)
     except KeyboardInterrupt as exc:
         from ...core.errors import exit_status, last_line
         from ...usecases.comparing import FILE
 
         if not (Path(results_dir) / FILE).is_file():  # stopped before the comparison was opened: nothing to resume
             raise
-        last_line(f"evobiped: interrupted; the runs done so far are kept: continue with: evobiped compare --resume {results_dir}")
+        last_line(f"evobiped: interrupted; the runs done so far are kept: continue with: "
+                  f"evobiped compare --resume {results_dir}")
         return exit_status(exc)
     from ...usecases.compare_report import markdown
 

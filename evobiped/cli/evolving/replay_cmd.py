@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from ...flags import add_source_flag, add_stored_walker, finite_float, positive_float, positive_int, refuse, unfinished_note, walk_line
+from ...flags import (add_source_flag, add_stored_walker, finite_float, positive_float, positive_int, refuse,
+                      unfinished_note, walk_line)
 from ...core.progress import Progress
 
 
@@ -24,8 +25,10 @@ def add_replay(sub) -> None:
                    "the frames go into the recording too")
     p.add_argument("--video-size", nargs=2, type=positive_int, metavar=("W", "H"), default=[480, 360],
                    help="size of each panel in pixels, even numbers (default 480 360; a steering walker gets one panel per source)")
-    p.add_argument("--video-fps", type=positive_float, default=25.0, metavar="FPS", help="frames per simulated second (default 25: real time)")
-    p.add_argument("--video-window", nargs=2, type=finite_float, metavar=("T0", "T1"), help="only simulated times T0..T1 s (default: all)")
+    p.add_argument("--video-fps", type=positive_float, default=25.0, metavar="FPS",
+                   help="frames per simulated second (default 25: real time)")
+    p.add_argument("--video-window", nargs=2, type=finite_float, metavar=("T0", "T1"),
+                   help="only simulated times T0..T1 s (default: all)")
     add_source_flag(p)
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_replay_cmd)

@@ -13,13 +13,15 @@ def add_adapt(sub) -> None:
                    help="weak:JOINT:F (strength kept, 0-1), locked:JOINT or short:LEG:D (m); repeat for several cases")
     p.add_argument("--seconds", type=positive_float, default=50.0, metavar="S", help="length of each trial (default 50 s)")
     p.add_argument("--trials", type=positive_int, default=20, metavar="N", help="most trials per damage (default 20)")
-    p.add_argument("--rho", type=within(1e-3, 1e3, "scaled measure units", "the measures span 0 to 1"), default=TrialAndError.rho, metavar="R",
+    p.add_argument("--rho", type=within(1e-3, 1e3, "scaled measure units", "the measures span 0 to 1"),
+                   default=TrialAndError.rho, metavar="R",
                    help=f"the GP kernel's length scale in scaled measure units (default {TrialAndError.rho}; Cully et al. 0.4)")
     p.add_argument("--kappa", type=nonnegative_float, default=TrialAndError.kappa, metavar="K",
                    help=f"exploration weight of the upper confidence bound mu + K s (default {TrialAndError.kappa})")
     p.add_argument("--order", choices=ORDERS, default="ucb",
                    help="how the next trial is chosen: the GP's upper confidence bound (default), the best prior first, or at random")
-    p.add_argument("--pose-noise", type=within(0, 0.5, "rad", "29 deg off each joint's nominal angle"), default=0.0, metavar="RAD",
+    p.add_argument("--pose-noise", type=within(0, 0.5, "rad", "29 deg off each joint's nominal angle"), default=0.0,
+                   metavar="RAD",
                    help="each trial's initial joint angles off by Gaussian noise of this sd (default 0: nominal trials)")
     p.add_argument("--seed", type=seed, default=0, help="the noisy trials' and the random order's seed (default 0)")
     p.set_defaults(func=run_adapt_cmd)

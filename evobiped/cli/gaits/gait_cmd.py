@@ -25,22 +25,28 @@ def add_gait(sub) -> None:
     p.add_argument("--json", action="store_true", help="a commanded walker: print the report as JSON")
     p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: the "
                    "run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
-    p.add_argument("--battery", type=count(10**4, "schedules of a battery"), default=None, metavar="N", help="a commanded walker: N random schedules of "
+    p.add_argument("--battery", type=count(10**4, "schedules of a battery"), default=None, metavar="N",
+                   help="a commanded walker: N random schedules of "
                    "--stretches speeds drawn uniformly in its evolved speed range (or --range), --hold s each, straight "
                    "ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, falls, its "
                    "gait at constant commands, and (a walker evolved with stops) a 20 s stop between two walks at its "
                    "slowest, middle and fastest speed; writes <stem>_speed_battery.json")
-    p.add_argument("--stretches", type=count(10**4, "stretches of a schedule"), default=6, metavar="K", help="--battery: stretches per schedule (default 6)")
+    p.add_argument("--stretches", type=count(10**4, "stretches of a schedule"), default=6, metavar="K",
+                   help="--battery: stretches per schedule (default 6)")
     p.add_argument("--range", dest="speed_range", metavar="LOW,HIGH", help="--battery: the speeds drawn, m/s (default: "
                    "the speed range the walker was evolved for)")
     p.add_argument("--seed", type=seed, default=0, help="--battery: the seed of the schedules (default 0)")
-    p.add_argument("--ramp", type=finite_float, default=None, metavar="A", help="the knob speeds up by at most A m/s per s, "
+    p.add_argument("--ramp", type=finite_float, default=None, metavar="A",
+                   help="the knob speeds up by at most A m/s per s, "
                    "switching elites every second (default 0.1; 0: at once)")
-    p.add_argument("--ramp-down", type=finite_float, default=None, metavar="A", help="the knob slows down by at most A m/s per s "
+    p.add_argument("--ramp-down", type=finite_float, default=None, metavar="A",
+                   help="the knob slows down by at most A m/s per s "
                    "(default 0.2; 0: at once)")
-    p.add_argument("--correction", type=finite_float, default=None, metavar="S", help="the knob makes up a shortfall (or excess) in the distance "
+    p.add_argument("--correction", type=finite_float, default=None, metavar="S",
+                   help="the knob makes up a shortfall (or excess) in the distance "
                    "walked so far in a stretch within about S s (default 3; 0: no loop, the knob asks for the command itself)")
-    p.add_argument("--overshoot", type=finite_float, default=None, metavar="F", help="the most the knob may ask above or below the command, "
+    p.add_argument("--overshoot", type=finite_float, default=None, metavar="F",
+                   help="the most the knob may ask above or below the command, "
                    "a fraction of it (default 0.2)")
     p.set_defaults(func=run_gait_cmd)
 
@@ -136,9 +142,10 @@ def _run_commanded(args, speeds, turnings) -> int:
 
     out.mkdir(parents=True, exist_ok=True)
     stem = f"{source.genome_path.stem}_command" if source.run_dir is None else f"{source.label}_command"
-    with output_set("gait", [out / f"{stem}.json", out / f"{stem}.png"], say=note):  # one set: never a new JSON beside an old PNG
+    title = f"{source.name}: commanded and walked speed and turning rate"
+    with output_set("gait", [out / f"{stem}.json", out / f"{stem}.png"], say=note):  # no new JSON beside an old PNG
         write_json(out / f"{stem}.json", report)
-        png = command_figure(report, out / f"{stem}.png", title=f"{source.name}: commanded and walked speed and turning rate")
+        png = command_figure(report, out / f"{stem}.png", title=title)
     if args.json:
         print(json.dumps({k: v for k, v in report.items() if k != "trace"}, default=lambda v: None))
         return 0

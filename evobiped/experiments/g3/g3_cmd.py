@@ -16,19 +16,23 @@ def add_g3(sub) -> None:
     p.add_argument("preset", nargs="?", help=f"parameter set: {', '.join(PRESETS)} (not with --reproduce)")
     lv = p.add_mutually_exclusive_group()
     lv.add_argument("--go", type=finite_float, nargs="+", metavar="I", help="GO level(s) (default: the preset's)")
-    lv.add_argument("--sweep", type=finite_float, nargs=3, metavar=("START", "STOP", "STEP"), help="GO levels START..STOP (inclusive)")
+    lv.add_argument("--sweep", type=finite_float, nargs=3, metavar=("START", "STOP", "STEP"),
+                    help="GO levels START..STOP (inclusive)")
     p.add_argument("--continue", dest="mode", action="store_const", const="continue", default="reset",
                    help="one run through the levels keeping the state (default: reset to zero per level)")
-    p.add_argument("--from-go", type=finite_float, metavar="I0", help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
+    p.add_argument("--from-go", type=finite_float, metavar="I0",
+                   help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
     p.add_argument("--switch-at", type=positive_float, help="time of the switch from --from-go (default 30; only with --from-go)")
     p.add_argument("--t-run", type=positive_float, help="time units per level (default: the preset's, 120)")
     p.add_argument("--dt", type=positive_float, default=0.005, help="RK4 step in model time units (default 0.005)")
     p.add_argument("--channels", help="channels drawn in the diagrams, names or 0-3 (default all: LF,RF,LH,RH; only with --out)")
     p.add_argument("--out", metavar="DIR", help="write PNG gait diagrams and the frequency plot here")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
-    p.add_argument("--reproduce", metavar="DIR", help="check the paper claim by claim: write summary.json, one CSV per sweep and "
+    p.add_argument("--reproduce", metavar="DIR",
+                   help="check the paper claim by claim: write summary.json, one CSV per sweep and "
                    "the figures into DIR (made if missing) and print the numbers docs/g3.md quotes; no PRESET, only --step and --t-run go with it")
-    p.add_argument("--step", type=within(1e-3, 1, "", "a sweep of at most some thousand levels"), help="with --reproduce: GO increment of its sweeps (default 0.01, the paper's)")
+    p.add_argument("--step", type=within(1e-3, 1, "", "a sweep of at most some thousand levels"),
+                   help="with --reproduce: GO increment of its sweeps (default 0.01, the paper's)")
     p.set_defaults(func=run_g3_cmd)
     _DEFAULTS.update(vars(p.parse_args([])))
 
@@ -91,8 +95,8 @@ def run_g3_cmd(args) -> int:
         if not step > 0 or b < a:
             raise ConfigError("--sweep needs START <= STOP and STEP > 0")
         if (b - a) / step + 1 > MAX_LEVELS:
-            raise ConfigError(f"--sweep {a:g} {b:g} {step:g} gives {(b - a) / step + 1:,.0f} GO levels; a sweep runs at most "
-                              f"{MAX_LEVELS:,} (each a run of --t-run time units)")
+            raise ConfigError(f"--sweep {a:g} {b:g} {step:g} gives {(b - a) / step + 1:,.0f} GO levels; a sweep runs "
+                              f"at most {MAX_LEVELS:,} (each a run of --t-run time units)")
         levels = np.round(np.arange(a, b + step / 2, step), 10)
     else:
         levels = np.array(args.go if args.go else pre.go, float)

@@ -132,7 +132,8 @@ def check_size(steps: int, trace_bytes: float, t_end: float, dt: float) -> None:
                           f"{MAX_STEPS:.0e}: a shorter --t-run or a larger --dt")
     room = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 4
     if trace_bytes > room:
-        raise ConfigError(f"G3: the run's trace would take {trace_bytes / 2**30:.3g} GiB, more than this machine can hold "
+        raise ConfigError(f"G3: the run's trace would take {trace_bytes / 2**30:.3g} GiB, more than this machine can "
+                          "hold "
                           f"({room / 2**30:.3g} GiB): fewer GO levels or a shorter --t-run")
 
 

@@ -13,26 +13,33 @@ from ...core.progress import Progress
 
 def add_taga(sub) -> None:
     p = sub.add_parser("taga", help="run the Taga biped with its rhythm generator (Taga et al. 1991); gait metrics table")
-    p.add_argument("--u0", type=finite_float, nargs="+", default=[5.5], metavar="U", help="tonic input(s) u0, one walker each (default 5.5)")
+    p.add_argument("--u0", type=finite_float, nargs="+", default=[5.5], metavar="U",
+                   help="tonic input(s) u0, one walker each (default 5.5)")
     from .parameters import PRESETS
 
     p.add_argument("--preset", default="taga", help=f"rhythm-generator parameters: {', '.join(PRESETS)} (default taga: Appendix D)")
     p.add_argument("--seconds", type=positive_float, help="simulated time in s from Appendix E's initial state (default 20; not with --push)")
-    p.add_argument("--window", type=positive_float, help="metrics over the last WINDOW s, at most --seconds (default 10; not with --push)")
-    p.add_argument("--slope", type=finite_float, default=0.0, metavar="PCT", help="terrain slope in %% (uphill > 0; default 0)")
-    p.add_argument("--slope-start", type=finite_float, default=0.0, metavar="X", help="x (m) where the slope begins (default 0)")
+    p.add_argument("--window", type=positive_float,
+                   help="metrics over the last WINDOW s, at most --seconds (default 10; not with --push)")
+    p.add_argument("--slope", type=finite_float, default=0.0, metavar="PCT",
+                   help="terrain slope in %% (uphill > 0; default 0)")
+    p.add_argument("--slope-start", type=finite_float, default=0.0, metavar="X",
+                   help="x (m) where the slope begins (default 0)")
     p.add_argument("--kg", type=positive_float, default=1e4, help="ground stiffness N/m (default 1e4)")
     p.add_argument("--bg", type=finite_float, default=1e3, help="ground damping N s/m (default 1e3)")
     p.add_argument("--timestep", type=positive_float, default=0.0005, help="physics step in s (default 0.0005)")
     p.add_argument("--push", choices=("leg", "hip"), help="Fig. 7: after 10 s push the right shank (200 N) or the hip (288 N) forward for 0.2 s")
-    p.add_argument("--push-force", type=within(0, 1e4, "N", "a push beyond 10 kN throws any biped"), help="push force in N (default 200 leg, 288 hip; only with --push)")
-    p.add_argument("--push-delay", type=within(0, 2, "s", "the schedule waits 2 s for the lift-off"), help="push this many s after the right foot lifts off (default 0.05; only with --push)")
+    p.add_argument("--push-force", type=within(0, 1e4, "N", "a push beyond 10 kN throws any biped"),
+                   help="push force in N (default 200 leg, 288 hip; only with --push)")
+    p.add_argument("--push-delay", type=within(0, 2, "s", "the schedule waits 2 s for the lift-off"),
+                   help="push this many s after the right foot lifts off (default 0.05; only with --push)")
     p.add_argument("--save-genome", metavar="FILE.json", help="also write the genome file of the (first) walker, for evobiped replay")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--reproduce", metavar="DIR", help="run every experiment of the paper with its published parameters and write "
                    "taga_results.json, summary.md and the figures (Figs. 5-11) into DIR (made if missing); only --quick and --quiet go with it")
-    p.add_argument("--quick", action="store_true", help="with --reproduce: coarser grids in every part, to check the pipeline, not the numbers")
+    p.add_argument("--quick", action="store_true",
+                   help="with --reproduce: coarser grids in every part, to check the pipeline, not the numbers")
     p.set_defaults(func=run_taga_cmd)
     _DEFAULTS.update(vars(p.parse_args([])))
 

@@ -64,5 +64,6 @@ __all__ = [
     "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "genome_path",
     "history_columns", "history_text", "individuals_text", "is_unused", "label", "lock", "optimizer_table",
     "read_history", "read_individuals", "remove_stale_temporaries", "replay_file", "resolve_genome",
-    "robustness_stem", "unlock", "validate_checkpoint", "write_history", "FROM_CHECKPOINT", "check_at_rest", "checkpoint_mark",
+    "robustness_stem", "unlock", "validate_checkpoint", "write_history", "FROM_CHECKPOINT", "check_at_rest",
+    "checkpoint_mark",
 ]

@@ -32,8 +32,8 @@ class GenomeSource:
     meta: dict
     genome_path: Path  # the file read: a run directory's best.json or generation file, or the genome file itself
     run_dir: Path | None  # None for a lone genome file
-    #: read from a run another process was writing (``--allow-unfinished``): its checkpoint's mark (:func:`checkpoint_mark`)
-    #: and the writer's pid; None for a run at rest
+    #: read from a run another process was writing (``--allow-unfinished``): its checkpoint's mark
+    #: (:func:`checkpoint_mark`) and the writer's pid; None for a run at rest
     unfinished: dict | None = None
 
 
@@ -48,10 +48,12 @@ def checkpoint_mark(run_dir: Path) -> dict | None:
         history = json.loads(data).get("history", [])
     except (OSError, ValueError, AttributeError):
         return None
-    return {"generations": len(history) if isinstance(history, list) else None, "digest": hashlib.sha256(data).hexdigest()[:16]}
+    return {"generations": len(history) if isinstance(history, list) else None,
+            "digest": hashlib.sha256(data).hexdigest()[:16]}
 
 
-def check_at_rest(run_dir: Path, allow_unfinished: bool = False, how: str = "wait or pass --allow-unfinished") -> dict | None:
+def check_at_rest(run_dir: Path, allow_unfinished: bool = False,
+                  how: str = "wait or pass --allow-unfinished") -> dict | None:
     """None when no other process writes ``run_dir``; else one line (UserError, ending in ``how``) unless
     ``allow_unfinished``, and then the checkpoint's mark and the writer's pid (what a reader records of the generation
     it read)."""
