@@ -267,7 +267,7 @@ def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys
 @pytest.mark.parametrize("argv, words", [
     (["--source", "3"], "expected 2 arguments"),
     (["--source", "0.2", "-0.1"], "at the walker's start"),
-    (["--source", "nan", "1"], "sources must be"),
+    (["--source", "nan", "1"], "--source: must be a finite number"),
 ])
 def test_bad_sources_are_one_line(hearing_walker, tmp_path, capsys, argv, words):
     for cmd in (["episode", "--genome", str(hearing_walker / "best.json")], ["evolve", "--task", "steer", "--out", str(tmp_path / "x")]):

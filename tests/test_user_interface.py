@@ -39,7 +39,7 @@ REFUSED = [
     (["taga", "--reproduce", "out", "--u0", "6", "--json"], "--u0/--json: --reproduce runs the paper's own experiments"),
     (["taga", "--quick"], "--quick: it coarsens the grids of --reproduce"),
     (["replay", "GENOME", "--spawn"], "cannot spawn a Rerun viewer: no display here"),
-    (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"], "cannot write no/such/dir/t.json: No such file or directory"),
+    (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"], "--save-genome: the folder no/such/dir does not exist"),
 ]
 
 
