@@ -1,13 +1,14 @@
 """Fault campaign on ``evobiped evolve`` (and the commands that read its files), for a release check.
 
-Twenty classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
+Twenty-five classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
 release): a pool worker SIGKILLed, every worker killed, SIGTERM/SIGHUP to a worker, the resource tracker then a
 worker, every worker killed 2 to 6 pools in a row, the whole run SIGKILLed, SIGINT/SIGTERM/SIGHUP to the run,
 SIGINT at any moment from a command's start (evolve, replay, select, ``-h``; or to the process group while workers
 start), and a replay or select killed between its outputs.  The others are fixed cases: tampered checkpoints, edited
 configs, hostile settings files, genome files, ``select`` on damaged runs, runs started ``--from`` a relative path,
 damaged generation files, worker counts beyond the machine per backend, an empty value for every flag, and a run
-directory whose name is not UTF-8.  The classes after the first fourteen run their commands under a memory guard
+directory whose name is not UTF-8; and the newer commands' numbers, environment (``MUJOCO_GL``, ``ulimit -n``), paths
+that are no file, a run being written, and ``gait``'s outputs killed between them.  The classes after the first fourteen run their commands under a memory guard
 (a quarter of the machine, at most 8 GiB of address space) and check every case for residue: temporaries, a set's
 mark, a video's temporary folder, processes that outlived their command.
 
