@@ -20,6 +20,13 @@ from ..core.options import check_fields, option
 
 #: the gait terms the walking rule reads
 WALKING_TERMS = ("duty_min", "airborne", "duty_asymmetry", "slip_share", "forward", "time_up")
+#: and those it reads of a task whose gait terms sample every physics step (``gait_sampling = "physics_step"``)
+STEP_TERMS = ("slide_per_m",)
+
+
+def _sampling(task) -> str:
+    """How ``task``'s gait terms sample the feet (``gait_sampling``; ``control_tick`` for a task without the option)."""
+    return getattr(task, "sampling", None) or getattr(getattr(task, "options", None), "gait_sampling", "control_tick")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -43,7 +50,8 @@ class StopOptions:
     def check(self, task) -> None:
         """ConfigError (one line) when the task cannot tell what the rule asks."""
         if self.when == "walking":
-            missing = [t for t in WALKING_TERMS if t not in task.term_names]
+            needed = WALKING_TERMS + (STEP_TERMS if _sampling(task) == "physics_step" else ())
+            missing = [t for t in needed if t not in task.term_names]
             if missing:
                 raise ConfigError(f"stop.when = 'walking' needs the walk task's gait terms (task_options gait_terms = true "
                                   f"and fitness = 'weighted'); task {task.name!r} lacks {', '.join(missing)}")
@@ -55,13 +63,14 @@ class StopOptions:
             return False
         if self.when == "fitness":
             return bool(np.mean(fitness) >= self.above)
-        from ..analysis.gait_report import failed_criteria
+        from ..analysis.gait_report import criteria_for, failed_criteria
 
+        sampling = "physics_step" if all(t in terms for t in STEP_TERMS) else "control_tick"  # the terms say which
         for i in range(len(fell)):  # every presentation of every evaluation walker
-            one = {k: float(terms[k][i]) for k in WALKING_TERMS}
+            one = {k: float(terms[k][i]) for k in WALKING_TERMS + (STEP_TERMS if sampling == "physics_step" else ())}
             one["speed"] = one["forward"] / one["time_up"] if one["time_up"] > 0 else 0.0
             one["heading_deg"] = 0.0  # not measured during a run (see the module docstring)
-            if fell[i] or failed_criteria(one):
+            if fell[i] or failed_criteria(one, criteria_for(sampling)):
                 return False
         return True
 
