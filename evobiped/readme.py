@@ -20,7 +20,7 @@ from .controllers.base import GENERIC_CONTROLLER_OPTIONS
 from .envs.walkers import EnvOptions
 from .optimizers.cma import CMAOptions
 from .run.curriculum import CurriculumOptions
-from .run.stopping import StopOptions
+from .run.stopping import RestartOptions, StopOptions
 from .optimizers.es import ESOptions
 from .optimizers.map_elites import MapElitesOptions
 from .run.run_config import NormaliseOptions
@@ -87,6 +87,7 @@ def tables() -> dict[str, str]:
     out["run normalise"] = markdown_table(NormaliseOptions)
     out["run curriculum"] = markdown_table(CurriculumOptions)
     out["run stop"] = markdown_table(StopOptions)
+    out["run restart"] = markdown_table(RestartOptions)
     out["environment"] = markdown_table(EnvOptions)
     return out
 

@@ -46,9 +46,9 @@ def test_wilson_interval_is_the_score_formula(k, n):
 
 
 def _permutation_p(a, b) -> float:
-    """The exact two-sided p of the rank-sum statistic over every split of the pooled sample (no ties)."""
+    """The exact two-sided p of the rank-sum statistic over every split of the pooled sample (ties: midranks)."""
     pooled, m = np.concatenate([a, b]), len(a)
-    ranks = np.argsort(np.argsort(pooled)) + 1.0
+    ranks = np.array([(pooled < v).sum() + ((pooled == v).sum() + 1) / 2 for v in pooled])
     mean = m * (len(pooled) + 1) / 2
     observed = abs(ranks[:m].sum() - mean)
     splits = list(itertools.combinations(range(len(pooled)), m))
@@ -56,9 +56,19 @@ def _permutation_p(a, b) -> float:
 
 
 @pytest.mark.parametrize("a, b", [([1.1, 2.3, 3.7], [4.2, 5.0, 6.1, 0.5]), ([0.3, 0.9, 1.7, 2.2], [1.0, 1.5, 2.9, 3.3, 4.4]),
-                                  ([5.0, 6.0], [1.0, 2.0, 3.0])])
+                                  ([5.0, 6.0], [1.0, 2.0, 3.0]), ([0.0, 0.0, 1.0], [1.0, 1.0, 1.0]),
+                                  ([3.0, 3.0, 5.0, 0.0, 3.0], [3.0, 1.0, 1.0, 5.0, 2.0, 0.0]),
+                                  ([1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0], [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0])])
 def test_mann_whitney_p_is_the_exact_permutation_p(a, b):
     assert mann_whitney_p(a, b) == pytest.approx(_permutation_p(np.array(a), np.array(b)), abs=1e-12)
+
+
+def test_mann_whitney_p_with_ties_at_three_seeds_a_side_is_exact_not_the_normal_approximation():
+    from scipy.stats import mannwhitneyu
+
+    a, b = [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]  # 8 of the 20 splits are as far from the mean rank sum as this one
+    assert mann_whitney_p(a, b) == pytest.approx(0.4, abs=1e-12)
+    assert mannwhitneyu(a, b).pvalue == pytest.approx(0.19, abs=0.01)
 
 
 def test_mann_whitney_of_identical_constant_samples_is_one_and_median_iqr_interpolates():

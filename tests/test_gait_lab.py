@@ -8,12 +8,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from evobiped.analysis.gait_report import failed_criteria, gait_report
+from evobiped.analysis.gait_report import FootRecorder, failed_criteria, gait_report
 from evobiped.core.errors import ConfigError, UserError
 from evobiped.core.options import given
 from evobiped.episode import EpisodeConfig
 from evobiped.files.genome_file import load_genome
 from evobiped.physics.gait_lab import measure_one, stance_episodes
+from evobiped.tasks.walk import LAB_TERMS, LAB_TERMS_TICK
 
 from .conftest import WALKERS
 
@@ -100,13 +101,89 @@ def test_a_known_stance_schedule_gives_its_duty_factors_flight_and_steps():
 
 def test_the_walk_tasks_gait_terms_are_the_reports_measures():
     g, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed5.json")
-    opts = dict(given(cfg.task_options), gait_terms=True)
+    opts = dict(given(cfg.task_options), gait_terms=True, gait_sampling="physics_step")
     run_cfg = dataclasses.replace(cfg.nominal(), task_options=opts, seconds=8.0)
     terms = {k: float(v[0]) for k, v in run_cfg.build().run(g[None]).terms.items()}
     report = gait_report(cfg, g, seconds=8.0)
-    for k in ("duty_left", "duty_right", "airborne", "slip", "steps_per_s", "power", "cost_of_transport", "sliding"):
+    for k in LAB_TERMS:
         assert terms[k] == pytest.approx(report[k], rel=1e-12), k
     assert report["up"] and 0.5 < report["duty_left"] < 0.6 and report["steps_per_s"] > 5
+
+
+def test_control_tick_sampling_reads_the_last_physics_step_of_each_tick():
+    """The sampling the earlier walkers were evolved with: their terms are the measures of every fourth sample of the
+    report's series (the last physics step of each 20 ms tick), debounced one way, and lack the tail measures."""
+    g, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed5.json")
+    opts = dict(given(cfg.task_options), gait_terms=True, gait_sampling="control_tick")
+    ep = dataclasses.replace(cfg.nominal(), task_options=opts, seconds=6.0).build()
+    recorder = FootRecorder()
+    result = ep.run(g[None], listener=recorder)
+    assert ep.substeps == 4 and "slide_per_m" not in result.terms and "slip_p90" in LAB_TERMS
+    series = {k: v[ep.substeps - 1::ep.substeps] for k, v in recorder.series().items()}
+    forward = float(result.terms["forward"][0])
+    mass, leg = ep.body.gait_constants(ep.model)
+    tick = measure_one(series, ep.control_dt, forward=forward, mass=mass, leg_length=leg, feet=("left", "right"))
+    for k in LAB_TERMS_TICK:
+        assert result.terms[k][0] == tick[k], k
+
+
+def test_positive_work_is_raw_mujocos_joint_work_at_every_physics_step():
+    """An independent calculation: the same controls stepped in one raw MjData, the actuators' positive work as
+    qfrc_actuator times each hinge's displacement over every 5 ms physics step (semi-implicit Euler: the exact work
+    of the step), against the gait lab's power series; and the last-step sample alone misses a tenth of it or more."""
+    g, cfg, _ = load_genome(WALKERS / "ctrnn_walk_preset_seed1.json")
+    ep = cfg.nominal().build()
+    st = ep.start(g[None], seconds=4.0)
+    m = ep.model
+    d = mujoco.MjData(m)
+    state = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(m, st.sims.batch.get_data(0), state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    mujoco.mj_setState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    recorder = FootRecorder()
+    recorder.start(ep, st.sims)
+    qadr, dadr = m.jnt_qposadr[m.actuator_trnid[:, 0]], m.jnt_dofadr[m.actuator_trnid[:, 0]]
+    raw = []
+    for _ in range(200):
+        ep.advance(st, ticks=1, listener=recorder)
+        d.ctrl[:] = st.sims.ctrl[0]
+        for _ in range(ep.substeps):
+            q0 = d.qpos[qadr].copy()
+            mujoco.mj_step(m, d)
+            raw.append(d.qfrc_actuator[dadr] * (d.qpos[qadr] - q0) / m.opt.timestep)
+    assert np.array_equal(d.qpos, st.sims.qpos[0])  # the same motion, to the last bit
+    lab = recorder.series()["power"]
+    assert lab.shape == (800, 6) and lab == pytest.approx(np.array(raw), abs=1e-6)
+    every, last = np.maximum(lab, 0).sum(), np.maximum(lab[3::4], 0).sum() * 4
+    assert abs(last - every) > 0.02 * every  # one step in four is not the work
+
+
+def test_the_stance_debounce_merges_bounces_and_drops_taps():
+    dt, T = 0.005, 800  # 4 s of 5 ms samples; one stance [0, 0.6) s a second
+    contact = (np.arange(T) * dt % 1.0) < 0.6
+    contact[20:24] = False  # a 20 ms bounce inside the first stance
+    contact[150:156] = True  # a 30 ms tap in the first swing
+    one_way, both = stance_episodes(contact, dt), stance_episodes(contact, dt, min_gap=0.04)
+    assert len(one_way) == 5 and len(both) == 4 and both[0] == (0, 120)
+    contact[20:30] = False  # a 50 ms gap is a swing, not a bounce
+    assert len(stance_episodes(contact, dt, min_gap=0.04)) == 5
+
+
+def test_the_tail_of_the_slip_and_the_stride_against_hand_calculations():
+    dt, T = 0.01, 400
+    left = (np.arange(T) * dt % 1.0) < 0.6
+    contact = np.stack([left, np.roll(left, 50)], axis=1)
+    slip = np.where(np.arange(T)[:, None] % 10 == 0, 0.2, 0.01) * np.ones((T, 2))  # one sample in ten slides fast
+    sample = {"contact": contact, "slip": slip, "height": np.where(contact, 0.0, 0.05), "knee": np.zeros((T, 2)),
+              "power": np.zeros((T, 6))}
+    m = measure_one(sample, dt, forward=2.0, mass=1.0, leg_length=1.0, feet=("left", "right"))
+    stance_slips = slip[contact]
+    assert m["slip"] == 0.01 and m["slip_p90"] == pytest.approx(np.percentile(stance_slips, 90))
+    assert m["slide_per_m"] == pytest.approx(stance_slips.sum() * dt / 2.0)  # slid metres per metre forward
+    steps = m["steps_per_s"] * 4.0
+    fr = 0.5 ** 2 / 9.81
+    assert m["step_leg"] == pytest.approx(2.0 / steps) and m["step_similar"] == pytest.approx((2.0 / steps) / (1.15 * fr ** 0.3))
+    report = gait_report(*reversed(load_genome(WALKERS / "ctrnn_walk_preset_seed1.json")[:2]), seconds=5.0)
+    assert report["shuffle"] and report["step_similar"] < 1 / 3  # 13 cm steps where about 45 cm are predicted
 
 
 def test_a_skipping_walker_fails_the_walking_criteria_and_says_which():
@@ -114,7 +191,8 @@ def test_a_skipping_walker_fails_the_walking_criteria_and_says_which():
     report = gait_report(cfg, g, seconds=10.0)
     assert report["up"] and report["speed"] > 0.8
     assert {"duty_min", "airborne", "duty_asymmetry"} <= set(report["failed"]) and not report["walks"]
-    assert failed_criteria({**report, "duty_min": 0.55, "airborne": 0.0, "duty_asymmetry": 0.01, "slip_share": 0.04}) == []
+    assert failed_criteria({**report, "duty_min": 0.55, "airborne": 0.0, "duty_asymmetry": 0.01, "slip_share": 0.04,
+                                      "slide_per_m": 0.08}) == []
 
 
 def test_gait_terms_refuse_a_body_without_feet_and_bad_weights(monkeypatch):
@@ -137,6 +215,11 @@ def test_gait_terms_refuse_a_body_without_feet_and_bad_weights(monkeypatch):
         EpisodeConfig(task_options={"fitness": "weighted", "weights": {"airborne": float("nan")}})
     with pytest.raises(ConfigError, match="names no term"):
         EpisodeConfig(task_options={"fitness": "weighted", "weights": {"airbone": -1.0}})
+    with pytest.raises(ConfigError, match="slide_per_m measured only under gait_sampling = 'physics_step'"):
+        EpisodeConfig(task_options={"fitness": "weighted", "weights": {"slide_per_m": -1.0}})
+    with pytest.raises(ConfigError, match="gait_sampling"):
+        EpisodeConfig(task_options={"gait_terms": True, "gait_sampling": "every_tick"})
+    EpisodeConfig(task_options={"fitness": "weighted", "weights": {"slide_per_m": -1.0}, "gait_sampling": "physics_step"})
     g, cfg, _ = load_genome(WALKERS / "ctrnn_es_seed5.json")
     for bad in (float("inf"), 0.0, -1.0):
         with pytest.raises(UserError, match="--seconds"):

@@ -14,7 +14,7 @@ import numpy as np
 from ..bodies.base import Body
 from ..core.errors import UserError
 from ..episode import EpisodeConfig
-from ..physics.gait_lab import MEASURES, measure_one
+from ..physics.gait_lab import FIELDS, MEASURES, MIN_CONTACT, MIN_GAP, FootSample, measure_one
 
 #: the walking criteria: measure -> (comparison, bound), with what each rules out
 WALKING = {
@@ -24,16 +24,28 @@ WALKING = {
     "airborne": ("<=", 0.02, "both feet in the air: a flight phase"),
     "duty_asymmetry": ("<=", 0.05, "the feet stand for unequal shares: limping or skipping"),
     "slip_share": ("<=", 0.05, "stance feet slide (median slip over the speed): skating"),
+    "slide_per_m": ("<=", 0.10, "stance feet slide more than 10 cm per metre walked (the slip's tail): skating"),
 }
+#: the criteria whose measures only a meter sampling every physics step gives (a run's stopping rule under
+#: ``gait_sampling = "control_tick"`` judges without them, as it did when those walkers were evolved)
+STEP_CRITERIA = ("slide_per_m",)
+
+
+def criteria_for(sampling: str) -> dict:
+    """The :data:`WALKING` criteria a gait measured under ``sampling`` is judged by."""
+    return {k: v for k, v in WALKING.items() if sampling == "physics_step" or k not in STEP_CRITERIA}
 
 
 class FootRecorder:
-    """An episode listener that keeps the body's foot samples of row ``row`` tick by tick (``samples``: per tick
-    ``(contact, slip, height, knee, power)`` of that row), and its times (s)."""
+    """An episode listener that keeps the body's foot samples of row ``row`` after every physics step (``samples``:
+    per step ``(contact, slip, height, knee, power)`` of that row), and the times (s) of its control ticks."""
+
+    #: the episode collects the samples of every physics step for it (:meth:`Body.tick_feet`)
+    reads_feet_steps = True
 
     def __init__(self, row: int = 0):
         self.row = row
-        self.samples: dict[str, list[np.ndarray]] = {k: [] for k in ("contact", "slip", "height", "knee", "power")}
+        self.samples: dict[str, list[np.ndarray]] = {k: [] for k in FIELDS}
         self.times: list[float] = []
         self.body = None
 
@@ -42,18 +54,20 @@ class FootRecorder:
         self.body.feet(sims)  # a body without feet refuses here, before any tick
 
     def tick(self, t, sims, ids, neurons, action, task_state) -> None:
-        if self.row not in ids:
-            return
-        s = self.body.feet(sims)
+        if self.row in ids:
+            self.take(self.body.tick_feet(sims), t)
+
+    def take(self, feet: FootSample, t: float) -> None:
+        """Keep row ``row`` of a tick's samples ``feet`` (fields ``(S, n, ...)``), the tick ending at ``t`` s."""
         for k in self.samples:
-            self.samples[k].append(np.array(getattr(s, k)[self.row]))
+            self.samples[k].extend(np.array(getattr(feet, k)[:, self.row]))
         self.times.append(float(t))
 
     def end(self, result) -> None:
         pass
 
     def series(self) -> dict[str, np.ndarray]:
-        """Each sample stacked over the ticks, ``(T, F)`` (``power`` ``(T, J)``)."""
+        """Each sample stacked over the physics steps, ``(T, F)`` (``power`` ``(T, J)``)."""
         return {k: np.array(v) for k, v in self.samples.items()}
 
 
@@ -90,7 +104,7 @@ def measured(recorder: FootRecorder, episode, *, start: np.ndarray, end: np.ndar
              seconds: float, up: bool) -> dict:
     """The report of the walker ``recorder`` listened to (see :func:`gait_report`): it started at ``start`` ``(1, 2)``
     m facing ``facing`` ``(1, 2)``, is at ``end`` ``(1, 2)`` m, stayed up ``time_up`` of ``seconds`` s (``up``: no fall)."""
-    from ..physics.gait_lab import stance_episodes
+    from ..physics.gait_lab import SHUFFLE, stance_episodes
     from ..tasks.walk import displacement_heading
 
     body = episode.body
@@ -99,14 +113,15 @@ def measured(recorder: FootRecorder, episode, *, start: np.ndarray, end: np.ndar
     mass, leg = body.gait_constants(episode.model)
     feet = tuple(body.contact_sensor[1])
     series = recorder.series()
-    dt = episode.control_dt
+    dt = episode.control_dt / episode.substeps  # s per sample: one per physics step
     report = {"up": up, "time_up": time_up, "end_time": time_up, "seconds": float(seconds), "forward": forward,
               "speed": forward / time_up if time_up > 0 else 0.0, "heading_deg": heading if np.isfinite(heading) else None,
               "displacement": [float(v) for v in (end - start)[0]], "mass": mass, "leg_length": leg,
-              "control_dt": dt, "feet": list(feet)}
-    report.update(measure_one(series, dt, forward=forward, mass=mass, leg_length=leg, feet=feet))
-    report["stance"] = {f: [[a * dt, b * dt] for a, b in stance_episodes(series["contact"][:, i], dt)]
+              "control_dt": episode.control_dt, "sample_dt": dt, "sampling": "physics_step", "feet": list(feet)}
+    report.update(measure_one(series, dt, forward=forward, mass=mass, leg_length=leg, feet=feet, min_gap=MIN_GAP))
+    report["stance"] = {f: [[a * dt, b * dt] for a, b in stance_episodes(series["contact"][:, i], dt, MIN_CONTACT, MIN_GAP)]
                         for i, f in enumerate(feet)}
+    report["shuffle"] = bool(report["step_similar"] < SHUFFLE)
     report["failed"] = (["up"] if not up else []) + failed_criteria(report)
     report["walks"] = not report["failed"]
     return report
@@ -117,10 +132,11 @@ def has_feet(body) -> bool:
     return body.contact_sensor is not None and type(body).feet is not Body.feet
 
 
-def failed_criteria(report: dict) -> list[str]:
-    """The names of the :data:`WALKING` criteria that ``report`` misses (a missing or non-finite value misses)."""
+def failed_criteria(report: dict, criteria: dict | None = None) -> list[str]:
+    """The names of the ``criteria`` (default :data:`WALKING`) that ``report`` misses (a missing or non-finite value
+    misses)."""
     out = []
-    for name, (how, bound, _) in WALKING.items():
+    for name, (how, bound, _) in (WALKING if criteria is None else criteria).items():
         v = report.get(name)
         if v is None or not np.isfinite(v):
             out.append(name)
@@ -145,4 +161,4 @@ def gait_line(report: dict) -> str:
             f"CoT {report['cost_of_transport']:.2f}")
 
 
-__all__ = ["MEASURES", "WALKING", "FootRecorder", "gait_report", "failed_criteria", "criteria_words", "gait_line"]
+__all__ = ["MEASURES", "WALKING", "STEP_CRITERIA", "criteria_for", "FootRecorder", "gait_report", "failed_criteria", "criteria_words", "gait_line"]

@@ -128,7 +128,7 @@ def check_walker_test(config: EpisodeConfig, success: Success) -> None:
 
 
 class _Rows:
-    """An episode listener filling one gait recorder per simulation row (the feet read once a tick for all rows)."""
+    """An episode listener filling one gait recorder per simulation row (the feet read once a physics step for all rows)."""
 
     def __init__(self, recorders):
         self.recorders = recorders
@@ -137,13 +137,13 @@ class _Rows:
         for r in self.recorders:
             r.start(episode, sims)
 
+    reads_feet_steps = True
+
     def tick(self, t, sims, ids, neurons, action, task_state) -> None:
-        feet, running = self.recorders[0].body.feet(sims), set(np.asarray(ids).tolist())
+        feet, running = self.recorders[0].body.tick_feet(sims), set(np.asarray(ids).tolist())
         for r in self.recorders:
             if r.row in running:
-                for k in r.samples:
-                    r.samples[k].append(np.array(getattr(feet, k)[r.row]))
-                r.times.append(float(t))
+                r.take(feet, t)
 
     def end(self, result) -> None:
         pass

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import copy
 from abc import ABC, abstractmethod
-from typing import Any, ClassVar, Collection, Literal
+from typing import Any, Callable, ClassVar, Collection, Literal
 
 import mujoco
 import numpy as np
 
 from ..interface.contract import Actuator
 from ..core.errors import ConfigError
-from ..physics.gait_lab import FootSample
+from ..physics.gait_lab import FootSample, stacked
 from ..physics.models import load_model, model_path
 from ..physics.sim import Sims
 from ..core.options import option, taken
@@ -115,15 +115,19 @@ class Body(ABC):
     def substep(self, sims: Sims, ids: np.ndarray) -> None:
         """Custom forces before each physics step (only if ``has_custom_forces``)."""
 
-    def advance(self, sims: Sims, ids: np.ndarray, nstep: int) -> np.ndarray:
-        """``nstep`` physics steps of simulations ``ids`` (custom forces before each one);
-        bool mask over ``ids`` of blow-ups (see :meth:`Sims.step`)."""
-        if not self.has_custom_forces:
+    def advance(self, sims: Sims, ids: np.ndarray, nstep: int, each: Callable[[], None] | None = None) -> np.ndarray:
+        """``nstep`` physics steps of simulations ``ids`` (custom forces before each one; ``each()`` after each one,
+        the derived fields current); bool mask over ``ids`` of blow-ups (see :meth:`Sims.step`).  One step at a
+        time or ``nstep`` at once, the simulations end in the same state to the last bit."""
+        if not self.has_custom_forces and each is None:
             return sims.step(ids, nstep)
         bad = np.zeros(len(ids), bool)
         for _ in range(nstep):
-            self.substep(sims, ids)
+            if self.has_custom_forces:
+                self.substep(sims, ids)
             bad |= sims.step(ids, 1)
+            if each is not None:
+                each()
         return bad
 
     @abstractmethod
@@ -151,6 +155,13 @@ class Body(ABC):
         """The gait lab's sample of every row now (:mod:`evobiped.physics.gait_lab`): feet in the order of
         :attr:`contact_sensor`; bodies without feet refuse (a gait measure needs them)."""
         raise ConfigError(f"body {self.name!r} declares no feet: its gait cannot be measured")
+
+    def tick_feet(self, sims: Sims) -> FootSample:
+        """The gait lab's samples of the last control tick, each field ``(S, n, ...)``: the states after each of its S
+        physics steps where the episode collected them (``Sims.readings["feet_steps"]``, kept until the state
+        changes), else the state now alone (S = 1)."""
+        got = sims.readings.get("feet_steps")
+        return got if got is not None else stacked([self.feet(sims)])
 
     def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
         """The body's total mass (kg) and leg length (m, hip to the ground in the initial pose), from ``model``."""

@@ -48,13 +48,14 @@ def disturb(d: Disturbances, sims: Sims, action: np.ndarray, low: np.ndarray, hi
 
 
 def assisted_physics(body: Body, sims: Sims, ids: np.ndarray, trunk: int, substeps: int, stiffness: np.ndarray,
-                     damping: float) -> np.ndarray:
+                     damping: float, each=None) -> np.ndarray:
     """One control period of physics for rows ``ids`` with the pelvis assistance (``stiffness`` ``(len(ids),)`` N m/rad,
-    ``damping`` s) set on body ``trunk`` before every physics step; bool mask of blow-ups."""
+    ``damping`` s) set on body ``trunk`` before every physics step (``each()`` after each, as :meth:`Body.advance`);
+    bool mask of blow-ups."""
     bad = np.zeros(len(ids), bool)
     for _ in range(substeps):
         sims.xfrc_applied[ids, trunk, 3:] = assist_torque(stiffness, damping, sims.xmat[ids, trunk], sims.cvel[ids, trunk, :3])
-        bad |= body.advance(sims, ids, 1)
+        bad |= body.advance(sims, ids, 1, each)
     return bad
 
 

@@ -29,7 +29,8 @@ class Watched(Protocol):
 
 
 class Listener(Protocol):
-    """Watches an episode (recording, figures); never changes it."""
+    """Watches an episode (recording, figures); never changes it.  A listener with ``reads_feet_steps = True`` reads
+    the gait lab's samples after every physics step of each tick (``Body.tick_feet``), which the episode then collects."""
 
     def start(self, episode: Watched, sims: Sims) -> None: ...
     def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: TaskState) -> None: ...
@@ -41,6 +42,7 @@ class Listeners:
 
     def __init__(self, *listeners: Listener):
         self.listeners = listeners
+        self.reads_feet_steps = any(getattr(x, "reads_feet_steps", False) for x in listeners)
 
     def start(self, episode, sims):
         for x in self.listeners:

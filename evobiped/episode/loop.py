@@ -10,6 +10,7 @@ from ..controllers.base import Controller
 from ..core.errors import ConfigError
 from ..interface.mapping import to_action
 from ..physics import gait
+from ..physics.gait_lab import stacked
 from ..physics.perturb import PerturbationOptions, Trials
 from ..physics.sim import Sims
 from ..tasks.base import Task
@@ -51,6 +52,7 @@ class Episode:
         #: (else they are computed only for a listener): planned once
         self.senses = None if self.controller is None else SensePlan(body, self.controller, task)
         self._task_reads_neurons = task.reads_neurons()
+        self._task_reads_steps = task.reads_feet_steps()
 
     @property
     def n_ticks(self) -> int:
@@ -202,10 +204,15 @@ class Episode:
             st.pending.append(action)
             action = st.pending[0] if len(st.pending) <= self.latency else st.pending.pop(0)
         body.apply(sims, ids, action[ids])
+        # the gait lab's samples after every physics step, for a task or listener that measures them
+        samples: list | None = [] if self._task_reads_steps or getattr(listener, "reads_feet_steps", False) else None
+        each = None if samples is None else (lambda: samples.append(body.feet(sims)))
         if d is None or d.assist is None:
-            bad = self.body.advance(sims, ids, self.substeps)
+            bad = self.body.advance(sims, ids, self.substeps, each)
         else:  # the pelvis assistance (N m/rad) on the trunk
-            bad = assisted_physics(body, sims, ids, self._trunk, self.substeps, d.assist[ids], d.trials.assist_damping)
+            bad = assisted_physics(body, sims, ids, self._trunk, self.substeps, d.assist[ids], d.trials.assist_damping, each)
+        if samples is not None:
+            sims.readings["feet_steps"] = stacked(samples)  # what Body.tick_feet hands on until the state changes
         st.ticks = k + 1
         t = (k + 1) * self.control_dt
         if "gait" in sims.extra:  # a controller reads the gait senses

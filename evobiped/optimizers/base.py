@@ -239,6 +239,15 @@ class Optimizer:
         """Indices best first; ties keep population order (stable)."""
         return np.argsort(-self.fitness, kind="stable")
 
+    #: whether :meth:`start_over` starts the search over (the lost-run rule's ``action = "restart"``)
+    starts_over: ClassVar[bool] = False
+
+    def start_over(self) -> np.ndarray:
+        """Start the search over at the current generation, after :meth:`next_generation`: the population drawn anew
+        (this generation's random stream), what the search learnt forgotten; returns the new rows' previous rows (all
+        -1: every individual is new).  Only where :attr:`starts_over` says so."""
+        raise NotImplementedError(f"the {self.name} optimizer cannot start over")
+
     def parent_rows(self) -> np.ndarray | None:
         """After ``next_generation()``: for each new row, the previous generation's row it was bred from (-1: none,
         e.g. a survivor); None (this default): the optimizer does not say (it samples a distribution).  Optional:

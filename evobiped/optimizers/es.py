@@ -96,12 +96,14 @@ class ESOptions:
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ESState(OptimizerState):
-    """ES between generations: theta ``(G,)``, Adam's moments ``m``, ``v`` ``(G,)`` and the current population's fitness."""
+    """ES between generations: theta ``(G,)``, Adam's moments ``m``, ``v`` ``(G,)``, the current population's fitness
+    and the generation its current attempt started (``started``: 0 unless the run started over)."""
 
     name = "es"
     theta: np.ndarray
     m: np.ndarray
     v: np.ndarray
+    started: int = 0
 
     def __post_init__(self):
         for k in ("theta", "m", "v", "fitness"):
@@ -110,7 +112,7 @@ class ESState(OptimizerState):
     def to_dict(self) -> dict:
         plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
         return {"name": self.name, "generation": self.generation, "theta": plain(self.theta), "m": plain(self.m),
-                "v": plain(self.v), "fitness": plain(self.fitness)}
+                "v": plain(self.v), "fitness": plain(self.fitness), **({"started": self.started} if self.started else {})}
 
 
 def centred_ranks(f: np.ndarray, ties: str = "average") -> np.ndarray:
@@ -131,6 +133,7 @@ class EvolutionStrategy(Optimizer):
 
     name, Options, table, about = "es", ESOptions, "es", "evolution strategies"
     reports_evaluation_rows = True
+    starts_over = True
 
     def __init__(self, layout, config: ESOptions, **start):
         """As every optimizer (:meth:`Optimizer.__init__`); theta starts at the start point (the start genome, else the
@@ -140,7 +143,7 @@ class EvolutionStrategy(Optimizer):
         self.centre = layout.centre if config.weight_decay_to == "centre" else np.zeros(layout.size)
         self.decays = layout.decays if config.weight_decay_to == "centre" else np.ones(layout.size, bool)
         self.m, self.v = np.zeros(layout.size), np.zeros(layout.size)
-        self.generation = 0
+        self.generation = self.started = 0
         self._sample()
 
     @classmethod
@@ -156,7 +159,7 @@ class EvolutionStrategy(Optimizer):
     def sigma(self) -> float:
         """The sampling step of this generation (gene units)."""
         c = self.config
-        return max(c.sigma * c.sigma_decay ** self.generation, c.sigma_min) if c.sigma_decay < 1 else c.sigma
+        return max(c.sigma * c.sigma_decay ** (self.generation - self.started), c.sigma_min) if c.sigma_decay < 1 else c.sigma
 
     def _noise(self) -> np.ndarray:
         eps = self.rng(self.generation).standard_normal((self.config.pairs, self.layout.size))
@@ -217,7 +220,7 @@ class EvolutionStrategy(Optimizer):
             rp, rm = r[:N], r[N:]
             g = ((rp - rm) @ eps if dp is None else rp @ dp + rm @ dm) / (2 * N)  # the same where nothing is clipped
             g = (g - c.weight_decay * (self.theta - self.centre) * self.decays) * self.mutable
-            t = self.generation + 1
+            t = self.generation - self.started + 1
             self.m = BETA1 * self.m + (1 - BETA1) * g
             self.v = BETA2 * self.v + (1 - BETA2) * g * g
             a = c.learning_rate * math.sqrt(1 - BETA2**t) / (1 - BETA1**t)
@@ -230,14 +233,23 @@ class EvolutionStrategy(Optimizer):
         return np.full(len(self.population), -1)
 
     # ---- its state as a value
+    def start_over(self) -> np.ndarray:
+        """Start over at this generation (:meth:`Optimizer.start_over`): theta at the start point, Adam's moments and
+        the sigma schedule from nothing; the noise is this generation's."""
+        self.theta, self.started = self.start_point(), self.generation
+        self.m, self.v = np.zeros(self.layout.size), np.zeros(self.layout.size)
+        self._sample()
+        return np.full(len(self.population), -1)
+
     def state(self) -> ESState:
-        return ESState(generation=self.generation, theta=self.theta, m=self.m, v=self.v, fitness=self.fitness)
+        return ESState(generation=self.generation, theta=self.theta, m=self.m, v=self.v, fitness=self.fitness,
+                       started=self.started)
 
     def restore(self, state: ESState) -> None:
         G = self.layout.size
         if any(len(a) != G for a in (state.theta, state.m, state.v)):
             raise UserError(f"checkpoint: the ES state's theta, m and v must have {G} genes each")
-        self.generation = state.generation
+        self.generation, self.started = state.generation, state.started
         self.theta, self.m, self.v = (np.array(a, float) for a in (state.theta, state.m, state.v))
         self._resample_with_fitness(state.fitness, "ES")
 
@@ -246,4 +258,7 @@ class EvolutionStrategy(Optimizer):
         out = {k: ESState.numbers_of(table, k, null=np.nan if k == "fitness" else None) for k in ("theta", "m", "v", "fitness")}
         if (out["v"] < 0).any():
             raise UserError("checkpoint: es.v must be >= 0")
-        return ESState(generation=gen, **out)
+        started = table.get("started", 0)
+        if isinstance(started, bool) or not isinstance(started, int) or not 0 <= started <= gen:
+            raise UserError(f"checkpoint: es.started must be a whole number in [0, {gen}], got {started!r}")
+        return ESState(generation=gen, started=started, **out)

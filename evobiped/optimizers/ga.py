@@ -87,13 +87,24 @@ class GA(Optimizer):
         super().__init__(layout, config, **start)
         self.sigma = layout.mutation_sigma
         self.generation = 0
-        P = config.population
-        rng = self.rng(0)
+        self._first_population()
+
+    def _first_population(self) -> None:
+        """``population`` clones of the start genomes (repeated in order), or samples of the layout's initial
+        distribution drawn from this generation's stream; fitness not yet known."""
+        P = self.config.population
         if self.initial is None:
-            self.population = layout.sample(rng, P)
+            self.population = self.layout.sample(self.rng(self.generation), P)
         else:  # clones of one genome (G,), or a population (n, G) repeated to size P
             self.population = self.initial[np.arange(P) % len(self.initial)].copy()
         self.fitness = np.full(P, np.nan)
+
+    starts_over = True
+
+    def start_over(self) -> np.ndarray:
+        """Start over at this generation (:meth:`Optimizer.start_over`): a first population drawn anew."""
+        self._first_population()
+        return np.full(len(self.population), -1)
 
     @classmethod
     def settled(cls, options: GAOptions, scored_differently) -> GAOptions:

@@ -197,7 +197,8 @@ def _summary(run: CommittedRun, best_walk: dict | None) -> dict:
     # the stopping rule's verdict only in runs that have one (other summaries as before)
     return rundir.summary_table(version=__version__, generations=run.optimizer.generation, best=run.best, wall_seconds=run.wall,
                                 history=run.history, best_walk=best_walk,
-                                stopped_early=run.context.stopped() if run.config.stop.active else None)
+                                stopped_early=(run.context.stopped() and not run.context.lost_stop()) if run.config.stop.active else None,
+                                lost=None if run.context.attempts is None else run.context.attempts.lost)
 
 
 def write_summary(run: CommittedRun, *, repair: bool = False) -> dict:

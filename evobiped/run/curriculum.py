@@ -11,7 +11,11 @@ condition ``advance_for`` generations running:
 * ``advance = "up"``: every evaluation walker stayed up its whole episode, in
   every presentation;
 * ``advance = TERM``: the evaluation walkers' mean of that term is at least
-  ``advance_above``.
+  ``advance_above``;
+
+and, with either, the evaluation walkers' mean of each term of ``advance_at_most`` at most its bound and of
+``advance_at_least`` at least its bound (e.g. ``advance_at_most = {airborne = 0.1}``: a walker that stays up by
+hopping does not move on).
 
 The phase and the run of generations meeting the condition are part of the
 checkpoint and of history.csv (``phase``), so a resume continues exactly; the
@@ -37,6 +41,12 @@ def _phases(v) -> None:
         raise ConfigError(f"must be a list of tables of finite weights by term name, got {v!r}")
 
 
+def _bounds(v) -> None:
+    if not (isinstance(v, dict) and all(isinstance(k, str) and isinstance(x, (int, float)) and not isinstance(x, bool)
+                                        and np.isfinite(x) for k, x in v.items())):
+        raise ConfigError(f"must be a table of finite bounds by term name, got {v!r}")
+
+
 def _lengths(v) -> None:
     if not (isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) and 0 < x <= 1e5 for x in v)):
         raise ConfigError(f"must be a list of episode lengths in s, each > 0, got {v!r}")
@@ -51,6 +61,10 @@ class CurriculumOptions:
     advance: str = option("up", "when to move on: `up` (every evaluation walker up its whole episode) or a term's name")
     advance_above: float = option(0.0, "with a term: the evaluation walkers' mean it must reach")
     advance_for: int = option(2, "generations running the condition must hold", low=1, integer=True)
+    advance_at_most: dict = option({}, "and the evaluation walkers' mean of each of these terms at most its bound, "
+                                   "e.g. {airborne = 0.1}", check=_bounds)
+    advance_at_least: dict = option({}, "and of each of these terms at least its bound, e.g. {duty_min = 0.3}",
+                                    check=_bounds)
     seconds: list = option([], "the episode length of each phase (empty: the episode's)", unit="s", check=_lengths)
 
     def __post_init__(self):
@@ -84,6 +98,10 @@ class Curriculum:
         if o.advance != "up" and o.advance not in terms:
             raise ConfigError(f"curriculum.advance: {o.advance!r} is neither 'up' nor a term of the {task.name} task "
                               f"({', '.join(terms)})")
+        for name in ("advance_at_most", "advance_at_least"):
+            if unknown := [k for k in getattr(o, name) if k not in terms]:
+                raise ConfigError(f"curriculum.{name}: names no term of the {task.name} task: {', '.join(unknown)} "
+                                  f"(terms: {', '.join(terms)})")
 
     @property
     def active(self) -> bool:
@@ -100,9 +118,12 @@ class Curriculum:
     def met(self, result: EpisodeResult, rows: np.ndarray) -> bool:
         """Whether the evaluation walkers (genomes ``rows`` of ``result``) meet the condition."""
         o = self.options
+        mean = lambda k: float(np.mean(np.asarray(result.terms[k])[rows]))  # noqa: E731
+        bounded = (all(mean(k) <= b for k, b in o.advance_at_most.items())
+                   and all(mean(k) >= b for k, b in o.advance_at_least.items()))
         if o.advance == "up":
-            return bool(not result.fell[rows].any())
-        return bool(np.mean(np.asarray(result.terms[o.advance])[rows]) >= o.advance_above)
+            return bool(not result.fell[rows].any()) and bounded
+        return mean(o.advance) >= o.advance_above and bounded
 
     def after(self, result: EpisodeResult, rows: np.ndarray) -> None:
         """Count this generation; move to the next phase when the condition held ``advance_for`` generations running."""

@@ -222,14 +222,19 @@ class Run:
         rundir.append_individuals(self.dir / rundir.INDIVIDUALS, self.individuals.records(g, f, unknown))
         # while schedules still change or the assistance holds the walker up, generations are not comparable (nor
         # the unassisted walker's): the run's best is the latest generation's until then, then the fittest since
-        if self.best is None or self._unsettled(g) or self._unsettled(self.best["generation"]) or meta["fitness"] > self.best["fitness"]:
+        if self.best is None or not self._held(g) and (self._unsettled(g) or self._unsettled(self.best["generation"])
+                                                       or meta["fitness"] > self.best["fitness"]):
             self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
             self.context.best = context
         self.history.append(stats.row())
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
         self.context.after(result, unknown, opt.evaluation_rows(), f)
-        self.individuals.carry(opt.next_generation(), opt.parent_rows())  # the individuals it keeps keep their outcome
+        carried = opt.next_generation()
+        if self.context.restart_due:  # the lost-run rule: the search starts over (every individual new)
+            self.individuals.carry(opt.start_over(), None)
+        else:
+            self.individuals.carry(carried, opt.parent_rows())  # the individuals it keeps keep their outcome
         return stats
 
     def _key(self, generation: int) -> tuple[int, ...]:
@@ -241,6 +246,11 @@ class Run:
         or it was scored in an earlier phase of the curriculum than the last."""
         return (self.config.episode.perturbations.unsettled(generation, rundir.column(self.history, "best"))
                 or self.context.early_phase(generation))
+
+    def _held(self, generation: int) -> bool:
+        """After a restart, a generation of an early phase leaves a best scored in the last phase as it is."""
+        return bool(self.context.attempts and self.context.attempts.attempt and self.best is not None
+                    and self.context.early_phase(generation) and not self.context.early_phase(self.best["generation"]))
 
     # ---- files
     def checkpoint(self) -> None:

@@ -18,7 +18,7 @@ from ..physics.perturb import STRENGTHS
 from ..evaluation import BACKENDS
 from ..optimizers import OPTIMIZERS, Optimizer, described
 from .curriculum import Curriculum, CurriculumOptions
-from .stopping import StopOptions
+from .stopping import RestartOptions, StopOptions
 
 
 def _text(v) -> None:
@@ -43,6 +43,7 @@ class RunConfig:
     normalise: NormaliseOptions = field(default_factory=lambda: NormaliseOptions())
     curriculum: CurriculumOptions = field(default_factory=CurriculumOptions)
     stop: StopOptions = field(default_factory=StopOptions)
+    restart: RestartOptions = field(default_factory=RestartOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
     budget: int | None = option(None, "episodes to evaluate: the run stops at the first generation boundary where the episodes "
                                 "it evaluated (genomes x presentations each, episodes_per_genome) reach this (none: every generation)",
@@ -71,6 +72,9 @@ class RunConfig:
             Curriculum(self.curriculum).check(self.episode.parts()[2])
         if self.stop.active:
             self.stop.check(self.episode.parts()[2])
+        self.restart.check(len(self.curriculum.phases), OPTIMIZERS[self.optimizer])
+        if self.budget is not None and self.budget < (one := population_of(self) * episodes_per_genome(self)):
+            raise ConfigError(f"budget: {self.budget} episodes is less than one generation's {one}")
 
     @property
     def options(self):
@@ -90,7 +94,7 @@ class RunConfig:
                 if cls.always_written or (opt == self.optimizer and value[opt] != dataclasses.asdict(cls.Options())):
                     d[cls.table] = value[opt]
         d["episode"] = self.episode.to_dict()
-        for name, cls in (("normalise", NormaliseOptions), ("curriculum", CurriculumOptions), ("stop", StopOptions)):
+        for name, cls in SECTIONS:
             if d[name] == dataclasses.asdict(cls()):  # written only when set: other runs' config.json as before
                 del d[name]
         d["frozen_blocks"] = list(self.frozen_blocks)
@@ -111,8 +115,7 @@ class RunConfig:
             d = dict(d)
             episode = EpisodeConfig(**refuse_unknown(EpisodeConfig, d.pop("episode", {}), "episode"))
             optimizers = {name: parse(opt.Options, d.pop(opt.table, {}), opt.table) for name, opt in OPTIMIZERS.items()}
-            extra = {name: parse(cls, d.pop(name, {}), name)
-                     for name, cls in (("normalise", NormaliseOptions), ("curriculum", CurriculumOptions), ("stop", StopOptions))}
+            extra = {name: parse(cls, d.pop(name, {}), name) for name, cls in SECTIONS}
             if isinstance(d.get("frozen_blocks"), list):
                 d["frozen_blocks"] = tuple(d["frozen_blocks"])
             return cls(episode=episode, optimizer_options=optimizers, **extra, **d)
@@ -138,6 +141,11 @@ class NormaliseOptions:
 
     def __post_init__(self):
         check_fields(self, "normalise")
+
+
+#: the run config's sections beside the episode and the optimizers, each written to config.json only when set
+SECTIONS = (("normalise", NormaliseOptions), ("curriculum", CurriculumOptions), ("stop", StopOptions),
+            ("restart", RestartOptions))
 
 
 def _table_fields(cls: type) -> list[str]:

@@ -34,7 +34,7 @@ from ..interface.normaliser import Normaliser, frozen_table
 from ..core.options import given
 from ..optimizers import OPTIMIZERS
 from .curriculum import Curriculum
-from .stopping import streak
+from .stopping import Attempts, streak
 
 
 #: history.csv's columns of a run with a context (after the best's terms)
@@ -57,6 +57,11 @@ class RunContext:
         self.stats = Normaliser.empty(len(self.declared[0])) if self.running else None
         if self.running and start is not None:
             self.stats = _seed_stats(start, config.episode, self.declared, self.stats)
+        self.start_stats = self.stats  # what a restart begins from again
+        #: the lost-run rule's record (:mod:`.stopping`; None: the run has no such rule), and whether the optimizer is to
+        #: start over after this generation
+        self.attempts = Attempts() if config.restart.active else None
+        self.restart_due = False
         self.floor = self._floors(controller) if self.running else None
         #: per generation: the phase it was scored in and how its evaluation walkers did (history.csv's extra columns)
         self.history: list[dict] = []
@@ -65,11 +70,16 @@ class RunContext:
 
     @property
     def active(self) -> bool:
-        return self.running or self.curriculum.active or OPTIMIZERS[self.config.optimizer].reports_evaluation_rows or self.config.stop.active
+        return (self.running or self.curriculum.active or OPTIMIZERS[self.config.optimizer].reports_evaluation_rows
+                or self.config.stop.active or self.attempts is not None)
 
     def stopped(self) -> bool:
-        """The stopping rule (:mod:`.stopping`) held for its generations running."""
-        return self.config.stop.active and streak(self.history) >= self.config.stop.generations
+        """The stopping rule (:mod:`.stopping`) held for its generations running, or the lost-run rule stopped the run."""
+        return (self.config.stop.active and streak(self.history) >= self.config.stop.generations) or self.lost_stop()
+
+    def lost_stop(self) -> bool:
+        """The lost-run rule stopped the run."""
+        return self.attempts is not None and self.attempts.stopped
 
     def _floors(self, controller) -> np.ndarray:
         o = self.config.normalise
@@ -116,6 +126,7 @@ class RunContext:
         forward = float(np.mean(np.asarray(result.terms["forward"])[rows])) if "forward" in result.terms and len(rows) else float("nan")
         if len(rows):
             self.curriculum.after(result, rows)
+        self._lost(phase, len(rows) > 0 and up == 0.0)
         values = (phase, up, None if not np.isfinite(forward) else forward)
         self.history.append(dict(zip(HISTORY_EXTRA, values)))
         stop = self.config.stop
@@ -124,6 +135,18 @@ class RunContext:
             # each presentation of each evaluation walker (a term is (genomes,) or (genomes, presentations))
             terms = {k: np.asarray(v)[rows].reshape(-1) for k, v in result.terms.items()}
             self.history[-1][STOP_COLUMN] = int(last_phase and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
+
+    def _lost(self, phase: int, fell: bool) -> None:
+        """The lost-run rule after this generation (scored in ``phase``; ``fell``: every evaluation walker fell): a
+        restart sends the curriculum back to its first phase and the normaliser to its start, and tells the run to
+        start its optimizer over."""
+        if self.attempts is None:
+            return
+        action = self.attempts.check(self.config.restart, len(self.history), phase, self.curriculum.phase != phase, fell)
+        self.restart_due = action == "restart"
+        if self.restart_due:
+            self.curriculum.phase = self.curriculum.streak = 0
+            self.stats = self.start_stats
 
     def early_phase(self, generation: int) -> bool:
         """Generation ``generation`` was (or, the next one, is) scored in a phase before the curriculum's last."""
@@ -140,6 +163,8 @@ class RunContext:
         if self.running:
             out["normaliser"] = self.stats.to_dict()
         out["best_context"] = None if self.best is None else _context_table(self.best)
+        if self.attempts is not None:
+            out["restarts"] = self.attempts.to_dict()
         return out
 
     def restore(self, ck: dict) -> None:
@@ -156,6 +181,8 @@ class RunContext:
             self.stats = Normaliser.from_dict(ck["normaliser"], len(self.declared[0]))
         table = ck.get("best_context")
         self.best = None if table is None else _context_from(table, len(self.declared[0]) if self.declared else 0)
+        if self.attempts is not None:
+            self.attempts = Attempts.from_dict(ck.get("restarts"))
 
 
 def _seed_stats(cfg: EpisodeConfig, episode: EpisodeConfig, declared: tuple[np.ndarray, np.ndarray], empty: Normaliser) -> Normaliser:

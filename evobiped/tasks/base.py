@@ -56,13 +56,13 @@ class Task:
         self.options = taken(self.Options, options, given, f"{self.name} task_options")
         self._gait_constants: tuple[float, float] | None = None  # the body's mass and leg length, once read
 
-    def gait_meter(self, body: Body, sims: Sims) -> GaitMeter:
+    def gait_meter(self, body: Body, sims: Sims, sampling: str = "control_tick") -> GaitMeter:
         """The gait lab's meter (:class:`~evobiped.physics.gait_lab.GaitMeter`) for every row of ``sims`` on ``body``'s
-        feet, its clock at the rows' time now; the body's mass and leg length are read once per task.  ConfigError for
-        a body that declares no feet."""
+        feet, its clock at the rows' time now, sampling as ``sampling`` says; the body's mass and leg length are read
+        once per task.  ConfigError for a body that declares no feet."""
         if self._gait_constants is None:
             self._gait_constants = body.gait_constants(sims.model)
-        return GaitMeter(sims.n, body.contact_sensor[1], *self._gait_constants, float(sims.time.max()))
+        return GaitMeter(sims.n, body.contact_sensor[1], *self._gait_constants, float(sims.time.max()), sampling)
 
     @classmethod
     def criterion(cls, name: str, flag: str) -> dict:
@@ -117,6 +117,11 @@ class Task:
 
     #: the task reads the controller's neuron outputs (:meth:`on_tick`'s ``neurons``): it needs a controller
     def reads_neurons(self) -> bool:
+        return False
+
+    def reads_feet_steps(self) -> bool:
+        """Whether the task measures the gait lab's samples after every physics step (:meth:`Body.tick_feet`): the
+        episode collects them only then."""
         return False
 
     def sensors(self, body: Body, sims: Sims, state: TaskState) -> dict[str, np.ndarray]:

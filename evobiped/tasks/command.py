@@ -37,6 +37,7 @@ from ..core.errors import ConfigError
 from ..core.options import option
 from .command_schedule import check_times, draw_commands, schedule_of
 from .states import CommandState
+from ..physics.gait_lab import SAMPLING_HELP, check_sampled
 from .walk import LAB_TERMS, TERMS, WalkTask
 
 #: the terms the command task adds to the walk task's
@@ -114,8 +115,10 @@ class CommandOptions:
     pace_cap: float = option(0.6, "the term pace: the displacement forward, counted up to this speed times the time up",
                              unit="m/s", above=0)
     gait_terms: bool = option(False, "add the gait lab's terms (also on when the weights name one)")
+    gait_sampling: str = option("control_tick", SAMPLING_HELP, choices=("physics_step", "control_tick"))
 
     def __post_init__(self):
+        check_sampled(self.weights, self.gait_sampling, "weights")
         if self.schedule == "constant" and (isinstance(self.speed, (list, tuple)) or isinstance(self.turning, (list, tuple))):
             raise ConfigError("a constant schedule takes one speed and one turning rate; lists need schedule = 'piecewise'")
         if self.schedule == "piecewise":

@@ -80,6 +80,7 @@ from dataclasses import dataclass
 
 from ..core.errors import ConfigError
 from ..core.options import option
+from ..physics.gait_lab import SAMPLING_HELP, check_sampled, terms
 from .base import Task
 from .sound import (DEFAULT_SOURCES, MIN_SOURCE_DISTANCE, check_range, draw_sources, ear_signal, ear_sites, intensity,
                     parse_sources)
@@ -128,11 +129,13 @@ class SteerOptions:
     gait_weights: dict = option({}, "the gait lab's terms (airborne, sliding, duty_asymmetry, steps_per_s, ...), weighted and "
                                 "added to each presentation's fitness, e.g. {airborne = -100, sliding = -200}: pays a walk on the "
                                 "way; the terms join history.csv", check=_gait_weights)
+    gait_sampling: str = option("control_tick", SAMPLING_HELP, choices=("physics_step", "control_tick"))
 
     def __post_init__(self):
         from ..core.options import check_fields
 
         check_fields(self, "episode.task_options")
+        check_sampled(self.gait_weights, self.gait_sampling, "gait_weights")
         if self.random_sources:
             if not self.source_distance:
                 raise ConfigError("source_distance: random_sources need a range of distances [low, high] m; the distribution is empty")
@@ -162,11 +165,14 @@ class SteerTask(Task):
         self.presentations = len(self.sources)
         self.fitness_name = self.options.fitness
         self.gait_weights = dict(self.options.gait_weights)
-        if self.gait_weights:
-            self.term_names = type(self).term_names + LAB_TERMS
+        self.lab_terms = terms(self.options.gait_sampling) if self.gait_weights else ()
+        self.term_names = type(self).term_names + self.lab_terms
 
     def bind_model(self, model) -> None:
         self._ears = ear_sites(model, "steer")
+
+    def reads_feet_steps(self):
+        return bool(self.gait_weights) and self.options.gait_sampling == "physics_step"
 
     def sensor_widths(self):
         return {"sound": 1, **({"loudness": 1} if self.options.loudness else {})}
@@ -181,7 +187,7 @@ class SteerTask(Task):
         p0 = body.planar_position(sims).copy()
         state = SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)], near=np.zeros(sims.n))
         if self.gait_weights:
-            state.gait_lab = self.gait_meter(body, sims)
+            state.gait_lab = self.gait_meter(body, sims, self.options.gait_sampling)
         return state
 
     def draw_sources(self, key) -> np.ndarray | None:
@@ -208,7 +214,7 @@ class SteerTask(Task):
             near = np.linalg.norm(state.position[ok] - state.source[ok], axis=1) <= self.options.reach
             state.near[ok[near]] += 1
         if state.gait_lab is not None:
-            state.gait_lab.tick(body.feet(sims), ok, sims.time[ok])
+            state.gait_lab.tick(body.tick_feet(sims), ok, sims.time[ok])
 
     def fitness(self, state):
         distance = np.linalg.norm(state.position - state.source, axis=1)
@@ -237,7 +243,7 @@ class SteerTask(Task):
                "distance_to_source": np.linalg.norm(state.position - state.source, axis=1)}
         if state.gait_lab is not None:
             lab = self._lab(state)
-            out.update({k: lab[k] for k in LAB_TERMS})
+            out.update({k: lab[k] for k in self.lab_terms})
         return out
 
     def end_position(self, body, sims, state):

@@ -95,7 +95,9 @@ TERMS = ("distance", "forward", "cyclicity", "time_up", "steps")
 #: the terms ``gait_measures`` adds: mean forward speed (m/s), mean turning rate (deg/s, + left)
 GAIT_TERMS = ("speed", "turning")
 #: the gait lab's terms (``gait_terms``): the duty factor of each foot, then the measures
-LAB_TERMS = ("duty_left", "duty_right") + tuple(gait_lab.MEASURES)
+LAB_TERMS = gait_lab.terms("physics_step")
+#: those a ``gait_sampling = "control_tick"`` meter gives
+LAB_TERMS_TICK = gait_lab.terms("control_tick")
 
 
 def _weights(v) -> None:
@@ -135,10 +137,12 @@ class WalkOptions:
                              "times the time up (a walk is paid, a faster run is not)", unit="m/s", above=0)
     gait_terms: bool = option(False, "add the gait lab's terms (duty factors, airborne, slip, power, ...; also on when "
                               "the weights name one)")
+    gait_sampling: str = option("control_tick", gait_lab.SAMPLING_HELP, choices=tuple(gait_lab.SAMPLINGS))
 
     def __post_init__(self):
         if self.fitness != "distance" and self.cyclic_weight:
             raise ConfigError("the cyclic criterion multiplies eq. 4; use it with fitness = 'distance'")
+        gait_lab.check_sampled(self.weights, self.gait_sampling, "weights")
 
 
 class WalkTask(Task):
@@ -170,8 +174,10 @@ class WalkTask(Task):
         self.counts_steps = self.weighs_terms = self.fitness_name == "weighted"
         # time_up and steps only under the weighted fitness: the other fitnesses' files keep their columns
         self.gait_lab = o.gait_terms or (self.fitness_name == "weighted" and any(k in LAB_TERMS for k in self.weights))
+        self.sampling = o.gait_sampling
+        self.lab_terms = gait_lab.terms(self.sampling) if self.gait_lab else ()
         self.term_names = ((TERMS if self.counts_steps else TERMS[:3]) + (GAIT_TERMS if o.gait_measures else ())
-                           + (LAB_TERMS if self.gait_lab else ()) + (("pace",) if "pace" in self.weights else ()))
+                           + self.lab_terms + (("pace",) if "pace" in self.weights else ()))
 
     def sensor_widths(self):
         return {"heading_error": 1} if self.heading_sense else {}
@@ -199,13 +205,16 @@ class WalkTask(Task):
             state.stance = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
             state.steps = np.zeros(sims.n)
         if self.gait_lab:
-            state.gait_lab = self.gait_meter(body, sims)
+            state.gait_lab = self.gait_meter(body, sims, self.sampling)
         if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
             state.travel, state.yaw, state.facing_now = np.zeros(sims.n), np.zeros(sims.n), state.facing.copy()
         return state
 
     def reads_neurons(self):
         return bool(self.cyclic_weight)  # the cyclic criterion counts the motor neurons' cycles
+
+    def reads_feet_steps(self):
+        return self.gait_lab and self.sampling == "physics_step"
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
@@ -221,7 +230,7 @@ class WalkTask(Task):
             state.steps[ok] += stance != state.stance[ok]
             state.stance[ok] = stance
         if self.gait_lab:
-            state.gait_lab.tick(body.feet(sims), ok, sims.time[ok])
+            state.gait_lab.tick(body.tick_feet(sims), ok, sims.time[ok])
         if self.cyclic_weight:
             state.motor.append(neurons[:, : state.n_motor].copy())
             state.ticks[ok] += 1
@@ -252,7 +261,7 @@ class WalkTask(Task):
             out["speed"], out["turning"] = state.travel / up, np.degrees(state.yaw) / up
         if self.gait_lab:
             lab = state.gait_lab.measure(self.forward(state))
-            out.update({k: lab[k] for k in LAB_TERMS})
+            out.update({k: lab[k] for k in self.lab_terms})
         return out
 
     def end_position(self, body, sims, state):

@@ -123,8 +123,11 @@ class _Shown:
         best = self.run.best or {"fitness": s.best, "fell": s.best_fell}
         self.line.report(s.generation + 1, generation_note(
             best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean, worst=s.worst,
-            evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds),
-            left=self.clock.left(s.generation + 1))
+            evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds)
+            + phase_note(self.run), left=self.clock.left(s.generation + 1))
+        lost = lost_line(self.run, s.generation)
+        if lost:
+            self.say(lost)
 
     def done(self, run, summary: dict) -> None:
         best = summary["best"]
@@ -132,6 +135,8 @@ class _Shown:
         walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
         # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
         earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if self.args.resume else ""
+        if run.context.lost_stop():
+            print(f"stopped after generation {summary['generations'] - 1}: lost ({lost_words(run.context.attempts.lost[-1], run)})")
         if summary.get("stopped_early"):
             rule = run.config.stop
             what = "its evaluation walkers met the walking criteria" if rule.when == "walking" else f"its evaluation walkers' fitness reached {rule.above:g}"
@@ -157,3 +162,41 @@ def _viewer_log(run, rerun: str):
 
 
 SUBCOMMANDS = (add_evolve,)
+
+
+def phase_note(run) -> str:
+    """The curriculum's phase for evolve's line ("; phase 2 of 2, its 37th generation"), and the attempt after a restart;
+    empty for a run without either."""
+    c, attempts = run.context.curriculum, run.context.attempts
+    out = ""
+    if c.active:
+        since = attempts.phase_since if attempts is not None else None
+        taken = "" if since is None else f", {run.optimizer.generation - since} generations in it"
+        out += f"; now phase {c.phase + 1} of {len(c.options.phases)}{taken}"
+    if attempts is not None and attempts.attempt:
+        out += f"; attempt {attempts.attempt + 1}"
+    return out
+
+
+def lost_words(event: dict, run) -> str:
+    """A lost phase in words: which phase, the patience it took (or the generations its walkers fell)."""
+    phases = max(len(run.config.curriculum.phases), 1)
+    if event.get("why") == "fallen":
+        return (f"in phase {event['phase'] + 1} of {phases} the evaluation walkers fell in "
+                f"{run.config.restart.fallen_for[event['phase']]} generations running (restart.fallen_for)")
+    goal = "meet the stopping rule" if event["phase"] == phases - 1 and run.config.stop.active else (
+        "advance" if event["phase"] < phases - 1 else "end")
+    return (f"phase {event['phase'] + 1} of {phases} did not {goal} within its "
+            f"{run.config.restart.patience[event['phase']]} generations (restart.patience)")
+
+
+def lost_line(run, generation: int) -> str | None:
+    """The line that says the run was lost after ``generation``, and what it does (None: it was not)."""
+    attempts = run.context.attempts
+    if attempts is None or not attempts.lost or attempts.lost[-1]["generation"] != generation:
+        return None
+    event, o = attempts.lost[-1], run.config.restart
+    then = {"restart": f"starting over at generation {generation + 1} (restart {attempts.attempt} of at most {o.max_restarts})",
+            "stop": "stopping" + (f" (all {o.max_restarts} restarts spent)" if o.action == "restart" else ""),
+            "warn": "going on (restart.action = 'warn')"}[event["action"]]
+    return f"evolve: lost: {lost_words(event, run)}; {then}"

@@ -27,6 +27,7 @@ def run_gait_report_cmd(args) -> int:
     from pathlib import Path
 
     from ...analysis.gait_report import WALKING, criteria_words, gait_report
+    from ...physics.gait_lab import similar_step
     from ...core.errors import UserError
     from ...record.source import resolve
 
@@ -76,10 +77,15 @@ def run_gait_report_cmd(args) -> int:
              + f" (asymmetry {report['duty_asymmetry']:.3f})"),
             ("airborne", f"{100 * report['airborne']:.1f} % of the time (double support {100 * report['double_support']:.1f} %)"),
             ("steps", f"{report['steps_per_s']:.2f} per s, {report['step_length']:.3f} m each"),
-            ("stance slip", f"median {report['slip']:.3f} m/s, {100 * report['slip_share']:.1f} % of the speed"),
+            ("stride", f"steps {report['step_leg']:.2f} leg lengths ({report['leg_length']:.2f} m legs), "
+             f"{report['step_similar']:.2f} of the {similar_step(report['speed'], report['leg_length']):.2f} m step "
+             f"dynamic similarity predicts{': a shuffle' if report['shuffle'] else ''}"),
+            ("stance slip", f"median {report['slip']:.3f} m/s, {100 * report['slip_share']:.1f} % of the speed; 90th "
+             f"percentile {100 * report['slip_p90_share']:.1f} %; {100 * report['slide_per_m']:.1f} cm slid per m walked"),
             ("swing", f"peak foot clearance {report['clearance']:.3f} m, knee excursion {report['knee_swing']:.2f} rad"),
             ("power", f"{report['power']:.1f} W/kg positive, cost of transport {report['cost_of_transport']:.2f}")]
-    print(f"gait of {source.genome_path} (first {args.seconds:g} s of its nominal episode)")
+    print(f"gait of {source.genome_path} (first {args.seconds:g} s of its nominal episode, read after every "
+          f"{1000 * report['sample_dt']:g} ms physics step)")
     for k, v in rows:
         print(f"  {k:<12} {v}")
     bounds = ", ".join(f"{k} {how.replace('abs', '|x| ')} {b:g}" for k, (how, b, _) in WALKING.items())
@@ -88,8 +94,9 @@ def run_gait_report_cmd(args) -> int:
 
 
 #: the columns of :func:`table_row`
-TABLE_HEAD = ("| walker | up | speed (m/s) | duty L / R | airborne | steps/s | step (m) | slip (% of speed) | clearance (m) "
-              "| W/kg | CoT | walks? |\n|---|---|---|---|---|---|---|---|---|---|---|---|")
+TABLE_HEAD = ("| walker | up | speed (m/s) | duty L / R | airborne | steps/s | step (m) | step / similar | slip (% of "
+              "speed; 90th pct) | slid (cm/m) | clearance (m) | W/kg | CoT | walks? |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def table_row(name: str, r: dict) -> str:
@@ -97,7 +104,9 @@ def table_row(name: str, r: dict) -> str:
     duty = " / ".join(f"{r[f'duty_{f}']:.2f}" for f in ("left", "right") if f"duty_{f}" in r)
     verdict = "yes" if r["walks"] else "no: " + ", ".join(r["failed"])
     return (f"| `{name}` | {r.get('up_for', r['seconds']):g} s {'up' if r['up'] else 'fell'} | {r['speed']:.2f} | {duty} "
-            f"| {100 * r['airborne']:.1f} % | {r['steps_per_s']:.1f} | {r['step_length']:.2f} | {100 * r['slip_share']:.0f} "
+            f"| {100 * r['airborne']:.1f} % | {r['steps_per_s']:.1f} | {r['step_length']:.2f} "
+            f"| {r['step_similar']:.2f}{' shuffle' if r['shuffle'] else ''} "
+            f"| {100 * r['slip_share']:.0f}; {100 * r['slip_p90_share']:.0f} | {100 * r['slide_per_m']:.1f} "
             f"| {r['clearance']:.3f} | {r['power']:.0f} | {r['cost_of_transport']:.2f} | {verdict} |")
 
 

@@ -8,7 +8,8 @@ of a complete run whose summary is missing or disagrees with the checkpoint).
 
 ``best``: the run's best (fitness, fell, end time in s, seed, generation, terms); ``wall_seconds``: the evaluation's
 wall-clock time over all sessions (s, rounded to ms); ``best_walk``: the best walker's walk in the nominal episode;
-``stopped_early`` only in runs with a stopping rule.
+``stopped_early`` only in runs with a stopping rule (true when it held), ``lost`` only in runs with a lost-run rule
+(``[restart]``: each lost phase's generation, phase and action).
 """
 
 from __future__ import annotations
@@ -23,9 +24,10 @@ from .layout import SUMMARY
 
 
 def summary_table(*, version: str, generations: int, best: dict | None, wall_seconds: float, history: list[list],
-                  best_walk: dict | None, stopped_early: bool | None = None) -> dict:
+                  best_walk: dict | None, stopped_early: bool | None = None, lost: list | None = None) -> dict:
     """summary.json's fields: ``history`` the committed rows (its evaluations are summed); ``stopped_early`` None when
-    the run has no stopping rule (no such field)."""
+    the run has no stopping rule (no such field); ``lost`` (each lost phase: generation, phase, what was done) None
+    when it has no lost-run rule (no such field)."""
     out = {
         "evobiped": version,
         "generations": generations,
@@ -37,6 +39,8 @@ def summary_table(*, version: str, generations: int, best: dict | None, wall_sec
     }
     if stopped_early is not None:
         out["stopped_early"] = stopped_early
+    if lost is not None:
+        out["lost"] = lost
     return out
 
 
