@@ -254,8 +254,9 @@ class ReilBiped(Body):
         r[..., 2] -= self._foot_radius
         vx = cvel[..., 3] + w[..., 1] * r[..., 2] - w[..., 2] * r[..., 1]
         vy = cvel[..., 4] + w[..., 2] * r[..., 0] - w[..., 0] * r[..., 2]
+        force = sims.actuator_force
         return FootSample(contact=height < 0.0, slip=np.hypot(vx, vy), height=height, knee=sims.qpos[:, self._knees],
-                          power=sims.actuator_force * sims.actuator_velocity)
+                          power=force * sims.actuator_velocity, torque=force.copy())
 
     def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
         data = mujoco.MjData(model)

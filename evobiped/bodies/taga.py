@@ -251,7 +251,8 @@ class TagaBiped(Body):
         on, T, knee_rate = st["force"][:, [1, 3]] > 0, st["torque"], sims.qvel[:, self._dadr[[3, 5]]]
         power = np.concatenate([T[:, [0, 3]] * k["dthigh"], -T[:, [1, 4]] * knee_rate, -T[:, [2, 5]] * on * k["dshank"]], axis=1)
         return FootSample(contact=on, slip=np.abs(k["dankle"][..., 0]), height=k["ankle"][..., 1] - self.terrain(k["ankle"][..., 0]),
-                          knee=sims.qpos[:, self._qadr[[3, 5]]], power=power)
+                          knee=sims.qpos[:, self._qadr[[3, 5]]], power=power,
+                          torque=np.concatenate([T[:, [0, 3]], T[:, [1, 4]], T[:, [2, 5]] * on], axis=1))
 
     def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
         return float(model.body_mass.sum()), self.p["l1"] + self.p["l2"]

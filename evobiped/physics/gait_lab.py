@@ -34,7 +34,9 @@ invisible (a search can move its effort there) and a 20 ms bounce splits a stanc
   may weigh is finite); **lift**: the clearance with each swing's peak capped at ``LIFT_CAP`` (5 cm), what a
   fitness should pay (an uncapped clearance pays a leg kicked a metre high as the walker falls);
 * **power**: mean positive mechanical power sum_j max(tau_j omega_j, 0) per kg (W/kg); **cost of transport**: that
-  power over (g v) (dimensionless: positive work per metre per body weight); **Froude number** v^2 / (g L).
+  power over (g v) (dimensionless: positive work per metre per body weight); **Froude number** v^2 / (g L);
+  **torque_cost**: the squared joint torques summed over time per kg per metre forward (N^2 m s / kg), an effort
+  that, as a muscle's, charges a leg swung fast (Kuo 2001: what makes long, slow steps the cheap ones).
 
 The speed v is the forward travel over the time up (the caller's: the walk task's displacement along the initial
 facing); L is the body's leg length (hip to the ground, m).  ``control_tick`` meters measure :data:`MEASURES_TICK`
@@ -83,6 +85,7 @@ MEASURES |= {
     "slip_p90": "90th percentile of the stance slip speed (m/s)", "slip_p90_share": "slip_p90 over the speed",
     "slide_per_m": "stance feet's slip distance per metre forward (m/m)",
     "step_leg": "step length in leg lengths", "step_similar": "step length over dynamic similarity's step at the Froude number",
+    "torque_cost": "sum of squared joint torques over time per kg per metre forward (N^2 m s / kg)",
 }
 
 
@@ -109,18 +112,19 @@ def similar_step(speed: float, leg_length: float) -> float:
 class FootSample:
     """One state of ``n`` rows and ``F`` feet: ``contact`` ``(n, F)`` bool, ``slip`` ``(n, F)`` m/s (horizontal speed
     of the foot's point at the ground), ``height`` ``(n, F)`` m (its lowest point above the ground), ``knee`` ``(n, F)``
-    rad (NaN: no knee), ``power`` ``(n, J)`` W (tau * omega per actuated joint).  A tick's samples (:func:`stacked`)
-    have a leading axis of its S physics steps, ``(S, n, ...)``."""
+    rad (NaN: no knee), ``power`` ``(n, J)`` W (tau * omega per actuated joint), ``torque`` ``(n, J)`` N m (tau).  A
+    tick's samples (:func:`stacked`) have a leading axis of its S physics steps, ``(S, n, ...)``."""
 
     contact: np.ndarray
     slip: np.ndarray
     height: np.ndarray
     knee: np.ndarray
     power: np.ndarray
+    torque: np.ndarray
 
 
 #: the fields of a :class:`FootSample`
-FIELDS = ("contact", "slip", "height", "knee", "power")
+FIELDS = ("contact", "slip", "height", "knee", "power", "torque")
 
 
 def stacked(samples: list[FootSample]) -> FootSample:
@@ -199,6 +203,9 @@ def measure_one(sample: dict[str, np.ndarray], dt: float, *, forward: float, mas
     out.update(slip_p90=p90, slip_p90_share=p90 / speed if moving and np.isfinite(p90) else np.inf,
                slide_per_m=out["sliding"] / speed if moving else np.inf, step_leg=out["step_length"] / leg_length,
                step_similar=out["step_length"] / similar if similar > 0 else 0.0)
+    if "torque" in sample:  # what swinging a leg fast costs a muscle (rises steeply with the step rate)
+        squared = float(np.square(sample["torque"]).sum() * dt / mass)
+        out["torque_cost"] = squared / forward if forward > 1e-3 else np.inf
     return out
 
 
