@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.kernel import ufunc_loop
+from ..core.kernel import jit, ufunc_loop
 from ..core.ufunc_calls import apply_loop
-from ..core.kernel import jit
 
 
 @jit
@@ -112,5 +111,6 @@ def step(ctrl, params: dict, state: np.ndarray, inputs: np.ndarray) -> tuple[np.
     c, D = (params["c"], params["D"]) if ctrl.direct else _NO_DIRECT
     substeps = params["substeps"] if ctrl.exponential else np.zeros(0, np.int64)
     f = np.ascontiguousarray
-    return _step(ufunc_loop(np.exp), f(state, float), f(inputs, float), f(params["alpha"]), f(params["W"]), f(params["V"]),
-                 f(params["tau"]), substeps, ctrl.dt, ctrl.exponential, ctrl.outputs_after, f(c), f(D), ctrl.n_outputs)
+    return _step(ufunc_loop(np.exp), f(state, float), f(inputs, float), f(params["alpha"]), f(params["W"]),
+                 f(params["V"]), f(params["tau"]), substeps, ctrl.dt, ctrl.exponential, ctrl.outputs_after, f(c), f(D),
+                 ctrl.n_outputs)

@@ -7,9 +7,9 @@ test holds it to NumPy's); transcendental functions do not in general: NumPy's S
 (AVX-512 on this machine) differ from the C library's, which numba calls, in the last bit of one value in ten
 or twenty.  So a kernel takes those from NumPy itself: :func:`ufunc_loop` finds the float64 inner loop NumPy runs
 for ``np.exp(x)`` (the one its CPU dispatch chose at import), and compiled code calls it through
-:func:`evobiped.core.ufunc_calls.apply_loop`, so a compiled transcendental is NumPy's on every machine.  The loop is checked against
-the ufunc on a probe of values when it is found; where it cannot be found or disagrees, the compiled kernel
-is unavailable (``kernel = "numpy"`` then runs, with the same numbers).
+:func:`evobiped.core.ufunc_calls.apply_loop`, so a compiled transcendental is NumPy's on every machine.  The
+loop is checked against the ufunc on a probe of values when it is found; where it cannot be found or disagrees, the
+compiled kernel is unavailable (``kernel = "numpy"`` then runs, with the same numbers).
 
 Kernels: ``numpy`` (the NumPy calls), ``compiled`` (numba; refused with one line where numba or the loops are
 missing), ``auto`` (compiled where available, else numpy: the default, as both give the same numbers).
@@ -34,7 +34,8 @@ _NPY_DOUBLE = 12
 class _UFunc(ctypes.Structure):
     """The head of NumPy's ``PyUFuncObject`` (numpy/ufuncobject.h), up to its type signatures."""
 
-    _fields_ = [("ob_refcnt", ctypes.c_ssize_t), ("ob_type", ctypes.c_void_p), ("nin", ctypes.c_int), ("nout", ctypes.c_int),
+    _fields_ = [("ob_refcnt", ctypes.c_ssize_t), ("ob_type", ctypes.c_void_p), ("nin", ctypes.c_int),
+                ("nout", ctypes.c_int),
                 ("nargs", ctypes.c_int), ("identity", ctypes.c_int), ("functions", ctypes.POINTER(ctypes.c_void_p)),
                 ("data", ctypes.POINTER(ctypes.c_void_p)), ("ntypes", ctypes.c_int), ("reserved1", ctypes.c_int),
                 ("name", ctypes.c_char_p), ("types", ctypes.POINTER(ctypes.c_char))]
@@ -46,7 +47,8 @@ def _probe(ufunc: np.ufunc) -> list[np.ndarray]:
     if ufunc is np.arcsin:
         x = np.concatenate([rng.uniform(-1, 1, 4099), [-1.0, 1.0, 0.0, -0.0, 1e-300, 0.5, np.nan]])
     else:
-        x = np.concatenate([rng.uniform(-40, 40, 4099), rng.uniform(-800, 800, 1001), [0.0, -0.0, np.inf, -np.inf, np.nan]])
+        x = np.concatenate([rng.uniform(-40, 40, 4099), rng.uniform(-800, 800, 1001),
+                            [0.0, -0.0, np.inf, -np.inf, np.nan]])
     return [x]
 
 
@@ -106,7 +108,8 @@ def compiled(kernel: str, where: str = "episode.kernel") -> bool:
 
 
 def jit(fn):
-    """``numba.njit(cache=True, nogil=True)``: compiled once per machine (the cache beside the module), without the GIL."""
+    """``numba.njit(cache=True, nogil=True)``: compiled once per machine (the cache beside the module), runs without
+    the GIL."""
     import numba
 
     return numba.njit(cache=True, nogil=True)(fn)

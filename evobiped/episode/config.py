@@ -169,7 +169,8 @@ class EpisodeConfig:
         body, own, task = self.parts()
         return Episode(body, own if controller is None else controller, task, seconds=float(self.seconds),
                        stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations if self.perturbations.active else None,
-                       latency=self.latency if controller is None else 0, control_dt=self.control_dt, kernel=self.kernel)
+                       latency=self.latency if controller is None else 0, control_dt=self.control_dt,
+                       kernel=self.kernel)
 
 
 def build_episode(**config: Any) -> "Episode":
