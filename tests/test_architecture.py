@@ -12,7 +12,8 @@ PACKAGE = Path(__file__).resolve().parent.parent / "evobiped"
 LAYERS: list[set[str]] = [
     {"core.glbackend"},
     {"core.errors", "__version__"},
-    {"core.validate", "core.fileio", "core.net", "core.progress", "core.provenance", "physics.models", "physics.sim",
+    {"core.validate", "core.kernel", "core.ufunc_calls", "core.fileio", "core.net", "core.progress", "core.provenance",
+     "physics.models", "physics.sim",
      "interface.genome", "interface.mapping", "interface.frame", "interface.normaliser", "files.presets", "physics.gait_lab"},
     {"core.schedule"},
     {"core.options", "interface.contract", "physics.gait"},

@@ -200,6 +200,7 @@ def bench(
     return {
         "body": config.body,
         "controller": config.controller,
+        "kernel": "compiled" if ep.compiled else "numpy",
         "timestep_s": model.opt.timestep,
         "control_dt_s": ep.control_dt,
         "population": population,
@@ -235,7 +236,8 @@ def format_bench(r: dict) -> str:
              f"eval x{r['presentations']}": f"(e) evaluation, {r['presentations']} presentations"}
     lines = [
         f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "
-        f"physics step {r['timestep_s'] * 1000:g} ms, control step {r['control_dt_s'] * 1000:g} ms, {r['cpu_count']} cores",
+        f"physics step {r['timestep_s'] * 1000:g} ms, control step {r['control_dt_s'] * 1000:g} ms, "
+        f"{r['cpu_count']} cores, {r['kernel']} kernel",
         f"median of {r['repeats']} interleaved repeat(s), sim-s/s [slowest, fastest repeat]",
     ]
     for k in names:

@@ -98,6 +98,11 @@ class Controller(ABC):
         itself where the period makes no difference, else a copy (this one is left unchanged)."""
         return self
 
+    def compiled(self) -> "Controller":
+        """This controller with its step in compiled code giving the same numbers to the last bit (the episode's
+        ``kernel``, :mod:`evobiped.core.kernel`): a copy, or itself where it has no compiled step."""
+        return self
+
     @property
     @abstractmethod
     def layout(self) -> GenomeLayout:

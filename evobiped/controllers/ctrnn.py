@@ -67,6 +67,8 @@ order stay the default):
 
 from __future__ import annotations
 
+import copy
+import functools
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -228,6 +230,13 @@ class CTRNN(Controller):
     def outputs_of(self, params: dict[str, np.ndarray], A: np.ndarray) -> np.ndarray:
         """O = sigma(A - alpha), ``(P, n)``."""
         return sigmoid(A - params["alpha"])
+
+    def compiled(self):
+        from . import ctrnn_kernel
+
+        other = copy.copy(self)
+        other.step = functools.partial(ctrnn_kernel.step, other)
+        return other
 
     def step(self, params, state, inputs):
         with np.errstate(over="ignore"):

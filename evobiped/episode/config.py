@@ -13,6 +13,7 @@ from ..bodies.base import Body
 from ..controllers import CONTROLLERS
 from ..controllers.base import Controller, ControllerOptions
 from ..core.errors import ConfigError
+from ..core.kernel import KERNELS
 from ..interface.genome import GenomeLayout
 from ..core.options import given, refuse_unknown
 from ..physics.perturb import PerturbationOptions
@@ -54,12 +55,17 @@ class EpisodeConfig:
     #: s: the control period of an episode without a controller (a multiple of the body's physics step); a
     #: controller's period is its own (its ``dt`` option, else the physics step)
     control_dt: float | None = None
+    #: how the control tick's array work runs (:mod:`evobiped.core.kernel`): ``auto`` (compiled where numba is
+    #: installed, else NumPy), ``compiled`` or ``numpy``; the same numbers to the last bit in each
+    kernel: str = "auto"
 
     def __post_init__(self):
         for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
             if name not in reg and not (kind == "controller" and name is None):
                 raise ConfigError(f"episode.{kind}: unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
         number(self.seconds, "episode.seconds:", above=0, unit="s")
+        if self.kernel not in KERNELS:
+            raise ConfigError(f"episode.kernel: unknown kernel {self.kernel!r} (choose from {', '.join(KERNELS)})")
         if not isinstance(self.stop_on_fall, bool):
             raise ConfigError(f"episode.stop_on_fall: must be true or false, got {self.stop_on_fall!r}")
         if self.controller is None:
@@ -86,6 +92,8 @@ class EpisodeConfig:
             d[name] = copy.deepcopy(given(d[name]))
         if d["control_dt"] is None:
             del d["control_dt"]
+        if d["kernel"] == "auto":  # the same numbers whichever runs: files name it only where it was chosen
+            del d["kernel"]
         return d
 
     @property
@@ -161,7 +169,8 @@ class EpisodeConfig:
         body, own, task = self.parts()
         return Episode(body, own if controller is None else controller, task, seconds=float(self.seconds),
                        stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations if self.perturbations.active else None,
-                       latency=self.latency if controller is None else 0, control_dt=self.control_dt)
+                       latency=self.latency if controller is None else 0, control_dt=self.control_dt,
+                       kernel=self.kernel)
 
 
 def build_episode(**config: Any) -> "Episode":

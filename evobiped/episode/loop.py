@@ -8,6 +8,7 @@ import numpy as np
 from ..bodies.base import Body
 from ..controllers.base import Controller
 from ..core.errors import ConfigError
+from ..core.kernel import compiled
 from ..interface.mapping import to_action
 from ..physics import gait
 from ..physics.gait_lab import stacked
@@ -27,9 +28,11 @@ class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
     def __init__(self, body: Body, controller: Controller | None, task: Task, *, seconds: float, stop_on_fall: bool = True,
-                 perturbations: PerturbationOptions | None = None, latency: int = 0, control_dt: float | None = None):
+                 perturbations: PerturbationOptions | None = None, latency: int = 0, control_dt: float | None = None,
+                 kernel: str = "auto"):
         """``controller`` None: the actions come from outside (:meth:`step`, the Gymnasium environments), one
-        every ``control_dt`` s (a multiple of the body's physics step)."""
+        every ``control_dt`` s (a multiple of the body's physics step).  ``kernel``: the tick's array work compiled
+        or in NumPy (:mod:`evobiped.core.kernel`; the same numbers)."""
         self.body, self.controller, self.task = body, controller, task
         #: control ticks by which each action reaches the body late (a real controller's computation and
         #: transmission delay; the first action is held until the pipeline is full)
@@ -44,6 +47,10 @@ class Episode:
         self.control_dt = dt
         # the controller told its period: a bound copy, the caller's controller unchanged
         self.controller = None if controller is None else controller.bound(dt)
+        #: whether the tick's array work runs compiled (ConfigError for a kernel that cannot run here)
+        self.compiled = compiled(kernel)
+        if self.compiled and self.controller is not None:
+            self.controller = self.controller.compiled()
         self.grounds = Grounds(body, self.model)
         self._trunk = self.model.body(body.trunk).id
         # qpos address of each actuated joint, in action order (initial-pose noise)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from ...flags import check_workers, choices_text, positive_float, positive_int
@@ -20,6 +21,8 @@ def add_bench(sub) -> None:
     p.add_argument("--repeats", type=positive_int, help="interleaved repeats of each measurement; the median counts (default 5)")
     p.add_argument("--presentations", type=positive_int, default=1, metavar="R",
                    help="also time evaluation on R perturbed presentations per walker, per simulated second (default 1: not measured)")
+    p.add_argument("--kernel", default="auto", metavar="K", help="the tick's array work: auto (compiled where numba is "
+                   "installed), compiled or numpy (the same numbers; default auto)")
     p.add_argument("--quick", action="store_true", help="a small run (under 30 s): 16 walkers x 4 s, 5 repeats")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -34,8 +37,6 @@ def run_bench_cmd(args) -> int:
     size.update({k: getattr(args, k) for k in size if getattr(args, k) is not None})
     context = None
     if args.preset:
-        import dataclasses
-
         from ...episode import Context
         from ...flags import run_config
 
@@ -44,6 +45,10 @@ def run_bench_cmd(args) -> int:
         context = Context(observe=True) if run.normalise.running else None
     else:
         cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=size["seconds"])
+    from ...core.kernel import compiled
+
+    compiled(args.kernel, "--kernel")
+    cfg = dataclasses.replace(cfg, kernel=args.kernel)
     check_workers("process", args.workers, None)
     progress = Progress("bench", size["repeats"], "repeats", quiet=args.quiet or args.json)
     r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"], presentations=args.presentations,

@@ -1,0 +1,115 @@
+"""Compiled per-tick code that gives NumPy's numbers to the last bit: the episode's ``kernel`` option.
+
+The control tick's array work (a controller's step, a body's senses) can run as numba-compiled loops
+(``@njit(cache=True, nogil=True)``, :func:`jit`) instead of NumPy calls.  Elementwise IEEE operations (+, -, *, /,
+sqrt, comparisons) give the same bits in both; sums do when the compiled loop adds in NumPy's order (each kernel's
+test holds it to NumPy's); transcendental functions do not in general: NumPy's SIMD ``exp`` and ``arcsin``
+(AVX-512 on this machine) differ from the C library's, which numba calls, in the last bit of one value in ten
+or twenty.  So a kernel takes those from NumPy itself: :func:`ufunc_loop` finds the float64 inner loop NumPy runs
+for ``np.exp(x)`` (the one its CPU dispatch chose at import), and compiled code calls it through
+:func:`evobiped.core.ufunc_calls.apply_loop`, so a compiled transcendental is NumPy's on every machine.  The
+loop is checked against the ufunc on a probe of values when it is found; where it cannot be found or disagrees, the
+compiled kernel is unavailable (``kernel = "numpy"`` then runs, with the same numbers).
+
+Kernels: ``numpy`` (the NumPy calls), ``compiled`` (numba; refused with one line where numba or the loops are
+missing), ``auto`` (compiled where available, else numpy: the default, as both give the same numbers).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+
+import numpy as np
+
+from .errors import ConfigError
+
+KERNELS = ("auto", "compiled", "numpy")
+#: the inner loop's C signature: ``void loop(char **args, npy_intp *dimensions, npy_intp *steps, void *data)``, its
+#: pointers passed as integers (the same registers on every 64-bit ABI numba targets)
+LOOP = ctypes.CFUNCTYPE(None, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t, ctypes.c_ssize_t)
+_NPY_DOUBLE = 12
+
+
+class _UFunc(ctypes.Structure):
+    """The head of NumPy's ``PyUFuncObject`` (numpy/ufuncobject.h), up to its type signatures."""
+
+    _fields_ = [("ob_refcnt", ctypes.c_ssize_t), ("ob_type", ctypes.c_void_p), ("nin", ctypes.c_int),
+                ("nout", ctypes.c_int),
+                ("nargs", ctypes.c_int), ("identity", ctypes.c_int), ("functions", ctypes.POINTER(ctypes.c_void_p)),
+                ("data", ctypes.POINTER(ctypes.c_void_p)), ("ntypes", ctypes.c_int), ("reserved1", ctypes.c_int),
+                ("name", ctypes.c_char_p), ("types", ctypes.POINTER(ctypes.c_char))]
+
+
+def _probe(ufunc: np.ufunc) -> list[np.ndarray]:
+    """Arguments that exercise a float64 loop: its SIMD body and tail, edges, infinities, NaN."""
+    rng = np.random.default_rng(12345)
+    if ufunc is np.arcsin:
+        x = np.concatenate([rng.uniform(-1, 1, 4099), [-1.0, 1.0, 0.0, -0.0, 1e-300, 0.5, np.nan]])
+    else:
+        x = np.concatenate([rng.uniform(-40, 40, 4099), rng.uniform(-800, 800, 1001),
+                            [0.0, -0.0, np.inf, -np.inf, np.nan]])
+    return [x]
+
+
+@functools.cache
+def ufunc_loop(ufunc: np.ufunc) -> int | None:
+    """The address of NumPy's float64 inner loop of the unary ``ufunc`` (``np.exp``, ``np.arcsin``): the one
+    ``ufunc(x)`` runs for a contiguous float64 ``x`` (the first float64 loop in its type list), checked to the last
+    bit against ``ufunc`` on a probe; None where NumPy's layout or loop is not what this expects.  Compiled code
+    calls it through :func:`evobiped.core.ufunc_calls.apply_loop`."""
+    try:
+        u = _UFunc.from_address(id(ufunc))
+        if u.name != ufunc.__name__.encode() or u.nin != 1 or u.nout != 1 or u.ntypes != len(ufunc.types):
+            return None
+        for i in range(u.ntypes):
+            if all(b == _NPY_DOUBLE for b in u.types[i * u.nargs:(i + 1) * u.nargs]):
+                break
+        else:
+            return None
+        if not u.functions[i] or u.data[i]:  # a loop that needs its data pointer is not one this calls
+            return None
+        address = int(u.functions[i])
+    except (ValueError, TypeError, OverflowError):
+        return None
+    (x,) = _probe(ufunc)
+    out = np.empty_like(x)
+    args = np.array([x.ctypes.data, out.ctypes.data, len(x), 8, 8], np.intp)
+    with np.errstate(all="ignore"):
+        LOOP(address)(args.ctypes.data, args[2:].ctypes.data, args[3:].ctypes.data, 0)
+        want = ufunc(x)
+    return address if np.array_equal(out.view(np.int64), want.view(np.int64)) else None
+
+
+@functools.cache
+def unavailable() -> str | None:
+    """Why the compiled kernel cannot run here (one line), or None where it can."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return "the compiled kernel needs numba (pip install numba, a dependency of evobiped)"
+    for f in (np.exp, np.arcsin):
+        if ufunc_loop(f) is None:
+            return f"the compiled kernel could not find NumPy {np.__version__}'s own float64 {f.__name__} loop"
+    return None
+
+
+def compiled(kernel: str, where: str = "episode.kernel") -> bool:
+    """Whether ``kernel`` (one of :data:`KERNELS`) runs compiled here; ConfigError (one line) for an unknown one and for
+    ``compiled`` where it is unavailable."""
+    if kernel not in KERNELS:
+        raise ConfigError(f"{where}: unknown kernel {kernel!r} (choose from {', '.join(KERNELS)})")
+    if kernel == "numpy":
+        return False
+    why = unavailable()
+    if why is not None and kernel == "compiled":
+        raise ConfigError(f"{where}: {why}; kernel 'numpy' gives the same numbers")
+    return why is None
+
+
+def jit(fn):
+    """``numba.njit(cache=True, nogil=True)``: compiled once per machine (the cache beside the module), runs without
+    the GIL."""
+    import numba
+
+    return numba.njit(cache=True, nogil=True)(fn)

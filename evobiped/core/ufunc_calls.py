@@ -1,0 +1,31 @@
+"""NumPy's own float64 inner loops called from compiled code (:func:`evobiped.core.kernel.ufunc_loop` finds them):
+importing this module imports numba, so only a compiled kernel does."""
+
+from __future__ import annotations
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+
+
+@intrinsic
+def _call_loop(typingctx, address, args, dimensions, steps):
+    """``((void (*)(char **, npy_intp *, npy_intp *, void *)) address)(args, dimensions, steps, NULL)``: a ufunc inner
+    loop at a run-time address (all four integers), so a function that calls it is cached like any other."""
+    def codegen(context, builder, signature, values):
+        ptr = ir.IntType(8).as_pointer()
+        fn = builder.inttoptr(values[0], ir.FunctionType(ir.VoidType(), [ptr] * 4).as_pointer())
+        builder.call(fn, [builder.inttoptr(v, ptr) for v in values[1:]] + [ir.Constant(ptr, None)])
+        return context.get_dummy_value()
+
+    return types.void(types.intp, types.intp, types.intp, types.intp), codegen
+
+
+@njit(cache=True, nogil=True)
+def apply_loop(loop: int, x: np.ndarray, out: np.ndarray) -> None:
+    """``out[:] = f(x)`` by NumPy's inner loop at address ``loop`` of a unary float64 ufunc f: ``x`` and ``out``
+    contiguous float64 arrays of the same size (any shape; ``out`` may be ``x``); the same bits as ``f(x)`` in NumPy."""
+    io = np.empty(5, np.intp)  # args (2 pointers), dimensions (1), steps (2): what a ufunc loop is handed
+    io[0], io[1], io[2], io[3], io[4] = x.ctypes.data, out.ctypes.data, x.size, 8, 8
+    _call_loop(loop, io.ctypes.data, io[2:].ctypes.data, io[3:].ctypes.data)
