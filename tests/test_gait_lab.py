@@ -184,7 +184,7 @@ def test_the_tail_of_the_slip_and_the_stride_against_hand_calculations():
     assert m["step_leg"] == pytest.approx(2.0 / steps) and m["step_similar"] == pytest.approx((2.0 / steps) / (1.15 * fr ** 0.3))
     torque = np.tile([1.0, -2.0, 0.0, 3.0, 0.0, 0.0], (T, 1))
     m = measure_one({**sample, "torque": torque}, dt, forward=2.0, mass=1.0, leg_length=1.0, feet=("left", "right"))
-    assert m["torque_cost"] == pytest.approx(14.0 * 4.0 / 2.0)  # 14 N^2 m^2 for 4 s over 2 m
+    assert m["torque_cost"] == pytest.approx(14.0)  # 1 + 4 + 9 N^2 m^2 at every sample, per kg
     report = gait_report(*reversed(load_genome(WALKERS / "ctrnn_walk_preset_seed1.json")[:2]), seconds=5.0)
     assert report["shuffle"] and report["step_similar"] < 1 / 3  # 13 cm steps where about 45 cm are predicted
 

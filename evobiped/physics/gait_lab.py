@@ -35,8 +35,9 @@ invisible (a search can move its effort there) and a 20 ms bounce splits a stanc
   fitness should pay (an uncapped clearance pays a leg kicked a metre high as the walker falls);
 * **power**: mean positive mechanical power sum_j max(tau_j omega_j, 0) per kg (W/kg); **cost of transport**: that
   power over (g v) (dimensionless: positive work per metre per body weight); **Froude number** v^2 / (g L);
-  **torque_cost**: the squared joint torques summed over time per kg per metre forward (N^2 m s / kg), an effort
-  that, as a muscle's, charges a leg swung fast (Kuo 2001: what makes long, slow steps the cheap ones).
+  **torque_cost**: the mean over time of the squared joint torques summed, per kg (N^2 m^2 / kg; finite for any
+  gait, what a fitness can weigh; over the speed, per metre), an effort that, as a muscle's, charges a leg swung
+  fast (Kuo 2001: what makes long, slow steps the cheap ones).
 
 The speed v is the forward travel over the time up (the caller's: the walk task's displacement along the initial
 facing); L is the body's leg length (hip to the ground, m).  ``control_tick`` meters measure :data:`MEASURES_TICK`
@@ -85,7 +86,7 @@ MEASURES |= {
     "slip_p90": "90th percentile of the stance slip speed (m/s)", "slip_p90_share": "slip_p90 over the speed",
     "slide_per_m": "stance feet's slip distance per metre forward (m/m)",
     "step_leg": "step length in leg lengths", "step_similar": "step length over dynamic similarity's step at the Froude number",
-    "torque_cost": "sum of squared joint torques over time per kg per metre forward (N^2 m s / kg)",
+    "torque_cost": "mean sum of squared joint torques per kg (N^2 m^2 / kg)",
 }
 
 
@@ -204,8 +205,7 @@ def measure_one(sample: dict[str, np.ndarray], dt: float, *, forward: float, mas
                slide_per_m=out["sliding"] / speed if moving else np.inf, step_leg=out["step_length"] / leg_length,
                step_similar=out["step_length"] / similar if similar > 0 else 0.0)
     if "torque" in sample:  # what swinging a leg fast costs a muscle (rises steeply with the step rate)
-        squared = float(np.square(sample["torque"]).sum() * dt / mass)
-        out["torque_cost"] = squared / forward if forward > 1e-3 else np.inf
+        out["torque_cost"] = float(np.square(sample["torque"]).sum(axis=1).mean() / mass)
     return out
 
 

@@ -84,7 +84,8 @@ def run_gait_report_cmd(args) -> int:
              f"percentile {100 * report['slip_p90_share']:.1f} %; {100 * report['slide_per_m']:.1f} cm slid per m walked"),
             ("swing", f"peak foot clearance {report['clearance']:.3f} m, knee excursion {report['knee_swing']:.2f} rad"),
             ("power", f"{report['power']:.1f} W/kg positive, cost of transport {report['cost_of_transport']:.2f}, "
-             f"torque cost {report['torque_cost']:.0f} N^2 m s/kg per m")]
+             f"torque cost {report['torque_cost']:.0f} N^2 m^2/kg ({report['torque_cost'] / max(report['speed'], 1e-3):.0f} "
+             "per m/s)")]
     print(f"gait of {source.genome_path} (first {args.seconds:g} s of its nominal episode, read after every "
           f"{1000 * report['sample_dt']:g} ms physics step)")
     for k, v in rows:
