@@ -366,3 +366,32 @@ def _alive(pid: int) -> bool:
     except OSError:
         return False
     return state != "Z"
+
+
+# ---- too little address space (ulimit -v): one line before NumPy, MuJoCo or Rerun is loaded
+@pytest.mark.parametrize("kib", [100_000, 300_000, 524_287])
+@pytest.mark.parametrize("command", [["presets"], ["episode", "--seconds", "0.5"], ["evolve", *TINY, "--out", "run"]])
+def test_too_little_address_space_is_one_line_naming_the_limit_the_minimum_and_the_fix(tmp_path, kib, command):
+    r = guarded(*command, memory=kib * 1024, cwd=tmp_path)
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, f"may take {kib:,} KiB of address space (ulimit -v {kib})", "524,288 KiB (512 MiB)",
+                   "raise the limit (ulimit -v 524288)")
+    assert not list(tmp_path.iterdir())
+
+
+def test_the_least_address_space_runs_presets_and_an_episode(tmp_path):
+    from evobiped import MIN_ADDRESS_SPACE
+
+    for command in (["presets"], ["episode", "--genome", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5"]):
+        r = guarded(*command, memory=MIN_ADDRESS_SPACE, cwd=tmp_path)
+        assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+
+
+def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_c_alone():
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (100_000 * 1024, 100_000 * 1024))
+
+    code = "import signal, sys, evobiped; print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, 'numpy' in sys.modules)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, preexec_fn=limit, timeout=60,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert (r.returncode, r.stdout, r.stderr) == (0, "True False\n", "")
