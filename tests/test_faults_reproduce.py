@@ -39,8 +39,8 @@ def test_a_g3_out_killed_between_its_figures_leaves_no_old_figure_beside_a_new_o
     assert sorted(p.name for p in d.iterdir()) == ["g3_fig4_diagrams.png", "g3_fig4_run.png"]
     sweep = ["g3", "fig4", "--go", "0.1", "0.2", "--out", d]  # two levels: the diagrams and the frequency plot
     r = _run(*sweep, kill_at=3)  # the mark, the diagrams, then killed at the frequency plot's rename
-    assert r.returncode == -signal.SIGKILL, r.stderr
     assert not (d / "g3_fig4_run.png").exists(), "the previous run's figure beside the new diagrams"
+    assert r.returncode == -signal.SIGKILL, r.stderr
     r = _run(*sweep)
     assert r.returncode == 0 and "the previous g3 fig4 was cut short" in r.stderr, r.stderr
     assert sorted(p.name for p in d.iterdir()) == ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"], "a mark or temporary"
