@@ -395,3 +395,16 @@ def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, preexec_fn=limit, timeout=60,
                        env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert (r.returncode, r.stdout, r.stderr) == (0, "True False\n", "")
+
+
+@pytest.mark.parametrize("command", [["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"],
+                                     ["evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run"]])
+def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in_one_line(tmp_path, command):
+    """Rerun's and Arrow's libraries (replay), numba's LLVM in each worker (evolve) need more than the 512 MiB the
+    command starts in: one line naming the limit and its fix, never a library's own traceback."""
+    from evobiped import MIN_ADDRESS_SPACE
+
+    r = guarded(*command, memory=MIN_ADDRESS_SPACE, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    assert last.startswith("evobiped: error: ") and "(ulimit -v 524288)" in last and "(ulimit -v unlimited)" in last, r.stderr

@@ -7,8 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from evobiped.experiments.g3.g3_reproduce import outputs as g3_outputs
-from evobiped.experiments.taga.taga_reproduce import outputs as taga_outputs
+from evobiped.experiments.g3.g3_reproduce import g3_outputs
+from evobiped.experiments.taga.taga_reproduce import taga_outputs
 
 from .conftest import ROOT
 

@@ -83,7 +83,14 @@ def _start(parent: int, initializer: Callable | None, initargs: tuple) -> None:
         signal.signal(sig, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, PARENTS_SIGNALS)  # one that came while it started is dropped now
     if initializer is not None:
-        initializer(*initargs)
+        try:
+            initializer(*initargs)
+        except (ImportError, OSError, MemoryError):  # a library that cannot load under a low ulimit -v: die quietly,
+            import resource  # the parent names the limit when the pool breaks
+
+            if resource.getrlimit(resource.RLIMIT_AS)[0] == resource.RLIM_INFINITY:
+                raise
+            os._exit(1)
 
 
 def _quiet_resource_tracker() -> None:

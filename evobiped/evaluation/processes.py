@@ -27,6 +27,8 @@ def _work(job: tuple) -> EpisodeResult:
 
 #: below this many file descriptors (``ulimit -n``) a pool's workers may die of too few: said when they do
 FEW_DESCRIPTORS = 256
+#: below this address space (bytes, ``ulimit -v``) a worker may die loading NumPy, MuJoCo and numba: said when they do
+FEW_BYTES = 2 * 2**30
 
 
 class ProcessPoolEvaluator(RetryingEvaluator):
@@ -44,6 +46,10 @@ class ProcessPoolEvaluator(RetryingEvaluator):
         low = soft != resource.RLIM_INFINITY and soft < FEW_DESCRIPTORS
         files = (f"too many open files? this process may open {soft} (ulimit -n): raise the limit (ulimit -n 1024) or "
                  "give fewer --workers; ") if low else ""
+        space = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if space != resource.RLIM_INFINITY and space < FEW_BYTES:
+            files += (f"too little address space? each worker may take {space // 1024:,} KiB (ulimit -v {space // 1024}): "
+                      "raise the limit (ulimit -v unlimited); ")
         return "evaluation workers died {n} times in one generation (" + files + "out of memory? killed?)"
 
     def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None,

@@ -2,7 +2,7 @@
 
 Writes summary.json, one CSV per sweep and the PNG figures to DIR, and prints
 the numbers docs/g3.md quotes.  Takes ~1.5 minutes on one core.  The files are one
-set (:func:`~evobiped.files.rundir.output_set.output_set`, the files :func:`outputs` names): the previous
+set (:func:`~evobiped.files.rundir.output_set.output_set`, the files :func:`g3_outputs` names): the previous
 reproduction's are removed first, and a reproduction cut short is said by the next one.
 """
 
@@ -61,7 +61,7 @@ HUMAN, HUMAN_MODES = ("human", "human-lagged"), ("reset", "from_walk")
 SYMMETRIC = ("fig5a", "fig5b", "fig7")
 
 
-def outputs(out: str | Path) -> list[Path]:
+def g3_outputs(out: str | Path) -> list[Path]:
     """Every file :func:`reproduce_g3` may write into ``out``, whatever its ``step``: summary.json, each sweep's CSV
     and figures, the single runs' figures."""
     out = Path(out)
@@ -78,7 +78,7 @@ def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0, say=
     one removed first; ``say(line)`` hears that the previous reproduction was cut short."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    with output_set("g3 reproduction", outputs(out), say=say):
+    with output_set("g3 reproduction", g3_outputs(out), say=say):
         _claims(out, step, t_run)
 
 

@@ -8,7 +8,7 @@ activity walking vs isolated (Fig. 6) and the u0 bifurcation diagrams
 ``quick`` runs every part on coarser grids (fewer u0 values, push phases,
 slopes and ground parameters, no physics-step halving) to check the pipeline,
 not the numbers.  The files are one set (:func:`~evobiped.files.rundir.output_set.output_set`, the files
-:func:`outputs` names, quick or not): the previous reproduction's are removed first, and one cut short is said by
+:func:`taga_outputs` names, quick or not): the previous reproduction's are removed first, and one cut short is said by
 the next.
 """
 
@@ -60,7 +60,7 @@ SLOPES, QUICK_SLOPES = (2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10), (4, 6, 8, -2, -6
 PUSHES = (("right_shank", 200.0), ("hip", 288.0))
 
 
-def outputs(out: str | Path) -> list[Path]:
+def taga_outputs(out: str | Path) -> list[Path]:
     """Every file :func:`reproduce_taga` may write into ``out``, quick or not."""
     out = Path(out)
     names = ["taga_results.json", "summary.md", "fig5a_walk_u5.5.png", "fig5b_walk_cycle.png", "fig9a_run_u7.5.png",
@@ -75,7 +75,7 @@ def reproduce_taga(out: str | Path, quick: bool = False, quiet: bool = False, sa
     set, the previous one removed first; ``say(line)`` hears that the previous reproduction was cut short."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    with output_set("taga reproduction", outputs(out), say=say):
+    with output_set("taga reproduction", taga_outputs(out), say=say):
         _experiments(out, quick, quiet)
 
 
