@@ -1,6 +1,6 @@
 """Fault campaign on ``evobiped evolve`` (and the commands that read its files), for a release check.
 
-Twenty-five classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
+Twenty-seven classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
 release): a pool worker SIGKILLed, every worker killed, SIGTERM/SIGHUP to a worker, the resource tracker then a
 worker, every worker killed 2 to 6 pools in a row, the whole run SIGKILLed, SIGINT/SIGTERM/SIGHUP to the run,
 SIGINT at any moment from a command's start (evolve, replay, select, ``-h``; or to the process group while workers
@@ -8,7 +8,8 @@ start), and a replay or select killed between its outputs.  The others are fixed
 configs, hostile settings files, genome files, ``select`` on damaged runs, runs started ``--from`` a relative path,
 damaged generation files, worker counts beyond the machine per backend, an empty value for every flag, and a run
 directory whose name is not UTF-8; and the newer commands' numbers, environment (``MUJOCO_GL``, ``ulimit -n``), paths
-that are no file, a run being written, and ``gait``'s outputs killed between them.  The classes after the first fourteen run their commands under a memory guard
+that are no file, a run being written, ``gait``'s outputs killed between them, the experiments'
+outputs (``g3 --out``, ``g3 --reproduce``, ``taga --reproduce``) killed between them, and ``ulimit -v``.  The classes after the first fourteen run their commands under a memory guard
 (a quarter of the machine, at most 8 GiB of address space) and check every case for residue: temporaries, a set's
 mark, a video's temporary folder, processes that outlived their command.
 
@@ -18,7 +19,8 @@ to an undisturbed one), ``refused, resumed`` (the workers died past the retries:
 the same), ``refused`` (one line on stderr, exit status 2, and nothing of the run directory changed where that is
 asked), or a failure: ``traceback``, ``hang`` (no answer within the
 time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs),
-``residue`` (something left behind), ``mixed`` (a new output beside an old one of the same command) and ``other``.  The exit status is 1 when any case fails.
+``stale`` (a read of a run being written accepted without saying so), ``residue`` (a file left
+behind), ``orphan`` (a process that outlived its command), ``mixed`` (a new output beside an old one of the same command) and ``other``.  The exit status is 1 when any case fails.
 
     python scripts/fault_campaign.py --repeat 50 --out /tmp/campaign      # about an hour on 2 cores
     python scripts/fault_campaign.py --repeat 2 --classes worker-sigkill group-kill
@@ -574,15 +576,15 @@ def generation_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     def gen(d, g):
         return d / "generations" / f"gen_{g:04d}.json"
 
-    def edit(key, change):
+    def edited(key, change):  # the file's ``key`` changed (``edit`` is tests.fault_cases')
         return lambda d, g: edit(gen(d, g), lambda obj: {**obj, key: change(obj[key])})
 
     damage = {
         "cut": lambda d, g: gen(d, g).write_bytes(gen(d, g).read_bytes()[:100]),
         "deleted": lambda d, g: gen(d, g).unlink(),
         "swapped": lambda d, g: shutil.copyfile(gen(d, (g + 1) % 6), gen(d, g)),
-        "a gene edited": edit("genome", lambda x: [x[0] / 2 + 0.125, *x[1:]]),
-        "fitness edited": edit("fitness", lambda f: f + 1.0),
+        "a gene edited": edited("genome", lambda x: [x[0] / 2 + 0.125, *x[1:]]),
+        "fitness edited": edited("fitness", lambda f: f + 1.0),
     }
     out = []
     for name, harm in damage.items():
@@ -832,6 +834,10 @@ def _set_after_kill(args, d: Path, files, n: int, old: bytes | None = None) -> s
     return "" if rc == -signal.SIGKILL else verdict(rc, err)
 
 
+#: a G3 reproduction on a coarse grid (2 levels per sweep, 40 time units each: some 30 s)
+G3_QUICK = ["--step", "0.25", "--t-run", "40"]
+
+
 def reproduce_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     """``g3 --out``, ``g3 --reproduce`` and ``taga --reproduce`` SIGKILLed at renames of their outputs over a previous
     set (a real one, or every file of the set made by hand), then run again: never a new file beside an old one."""
@@ -848,11 +854,13 @@ def reproduce_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
         if not v:
             rc, err, _ = command(*args, guarded=True)
             v = verdict(rc, err)
-            v = ("rewritten" if "was cut short" in err else "identical" if n == 1 else "silent") if v == "identical" else v
-            v = v if sorted(x.name for x in d.iterdir()) == ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"] else "residue"
+            if v == "identical":
+                v = "rewritten" if "was cut short" in err else "identical" if n == 1 else "silent"
+            if sorted(x.name for x in d.iterdir()) != ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"]:
+                v = "residue"
         out.append(_case(f"g3 --out killed at rename {n}, run again", _checked(v, d)))
     for what, args, files, kills in (
-            ("g3 --reproduce", ["g3", "--reproduce", "{d}", "--step", "0.25", "--t-run", "40"], g3_outputs, (2, 9, 20, 31)),
+            ("g3 --reproduce", ["g3", "--reproduce", "{d}", *G3_QUICK], g3_outputs, (2, 9, 20, 31)),
             ("taga --reproduce", ["taga", "--reproduce", "{d}", "--quick", "--quiet"], taga_outputs, (2, 3))):
         for n in kills:
             d = work / f"{what.split()[0]}-reproduce-{n}"
@@ -861,15 +869,15 @@ def reproduce_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
                 f.write_bytes(old)
             v = _set_after_kill([a.format(d=d) for a in args], d, files(d), n, old)
             if not v:  # the next run says the previous was cut short, before its own mark (killed there)
-                rc, err, _ = command(*[a.format(d=d) for a in args], env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "1"}, guarded=True)
+                rc, err, _ = command(*[a.format(d=d) for a in args], env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "1"},
+                                     guarded=True)
                 v = "rewritten" if rc == -signal.SIGKILL and "was cut short" in err else verdict(rc, err)
                 v = "silent" if v == "identical" else v
             out.append(_case(f"{what} killed at rename {n} over a previous set", v))
     d = work / "g3-reproduce-whole"  # a whole reproduction after one cut short: said, and only its set's files
     d.mkdir()
-    rc, err, _ = command("g3", "--reproduce", d, "--step", "0.25", "--t-run", "40", env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "5"},
-                         guarded=True)
-    rc, err, _ = command("g3", "--reproduce", d, "--step", "0.25", "--t-run", "40", guarded=True)
+    command("g3", "--reproduce", d, *G3_QUICK, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "5"}, guarded=True)
+    rc, err, _ = command("g3", "--reproduce", d, *G3_QUICK, guarded=True)
     v = verdict(rc, err)
     if v == "identical":
         v = "rewritten" if "was cut short" in err else "silent"
@@ -887,7 +895,8 @@ def _address_space(args, kib: int, cwd: Path) -> tuple[int | None, str]:
 
     try:
         r = subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, capture_output=True, text=True,
-                           timeout=LIMIT, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=little, start_new_session=True)
+                           timeout=LIMIT, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=little,
+                           start_new_session=True)
     except subprocess.TimeoutExpired:
         return None, ""
     ANSWERS.append((r.stderr.strip().splitlines() or [""])[-1])
@@ -898,10 +907,12 @@ def memory_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     """Every command under ``ulimit -v`` below the 512 MiB the command starts in (one line naming the limit, the
     minimum and the fix, nothing written), and at it and above: run, or one line naming the limit."""
     walker = ROOT / "docs" / "walkers" / "ctrnn_walk_seed1.json"
+    commanded = ROOT / "docs" / "walkers" / "ctrnn_command_seed1.json"
     commands = {"presets": ["presets"], "episode": ["episode", "--genome", walker, "--seconds", "0.5"],
                 "replay": ["replay", walker, "--seconds", "0.5", "--out", "r.rrd"], "taga": ["taga", "--seconds", "1"],
-                "g3": ["g3", "fig4", "--out", "g3"], "evolve": ["evolve", *RUN, "--backend", "process", "--workers", "2", "--out", "run"],
-                "gait": ["gait", ROOT / "docs" / "walkers" / "ctrnn_command_seed1.json", "--speed", "0.5", "--hold", "1", "--out", "g"]}
+                "g3": ["g3", "fig4", "--out", "g3"],
+                "evolve": ["evolve", *RUN, "--backend", "process", "--workers", "2", "--out", "run"],
+                "gait": ["gait", commanded, "--speed", "0.5", "--hold", "1", "--out", "g"]}
     out = []
     for kib in (50_000, 200_000, 400_000, 524_287):
         for name, args in commands.items():

@@ -382,7 +382,8 @@ def test_too_little_address_space_is_one_line_naming_the_limit_the_minimum_and_t
 def test_the_least_address_space_runs_presets_and_an_episode(tmp_path):
     from evobiped import MIN_ADDRESS_SPACE
 
-    for command in (["presets"], ["episode", "--genome", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5"]):
+    walker = ROOT / "docs/walkers/ctrnn_walk_seed1.json"
+    for command in (["presets"], ["episode", "--genome", walker, "--seconds", "0.5"]):
         r = guarded(*command, memory=MIN_ADDRESS_SPACE, cwd=tmp_path)
         assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
 
@@ -391,14 +392,16 @@ def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_
     def limit():
         resource.setrlimit(resource.RLIMIT_AS, (100_000 * 1024, 100_000 * 1024))
 
-    code = "import signal, sys, evobiped; print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, 'numpy' in sys.modules)"
+    code = ("import signal, sys, evobiped; "
+            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, 'numpy' in sys.modules)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, preexec_fn=limit, timeout=60,
                        env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert (r.returncode, r.stdout, r.stderr) == (0, "True False\n", "")
 
 
-@pytest.mark.parametrize("command", [["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"],
-                                     ["evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run"]])
+@pytest.mark.parametrize("command", [
+    ["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"],
+    ["evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run"]])
 def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in_one_line(tmp_path, command):
     """Rerun's and Arrow's libraries (replay), numba's LLVM in each worker (evolve) need more than the 512 MiB the
     command starts in: one line naming the limit and its fix, never a library's own traceback."""
@@ -407,4 +410,5 @@ def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in
     r = guarded(*command, memory=MIN_ADDRESS_SPACE, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     last = r.stderr.strip().splitlines()[-1]
-    assert last.startswith("evobiped: error: ") and "(ulimit -v 524288)" in last and "(ulimit -v unlimited)" in last, r.stderr
+    assert last.startswith("evobiped: error: ") and "(ulimit -v 524288)" in last, r.stderr
+    assert "(ulimit -v unlimited)" in last, r.stderr

@@ -17,7 +17,9 @@ OLD = b"the previous run's"
 
 def _run(*args, kill_at: int | None = None) -> subprocess.CompletedProcess:
     """``evobiped ARGS``, SIGKILLed just before its ``kill_at``-th rename where given."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), **({"EVOBIPED_FAULT_KILL_AT_REPLACE": str(kill_at)} if kill_at else {})}
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    if kill_at:
+        env["EVOBIPED_FAULT_KILL_AT_REPLACE"] = str(kill_at)
     return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, text=True, env=env,
                           timeout=300)
 
@@ -43,7 +45,8 @@ def test_a_g3_out_killed_between_its_figures_leaves_no_old_figure_beside_a_new_o
     assert r.returncode == -signal.SIGKILL, r.stderr
     r = _run(*sweep)
     assert r.returncode == 0 and "the previous g3 fig4 was cut short" in r.stderr, r.stderr
-    assert sorted(p.name for p in d.iterdir()) == ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"], "a mark or temporary"
+    written = sorted(p.name for p in d.iterdir())
+    assert written == ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"], f"a mark or temporary: {written}"
 
 
 def test_a_g3_reproduction_killed_between_its_files_leaves_none_of_the_previous_one(tmp_path):
@@ -57,8 +60,8 @@ def test_a_g3_reproduction_killed_between_its_files_leaves_none_of_the_previous_
     assert (d / kept[0]).read_bytes() != OLD
     r = _run(*reproduce)
     assert r.returncode == 0 and "the previous g3 reproduction was cut short" in r.stderr, r.stderr
-    written = {p.name for p in d.iterdir()}
-    assert written <= {p.name for p in g3_outputs(d)}, f"files outside the set: {written - {p.name for p in g3_outputs(d)}}"
+    written, the_set = {p.name for p in d.iterdir()}, {p.name for p in g3_outputs(d)}
+    assert written <= the_set, f"files outside the set: {written - the_set}"
     assert "summary.json" in written and not _left(d)
 
 

@@ -103,7 +103,8 @@ def descriptors_line() -> str:
 
 
 #: what a library that ran out of address space raises (NumPy's, MuJoCo's, numba's LLVM, Rerun's, Arrow's loaders)
-NO_SPACE = ("failed to map segment", "could not allocate memory", "cannot allocate memory", "could not find/load shared object")
+NO_SPACE = ("failed to map segment", "could not allocate memory", "cannot allocate memory",
+            "could not find/load shared object")
 
 
 def out_of_address_space(exc: BaseException) -> str | None:
@@ -112,7 +113,8 @@ def out_of_address_space(exc: BaseException) -> str | None:
     import resource
 
     soft = resource.getrlimit(resource.RLIMIT_AS)[0]
-    if soft == resource.RLIM_INFINITY or not (isinstance(exc, MemoryError) or any(w in str(exc).lower() for w in NO_SPACE)):
+    said = isinstance(exc, MemoryError) or any(w in str(exc).lower() for w in NO_SPACE)
+    if soft == resource.RLIM_INFINITY or not said:
         return None
     return (f"out of address space: this process may take {soft // 1024:,} KiB (ulimit -v {soft // 1024}), too little "
             "for this command's libraries; raise the limit (ulimit -v unlimited)")

@@ -48,7 +48,8 @@ class ProcessPoolEvaluator(RetryingEvaluator):
                  "give fewer --workers; ") if low else ""
         space = resource.getrlimit(resource.RLIMIT_AS)[0]
         if space != resource.RLIM_INFINITY and space < FEW_BYTES:
-            files += (f"too little address space? each worker may take {space // 1024:,} KiB (ulimit -v {space // 1024}): "
+            files += (f"too little address space? each worker may take {space // 1024:,} KiB "
+                      f"(ulimit -v {space // 1024}): "
                       "raise the limit (ulimit -v unlimited); ")
         return "evaluation workers died {n} times in one generation (" + files + "out of memory? killed?)"
 

@@ -59,8 +59,8 @@ def _run_reproduce(args) -> int:
         raise UserError(f"--reproduce: cannot make the folder {args.reproduce}: {e.strerror}") from None
     from .g3_reproduce import reproduce_g3
 
-    reproduce_g3(args.reproduce, step=0.01 if args.step is None else args.step, t_run=200.0 if args.t_run is None else args.t_run,
-                 say=note)
+    step, t_run = 0.01 if args.step is None else args.step, 200.0 if args.t_run is None else args.t_run
+    reproduce_g3(args.reproduce, step=step, t_run=t_run, say=note)
     return 0
 
 
@@ -116,8 +116,9 @@ def run_g3_cmd(args) -> int:
         from .g3_figures import sweep_figures, sweep_files
 
         stem = f"g3_{pre.name}"
-        with output_set(f"g3 {pre.name}", sweep_files(Path(args.out), stem), say=note):  # no old run beside new diagrams
-            files = [str(f) for f in sweep_figures(args.out, stem, s, idx, g3.LIMBS, title=f"G3 {pre.name} ({args.mode})")]
+        title = f"G3 {pre.name} ({args.mode})"
+        with output_set(f"g3 {pre.name}", sweep_files(Path(args.out), stem), say=note):  # no old run beside new plots
+            files = [str(f) for f in sweep_figures(args.out, stem, s, idx, g3.LIMBS, title=title)]
     if args.json:
         print(json.dumps({"preset": pre.name, "source": pre.source, "mode": args.mode, "levels": rows, "files": files}))
         return 0

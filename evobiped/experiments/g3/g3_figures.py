@@ -115,7 +115,8 @@ def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *
         xs.append(tr.x[r][m][:, channels])
         labels.append(f"I={lv:.3g}\n{g.label}")
     t = tr.t[: max(len(x) for x in xs)] - tr.t[0]
-    written.append(sweep_diagrams(diagrams_png, t, xs, labels, names, title=f"{title}: last {span:g} units of each level; bars top to bottom: {', '.join(names)}"))
+    heading = f"{title}: last {span:g} units of each level; bars top to bottom: {', '.join(names)}"
+    written.append(sweep_diagrams(diagrams_png, t, xs, labels, names, title=heading))
     if len(sweep.levels) > 1:
         freq = np.array([g.frequency for g in sweep.gaits])
         duty = np.array([np.mean(g.duty) for g in sweep.gaits])
