@@ -399,16 +399,25 @@ def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_
     assert (r.returncode, r.stdout, r.stderr) == (0, "True False\n", "")
 
 
-@pytest.mark.parametrize("command", [
-    ["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"],
-    ["evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run"]])
-def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in_one_line(tmp_path, command):
-    """Rerun's and Arrow's libraries (replay), numba's LLVM in each worker (evolve) need more than the 512 MiB the
-    command starts in: one line naming the limit and its fix, never a library's own traceback."""
+@pytest.mark.parametrize("kib, command", [
+    (524_288, ["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"]),
+    (600_000, ["evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run"])])
+def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in_one_line(tmp_path, kib, command):
+    """Rerun's and Arrow's libraries (replay, evolve's last files) need more than the 512 MiB the command starts in:
+    one line naming the limit and its fix, never a library's own traceback."""
+    r = guarded(*command, memory=kib * 1024, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    one_line_error(r.stderr, f"out of address space: this process may take {kib:,} KiB (ulimit -v {kib})",
+                   "raise the limit (ulimit -v unlimited)")
+
+
+def test_workers_that_cannot_load_their_libraries_die_quietly_and_the_run_names_the_limit(tmp_path):
+    """At 512 MiB a worker's numba and MuJoCo mostly do not fit (some runs they do: then the run completes)."""
     from evobiped import MIN_ADDRESS_SPACE
 
-    r = guarded(*command, memory=MIN_ADDRESS_SPACE, cwd=tmp_path)
-    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
-    last = r.stderr.strip().splitlines()[-1]
-    assert last.startswith("evobiped: error: ") and "(ulimit -v 524288)" in last, r.stderr
-    assert "(ulimit -v unlimited)" in last, r.stderr
+    r = guarded("evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run", memory=MIN_ADDRESS_SPACE,
+                cwd=tmp_path)
+    assert "Traceback" not in r.stderr and r.returncode in (0, 2), r.stderr
+    if r.returncode == 2:
+        last = r.stderr.strip().splitlines()[-1]
+        assert last.startswith("evobiped: error: ") and "(ulimit -v 524288)" in last, r.stderr
