@@ -860,7 +860,7 @@ def reproduce_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
                 v = "residue"
         out.append(_case(f"g3 --out killed at rename {n}, run again", _checked(v, d)))
     for what, args, files, kills in (
-            ("g3 --reproduce", ["g3", "--reproduce", "{d}", *G3_QUICK], g3_outputs, (2, 9, 20, 31)),
+            ("g3 --reproduce", ["g3", "--reproduce", "{d}", *G3_QUICK], g3_outputs, (2, 9, 20, 30)),
             ("taga --reproduce", ["taga", "--reproduce", "{d}", "--quick", "--quiet"], taga_outputs, (2, 3))):
         for n in kills:
             d = work / f"{what.split()[0]}-reproduce-{n}"

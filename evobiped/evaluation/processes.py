@@ -8,7 +8,7 @@ from ..episode import Episode, EpisodeConfig
 from ..episode.result import EpisodeResult
 from .base import RetryingEvaluator, evaluate_batch
 from .faults import FaultHook
-from .pool import spawn_pool, stop_pool
+from .pool import FEW_BYTES, spawn_pool, stop_pool
 
 # ---- in a worker process: its Episode and testing hook, set by the initializer
 _worker_episode: Episode | None = None
@@ -27,8 +27,6 @@ def _work(job: tuple) -> EpisodeResult:
 
 #: below this many file descriptors (``ulimit -n``) a pool's workers may die of too few: said when they do
 FEW_DESCRIPTORS = 256
-#: below this address space (bytes, ``ulimit -v``) a worker may die loading NumPy, MuJoCo and numba: said when they do
-FEW_BYTES = 2 * 2**30
 
 
 class ProcessPoolEvaluator(RetryingEvaluator):
