@@ -1,6 +1,6 @@
 """Fault campaign on ``evobiped evolve`` (and the commands that read its files), for a release check.
 
-Twenty-five classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
+Twenty-seven classes of faults.  Nine strike at random moments and are repeated ``--repeat`` times (50 or more for a
 release): a pool worker SIGKILLed, every worker killed, SIGTERM/SIGHUP to a worker, the resource tracker then a
 worker, every worker killed 2 to 6 pools in a row, the whole run SIGKILLed, SIGINT/SIGTERM/SIGHUP to the run,
 SIGINT at any moment from a command's start (evolve, replay, select, ``-h``; or to the process group while workers
@@ -8,7 +8,8 @@ start), and a replay or select killed between its outputs.  The others are fixed
 configs, hostile settings files, genome files, ``select`` on damaged runs, runs started ``--from`` a relative path,
 damaged generation files, worker counts beyond the machine per backend, an empty value for every flag, and a run
 directory whose name is not UTF-8; and the newer commands' numbers, environment (``MUJOCO_GL``, ``ulimit -n``), paths
-that are no file, a run being written, and ``gait``'s outputs killed between them.  The classes after the first fourteen run their commands under a memory guard
+that are no file, a run being written, ``gait``'s outputs killed between them, the experiments'
+outputs (``g3 --out``, ``g3 --reproduce``, ``taga --reproduce``) killed between them, and ``ulimit -v``.  The classes after the first fourteen run their commands under a memory guard
 (a quarter of the machine, at most 8 GiB of address space) and check every case for residue: temporaries, a set's
 mark, a video's temporary folder, processes that outlived their command.
 
@@ -18,7 +19,8 @@ to an undisturbed one), ``refused, resumed`` (the workers died past the retries:
 the same), ``refused`` (one line on stderr, exit status 2, and nothing of the run directory changed where that is
 asked), or a failure: ``traceback``, ``hang`` (no answer within the
 time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs),
-``residue`` (something left behind), ``mixed`` (a new output beside an old one of the same command) and ``other``.  The exit status is 1 when any case fails.
+``stale`` (a read of a run being written accepted without saying so), ``residue`` (a file left
+behind), ``orphan`` (a process that outlived its command), ``mixed`` (a new output beside an old one of the same command) and ``other``.  The exit status is 1 when any case fails.
 
     python scripts/fault_campaign.py --repeat 50 --out /tmp/campaign      # about an hour on 2 cores
     python scripts/fault_campaign.py --repeat 2 --classes worker-sigkill group-kill
@@ -55,7 +57,7 @@ LIMIT = 180.0  # s: a case that takes longer hangs
 ANSWERS: list[str] = []
 #: the whole stderr of each command and run (a failed case's are kept beside its run directory)
 STDERR: list[str] = []
-FAILURES = ("traceback", "hang", "silent", "other", "residue", "mixed")
+FAILURES = ("traceback", "hang", "silent", "stale", "other", "residue", "orphan", "mixed")
 
 
 # ---- running the command
@@ -470,17 +472,16 @@ def residue(*dirs: Path) -> list[str]:
 
     found = [str(p) for d in dirs if Path(d).is_dir() for pat in (".*.tmp*", ".*.incomplete") for p in Path(d).rglob(pat)]
     found += [str(p) for p in Path(tempfile.gettempdir()).glob("tmp*/video.mp4")]
-    found += LEFTOVER
-    LEFTOVER.clear()
     return found
 
 
 def _checked(v: str, *dirs: Path) -> str:
     """A verdict, unless the case left residue (what it left goes to the case's stderr, :data:`STDERR`)."""
-    left = residue(*dirs)
-    if left:
-        STDERR.append("residue: " + "; ".join(left))
-    return "residue" if v not in FAILURES and left else v
+    left, orphans = residue(*dirs), LEFTOVER[:]
+    LEFTOVER.clear()
+    if left or orphans:
+        STDERR.append("residue: " + "; ".join(left + orphans))
+    return v if v in FAILURES else "orphan" if orphans else "residue" if left else v
 
 
 def _interpreters_own(err: str) -> bool:
@@ -575,15 +576,15 @@ def generation_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     def gen(d, g):
         return d / "generations" / f"gen_{g:04d}.json"
 
-    def edit(key, change):
+    def edited(key, change):  # the file's ``key`` changed (``edit`` is tests.fault_cases')
         return lambda d, g: edit(gen(d, g), lambda obj: {**obj, key: change(obj[key])})
 
     damage = {
         "cut": lambda d, g: gen(d, g).write_bytes(gen(d, g).read_bytes()[:100]),
         "deleted": lambda d, g: gen(d, g).unlink(),
         "swapped": lambda d, g: shutil.copyfile(gen(d, (g + 1) % 6), gen(d, g)),
-        "a gene edited": edit("genome", lambda x: [x[0] / 2 + 0.125, *x[1:]]),
-        "fitness edited": edit("fitness", lambda f: f + 1.0),
+        "a gene edited": edited("genome", lambda x: [x[0] / 2 + 0.125, *x[1:]]),
+        "fitness edited": edited("fitness", lambda f: f + 1.0),
     }
     out = []
     for name, harm in damage.items():
@@ -745,6 +746,11 @@ def odd_path_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     return out
 
 
+def _stale(v: str) -> str:
+    """A read of a run being written (or gone past) accepted without saying so is a stale read."""
+    return "stale" if v == "silent" else v
+
+
 def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     """The commands that read a run, on one an evolve is writing: refused by name (or, ``--allow-unfinished``, the
     generation recorded); a selection made then, read once the run went on: refused, never reused silently."""
@@ -763,15 +769,15 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
                      ["gait-report", d, "--seconds", "1"], ["robustness", d, "--seconds", "2", "--push-after", "1"],
                      ["distill", d, "--iterations", "1"]):
             rc, err, _ = command(*args, guarded=True, timeout=60)
-            out.append(_case(f"{' '.join(map(str, args[:2]))} of a run being written", refusal(rc, err, words)))
+            out.append(_case(f"{' '.join(map(str, args[:2]))} of a run being written", _stale(refusal(rc, err, words))))
         rc, err, _ = command("select", d, "--seconds", "1", "--top", "1", "--allow-unfinished", guarded=True)
         chosen = json.loads((d / "selected.json").read_text()).get("from_checkpoint") if rc == 0 else None
         v = verdict(rc, err) if rc != 0 else "identical" if chosen and chosen.get("writer") == p.pid else "silent"
-        out.append(_case("select --allow-unfinished of a run being written", v))
+        out.append(_case("select --allow-unfinished of a run being written", _stale(v)))
         for args in (["replay", d, "--seconds", "0.5", "--allow-unfinished"], ["gait-report", d, "--seconds", "1", "--allow-unfinished"]):
             rc, err, _ = command(*args, guarded=True, timeout=60)
             v = verdict(rc, err) if rc != 0 else "identical" if "is being written by process" in err else "silent"
-            out.append(_case(f"{args[0]} --allow-unfinished of a run being written", v))
+            out.append(_case(f"{args[0]} --allow-unfinished of a run being written", _stale(v)))
         while chosen and len(json.loads((d / "checkpoint.json").read_text())["history"]) == chosen["generations"]:
             time.sleep(0.1)
     finally:
@@ -779,7 +785,8 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
         p.communicate()
     for args in (["replay", d / "selected.json", "--seconds", "0.5"], ["gait-report", d / "selected.json", "--seconds", "1"]):
         rc, err, _ = command(*args, guarded=True, timeout=60)
-        out.append(_case(f"{args[0]} of a selection the run has gone past", refusal(rc, err, "choose again with evobiped select")))
+        out.append(_case(f"{args[0]} of a selection the run has gone past",
+                         _stale(refusal(rc, err, "choose again with evobiped select"))))
     return out
 
 
@@ -812,6 +819,123 @@ FIXED.update({"numbers": number_cases, "environment": environment_cases, "odd-pa
               "gait-output": gait_output_cases})
 
 
+# ---- the experiments' outputs as one set; too little address space
+def _set_after_kill(args, d: Path, files, n: int, old: bytes | None = None) -> str:
+    """``evobiped ARGS`` SIGKILLed at its ``n``-th rename over the previous set in ``d`` (``files`` where it stands,
+    ``old`` their bytes where they were made by hand): ``mixed`` if a new file stands beside an old one, else the
+    exit status' verdict ("" where it was killed)."""
+    time.sleep(0.05)
+    t0 = time.time()
+    rc, err, _ = command(*args, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": str(n)}, guarded=True)
+    here = [f for f in files if f.exists()]
+    new = [f.stat().st_mtime >= t0 and (old is None or f.read_bytes() != old) for f in here]
+    if any(new) and not all(new):
+        return "mixed"
+    return "" if rc == -signal.SIGKILL else verdict(rc, err)
+
+
+#: a G3 reproduction on a coarse grid (2 levels per sweep, 40 time units each: some 30 s)
+G3_QUICK = ["--step", "0.25", "--t-run", "40"]
+
+
+def reproduce_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """``g3 --out``, ``g3 --reproduce`` and ``taga --reproduce`` SIGKILLed at renames of their outputs over a previous
+    set (a real one, or every file of the set made by hand), then run again: never a new file beside an old one."""
+    from evobiped.experiments.g3.g3_figures import sweep_files
+    from evobiped.experiments.g3.g3_reproduce import g3_outputs
+    from evobiped.experiments.taga.taga_reproduce import taga_outputs
+
+    out, old = [], b"the previous run's"
+    for n in (1, 2, 3):
+        d = work / f"g3-out-{n}"
+        command("g3", "fig4", "--out", d, guarded=True)  # one level: its run and its diagrams
+        args = ["g3", "fig4", "--go", "0.1", "0.2", "--out", d]  # two: the diagrams and the frequency plot
+        v = _set_after_kill(args, d, sweep_files(d, "g3_fig4"), n)
+        if not v:
+            rc, err, _ = command(*args, guarded=True)
+            v = verdict(rc, err)
+            if v == "identical":
+                v = "rewritten" if "was cut short" in err else "identical" if n == 1 else "silent"
+            if sorted(x.name for x in d.iterdir()) != ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"]:
+                v = "residue"
+        out.append(_case(f"g3 --out killed at rename {n}, run again", _checked(v, d)))
+    for what, args, files, kills in (
+            ("g3 --reproduce", ["g3", "--reproduce", "{d}", *G3_QUICK], g3_outputs, (2, 9, 20, 30)),
+            ("taga --reproduce", ["taga", "--reproduce", "{d}", "--quick", "--quiet"], taga_outputs, (2, 3))):
+        for n in kills:
+            d = work / f"{what.split()[0]}-reproduce-{n}"
+            d.mkdir()
+            for f in files(d):
+                f.write_bytes(old)
+            v = _set_after_kill([a.format(d=d) for a in args], d, files(d), n, old)
+            if not v:  # the next run says the previous was cut short, before its own mark (killed there)
+                rc, err, _ = command(*[a.format(d=d) for a in args], env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "1"},
+                                     guarded=True)
+                v = "rewritten" if rc == -signal.SIGKILL and "was cut short" in err else verdict(rc, err)
+                v = "silent" if v == "identical" else v
+            out.append(_case(f"{what} killed at rename {n} over a previous set", v))
+    d = work / "g3-reproduce-whole"  # a whole reproduction after one cut short: said, and only its set's files
+    d.mkdir()
+    command("g3", "--reproduce", d, *G3_QUICK, env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "5"}, guarded=True)
+    rc, err, _ = command("g3", "--reproduce", d, *G3_QUICK, guarded=True)
+    v = verdict(rc, err)
+    if v == "identical":
+        v = "rewritten" if "was cut short" in err else "silent"
+        v = v if {x.name for x in d.iterdir()} <= {f.name for f in g3_outputs(d)} else "residue"
+    out.append(_case("g3 --reproduce whole after one cut short", _checked(v, d)))
+    return out
+
+
+def _address_space(args, kib: int, cwd: Path) -> tuple[int | None, str]:
+    """``evobiped ARGS`` in ``cwd`` with at most ``kib`` KiB of address space (``ulimit -v``)."""
+    import resource
+
+    def little():
+        resource.setrlimit(resource.RLIMIT_AS, (kib * 1024, kib * 1024))
+
+    try:
+        r = subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                           timeout=LIMIT, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=little,
+                           start_new_session=True)
+    except subprocess.TimeoutExpired:
+        return None, ""
+    ANSWERS.append((r.stderr.strip().splitlines() or [""])[-1])
+    return r.returncode, r.stderr
+
+
+def memory_cases(work: Path, done: Path) -> list[tuple[str, str]]:
+    """Every command under ``ulimit -v`` below the 512 MiB the command starts in (one line naming the limit, the
+    minimum and the fix, nothing written), and at it and above: run, or one line naming the limit."""
+    walker = ROOT / "docs" / "walkers" / "ctrnn_walk_seed1.json"
+    commanded = ROOT / "docs" / "walkers" / "ctrnn_command_seed1.json"
+    commands = {"presets": ["presets"], "episode": ["episode", "--genome", walker, "--seconds", "0.5"],
+                "replay": ["replay", walker, "--seconds", "0.5", "--out", "r.rrd"], "taga": ["taga", "--seconds", "1"],
+                "g3": ["g3", "fig4", "--out", "g3"],
+                "evolve": ["evolve", *RUN, "--backend", "process", "--workers", "2", "--out", "run"],
+                "gait": ["gait", commanded, "--speed", "0.5", "--hold", "1", "--out", "g"]}
+    out = []
+    for kib in (50_000, 200_000, 400_000, 524_287):
+        for name, args in commands.items():
+            cwd = work / f"memory-{len(out)}"
+            cwd.mkdir()
+            rc, err = _address_space(args, kib, cwd)
+            v = "hang" if rc is None else refusal(rc, err, f"(ulimit -v {kib}), below the 524,288 KiB (512 MiB)")
+            out.append(_case(f"ulimit -v {kib} {name}", "residue" if v == "refused" and any(cwd.iterdir()) else v))
+    for kib in (524_288, 700_000):
+        for name, args in commands.items():
+            cwd = work / f"memory-{len(out)}"
+            cwd.mkdir()
+            rc, err = _address_space(args, kib, cwd)
+            v = "hang" if rc is None else refusal(rc, err, f"(ulimit -v {kib})") if rc != 0 else verdict(rc, err)
+            if name in ("presets", "episode") and kib == 524_288 and v == "refused":
+                v = "other"  # the stated minimum runs them
+            out.append(_case(f"ulimit -v {kib} {name}", v))
+    return out
+
+
+FIXED.update({"reproduce-output": reproduce_output_cases, "memory-limit": memory_cases})
+
+
 def campaign(work: Path, classes: list[str], repeat: int, show: bool = False) -> tuple[dict[str, Counter], list[str]]:
     """Run ``classes`` (the random-moment ones ``repeat`` times each) in the emptied folder ``work``: each class's
     verdicts counted, and a note for each failed case (its commands' stderr kept beside its run directory)."""
@@ -834,6 +958,10 @@ def campaign(work: Path, classes: list[str], repeat: int, show: bool = False) ->
                 d = work / f"{name}-{i}"
                 STDERR.clear()
                 v = RANDOM[name](d, reference)
+                if LEFTOVER:  # processes of its commands that outlived them
+                    STDERR.append("orphans: " + "; ".join(LEFTOVER))
+                    v = v if v in FAILURES else "orphan"
+                    LEFTOVER.clear()
                 results[name][v] += 1
                 if v in FAILURES:
                     notes.append(f"{name} #{i}: {v} ({d}; its commands' stderr in {d}.stderr)")
@@ -847,6 +975,10 @@ def campaign(work: Path, classes: list[str], repeat: int, show: bool = False) ->
                 results[name][v] += 1
                 if v in FAILURES:
                     notes.append(f"{name}: {case}: {v}: {answer}")
+            if LEFTOVER:  # processes a case outlived that no verdict of its own counted
+                results[name]["orphan"] += 1
+                notes.append(f"{name}: orphan: {'; '.join(LEFTOVER)}")
+                LEFTOVER.clear()
         struck = f"  ({', '.join(f'{k} {n}' for k, n in STRUCK.items())})" if name in RANDOM else ""
         print(f"{name:<22} {sum(results[name].values()):>4} cases  " + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())) + struck,
               flush=True)

@@ -366,3 +366,58 @@ def _alive(pid: int) -> bool:
     except OSError:
         return False
     return state != "Z"
+
+
+# ---- too little address space (ulimit -v): one line before NumPy, MuJoCo or Rerun is loaded
+@pytest.mark.parametrize("kib", [100_000, 300_000, 524_287])
+@pytest.mark.parametrize("command", [["presets"], ["episode", "--seconds", "0.5"], ["evolve", *TINY, "--out", "run"]])
+def test_too_little_address_space_is_one_line_naming_the_limit_the_minimum_and_the_fix(tmp_path, kib, command):
+    r = guarded(*command, memory=kib * 1024, cwd=tmp_path)
+    assert r.returncode == 2, r.stderr
+    one_line_error(r.stderr, f"may take {kib:,} KiB of address space (ulimit -v {kib})", "524,288 KiB (512 MiB)",
+                   "raise the limit (ulimit -v 524288)")
+    assert not list(tmp_path.iterdir())
+
+
+def test_the_least_address_space_runs_presets_and_an_episode(tmp_path):
+    from evobiped import MIN_ADDRESS_SPACE
+
+    walker = ROOT / "docs/walkers/ctrnn_walk_seed1.json"
+    for command in (["presets"], ["episode", "--genome", walker, "--seconds", "0.5"]):
+        r = guarded(*command, memory=MIN_ADDRESS_SPACE, cwd=tmp_path)
+        assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+
+
+def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_c_alone():
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (100_000 * 1024, 100_000 * 1024))
+
+    code = ("import signal, sys, evobiped; "
+            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, 'numpy' in sys.modules)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, preexec_fn=limit, timeout=60,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert (r.returncode, r.stdout, r.stderr) == (0, "True False\n", "")
+
+
+@pytest.mark.parametrize("kib, command", [
+    (524_288, ["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"]),
+    (600_000, ["evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run"])])
+def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in_one_line(tmp_path, kib, command):
+    """Rerun's and Arrow's libraries (replay, evolve's last files) need more than the 512 MiB the command starts in:
+    one line naming the limit and its fix, never a library's own traceback."""
+    r = guarded(*command, memory=kib * 1024, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    one_line_error(r.stderr, f"out of address space: this process may take {kib:,} KiB (ulimit -v {kib})",
+                   "raise the limit (ulimit -v unlimited)")
+
+
+def test_workers_that_cannot_load_their_libraries_die_quietly_and_the_run_names_the_limit(tmp_path):
+    """At 512 MiB a worker's numba and MuJoCo mostly do not fit (some runs they do: then the run completes)."""
+    from evobiped import MIN_ADDRESS_SPACE
+
+    r = guarded("evolve", *TINY, "--backend", "process", "--workers", "1", "--out", "run", memory=MIN_ADDRESS_SPACE,
+                cwd=tmp_path)
+    assert "Traceback" not in r.stderr and r.returncode in (0, 2), r.stderr
+    if r.returncode == 2:
+        last = r.stderr.strip().splitlines()[-1]
+        assert last.startswith("evobiped: error: ") and "(ulimit -v 524288)" in last, r.stderr

@@ -126,3 +126,19 @@ def test_a_pool_that_breaks_while_it_starts_its_workers_costs_a_retry(monkeypatc
         monkeypatch.setattr(broken, "submit", closed)
         assert same(ev.evaluate(g), want)
     assert retries == [1]
+
+
+def test_a_stopped_pool_leaves_no_manager_thread_for_the_interpreters_exit_to_wake():
+    """Python 3.11's exit wakes every pool's manager thread through a pipe the thread closes as it ends: a pool
+    whose workers died and that was stopped has its thread ended first, or the exit may write to the closed pipe
+    ("Exception ignored ... Bad file descriptor" after the command's last line)."""
+    from evobiped.evaluation.pool import spawn_pool, stop_pool
+
+    for _ in range(3):
+        pool = spawn_pool(1)
+        pool.submit(time.sleep, 0).result()
+        for p in list(pool._processes.values()):
+            os.kill(p.pid, signal.SIGKILL)
+        manager = pool._executor_manager_thread
+        stop_pool(pool)
+        assert not manager.is_alive()

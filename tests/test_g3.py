@@ -198,7 +198,8 @@ def test_cli_g3_reproduce_hands_the_folder_step_and_t_run_to_the_reproduction(tm
     from evobiped.experiments.g3 import g3_reproduce
 
     calls = []
-    monkeypatch.setattr(g3_reproduce, "reproduce_g3", lambda out, step, t_run: calls.append((out, step, t_run)))
+    monkeypatch.setattr(g3_reproduce, "reproduce_g3", lambda out, step, t_run, say=None:
+                        calls.append((out, step, t_run)))
     out = str(tmp_path / "made" / "g3")
     assert main(["g3", "--reproduce", out]) == 0
     assert main(["g3", "--reproduce", out, "--step", "0.05", "--t-run", "80"]) == 0

@@ -266,7 +266,8 @@ def test_cli_reproduce_runs_the_paper_into_the_folder(tmp_path, monkeypatch):
     from evobiped.experiments.taga import taga_reproduce
 
     calls = []
-    monkeypatch.setattr(taga_reproduce, "reproduce_taga", lambda out, quick, quiet: calls.append((out, quick, quiet)))
+    monkeypatch.setattr(taga_reproduce, "reproduce_taga", lambda out, quick, quiet, say=None:
+                        calls.append((out, quick, quiet)))
     assert main(["taga", "--reproduce", str(tmp_path / "r"), "--quick", "--quiet"]) == 0
     assert main(["taga", "--reproduce", str(tmp_path / "r")]) == 0
     assert calls == [(str(tmp_path / "r"), True, True), (str(tmp_path / "r"), False, False)] and (tmp_path / "r").is_dir()

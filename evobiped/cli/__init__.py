@@ -102,6 +102,24 @@ def descriptors_line() -> str:
             "fewer --workers")
 
 
+#: what a library that ran out of address space raises (NumPy's, MuJoCo's, numba's LLVM, Rerun's, Arrow's loaders)
+NO_SPACE = ("failed to map segment", "could not allocate memory", "cannot allocate memory",
+            "could not find/load shared object")
+
+
+def out_of_address_space(exc: BaseException) -> str | None:
+    """The line for ``exc`` when it is a library's failure to load or allocate under an address-space limit
+    (``ulimit -v``), else None: the limit and its fix."""
+    import resource
+
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    said = isinstance(exc, MemoryError) or any(w in str(exc).lower() for w in NO_SPACE)
+    if soft == resource.RLIM_INFINITY or not said:
+        return None
+    return (f"out of address space: this process may take {soft // 1024:,} KiB (ulimit -v {soft // 1024}), too little "
+            "for this command's libraries; raise the limit (ulimit -v unlimited)")
+
+
 def main(argv: list[str] | None = None) -> int:
     restore = lambda: None  # noqa: E731
     try:
@@ -128,6 +146,9 @@ def main(argv: list[str] | None = None) -> int:
             last_line(f"{ERROR}{descriptors_line()}")
             return 2
         if exc.filename is None:
+            if line := out_of_address_space(exc):
+                last_line(f"{ERROR}{line}")
+                return 2
             raise
         from pathlib import Path
 
@@ -141,9 +162,17 @@ def main(argv: list[str] | None = None) -> int:
         return exit_status(exc)
     except ImportError as exc:  # Ctrl-C inside an extension module's import (NumPy's, MuJoCo's) arrives as an ImportError
         if not _interrupted(exc):
+            if line := out_of_address_space(exc):
+                last_line(f"{ERROR}{line}")
+                return 2
             raise
         last_line("evobiped: interrupted")
         return 130
+    except Exception as exc:  # a library out of memory under ulimit -v (MuJoCo's FatalError, a MemoryError)
+        if line := out_of_address_space(exc):
+            last_line(f"{ERROR}{line}")
+            return 2
+        raise
     finally:
         restore()
         if argv is None:  # the command's own process: its work is done and said; a stop signal now would only cut

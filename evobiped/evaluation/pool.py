@@ -77,13 +77,34 @@ def _die_with(parent: int) -> None:
 PARENTS_SIGNALS = {signal.SIGINT, signal.SIGHUP}
 
 
+#: below this address space (bytes, ``ulimit -v``) a worker may die loading or compiling NumPy's, MuJoCo's and numba's
+#: code: it dies quietly (LLVM's own "Unable to allocate section memory!" included) and the parent names the limit
+FEW_BYTES = 2 * 2**30
+
+
+def _little_address_space() -> bool:
+    import resource
+
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    return soft != resource.RLIM_INFINITY and soft < FEW_BYTES
+
+
 def _start(parent: int, initializer: Callable | None, initargs: tuple) -> None:
     _die_with(parent)
+    if _little_address_space():  # its libraries' own abort messages would interleave with the parent's lines
+        quiet = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(quiet, 2)
+        os.close(quiet)
     for sig in PARENTS_SIGNALS:  # Ctrl-C and a closed terminal are the parent's to handle
         signal.signal(sig, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, PARENTS_SIGNALS)  # one that came while it started is dropped now
     if initializer is not None:
-        initializer(*initargs)
+        try:
+            initializer(*initargs)
+        except (ImportError, OSError, MemoryError):  # a library that cannot load under a low ulimit -v: die quietly,
+            if not _little_address_space():  # the parent names the limit when the pool breaks
+                raise
+            os._exit(1)
 
 
 def _quiet_resource_tracker() -> None:
@@ -128,9 +149,13 @@ def spawn_pool(workers: int, initializer: Callable | None = None, initargs: tupl
 def stop_pool(pool: ProcessPoolExecutor) -> None:
     """Stop ``pool`` now: cancel queued tasks, end running ones, wait for the processes to exit."""
     procs = list((getattr(pool, "_processes", None) or {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)  # shutdown forgets it
     pool.shutdown(wait=False, cancel_futures=True)
     for p in procs:
         if p.is_alive():
             p.terminate()
     for p in procs:
         p.join()
+    if manager is not None and manager is not threading.current_thread():
+        manager.join(timeout=5)  # its wakeup pipe closed now, not while the interpreter's exit wakes it (Python 3.11:
+        # a write to the pipe it closes meanwhile, "Exception ignored ... Bad file descriptor")

@@ -8,7 +8,7 @@ from ..episode import Episode, EpisodeConfig
 from ..episode.result import EpisodeResult
 from .base import RetryingEvaluator, evaluate_batch
 from .faults import FaultHook
-from .pool import spawn_pool, stop_pool
+from .pool import FEW_BYTES, spawn_pool, stop_pool
 
 # ---- in a worker process: its Episode and testing hook, set by the initializer
 _worker_episode: Episode | None = None
@@ -44,6 +44,11 @@ class ProcessPoolEvaluator(RetryingEvaluator):
         low = soft != resource.RLIM_INFINITY and soft < FEW_DESCRIPTORS
         files = (f"too many open files? this process may open {soft} (ulimit -n): raise the limit (ulimit -n 1024) or "
                  "give fewer --workers; ") if low else ""
+        space = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if space != resource.RLIM_INFINITY and space < FEW_BYTES:
+            files += (f"too little address space? each worker may take {space // 1024:,} KiB "
+                      f"(ulimit -v {space // 1024}): "
+                      "raise the limit (ulimit -v unlimited); ")
         return "evaluation workers died {n} times in one generation (" + files + "out of memory? killed?)"
 
     def __init__(self, episode: EpisodeConfig, workers: int, chunk: int | None = None, on_retry=None,

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 
-from ...flags import finite_float, positive_float, refuse, within
+from ...flags import finite_float, note, positive_float, refuse, within
 
 
 def add_g3(sub) -> None:
@@ -58,7 +59,8 @@ def _run_reproduce(args) -> int:
         raise UserError(f"--reproduce: cannot make the folder {args.reproduce}: {e.strerror}") from None
     from .g3_reproduce import reproduce_g3
 
-    reproduce_g3(args.reproduce, step=0.01 if args.step is None else args.step, t_run=200.0 if args.t_run is None else args.t_run)
+    step, t_run = 0.01 if args.step is None else args.step, 200.0 if args.t_run is None else args.t_run
+    reproduce_g3(args.reproduce, step=step, t_run=t_run, say=note)
     return 0
 
 
@@ -88,6 +90,8 @@ def run_g3_cmd(args) -> int:
             idx.append(int(c))
         else:
             raise ConfigError(f"--channels: unknown channel {c!r} (use {', '.join(g3.LIMBS)} or 0-3)")
+    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
+        refuse("--out", f"{args.out} exists and is not a directory")
     if args.channels is not None and not args.out:
         refuse("--channels", "it picks the channels of the diagrams; give --out DIR to draw them")
     if args.sweep:
@@ -108,9 +112,13 @@ def run_g3_cmd(args) -> int:
     rows = [{"go": float(lv), **g.as_dict()} for lv, g in zip(s.levels, s.gaits)]
     files = []
     if args.out:
-        from .g3_figures import sweep_figures
+        from ...files.rundir.output_set import output_set
+        from .g3_figures import sweep_figures, sweep_files
 
-        files = [str(f) for f in sweep_figures(args.out, f"g3_{pre.name}", s, idx, g3.LIMBS, title=f"G3 {pre.name} ({args.mode})")]
+        stem = f"g3_{pre.name}"
+        title = f"G3 {pre.name} ({args.mode})"
+        with output_set(f"g3 {pre.name}", sweep_files(Path(args.out), stem), say=note):  # no old run beside new plots
+            files = [str(f) for f in sweep_figures(args.out, stem, s, idx, g3.LIMBS, title=title)]
     if args.json:
         print(json.dumps({"preset": pre.name, "source": pre.source, "mode": args.mode, "levels": rows, "files": files}))
         return 0

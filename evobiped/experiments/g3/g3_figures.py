@@ -86,6 +86,12 @@ def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.
     return save_figure(fig, path, dpi=110)
 
 
+def sweep_files(out_dir: Path, stem: str) -> list[Path]:
+    """Every PNG :func:`sweep_figures` may write for ``stem`` (a level's run, the diagrams, frequency/duty): one set,
+    so a sweep of one level never leaves its run's figure beside another sweep's frequency plot."""
+    return [Path(out_dir) / f"{stem}_{kind}.png" for kind in ("run", "diagrams", "frequency")]
+
+
 def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0, max_diagrams: int = 12) -> list[Path]:
     """The PNGs of a :class:`~evobiped.experiments.g3.simulation.GoSweep`: each level's run (one level) or
     one diagram per level over the last ``span`` time units of its hold (at
@@ -94,10 +100,11 @@ def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     tr, names = sweep.traj, [names[c] for c in channels]
+    run_png, diagrams_png, frequency_png = sweep_files(out_dir, stem)
     written = []
     if len(sweep.levels) == 1:
         r = sweep.rows[0]
-        written.append(run_figure(out_dir / f"{stem}_run.png", tr.t, tr.x[r][:, channels], names,
+        written.append(run_figure(run_png, tr.t, tr.x[r][:, channels], names,
                                   title=f"{title}: I = {sweep.levels[0]:g}, {sweep.gaits[0].label}", go=tr.go[r]))
     xs, labels = [], []
     L = len(sweep.levels)
@@ -108,10 +115,11 @@ def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *
         xs.append(tr.x[r][m][:, channels])
         labels.append(f"I={lv:.3g}\n{g.label}")
     t = tr.t[: max(len(x) for x in xs)] - tr.t[0]
-    written.append(sweep_diagrams(out_dir / f"{stem}_diagrams.png", t, xs, labels, names, title=f"{title}: last {span:g} units of each level; bars top to bottom: {', '.join(names)}"))
+    heading = f"{title}: last {span:g} units of each level; bars top to bottom: {', '.join(names)}"
+    written.append(sweep_diagrams(diagrams_png, t, xs, labels, names, title=heading))
     if len(sweep.levels) > 1:
         freq = np.array([g.frequency for g in sweep.gaits])
         duty = np.array([np.mean(g.duty) for g in sweep.gaits])
-        written.append(frequency_figure(out_dir / f"{stem}_frequency.png", sweep.levels, freq, duty,
+        written.append(frequency_figure(frequency_png, sweep.levels, freq, duty,
                                         [g.label for g in sweep.gaits], title=title, duty_lines=(0.23, 0.31)))
     return written

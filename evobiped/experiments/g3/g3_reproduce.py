@@ -1,7 +1,9 @@
 """Pribe, Grossberg & Cohen 1997 (G3) checked claim by claim: ``evobiped g3 --reproduce DIR``; see docs/g3.md.
 
 Writes summary.json, one CSV per sweep and the PNG figures to DIR, and prints
-the numbers docs/g3.md quotes.  Takes ~1.5 minutes on one core.
+the numbers docs/g3.md quotes.  Takes ~1.5 minutes on one core.  The files are one
+set (:func:`~evobiped.files.rundir.output_set.output_set`, the files :func:`g3_outputs` names): the previous
+reproduction's are removed first, and a reproduction cut short is said by the next one.
 """
 
 from __future__ import annotations
@@ -14,10 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from ...core.fileio import atomic_write
+from ...files.rundir.output_set import output_set
 from . import gaits
 from . import network as g3net
 from . import simulation as g3sim
-from .g3_figures import run_figure, sweep_figures
+from .g3_figures import run_figure, sweep_figures, sweep_files
 
 
 def ranges(levels, labels):
@@ -52,11 +55,35 @@ def save_sweep(out: Path, name: str, s: g3sim.GoSweep, title: str) -> dict:
     }
 
 
-def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0) -> None:
+#: the human presets of claim 4, and the sweeps each starts from
+HUMAN, HUMAN_MODES = ("human", "human-lagged"), ("reset", "from_walk")
+#: the symmetric presets of claim 5 (and Fig. 7's)
+SYMMETRIC = ("fig5a", "fig5b", "fig7")
+
+
+def g3_outputs(out: str | Path) -> list[Path]:
+    """Every file :func:`reproduce_g3` may write into ``out``, whatever its ``step``: summary.json, each sweep's CSV
+    and figures, the single runs' figures."""
+    out = Path(out)
+    sweeps = ["claim2_fig8a_sweep", *(f"claim4_{n}_{m}" for n in HUMAN for m in HUMAN_MODES),
+              *(f"claim5_{n}_sweep" for n in SYMMETRIC)]
+    return [out / "summary.json", out / "claim1_fig4_walk.png", out / "claim3_fig8b_walk_to_pace.png",
+            *(out / f"claim4_{n}_fig10.png" for n in HUMAN),
+            *(p for s in sweeps for p in (out / f"{s}.csv", *sweep_files(out, s)))]
+
+
+def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0, say=None) -> None:
     """Every claim: the GO sweeps in increments of ``step`` (paper: 0.01), ``t_run`` time units per GO level of the
-    quadruped sweeps (steady state: the last 40 %); writes into ``out`` (made if missing)."""
+    quadruped sweeps (steady state: the last 40 %); writes into ``out`` (made if missing) as one set, the previous
+    one removed first; ``say(line)`` hears that the previous reproduction was cut short."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    with output_set("g3 reproduction", g3_outputs(out), say=say):
+        _claims(out, step, t_run)
+
+
+def _claims(out: Path, step: float, t_run: float) -> None:
+    """The claims of :func:`reproduce_g3`, each written into ``out`` as it is checked."""
     levels = np.round(np.arange(0.05, 0.5 + 1e-9, step), 6)
     summary: dict = {}
 
@@ -99,8 +126,8 @@ def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0) -> N
     # claim 4: human walk and run (faithful, then the tuned lags)
     hl = np.round(np.arange(0.05, 0.30 + 1e-9, step), 6)
     c4 = {}
-    for name in ("human", "human-lagged"):
-        for mode, kw in (("reset", {}), ("from_walk", {"from_go": 0.1, "switch_at": 30.0})):
+    for name in HUMAN:
+        for mode, kw in ((HUMAN_MODES[0], {}), (HUMAN_MODES[1], {"from_go": 0.1, "switch_at": 30.0})):
             s = g3sim.go_sweep(g3net.preset(name), hl, **kw)
             r = save_sweep(out, f"claim4_{name}_{mode}", s, f"Sect. 6 {name}: " + ("reset per I" if mode == "reset" else "from the walk at I = 0.1, switch at t = 30"))
             walk = [g for g in s.gaits if g.label == "walk" and max(g.duty) < 0.23]
@@ -112,7 +139,7 @@ def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0) -> N
             c4[f"{name}/{mode}"] = r
             print(f"claim 4 {name} {mode}: ranges {[(a, round(b, 3), round(c, 3)) for a, b, c in r['ranges']]}; walk duty max {r['walk_duty_max']}, "
                   f"run duty min {r['run_duty_min']}; walk freq {r['walk_freq']}, run freq {r['run_freq']}")
-    for name in ("human", "human-lagged"):  # Fig. 10: walk 0.1 -> 0.15 at t = 30
+    for name in HUMAN:  # Fig. 10: walk 0.1 -> 0.15 at t = 30
         tr = g3sim.simulate(g3net.preset(name).network, g3sim.go_schedule([[0.1, 0.15]], [0.0, 30.0]), 150.0)
         g = gaits.analyse_gait(tr.t, tr.x[0], t_start=90.0)
         c4[f"{name}/fig10"] = g.as_dict()
@@ -121,7 +148,7 @@ def reproduce_g3(out: str | Path, step: float = 0.01, t_run: float = 200.0) -> N
     summary["claim4"] = c4
 
     # claim 5: Fig. 5A / 5B, symmetric unmodulated
-    for name in ("fig5a", "fig5b", "fig7"):
+    for name in SYMMETRIC:
         s = g3sim.go_sweep(g3net.preset(name), levels, t_run=t_run)
         r = save_sweep(out, f"claim5_{name}_sweep", s, f"{g3net.preset(name).source}, reset per I")
         summary[f"claim5_{name}" if name != "fig7" else "fig7"] = r

@@ -7,7 +7,7 @@ import json
 import numpy as np
 
 from ...core.errors import UserError
-from ...flags import check_output_file, finite_float, positive_float, refuse, within
+from ...flags import check_output_file, finite_float, note, positive_float, refuse, within
 from ...core.progress import Progress
 
 
@@ -62,7 +62,7 @@ def _run_reproduce(args) -> int:
         raise UserError(f"--reproduce: cannot make the folder {args.reproduce}: {e.strerror}") from None
     from .taga_reproduce import reproduce_taga
 
-    reproduce_taga(args.reproduce, quick=args.quick, quiet=args.quiet)
+    reproduce_taga(args.reproduce, quick=args.quick, quiet=args.quiet, say=note)
     return 0
 
 

@@ -7,7 +7,9 @@ activity walking vs isolated (Fig. 6) and the u0 bifurcation diagrams
 (Fig. 11).  Progress lines go to stderr; docs/taga.md gives the running times.
 ``quick`` runs every part on coarser grids (fewer u0 values, push phases,
 slopes and ground parameters, no physics-step halving) to check the pipeline,
-not the numbers.
+not the numbers.  The files are one set (:func:`~evobiped.files.rundir.output_set.output_set`, the files
+:func:`taga_outputs` names, quick or not): the previous reproduction's are removed first, and one cut short is said by
+the next.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from ...core.fileio import atomic_write
 from ...core.progress import Progress
+from ...files.rundir.output_set import output_set
 from . import generator, protocols
 from . import taga_figures as fig
 from .stride import contact_onsets
@@ -51,10 +54,33 @@ def one_cycle(tr: dict, p: int, after: float) -> tuple[float, float]:
     return float(tr["t"][td[0]]), float(tr["t"][td[1]])
 
 
-def reproduce_taga(out: str | Path, quick: bool = False, quiet: bool = False) -> None:
-    """Run every experiment of the paper and write its tables and figures into ``out`` (made if missing)."""
+#: the slopes of claim 5 in %, and those of a quick run
+SLOPES, QUICK_SLOPES = (2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10), (4, 6, 8, -2, -6)
+#: the bodies pushed in claim 4 (Fig. 7) and their forces, N
+PUSHES = (("right_shank", 200.0), ("hip", 288.0))
+
+
+def taga_outputs(out: str | Path) -> list[Path]:
+    """Every file :func:`reproduce_taga` may write into ``out``, quick or not."""
+    out = Path(out)
+    names = ["taga_results.json", "summary.md", "fig5a_walk_u5.5.png", "fig5b_walk_cycle.png", "fig9a_run_u7.5.png",
+             "fig9b_run_cycle.png", "fig6_activity.png", "fig11_bifurcation.png",
+             *(f"fig7_push_{target}.png" for target, _ in PUSHES),
+             *(f"fig8_uphill_{s}pct.png" for s in sorted({*SLOPES, *QUICK_SLOPES}) if s > 0)]
+    return [out / n for n in names]
+
+
+def reproduce_taga(out: str | Path, quick: bool = False, quiet: bool = False, say=None) -> None:
+    """Run every experiment of the paper and write its tables and figures into ``out`` (made if missing) as one
+    set, the previous one removed first; ``say(line)`` hears that the previous reproduction was cut short."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    with output_set("taga reproduction", taga_outputs(out), say=say):
+        _experiments(out, quick, quiet)
+
+
+def _experiments(out: Path, quick: bool, quiet: bool) -> None:
+    """The experiments of :func:`reproduce_taga`, each figure written into ``out`` as it is drawn."""
 
     def progress(what: str, seconds: float):
         """A ``TagaWalker(progress=...)`` callback: progress lines over ``seconds`` of simulated time."""
@@ -108,7 +134,7 @@ def reproduce_taga(out: str | Path, quick: bool = False, quiet: bool = False) ->
     # ---- claim 4: pushes at phases of the cycle (Fig. 7)
     log("claim 4: pushes")
     delays = np.arange(0.0, 1.12, 0.2 if quick else 0.1)
-    for target, force in (("right_shank", 200.0), ("hip", 288.0)):
+    for target, force in PUSHES:
         wp, prow = protocols.push(target, force, delays, before=10.0, after=8.0, progress=progress(f"push {target}", 21.3))
         R[f"push_{target}"] = prow
         keys = ["delay", "t_push", "fell", "fell_at", "stride_length_before", "strides_to_recover"]
@@ -122,7 +148,7 @@ def reproduce_taga(out: str | Path, quick: bool = False, quiet: bool = False) ->
 
     # ---- claim 5: slopes (start at x = 5 m, after ~4 s of level walking)
     log("claim 5: slopes")
-    slopes = [2, 3, 4, 5, 6, 8, -1, -2, -4, -6, -10] if not quick else [4, 6, 8, -2, -6]
+    slopes = list(QUICK_SLOPES if quick else SLOPES)
     srows = []
     for s in slopes:
         ws, (m,) = protocols.steady(5.5, seconds=25.0, window=10.0, slope=s / 100, slope_start=5.0, progress=progress(f"slope {s} %", 25.0))
