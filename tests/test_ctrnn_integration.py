@@ -87,7 +87,7 @@ def test_euler_stays_the_default_and_no_stored_walker_names_another_integration(
     assert walkers
     for f in walkers:
         options = json.loads(f.read_text())["episode"].get("controller_options", {})
-        if f.name.startswith(("ctrnn_walk_", "ctrnn_command_")):
+        if f.name.startswith(("ctrnn_walk_", "ctrnn_command_", "ctrnn_stride_")):
             assert options["integration"] == "exponential", f.name
         else:
             assert "integration" not in options, f.name

@@ -142,3 +142,16 @@ def test_a_stopped_pool_leaves_no_manager_thread_for_the_interpreters_exit_to_wa
         manager = pool._executor_manager_thread
         stop_pool(pool)
         assert not manager.is_alive()
+
+
+def test_stopping_a_pool_whose_manager_thread_never_started_is_quiet():
+    """A Ctrl-C while a pool starts its manager thread leaves the thread made but not started: stopping the pool then
+    joins nothing (joining an unstarted thread raises)."""
+    import threading
+    from concurrent.futures import ProcessPoolExecutor
+
+    from evobiped.evaluation.pool import stop_pool
+
+    pool = ProcessPoolExecutor(1)
+    pool._executor_manager_thread = threading.Thread(target=lambda: None)
+    stop_pool(pool)  # no RuntimeError

@@ -75,7 +75,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..interface.contract import Needs
-from ..core.errors import ConfigError
+from ..core.errors import ConfigError, signals_deferred
 from ..interface.genome import GeneBlock, GenomeLayout
 from ..core.options import option
 from .base import Controller, ControllerOptions
@@ -232,7 +232,8 @@ class CTRNN(Controller):
         return sigmoid(A - params["alpha"])
 
     def compiled(self):
-        from . import ctrnn_kernel
+        with signals_deferred():  # its compiled step loads from numba's cache: a Ctrl-C waits until it has
+            from . import ctrnn_kernel
 
         other = copy.copy(self)
         other.step = functools.partial(ctrnn_kernel.step, other)

@@ -22,7 +22,7 @@ import functools
 
 import numpy as np
 
-from .errors import ConfigError
+from .errors import ConfigError, signals_deferred
 
 KERNELS = ("auto", "compiled", "numpy")
 #: the inner loop's C signature: ``void loop(char **args, npy_intp *dimensions, npy_intp *steps, void *data)``, its
@@ -85,7 +85,8 @@ def ufunc_loop(ufunc: np.ufunc) -> int | None:
 def unavailable() -> str | None:
     """Why the compiled kernel cannot run here (one line), or None where it can."""
     try:
-        import numba  # noqa: F401
+        with signals_deferred():  # a Ctrl-C inside LLVM's start-up can crash the process on its way out: after it
+            import numba  # noqa: F401
     except ImportError:
         return "the compiled kernel needs numba (pip install numba, a dependency of evobiped)"
     for f in (np.exp, np.arcsin):
@@ -110,6 +111,7 @@ def compiled(kernel: str, where: str = "episode.kernel") -> bool:
 def jit(fn):
     """``numba.njit(cache=True, nogil=True)``: compiled once per machine (the cache beside the module), runs without
     the GIL."""
-    import numba
+    with signals_deferred():
+        import numba
 
     return numba.njit(cache=True, nogil=True)(fn)

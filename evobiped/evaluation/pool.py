@@ -156,6 +156,7 @@ def stop_pool(pool: ProcessPoolExecutor) -> None:
             p.terminate()
     for p in procs:
         p.join()
-    if manager is not None and manager is not threading.current_thread():
+    # (a Ctrl-C while the pool started its manager can leave it made but never started: nothing to join then)
+    if manager is not None and manager is not threading.current_thread() and manager.ident is not None:
         manager.join(timeout=5)  # its wakeup pipe closed now, not while the interpreter's exit wakes it (Python 3.11:
         # a write to the pipe it closes meanwhile, "Exception ignored ... Bad file descriptor")
