@@ -13,28 +13,14 @@ from evobiped.run import Run, RunConfig
 from evobiped.run.stopping import Attempts, RestartOptions
 
 from .conftest import cli
-from .test_evolve import Stop, fitness_history
+from .test_evolve import fitness_history
+from .test_stopping import _evolve
 
 
 def _config(optimizer="ga", generations=10, **restart) -> RunConfig:
     tables = {"ga": {"population": 8}, "es": {"pairs": 3, "sigma": 0.05}}
     return RunConfig.from_dict({"episode": {"seconds": 1.0}, optimizer: tables[optimizer], "optimizer": optimizer,
                                 "generations": generations, "seed": 4, "backend": "serial", "restart": restart})
-
-
-def _evolve(path, config, stop_at=None) -> Run:
-    run = Run.create(path, config)
-
-    def hook(stats):
-        if stats.generation == stop_at:
-            raise Stop
-
-    with make_evaluator(config.episode, "serial") as ev:
-        try:
-            run.evolve(ev, hook)
-        except Stop:
-            pass
-    return run
 
 
 def test_a_phase_is_lost_when_it_takes_its_patience_and_a_restart_begins_its_count_again():

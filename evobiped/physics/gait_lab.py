@@ -223,7 +223,9 @@ class GaitMeter:
         self.names = terms(sampling, self.feet)
         self.dt = np.nan  # s per sample: the simulation clock's advance at the first tick over its samples
         self._start_time = float(start_time)
-        self.series: dict[str, list[np.ndarray]] = {k: [] for k in FIELDS}
+        # the torques only where a measure reads them (torque_cost: physics_step), none kept per tick otherwise
+        kept = FIELDS if sampling == "physics_step" else tuple(k for k in FIELDS if k != "torque")
+        self.series: dict[str, list[np.ndarray]] = {k: [] for k in kept}
         self.ticked: list[np.ndarray] = []  # per tick: which rows were sampled
         self._measured: tuple[int, dict] | None = None
 
