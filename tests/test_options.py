@@ -49,7 +49,7 @@ BAD = [
     (dict(controller_options={"n_neurons": 0}), "episode.controller_options.n_neurons: must be in [1, 1000], got 0"),
     (dict(controller_options={"time_constants": [0.005, 1.0]}), "episode.controller_options: time_constants must be [low, high]"),
     (dict(controller="matsuoka", controller_options={"feedback": "yes"}),
-     "episode.controller_options.feedback: must be one of auto, taga, none, got 'yes'"),
+     "episode.controller_options.feedback: must be one of auto, taga, senses, none, got 'yes'"),
     (dict(controller="g3", controller_options={"go": [[1.0, 0.1], [0.5, 0.2]]}), "episode.controller_options.go: go schedule times must increase"),
     (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option (choose from dt, sound_limit, inputs, genes, latency, frame, input_norm)"),
     (dict(task_options={"fitness": "forward", "cyclic_weight": 1.0}), "episode.task_options: the cyclic criterion multiplies eq. 4"),

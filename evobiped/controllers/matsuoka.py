@@ -17,7 +17,12 @@ joint of each leg its hip.  Connections (Appendix D, Fig. 3):
 Feedback: on a body with the sensors ``link_angles``, ``link_velocities`` and
 ``ground_contact`` (the Taga biped) the Appendix C pathways Feed_1..Feed_12
 (with F_eed6 = a_5 (x_14 - pi/2) h(F_g4): the printed ``a_5(x_14 pi/2)`` is a
-transcription slip), otherwise Feed = 0.  Forward Euler at the control period
+transcription slip), otherwise Feed = 0.  ``feedback = "senses"`` feeds any body's senses instead: the
+controller's inputs x ``(k,)`` (the senses it is wired to, normalised, in the stance frame where ``frame``
+says so) through an evolvable gain matrix K ``(n_osc, k)``, push-pull as Appendix C's pathways are: oscillator
+o's flexor receives +(K x)_o and its extensor -(K x)_o.  With foot contacts, the time since touch-down and
+the pelvis' tilt among the inputs these are the paper's kinds of pathway (touch-down resetting the hips'
+phase, posture terms) with their gains and signs evolved.  Forward Euler at the control period
 (the physics step by default: tau = 0.025 s over dt = 0.5 ms).  The initial
 state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
 second leg's extensors there, e.g. for the isolated generator, which from an
@@ -25,7 +30,8 @@ exactly symmetric state settles to its fixed point instead of oscillating).
 
 Genome blocks (Taga's Appendix D values: :mod:`evobiped.experiments.taga.parameters`): per-oscillator
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
-``w_hka``; with feedback, ``feedback`` = a_1..a_8.  The tonic input u_0 is a
+``w_hka``; with Taga's feedback, ``feedback`` = a_1..a_8; with the senses', ``sense_gain`` = K row-major
+(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about.  The tonic input u_0 is a
 structure option (the experiments' control parameter), not a gene.
 """
 
@@ -59,6 +65,8 @@ BLOCKS = {
     "w_rl": dict(low=-10.0, high=0.0, init_mean=-1.0, init_sigma=0.5, mutation_sigma=0.5),
     "w_hka": dict(low=-10.0, high=0.0, init_mean=-1.0, init_sigma=0.5, mutation_sigma=0.5),
     "feedback": dict(low=0.0, high=10.0, init_mean=2.0, init_sigma=1.0, mutation_sigma=0.5),
+    "bias": dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05),
+    "sense_gain": dict(low=-2.0, high=2.0, init_mean=0.0, init_sigma=0.1, mutation_sigma=0.1),
 }
 
 
@@ -95,8 +103,14 @@ class MatsuokaOptions(ControllerOptions):
     """Options of the matsuoka controller."""
 
     u0: float = option(5.5, "tonic input u_0 (the experiments' speed control)", low=0)
-    feedback: str = option("auto", "Appendix C feedback: `taga` (required), `none`, or `auto` (where the body has Taga's "
-                           "legs and sensors)", choices=("auto", "taga", "none"))
+    feedback: str = option("auto", "Appendix C feedback: `taga` (required), `none`, `auto` (where the body has Taga's "
+                           "legs and sensors), or `senses`: any body's normalised senses through evolved gains",
+                           choices=("auto", "taga", "senses", "none"))
+    output: str = option("signed", "what p_e y_e - p_f y_f is to the body: `signed` (a torque, or a PD target "
+                         "centred on the joint's range), `angle` (a PD target in rad: 0 is the standing pose)",
+                         choices=("signed", "angle"))
+    reflex: bool = option(False, "with `senses` feedback and `angle` output: the senses also reach each joint's "
+                          "target directly through evolved gains R (a posture reflex beside the rhythm)")
     initial_u: float = option(0.0, "initial u of the first leg's flexors and the second leg's extensors")
     dt: float | None = option(None, "control period (none: the physics step)", unit="s", above=0)
 
@@ -114,6 +128,8 @@ class Matsuoka(Controller):
         taga = Needs(sensors=FEEDBACK_SENSORS, joints=TAGA_JOINTS)
         if options.feedback == "taga":
             return Needs(sensors=FEEDBACK_SENSORS, joints=TAGA_JOINTS, paired_legs=True)
+        if options.feedback == "senses":
+            return Needs(task_sensors=True, paired_legs=True, normalised=True)
         return Needs(paired_legs=True, optional=taga if options.feedback == "auto" else None)
 
     def __init__(self, options: MatsuokaOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
@@ -124,7 +140,10 @@ class Matsuoka(Controller):
         # takes the feedback where the wiring gave its sensors
         taga_body = actuators is not None and problem(Needs(joints=TAGA_JOINTS), Offer(actuators, {})) is None
         has = taga_body and all(s in inputs for s in FEEDBACK_SENSORS)
-        self.feedback = "taga" if (o.feedback == "taga" or (o.feedback == "auto" and has)) else "none"
+        self.feedback = ("taga" if (o.feedback == "taga" or (o.feedback == "auto" and has))
+                         else "senses" if o.feedback == "senses" else "none")
+        self.normalises_inputs = self.feedback == "senses"
+        self.output_kind = o.output
         u0, initial_u, dt = o.u0, o.initial_u, o.dt
         self.n_outputs = self.n_osc = int(n_outputs)
         self.n = 2 * self.n_osc
@@ -136,8 +155,18 @@ class Matsuoka(Controller):
         n_osc = self.n_osc
         blocks = [GeneBlock(name=b, size=n_osc, **BLOCKS[b]) for b in ("tau", "tau_adapt", "p_e", "p_f")]
         blocks += [GeneBlock(name=b, size=1, **BLOCKS[b]) for b in ("beta", "w_fe", "w_rl", "w_hka")]
+        self.n_inputs = int(sum(inputs.values()))
+        if self.output_kind == "angle":  # each joint's posture: the target (rad) its oscillator swings about
+            blocks.append(GeneBlock(name="bias", size=n_osc, **BLOCKS["bias"]))
         if self.feedback == "taga":
             blocks.append(GeneBlock(name="feedback", size=8, **BLOCKS["feedback"]))
+        elif self.feedback == "senses":
+            blocks.append(GeneBlock(name="sense_gain", size=n_osc * self.n_inputs, **BLOCKS["sense_gain"]))
+        self.reflex = bool(o.reflex)
+        if self.reflex:
+            if self.feedback != "senses" or self.output_kind != "angle":
+                raise ConfigError("matsuoka: reflex needs feedback = \"senses\" and output = \"angle\"")
+            blocks.append(GeneBlock(name="reflex_gain", size=n_osc * self.n_inputs, **BLOCKS["sense_gain"]))
         self._layout = GenomeLayout(tuple(blocks))
         # Taga's neuron k (0-based) sits at internal index _taga_order[k]: his oscillators are the
         # hips, the knees, the ankles, the first leg's before the second's
@@ -173,9 +202,14 @@ class Matsuoka(Controller):
         for hip in hips:
             for o in range(hip + 1, hip + half):
                 W[:, 2 * o + 1, 2 * hip] = W[:, 2 * o + 1, 2 * hip + 1] = g["w_hka"][:, 0]
-        out = dict(W=W, tau=rep(g["tau"]), tau_adapt=rep(g["tau_adapt"]), beta=g["beta"], p_e=g["p_e"], p_f=g["p_f"])
+        out = dict(W=W, tau=rep(g["tau"]), tau_adapt=rep(g["tau_adapt"]), beta=g["beta"], p_e=g["p_e"], p_f=g["p_f"],
+                   bias=g["bias"] if "bias" in g else np.zeros((P, self.n_osc)))
         out["u0"] = np.full((P, 1), self.u0)
         out["a"] = g["feedback"] if self.feedback == "taga" else np.zeros((P, 8))
+        if self.feedback == "senses":
+            out["K"] = g["sense_gain"].reshape(P, self.n_osc, self.n_inputs)
+        if self.reflex:
+            out["R"] = g["reflex_gain"].reshape(P, self.n_osc, self.n_inputs)
         return out
 
     # ------------------------------------------------------------ dynamics
@@ -191,6 +225,10 @@ class Matsuoka(Controller):
         """Feed_i ``(P, n)`` in internal neuron order (0 without feedback)."""
         P = inputs.shape[0]
         out = np.zeros((P, self.n))
+        if self.feedback == "senses":  # push-pull: +K x to each flexor, -K x to its extensor
+            f = np.einsum("pok,pk->po", params["K"], inputs)
+            out[:, 0::2], out[:, 1::2] = f, -f
+            return out
         if self.feedback != "taga":
             return out
         cols, start = {}, 0
@@ -202,8 +240,9 @@ class Matsuoka(Controller):
         return out
 
     def torques(self, params: dict[str, np.ndarray], y: np.ndarray) -> np.ndarray:
-        """``p_e y_e - p_f y_f`` per oscillator ``(P, n_osc)``."""
-        return params["p_e"] * y[:, 1::2] - params["p_f"] * y[:, 0::2]
+        """``p_e y_e - p_f y_f`` (plus the posture ``bias`` with ``output = "angle"``) per oscillator ``(P, n_osc)``."""
+        out = params["p_e"] * y[:, 1::2] - params["p_f"] * y[:, 0::2]
+        return out + params["bias"] if self.output_kind == "angle" else out
 
     def step(self, params, state, inputs):
         if self.period is None:
@@ -211,6 +250,8 @@ class Matsuoka(Controller):
         u, v = state["u"], state["v"]
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)
+        if self.reflex:
+            out = out + np.einsum("pok,pk->po", params["R"], inputs)
         net = (params["W"] * y[:, None, :]).sum(axis=2)
         du = (-u + net - params["beta"] * v + params["u0"] + self.feed(params, inputs)) / params["tau"]
         dv = (-v + y) / params["tau_adapt"]

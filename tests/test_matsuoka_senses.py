@@ -1,0 +1,104 @@
+"""Matsuoka's rhythm generator fed back by any body's senses (``feedback = "senses"``) and driving PD targets in
+rad (``output = "angle"``): the feed against an independent computation, the push-pull pathways, zero gains as no
+feedback to the last bit, and the senses changing the walker."""
+
+import numpy as np
+import pytest
+
+from evobiped.episode import EpisodeConfig
+
+INPUTS = ["joint_angles", "joint_velocities", "foot_contact", "pelvis_tilt", "pelvis_tilt_rate", "since_touchdown"]
+
+
+def _config(feedback="senses", output="angle", seconds=1.0):
+    return EpisodeConfig(body="reil", controller="matsuoka", seconds=seconds,
+                         controller_options={"feedback": feedback, "output": output, "u0": 1.0, "dt": 0.01,
+                                             "inputs": INPUTS})
+
+
+def _genome(ctrl, rng, **blocks):
+    """The layout's initial means, with named blocks set to ``blocks``' values (scalars or arrays)."""
+    parts = []
+    for b in ctrl.layout.blocks:
+        v = np.full(b.size, b.init_mean) if b.name not in blocks else np.broadcast_to(blocks[b.name], (b.size,))
+        parts.append(np.asarray(v, float))
+    return np.concatenate(parts)
+
+
+def test_senses_feed_each_oscillator_push_pull_through_its_gains():
+    ep = _config().build()
+    c = ep.controller
+    assert c.feedback == "senses" and c.normalises_inputs and c.output_kind == "angle"
+    k = c.n_inputs
+    assert list(c.input_names) == INPUTS and k == sum(c._widths.values()) == 19 and [b.name for b in c.layout.blocks][-2:] == ["bias", "sense_gain"]
+    rng = np.random.default_rng(3)
+    gains = rng.uniform(-1, 1, (2, c.n_osc * k))
+    G = np.stack([_genome(c, rng, sense_gain=g) for g in gains])
+    params = c.decode(G)
+    x = rng.normal(size=(2, k))
+    feed = c.feed(params, x)
+    for p in range(2):  # independently: oscillator o's flexor (neuron 2o) gets +sum_i K[o, i] x_i, its extensor -
+        K = gains[p].reshape(c.n_osc, k)
+        for o in range(c.n_osc):
+            want = sum(K[o, i] * x[p, i] for i in range(k))
+            assert feed[p, 2 * o] == pytest.approx(want, abs=1e-12)
+            assert feed[p, 2 * o + 1] == pytest.approx(-want, abs=1e-12)
+
+
+def test_zero_gains_are_no_feedback_to_the_last_bit_and_gains_change_the_walk():
+    rng = np.random.default_rng(0)
+    with_senses, without = _config(seconds=1.5).build(), _config("none", seconds=1.5).build()
+    g = _genome(with_senses.controller, rng, sense_gain=0.0, p_e=0.3, p_f=0.3)
+    plain = np.concatenate([g[:without.controller.layout.size]])  # the same genes before the gains
+    a, b = with_senses.run(g[None]), without.run(plain[None])
+    assert np.array_equal(a.end_time, b.end_time) and np.array_equal(a.fitness, b.fitness)
+    assert np.array_equal(a.end_position, b.end_position)
+    gains = rng.uniform(-1, 1, with_senses.controller.n_osc * with_senses.controller.n_inputs)
+    c = with_senses.run(_genome(with_senses.controller, rng, sense_gain=gains, p_e=0.3, p_f=0.3)[None])
+    assert not np.array_equal(c.end_position, a.end_position)
+
+
+def test_angle_output_is_the_pd_target_in_rad_about_the_posture_bias():
+    ep = _config().build()
+    c = ep.controller
+    rng = np.random.default_rng(1)
+    bias = np.array([0.1, -0.05, 0.4, -0.2, 0.05, 0.3])
+    params = c.decode(_genome(c, rng, bias=bias, p_e=0.7, p_f=0.2)[None])
+    y = np.abs(rng.normal(size=(1, c.n)))
+    out = c.torques(params, y)
+    assert np.allclose(out[0], 0.7 * y[0, 1::2] - 0.2 * y[0, 0::2] + bias, atol=1e-14)
+    seen = []
+
+    class Grab:
+        def start(self, episode, sims): ...
+        def tick(self, t, sims, ids, neurons, action, task_state):
+            seen.append(action[0].copy())
+        def end(self, result): ...
+
+    still = _genome(c, rng, bias=bias, p_e=0.0, p_f=0.0)
+    ep.run(still[None], listener=Grab())
+    assert np.allclose(seen[0], np.clip(bias, ep.low, ep.high))  # no rhythm: the targets are the posture
+
+
+def test_senses_need_declared_scales_and_signed_output_is_unchanged():
+    signed = _config(output="signed").build().controller
+    assert "bias" not in [b.name for b in signed.layout.blocks] and signed.output_kind == "signed"
+    assert _config("none", "signed").build().controller.normalises_inputs is False
+
+
+def test_reflex_adds_the_senses_to_each_target_and_needs_senses_and_angles():
+    from evobiped.core.errors import ConfigError
+
+    cfg = EpisodeConfig(body="reil", controller="matsuoka", seconds=1.0,
+                        controller_options={"feedback": "senses", "output": "angle", "reflex": True, "dt": 0.01,
+                                            "inputs": INPUTS})
+    c = cfg.build().controller
+    rng = np.random.default_rng(2)
+    R = rng.uniform(-1, 1, c.n_osc * c.n_inputs)
+    params = c.decode(_genome(c, rng, reflex_gain=R, p_e=0.0, p_f=0.0, bias=0.1)[None])
+    x = rng.normal(size=(1, c.n_inputs))
+    _, out = c.step(params, c.initial_state(params), x)
+    assert np.allclose(out[0], 0.1 + R.reshape(c.n_osc, c.n_inputs) @ x[0], atol=1e-12)
+    with pytest.raises(ConfigError, match="reflex needs"):
+        EpisodeConfig(body="reil", controller="matsuoka",
+                      controller_options={"feedback": "none", "output": "angle", "reflex": True}).build()
