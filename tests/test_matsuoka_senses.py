@@ -102,3 +102,33 @@ def test_reflex_adds_the_senses_to_each_target_and_needs_senses_and_angles():
     with pytest.raises(ConfigError, match="reflex needs"):
         EpisodeConfig(body="reil", controller="matsuoka",
                       controller_options={"feedback": "none", "output": "angle", "reflex": True}).build()
+
+
+def _g3(feedback="senses", seconds=1.0):
+    opts = {"feedback": feedback, "go": 0.1} | ({"inputs": INPUTS} if feedback == "senses" else {})
+    return EpisodeConfig(body="reil", controller="g3", seconds=seconds, controller_options=opts)
+
+
+def test_g3_senses_reach_each_channels_input_and_zero_gains_are_the_go_signal_alone():
+    from evobiped.controllers.g3_network import rk4_step
+
+    ep = _g3().build()
+    c = ep.controller
+    assert c.normalises_inputs and c.n_inputs == 19 and c.layout.blocks[-1].name == "sense_gain"
+    rng = np.random.default_rng(4)
+    K = rng.uniform(-1, 1, c.n * c.n_inputs)
+    params = c.decode(_genome(c, rng, sense_gain=K)[None])
+    x = rng.normal(size=(1, c.n_inputs))
+    state = {"x": np.full((1, c.n), 0.1), "y": np.zeros((1, c.n)), "k": 0}
+    got, _ = c.step(params, state, x)
+    xx, yy = state["x"], state["y"]
+    feed = K.reshape(c.n, c.n_inputs) @ x[0]
+    for s in range(c.substeps):  # independently: I = [GO + K x]^+ at each RK4 substep
+        I = np.maximum(c.go_at(s - c.lag_steps)[None, :] + feed[None, :], 0.0)
+        xx, yy = rk4_step(c.cells, xx, yy, I, params["D"], c.h)
+    assert np.allclose(got["x"], xx, rtol=0, atol=1e-12) and np.allclose(got["y"], yy, rtol=0, atol=1e-12)
+    assert not np.allclose(got["x"], c.step(c.decode(_genome(c, rng, sense_gain=0.0)[None]), state, x)[0]["x"])
+    plain = _g3("none", seconds=1.5).build()
+    g = _genome(c, rng, sense_gain=0.0)
+    a, b = _g3(seconds=1.5).build().run(g[None]), plain.run(g[None, :plain.controller.layout.size])
+    assert np.array_equal(a.end_position, b.end_position) and np.array_equal(a.fitness, b.fitness)

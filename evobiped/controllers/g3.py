@@ -10,6 +10,11 @@ class drives any body.  Evolvable (the genome):
   o_k = clip(offset_k + gain_k x_k, 0, 1) ("unit" output: a PD target
   low + o (high - low) for the Reil body, or a torque for torque bodies).
 
+With ``feedback = "senses"`` the body feeds back into it: the controller's inputs x ``(k,)`` (the senses it is
+wired to, normalised, in the stance frame where ``frame`` says so) reach channel k's excitatory input through
+evolved gains, I_k = [GO_k + (K x)_k]^+ held over each control period (``sense_gain``: K ``(N, k)`` row-major),
+so touch-downs and the trunk's tilt can reset and shape the rhythm as Taga's pathways do his.
+
 Fixed (options): the cell constants A-G2 of a preset (default ``fig4``); the GO
 signal ``go``, either a level or a schedule ``[[t_s, level], ...]`` (seconds from
 the episode start; the level is 0 before the first entry), so a user can speed
@@ -43,6 +48,7 @@ SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1
 COUPLING = dict(low=0.0, high=1.5, init_mean=0.15, init_sigma=0.1, mutation_sigma=0.05)
 GAIN = dict(low=-2.0, high=2.0, init_mean=0.0, init_sigma=1.0, mutation_sigma=0.3)
 OFFSET = dict(low=0.0, high=1.0, init_mean=0.5, init_sigma=0.2, mutation_sigma=0.1)
+SENSE_GAIN = dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05)
 
 
 def _schedule(go) -> tuple[np.ndarray, np.ndarray]:
@@ -75,6 +81,8 @@ class G3Options(ControllerOptions):
     time_scale: float = option(10.0, "model time units per second of simulated time", unit="1/s", above=0)
     max_step: float = option(0.05, "largest RK4 step", unit="model time", above=0)
     preset: str = option("fig4", "cell constants A-G2 of this published parameter set", choices=tuple(CELLS))
+    feedback: str = option("none", "`none`: the GO signal alone drives it; `senses`: the body's normalised senses "
+                           "also reach each channel's input through evolved gains", choices=("none", "senses"))
 
 
 class G3Controller(Controller):
@@ -87,18 +95,26 @@ class G3Controller(Controller):
 
     @classmethod
     def needs(cls, options: G3Options) -> Needs:
-        """Any body; no sensors (the GO signal is an option)."""
+        """Any body; no sensors (the GO signal is an option), or with ``feedback = "senses"`` the task's and the
+        ``inputs`` option's, normalised."""
+        if options.feedback == "senses":
+            return Needs(task_sensors=True, normalised=True)
         return Needs(deaf=True)
 
     def __init__(self, options: G3Options | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
         o = self.options = self.own_options(options, given)
         dt, go, lag, time_scale, max_step, preset = o.dt, o.go, o.lag, o.time_scale, o.max_step, o.preset
-        if inputs:
-            raise ConfigError(f"g3: takes no sensor inputs (got {sorted(inputs)}); its GO signal is the 'go' option")
+        inputs = dict(inputs or {})
+        self.feedback = o.feedback
+        if inputs and self.feedback != "senses":
+            raise ConfigError(f"g3: takes no sensor inputs (got {sorted(inputs)}) without feedback = \"senses\"; "
+                              "its GO signal is the 'go' option")
+        self.normalises_inputs = self.feedback == "senses"
         if n_outputs < 1:
             raise ConfigError("g3: needs at least one output channel")
         self.n_outputs = self.n = int(n_outputs)
-        self.input_names = ()
+        self.input_names = tuple(inputs)
+        self.n_inputs = int(sum(inputs.values()))
         self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)
         self.go_times, self.go_levels = _schedule(go)
         self.cells = CELLS[preset]
@@ -115,6 +131,7 @@ class G3Controller(Controller):
                 GeneBlock(name="gain", size=n, **GAIN),
                 GeneBlock(name="offset", size=n, **OFFSET),
             )
+            + ((GeneBlock(name="sense_gain", size=n * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses" else ())
         )
 
     @property
@@ -128,7 +145,10 @@ class G3Controller(Controller):
         off = ~np.eye(n, dtype=bool)
         D[:, off] = p["coupling"]
         D[:, np.arange(n), np.arange(n)] = p["self_inhibition"]
-        return {"D": D, "gain": p["gain"], "offset": p["offset"]}
+        out = {"D": D, "gain": p["gain"], "offset": p["offset"]}
+        if self.feedback == "senses":
+            out["K"] = p["sense_gain"].reshape(P, n, self.n_inputs)
+        return out
 
     def initial_state(self, params: dict[str, np.ndarray]) -> dict:
         """x, y ``(P, N)`` zero (the paper's resting start) and the internal step count k."""
@@ -148,8 +168,11 @@ class G3Controller(Controller):
     def step(self, params, state, inputs):
         x, y, k = state["x"], state["y"], state["k"]
         out = self.outputs_of(params, x)
+        feed = np.einsum("pnk,pk->pn", params["K"], inputs) if self.feedback == "senses" else None
         for s in range(self.substeps):
             I = self.go_at(k + s - self.lag_steps)[None, :]  # (1, N); 0 before it arrives
+            if feed is not None:  # an excitatory input: not below 0
+                I = np.maximum(I + feed, 0.0)
             x, y = rk4_step(self.cells, x, y, I, params["D"], self.h)
         return {"x": x, "y": y, "k": k + self.substeps}, out
 
