@@ -1,6 +1,6 @@
-"""Matsuoka's rhythm generator fed back by any body's senses (``feedback = "senses"``) and driving PD targets in
-rad (``output = "angle"``): the feed against an independent computation, the push-pull pathways, zero gains as no
-feedback to the last bit, and the senses changing the walker."""
+"""The rhythm generators fed back by any body's senses: Matsuoka's (``feedback = "senses"``, PD targets in rad with
+``output = "angle"``, a direct ``reflex``) and G3's (``feedback = "senses"``): each feed against an independent
+computation, the push-pull pathways, zero gains as no feedback to the last bit, and the senses changing the walker."""
 
 import numpy as np
 import pytest
