@@ -123,16 +123,26 @@ def settings_of(block: str, before: dict | None) -> dict:
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
-def test_every_toml_block_in_the_docs_is_accepted_as_evobiped_reads_it(page):
+def test_every_toml_block_in_the_docs_is_accepted_as_evobiped_reads_it(page, tmp_path):
     """A settings file shown in the docs can be pasted as it stands: an evolve settings file (or a distill one) that
-    ``evolve --config`` (``distill --config``) accepts, every name declared and every value in range."""
+    ``evolve --config`` (``distill --config``) accepts, every name declared and every value in range; a body
+    declaration that declares the box biped's model as it stands."""
+    import shutil
+
+    from evobiped.bodies import body_class
     from evobiped.core.errors import UserError
+    from evobiped.physics.models import model_path
     from evobiped.run import RunConfig
 
     before = None
     for block in toml_blocks(page.read_text()):
         table = settings_of(block, before)
         try:
+            if "legs" in table:  # a body declaration: of the box biped's model, beside a copy of it
+                shutil.copy(model_path("box_biped"), tmp_path / "declared.xml")
+                (tmp_path / "declared.toml").write_text(block)
+                body_class(f"mjcf:{tmp_path / 'declared.xml'}")
+                continue
             if "distill" in table:
                 from evobiped.distill.settings import parse_options
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..physics import gait
-from ..bodies import BODIES
+from ..bodies import body_class
 from ..episode import EpisodeConfig
 from ..core.errors import ConfigError
 from ..core.options import option, parse
@@ -61,7 +61,7 @@ def student_config(teacher_cfg: EpisodeConfig, overrides: dict[str, Any] | None 
     controller with :data:`STUDENT` (and ``overrides``) reading every sensor the body declares a standing value for
     but the gait senses (:mod:`evobiped.physics.gait`: the teacher's phase is learnt from the instantaneous senses;
     ``inputs`` in ``overrides`` adds them); no latency, no perturbations."""
-    senses = [n for n in BODIES[teacher_cfg.body].sensor_norms if n not in gait.NAMES]
+    senses = [n for n in body_class(teacher_cfg.body).sensor_norms if n not in gait.NAMES]
     opts = {**STUDENT, "inputs": senses, **(overrides or {})}
     if isinstance(opts.get("n_neurons"), (int, float)) and not isinstance(opts["n_neurons"], bool) and opts["n_neurons"] <= 0:
         raise ConfigError(f"student n_neurons must be > 0, got {opts['n_neurons']}")

@@ -8,7 +8,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..bodies import BODIES
+from ..bodies import DECLARED, body_class, declared_name
 from ..bodies.base import Body
 from ..controllers import CONTROLLERS
 from ..controllers.base import Controller, ControllerOptions
@@ -60,7 +60,10 @@ class EpisodeConfig:
     kernel: str = "auto"
 
     def __post_init__(self):
-        for kind, name, reg in (("body", self.body, BODIES), ("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
+        if isinstance(self.body, str) and self.body.startswith(DECLARED):  # a file's: found from any directory
+            object.__setattr__(self, "body", declared_name(self.body))
+        body_cls = body_class(self.body)
+        for kind, name, reg in (("controller", self.controller, CONTROLLERS), ("task", self.task, TASKS)):
             if name not in reg and not (kind == "controller" and name is None):
                 raise ConfigError(f"episode.{kind}: unknown {kind} {name!r} (choose from {', '.join(sorted(reg))})")
         number(self.seconds, "episode.seconds:", above=0, unit="s")
@@ -80,7 +83,7 @@ class EpisodeConfig:
         if self.controller is None and self.controller_options is None:
             object.__setattr__(self, "controller_options", {})
         ctrl_cls = ControllerOptions if self.controller is None else CONTROLLERS[self.controller].Options
-        for name, cls in (("body_options", BODIES[self.body].Options), ("controller_options", ctrl_cls),
+        for name, cls in (("body_options", body_cls.Options), ("controller_options", ctrl_cls),
                           ("task_options", TASKS[self.task].Options), ("perturbations", PerturbationOptions)):
             object.__setattr__(self, name, parsed(cls, getattr(self, name), f"episode.{name}"))
 

@@ -17,7 +17,7 @@ from typing import Any, Callable, Hashable
 
 import numpy as np
 
-from ..bodies import BODIES
+from ..bodies import body_class
 from ..bodies.base import Body
 from ..interface.contract import Offer, normaliser, wire
 from ..controllers import CONTROLLERS
@@ -87,7 +87,7 @@ def parsed(cls: type, table: Any, where: str) -> Any:
 def body_part(name: str, options: Any) -> tuple[Body, Hashable]:
     """The body ``name`` with its parsed ``options``, and its key."""
     key = (name, table_key(options))
-    return _BODIES.get(key, lambda: BODIES[name](options)), key
+    return _BODIES.get(key, lambda: body_class(name)(options)), key
 
 
 def task_part(name: str, options: Any, body_key: Hashable) -> tuple[Task, Hashable]:

@@ -32,7 +32,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ..bodies import BODIES
+from ..bodies import body_class
 from ..core.errors import UserError
 from ..core.fileio import atomic_write
 from ..core.glbackend import no_backend_message
@@ -113,7 +113,7 @@ class FrameRenderer:
         row = int(min(np.searchsorted(traj.state_time, t - 1e-9), len(traj.state_time) - 1))
         d.qpos[:] = traj.qpos[row]
         mujoco.mj_forward(m, d)
-        trunk = m.body(BODIES[traj.body_name].trunk).id
+        trunk = m.body(body_class(traj.body_name).trunk).id
         # the world's lights travel with the walker: a light's shadow map covers only the ground around the light,
         # so a light left at the origin casts no shadow of a walker a few metres on (foot contact unseen)
         world = m.light_bodyid == 0

@@ -19,7 +19,7 @@ def add_evolve(sub) -> None:
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
     p.add_argument("--optimizer", choices=tuple(OPTIMIZERS), help=f"{described(quote='')}; default ga")
-    p.add_argument("--body", help=f"body: {choices_text('body')} (default reil)")
+    p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: docs/own_robot.md; default reil)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")
     add_source_flag(p)

@@ -13,7 +13,7 @@ def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
     p.add_argument("--preset", metavar="NAME", help="time the episode of this preset (its body, controller, task and options, "
                    "nominal; with its running normaliser's sense collection) instead of --body/--controller")
-    p.add_argument("--body", default="reil", help=f"body: {choices_text('body')} (default reil)")
+    p.add_argument("--body", default="reil", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: docs/own_robot.md; default reil)")
     p.add_argument("--controller", default="ctrnn", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--population", type=positive_int, help="walkers (default 50; --quick 16)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50; --quick 4)")

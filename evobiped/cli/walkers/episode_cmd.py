@@ -16,7 +16,8 @@ def add_episode(sub) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--genome", metavar="FILE", help="genome JSON file (default: a random genome)")
     src.add_argument("--seed", type=seed, default=0, help="seed of the random genome (default 0)")
-    p.add_argument("--body", help=f"body: {choices_text('body')} (default reil; not with --genome, whose file names it)")
+    p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: docs/own_robot.md; default reil; "
+                   "not with --genome, whose file names it)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn; not with --genome)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default: the genome file's episode, else 50)")
     add_source_flag(p)
