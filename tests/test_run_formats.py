@@ -43,5 +43,6 @@ def test_a_run_of_an_older_format_resumes_and_continues_as_it_would_have(tmp_pat
         now, then = ([r[:2] for r in rows[:3]] + rows[3:] for rows in (now, then))
     assert now == then
     best, then = (json.loads((p / "best.json").read_text()) for p in (d, old))
-    assert (best["genome"], best["fitness"], best["generation"]) == (then["genome"], then["fitness"], then["generation"])
+    keys = ("genome", "fitness", "generation")
+    assert [best[k] for k in keys] == [then[k] for k in keys]
     assert (d / "summary.json").is_file() and len(list((d / "generations").glob("gen_*.json"))) == 5

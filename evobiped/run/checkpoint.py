@@ -55,8 +55,8 @@ def load(directory: Path) -> dict:
             raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
         # killed before its first commit: start over (the normaliser from the start genome's file again)
         start = kept_start(directory, config, None)
-        return {**parts, "optimizer": make_optimizer(config, start), "context": RunContext(config, start_episode(directory, config)),
-                "record": rundir.RunRecord(settings, None if start is None else [float(x) for x in start])}
+        return {**parts, "optimizer": make_optimizer(config, start),
+                "record": rundir.RunRecord(settings, _listed(start)), "context": RunContext(config, start_episode(directory, config))}
     try:
         ck = rundir.upgrade(ck, directory, settings=settings, start=lambda: _listed(_older_start(directory, config)))
     except UserError as exc:
@@ -70,7 +70,8 @@ def load(directory: Path) -> dict:
         raise UserError(f"checkpoint {path} is malformed: {exc}") from None
     state = opt.state_from(record.optimizer)
     if len(record.history) != state.generation:  # before the state is restored: an older CMA-ES state is replayed
-        raise UserError(f"checkpoint {path} is inconsistent (history has {len(record.history)} rows for generation {state.generation})")
+        raise UserError(f"checkpoint {path} is inconsistent (history has {len(record.history)} rows for generation "
+                        f"{state.generation})")
     opt.restore(state)
     context = RunContext(config)  # its state is the record's
     context.restore(record.context)
@@ -162,7 +163,8 @@ def derive(directory: Path, config: RunConfig, record: rundir.RunRecord, *, opti
     evolve use case's recording, evolution.rrd).  ``optimizer`` and ``context``: the record's state restored (the
     archive, the best's frozen context).  ``repairs`` (a resume's; None: a commit) notes each file it changed."""
     extra = record.context.get("history_extra", [])
-    rundir.sync_file(directory, rundir.HISTORY, rundir.history_text(record.history, record.history_terms, extra), repairs)
+    history = rundir.history_text(record.history, record.history_terms, extra)
+    rundir.sync_file(directory, rundir.HISTORY, history, repairs)
     best = record.best
     text = None if best is None else genome_text(np.array(record.best_genome), context.best_episode(), **best)
     rundir.sync_file(directory, rundir.BEST, text, repairs)
@@ -191,9 +193,10 @@ def _nominal_walk(directory: Path, config: RunConfig, record: rundir.RunRecord) 
 
 def _summary(config: RunConfig, record: rundir.RunRecord, context: RunContext, best_walk: dict | None) -> dict:
     # the stopping rule's verdict only in runs that have one (other summaries as before)
+    stopped_early = (context.stopped() and not context.lost_stop()) if config.stop.active else None
     return rundir.summary_table(version=__version__, generations=len(record.history), best=record.best,
                                 wall_seconds=record.wall_seconds, history=record.history, best_walk=best_walk,
-                                stopped_early=(context.stopped() and not context.lost_stop()) if config.stop.active else None,
+                                stopped_early=stopped_early,
                                 lost=None if context.attempts is None else context.attempts.lost)
 
 
@@ -206,7 +209,8 @@ def write_summary(directory: Path, config: RunConfig, record: rundir.RunRecord, 
         old = rundir.agreeing_summary(directory, lambda walk: _summary(config, record, context, walk))
         if old is not None:
             return old
-        repairs.append(f"{rundir.SUMMARY} {'rewritten' if (directory / rundir.SUMMARY).exists() else 'written'} from the checkpoint")
+        how = "rewritten" if (directory / rundir.SUMMARY).exists() else "written"
+        repairs.append(f"{rundir.SUMMARY} {how} from the checkpoint")
     summary = _summary(config, record, context, _nominal_walk(directory, config, record))
     rundir.write_summary_file(directory, summary)
     return summary

@@ -118,7 +118,8 @@ class Run:
                 keep_start(directory, start, config)
             environment = provenance.current()
             write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": environment})
-            record = rundir.RunRecord(fingerprint.settings(config, environment), None if start is None else [float(x) for x in start])
+            record = rundir.RunRecord(fingerprint.settings(config, environment),
+                                      None if start is None else [float(x) for x in start])
             run = cls(directory, config, opt, record, context=RunContext(config, start_episode(directory, config)),
                       listeners=listeners, started_in=environment)
             run.made_directory = made
@@ -189,14 +190,15 @@ class Run:
                     seed=self.config.seed, generation=g, terms=terms)
         text = genome_text(pop[b], self.context.episode(context), **meta)
         self.uncommitted = GenerationFiles(g, text, self.individuals.records(g, opt.fitness, unknown))
-        best = (meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)) if self._replaces_best(g, stats.best) else None
-        if best is not None:
-            self.context.best = context
+        best = None
+        if self._replaces_best(g, stats.best):
+            best, self.context.best = (meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)), context
         self._next_generation(result, unknown)
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.record = self.record.committed(
             stats.row(), {k: v if np.isfinite(v) else None for k, v in means.items()}, rundir.digest(text),
-            optimizer=opt.state().to_dict(), outcome=self.individuals.to_dict(), context=self.context.to_dict(), best=best)
+            optimizer=opt.state().to_dict(), outcome=self.individuals.to_dict(), context=self.context.to_dict(),
+            best=best)
         return stats
 
     def _next_generation(self, result, unknown: np.ndarray) -> None:
@@ -230,7 +232,8 @@ class Run:
 
     def _key(self, generation: int) -> tuple[int, ...]:
         """What generation ``generation``'s perturbed presentations are drawn from (:meth:`PerturbationOptions.key`)."""
-        return self.config.episode.perturbations.key(self.config.seed, generation, rundir.column(self.record.history, "best"))
+        bests = rundir.column(self.record.history, "best")
+        return self.config.episode.perturbations.key(self.config.seed, generation, bests)
 
     def _unsettled(self, generation: int) -> bool:
         """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,

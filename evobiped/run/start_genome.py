@@ -68,6 +68,6 @@ def start_file(directory: Path, config: RunConfig) -> np.ndarray | None:
         return None
     genome, _, meta = load_genome(file)
     if meta.get("source") != config.initial:
-        raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names {config.initial!r} "
-                        "as the start genome; restore it, or start a new run")
+        raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names "
+                        f"{config.initial!r} as the start genome; restore it, or start a new run")
     return genome

@@ -2,7 +2,8 @@
 generation must be the file that generation committed.
 
 The checkpoint records each one's digest (``generation_digests``: the SHA-256 of its text; null, for a generation
-committed before they were kept: the file's generation and fitness against the history).  A file that is missing, cut, edited or
+committed before they were kept: the file's generation and fitness against the history).  A file that is missing,
+cut, edited or
 swapped for another is rewritten when the checkpoint holds its genome (the run's best generation: best.json, itself
 derived from the checkpoint), and otherwise refused with one line naming it: no command goes on with another genome
 than the one the run committed under that generation's name.
@@ -56,7 +57,8 @@ def _holds(text: str | None, g: int, ck: dict, *, genome: bool = False) -> bool:
 
 def check_generation_files(directory: str | Path, ck: dict | None = None) -> list[str]:
     """Check every committed generation file of the run in ``directory`` against its checkpoint (``ck``: already
-    read, in the current format; None: read it, of any format, none there: nothing is committed).  Rewrites a damaged one from best.json where that is
+    read, in the current format; None: read it, of any format, none there: nothing is committed).  Rewrites a
+    damaged one from best.json where that is
     the generation's best, and returns what it rewrote (one sentence each); UserError naming the first file that
     cannot be."""
     d = Path(directory)

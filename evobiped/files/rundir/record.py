@@ -2,11 +2,9 @@
 (:meth:`RunRecord.to_dict`), checks and reads (:meth:`RunRecord.from_dict`) and upgrades it (:func:`upgrade`).
 
 Every older format is read by one step per format, in order, to the current one (:data:`FORMAT`, written as
-``format``); the formats before the key was written are told apart by the keys they lack:
+``format``); the formats before the key was written are told apart by the keys they lack (format: what its
+checkpoint holds; in parentheses what the step to it supplies, for an older one)::
 
-====== ==========================================================================================================
-format what its checkpoint holds (the step to it supplies, for an older one)
-====== ==========================================================================================================
 1      ``ga`` (the optimizer's state), ``history``, ``best``, ``wall_seconds``, ``outcome`` (fell, unstable, end_time)
 2      and ``best_genome`` (supplied: the best generation's file's genome)
 3      and ``history_terms`` (one empty table per generation), ``best_walk`` (null: not known), the outcome's
@@ -16,7 +14,6 @@ format what its checkpoint holds (the step to it supplies, for an older one)
 6      and the outcome's ``previous`` and ``parents`` (individuals.jsonl's lineage; nothing to supply)
 7      and ``generation_digests`` (null each: kept from then on)
 8      and ``format`` (``"evobiped-checkpoint/8"``)
-====== ==========================================================================================================
 
 A run directory of each older format is kept under ``tests/fixtures/rundirs``.  The optimizer's state
 (``optimizer``) and the run context's keys (:data:`CONTEXT_KEYS`: the running normaliser, the curriculum, the
@@ -120,21 +117,13 @@ class RunRecord:
         return self.replace(history=(*self.history[:-1], last), wall_seconds=self.wall_seconds + seconds)
 
 
-def read_best_genome(directory: Path, best: dict) -> list[float]:
-    """The genome of the best generation's file (what a format-1 record lacks), UserError when it cannot be read."""
-    path = generation_file(directory, best["generation"])
-    try:
-        genome = json.loads(path.read_text())["genome"]
-    except (OSError, ValueError, KeyError, TypeError):
-        raise UserError(f"best_genome is missing, and {path.name}, which holds it, cannot be read") from None
-    return genome
-
-
-def _format(table: dict) -> int:
-    """The format of a table written before the format was (the first key it lacks tells)."""
+def format_of(table: dict) -> int:
+    """The format of a table written before the format was: the first key it lacks tells (format 5 from 6: the
+    outcome's ``previous``)."""
     for n, key in ((2, "best_genome"), (3, "history_terms"), (4, OPTIMIZER_KEY), (5, SETTINGS_KEY), (7, DIGESTS_KEY)):
         if key not in table:
-            return n - 1
+            lineage = isinstance(table.get("outcome"), dict) and "previous" in table["outcome"]
+            return n - 1 if n != 7 or lineage else 5
     return 7
 
 
@@ -142,16 +131,20 @@ def upgrade(table: Any, directory: Path, *, settings: dict | None = None,
             start: Callable[[], list | None] = lambda: None) -> Any:
     """``table`` (checkpoint.json's, read with ``file_format=FORMAT``: of this format or one before the key) in the
     current format, one step per format (the module's table); a table of another type, or one too malformed to
-    upgrade, is returned for :meth:`RunRecord.from_dict` to name what is wrong.  ``settings`` and ``start`` supply what a table before format 5 lacks (the run's
-    config's settings, its start genome read as a resume reads it); a reader of the committed generations alone
-    gives neither (None then)."""
+    upgrade, is returned for :meth:`RunRecord.from_dict` to name what is wrong.  ``settings`` and ``start`` supply
+    what a table before format 5 lacks (the run's config's settings, its start genome read as a resume reads it);
+    a reader of the committed generations alone gives neither (None then)."""
     if not isinstance(table, dict) or FORMAT_KEY in table:
         return table
     t, history = dict(table), table.get("history")
     rows = len(history) if isinstance(history, list) else 0
-    n = _format(t)
+    n = format_of(t)
     if n < 2 and isinstance(t.get("best"), dict) and isinstance(t["best"].get("generation"), int):
-        t["best_genome"] = read_best_genome(directory, t["best"])
+        path = generation_file(directory, t["best"]["generation"])  # the best generation's file holds it
+        try:
+            t["best_genome"] = json.loads(path.read_text())["genome"]
+        except (OSError, ValueError, KeyError, TypeError):
+            raise UserError(f"best_genome is missing, and {path.name}, which holds it, cannot be read") from None
     if n < 3:
         t.setdefault("history_terms", [{}] * rows)
         t.setdefault("best_walk", None)
@@ -174,7 +167,8 @@ def _bad(field: str, why: str) -> UserError:
     return UserError(f"{field} {why}")
 
 
-def _number(v: Any, field: str, *, integer: bool = False, low: float | None = None, allow_minus_inf: bool = False) -> float:
+def _number(v: Any, field: str, *, integer: bool = False, low: float | None = None,
+            allow_minus_inf: bool = False) -> float:
     ok_type = isinstance(v, int) if integer else isinstance(v, (int, float))
     if isinstance(v, bool) or not ok_type:
         raise _bad(field, f"must be {'a whole number' if integer else 'a number'}, got {v!r}")
@@ -218,7 +212,8 @@ def _check(ck: Any, generations: int, low: np.ndarray, high: np.ndarray) -> None
             if name in _COUNTS:
                 _number(v, f"{where}.{name}", integer=True, low=0)
             else:
-                _number(v, f"{where}.{name}", allow_minus_inf=name in _FITNESS, low=0 if name == "wall_seconds" else None)
+                _number(v, f"{where}.{name}", allow_minus_inf=name in _FITNESS,
+                        low=0 if name == "wall_seconds" else None)
         if row[0] != g:
             raise _bad(f"{where}.generation", f"must be {g}, got {row[0]!r}")
     _number(ck["wall_seconds"], "wall_seconds", low=0)
@@ -290,10 +285,12 @@ def _check_outcome(outcome: Any, terms: Any, history: list) -> None:
             raise _bad(f"outcome.{key}", "must be a list of numbers or booleans (null: not known)")
     entry = lambda v: v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))  # noqa: E731
     for key, vals in ((f"{k}.{n}", v) for k in ("terms", "walk") for n, v in outcome.get(k, {}).items()):
-        if not isinstance(vals, list) or not all(entry(v) or (isinstance(v, list) and all(map(entry, v))) for v in vals):
+        if not isinstance(vals, list) or not all(entry(v) or (isinstance(v, list) and all(map(entry, v)))
+                                                 for v in vals):
             raise _bad(f"outcome.{key}", "must be a list of numbers (or of lists of numbers)")
     if not isinstance(terms, list) or len(terms) != len(history) or not all(
             isinstance(t, dict) and all(map(entry, t.values())) for t in terms):
-        raise _bad("history_terms", f"must be a list of tables of numbers (or nulls), one per generation ({len(history)})")
+        raise _bad("history_terms",
+                   f"must be a list of tables of numbers (or nulls), one per generation ({len(history)})")
     if any(terms) and "terms" not in outcome:
         raise _bad("outcome.terms", "is missing")
