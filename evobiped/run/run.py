@@ -58,6 +58,8 @@ class Run:
     def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, record: rundir.RunRecord,
                  individuals: Individuals | None = None, context: RunContext | None = None,
                  listeners: Sequence[RunListener] = (), started_in: dict | None = None):
+        """``record``: what the run has committed; ``optimizer``, ``individuals`` and ``context`` restored to its
+        state (None: a new run's); ``started_in``: the numerical environment config.json records."""
         self.dir, self.config, self.optimizer, self.record = directory, config, optimizer, record
         #: told of each commit, after the run directory's own files (:mod:`.listeners`; the evolve use case's recording)
         self.listeners: list[RunListener] = list(listeners)
