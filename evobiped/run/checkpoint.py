@@ -55,8 +55,9 @@ def load(directory: Path) -> dict:
             raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
         # killed before its first commit: start over (the normaliser from the start genome's file again)
         start = kept_start(directory, config, None)
-        return {**parts, "optimizer": make_optimizer(config, start),
-                "record": rundir.RunRecord(settings, _listed(start)), "context": RunContext(config, start_episode(directory, config))}
+        record = rundir.RunRecord(settings, _listed(start))
+        return {**parts, "optimizer": make_optimizer(config, start), "record": record,
+                "context": RunContext(config, start_episode(directory, config))}
     try:
         ck = rundir.upgrade(ck, directory, settings=settings, start=lambda: _listed(_older_start(directory, config)))
     except UserError as exc:
