@@ -38,7 +38,7 @@ def test_a_run_of_an_older_format_resumes_and_continues_as_it_would_have(tmp_pat
     old = FIXTURES / name / "uninterrupted"
     now, then = _fixed_columns(d / "history.csv"), _fixed_columns(old / "history.csv")
     if name.startswith("format1-"):
-        # the first format's runs resumed (by this code, as by the code of any version since) differ from their
+        # the first format's runs resumed (by this code, as by the code before the record, 630077b) differ from their
         # uninterrupted run in the mean, median and worst of the generation after the resume, never in its best
         now, then = ([r[:2] for r in rows[:3]] + rows[3:] for rows in (now, then))
     assert now == then
