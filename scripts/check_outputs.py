@@ -91,12 +91,19 @@ def _strip(obj):
     return obj
 
 
+#: a checkpoint's key of its format, absent from the checkpoints of before the format was written
+CHECKPOINT_FORMAT = ("checkpoint.json", "format")
+
+
 def normalised(path: Path) -> bytes:
-    """The file's bytes with wall-clock fields removed (JSON keys, CSV columns)."""
+    """The file's bytes with wall-clock fields removed (JSON keys, CSV columns), and checkpoint.json's format."""
     data = path.read_bytes()
     if path.suffix == ".json":
         try:
-            return json.dumps(_strip(json.loads(data)), sort_keys=True).encode()
+            obj = json.loads(data)
+            if path.name == CHECKPOINT_FORMAT[0] and isinstance(obj, dict):
+                obj.pop(CHECKPOINT_FORMAT[1], None)
+            return json.dumps(_strip(obj), sort_keys=True).encode()
         except ValueError:
             return data
     if path.suffix == ".csv":

@@ -85,6 +85,11 @@ def _nan_best(path: Path) -> None:
     path.write_text("".join(",".join(r) + "\n" for r in rows))
 
 
+def _before_digests(ck: dict) -> dict:
+    """A checkpoint as written before it kept the generation files' digests (and before its format)."""
+    return {k: v for k, v in ck.items() if k not in ("generation_digests", "format")}
+
+
 #: run directories damaged for ``select``: name -> (damage of the directory, words of the refusal)
 SELECT_DAMAGE = {
     "a short genome in a generation file": (lambda d: _generation(d, 0, lambda g: {**g, "genome": g["genome"][:7]}),
@@ -94,7 +99,7 @@ SELECT_DAMAGE = {
     "another episode": (lambda d: _generation(d, 0, lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}}),
                         "gen_0000.json is not the file its generation committed"),
     # a checkpoint written before it kept the generation files' digests: their generation and fitness agree
-    "another episode, older checkpoint": (lambda d: (edit(d / "checkpoint.json", lambda ck: {k: v for k, v in ck.items() if k != "generation_digests"}),
+    "another episode, older checkpoint": (lambda d: (edit(d / "checkpoint.json", _before_digests),
                                                      _generation(d, 1, lambda g: {**g, "episode": {**g["episode"], "seconds": 9.0}})),
                                           "of another episode than the run's"),
     "config names a number as its start genome": (lambda d: edit(d / "config.json", lambda c: {**c, "initial": 5}),

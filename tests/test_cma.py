@@ -161,7 +161,8 @@ def test_resume_with_another_optimizer_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'optimizer "cma" → "ga"' in err[0]
     ck = json.loads((tmp_path / "r" / "checkpoint.json").read_text())  # a checkpoint of before the settings were recorded
-    (tmp_path / "r" / "checkpoint.json").write_text(json.dumps({k: v for k, v in ck.items() if k not in ("settings", "start")}))
+    older = {k: v for k, v in ck.items() if k not in ("settings", "start", "format")}
+    (tmp_path / "r" / "checkpoint.json").write_text(json.dumps(older))
     assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "'cma' optimizer" in err[0]

@@ -171,6 +171,7 @@ def test_a_checkpoint_of_before_the_optimizer_key_resumes_bit_identically(tmp_pa
         run.checkpoint()
     path = run.dir / "checkpoint.json"
     ck = json.loads(path.read_text())
+    del ck["format"]  # written before the format was
     state = ck.pop("optimizer")
     state["optimizer"] = state.pop("name")
     path.write_text(json.dumps({"ga": state, **ck}))
@@ -416,7 +417,8 @@ def test_mismatched_checkpoint(finished_run, capsys):
     assert cli("evolve", "--resume", finished_run) == 2
     assert "config.json differs from the one this checkpoint was made with: ga.population 4 → 6" in capsys.readouterr().err
     ck = json.loads((finished_run / "checkpoint.json").read_text())
-    (finished_run / "checkpoint.json").write_text(json.dumps({k: v for k, v in ck.items() if k not in ("settings", "start")}))
+    older = {k: v for k, v in ck.items() if k not in ("settings", "start", "format")}
+    (finished_run / "checkpoint.json").write_text(json.dumps(older))
     assert cli("evolve", "--resume", finished_run) == 2
     assert "checkpoint population has shape (4, 120), the config needs (6, 120)" in capsys.readouterr().err
 
@@ -439,7 +441,7 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
     run = Run.create(tmp_path / "r", cfg)
     with make_evaluator(cfg.episode, "serial") as ev:
         summary = run.evolve(ev)
-    rows = [dict(zip(HISTORY_COLUMNS, map(float, r))) for r in run.history]
+    rows = [dict(zip(HISTORY_COLUMNS, map(float, r))) for r in run.record.history]
     assert rows[0]["unstable"] > 0 and rows[0]["falls"] >= rows[0]["unstable"]
     assert all(np.isfinite([r["best"], r["mean"], r["worst"]]).all() for r in rows)
     assert summary["generations"] == 2 and summary["best"]["fell"]

@@ -1,4 +1,5 @@
-"""One generation's statistics: a row of history.csv plus what a progress display needs."""
+"""One generation's statistics (a row of history.csv plus what a progress display needs) and the files it leaves to
+its commit."""
 
 from __future__ import annotations
 
@@ -30,3 +31,14 @@ class GenerationStats:
 
     def row(self) -> list:
         return [getattr(self, c) for c in HISTORY_COLUMNS]
+
+
+@dataclass(frozen=True)
+class GenerationFiles:
+    """What an evaluated generation writes at its commit, before checkpoint.json (:func:`.checkpoint.commit`)."""
+
+    generation: int
+    #: generations/gen_NNNN.json's text (the generation's best, its context frozen in)
+    text: str
+    #: individuals.jsonl's tables, one per row of the population (:meth:`.individuals.Individuals.records`)
+    individuals: list[dict]

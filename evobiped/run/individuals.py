@@ -97,7 +97,7 @@ class Individuals:
         return {k: num(v[i]) if v.ndim == 1 else [num(x) for x in v[i]] for k, v in self.terms.items()}
 
     def walk_of(self, i: int) -> dict | None:
-        """Where row ``i`` walked, as ``EpisodeResult.walk`` gives it (None: not known, e.g. an older checkpoint)."""
+        """Where row ``i`` walked, as ``EpisodeResult.walk`` gives it (None: not known, no result told yet)."""
         if "displacement" not in self.walk:
             return None
         return walk_summary(self.walk["displacement"][i], self.walk["heading_deg"][i])
@@ -120,8 +120,8 @@ class Individuals:
 
     @classmethod
     def from_dict(cls, d: dict, P: int) -> "Individuals":
-        """Restore :meth:`to_dict` (types checked by :func:`evobiped.files.rundir.validate_checkpoint`); UserError unless
-        each list has one entry per individual.  A checkpoint written before terms were kept has none."""
+        """Restore :meth:`to_dict` (types checked by :meth:`evobiped.files.rundir.RunRecord.from_dict`); UserError
+        unless each list has one entry per individual.  An outcome holds no terms until a result told some."""
         lists = {k: v for k, v in d.items() if k in OUTCOME}
         rows = {k: d[k] for k in ("previous", "parents") if k in d}
         nested = [v for k in ("terms", "walk") for v in d.get(k, {}).values()]

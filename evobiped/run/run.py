@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import time
-import uuid
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -21,15 +20,15 @@ from .. import __version__
 from ..core import provenance
 from ..files import rundir
 from ..core.errors import UserError
-from ..core.fileio import WriteError, atomic_write, json_text, write_json
+from ..core.fileio import WriteError, write_json
 from ..files.genome_file import genome_text
-from . import checkpoint as commit_point
+from . import checkpoint as commit_point, fingerprint
 from ..evaluation import Evaluator
 from ..optimizers import Optimizer
 from .individuals import Individuals
 from .listeners import RunListener
 from .run_config import RunConfig, episodes_per_genome, make_optimizer, start_genome
-from .generation_stats import GenerationStats
+from .generation_stats import GenerationFiles, GenerationStats
 from .run_context import RunContext
 from .start_genome import keep_start, start_episode
 
@@ -44,41 +43,47 @@ def _check_unused(directory: Path) -> None:
 
 
 class Run:
-    """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`."""
+    """A run directory and the optimizer that lives in it; holds the directory's lock until :meth:`close`.
 
-    #: the start genome ``(G,)`` as a list (None: the run has none), read once when the run was created
-    start: list[float] | None = None
+    What the run has committed is its :attr:`record` (checkpoint.json's, :class:`~evobiped.files.rundir.RunRecord`);
+    the optimizer, the individuals' outcomes and the context are the search's working state, the record's parts
+    restored.  A generation is evaluated (:meth:`step`: a new record, no file written), then committed
+    (:meth:`checkpoint`)."""
+
     #: the numerical environment config.json says the run started in (None: none recorded)
     started_in: dict | None = None
     #: :meth:`create` made the run directory (it did not exist before)
     made_directory: bool = False
 
-    def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, history: list[list], best: dict | None, wall: float,
-                 best_genome: list[float] | None = None, individuals: Individuals | None = None,
-                 history_terms: list[dict] | None = None, best_walk: dict | None = None, context: RunContext | None = None,
-                 generation_digests: list[str | None] | None = None):
-        self.dir, self.config, self.optimizer = directory, config, optimizer
-        self.history, self.best, self.wall = history, best, wall
-        #: the best genome of the run so far ``(G,)`` as stored in the checkpoint (None before generation 0)
-        self.best_genome = best_genome
+    def __init__(self, directory: Path, config: RunConfig, optimizer: Optimizer, record: rundir.RunRecord,
+                 individuals: Individuals | None = None, context: RunContext | None = None,
+                 listeners: Sequence[RunListener] = (), started_in: dict | None = None):
+        """``record``: what the run has committed; ``optimizer``, ``individuals`` and ``context`` restored to its
+        state (None: a new run's); ``started_in``: the numerical environment config.json records."""
+        self.dir, self.config, self.optimizer, self.record = directory, config, optimizer, record
+        #: told of each commit, after the run directory's own files (:mod:`.listeners`; the evolve use case's recording)
+        self.listeners: list[RunListener] = list(listeners)
         #: the outcome of each individual of the optimizer's population (rows as its population)
         self.individuals = individuals if individuals is not None else Individuals()
-        #: the best individual's terms per generation (name -> mean over its presentations), history.csv's term columns
-        self.history_terms = history_terms if history_terms is not None else []
-        #: each committed generation file's digest (None: a checkpoint written before they were kept)
-        self.generation_digests = generation_digests if generation_digests is not None else [None] * len(history)
-        #: where the best walker went in its evaluation (``EpisodeResult.walk``; None: not known)
-        self.best_walk = best_walk
+        #: what the run sets per generation beyond its config: the running normaliser, the curriculum's phase
+        self.context = context if context is not None else RunContext(config)
+        self.started_in = started_in
         #: what a resume found damaged and rebuilt from the checkpoint, one sentence each
         self.repairs: list[str] = []
         #: how this process's numerical environment differs from the one the run started in (a resume's; empty:
         #: the resumed run is bit-identical to an uninterrupted one)
         self.environment_differences: list[str] = []
-        self.recording_id = str(uuid.uuid5(uuid.NAMESPACE_OID, json_text(config.to_dict())))
-        #: what the run sets per generation beyond its config: the running normaliser, the curriculum's phase
-        self.context = context if context is not None else RunContext(config)
-        #: told of each commit, after the run directory's own files (:mod:`.listeners`; the evolve use case's recording)
-        self.listeners: list[RunListener] = []
+        #: the evaluated generation's files, written by its commit (None: nothing evaluated since the last commit)
+        self.uncommitted: GenerationFiles | None = None
+
+    @property
+    def recording_id(self) -> str:
+        """The run's recording id (the same for every session of the run: its config's)."""
+        return commit_point.recording_id(self.config)
+
+    def _readers(self) -> dict:
+        """What the derived files read the record through (:func:`.checkpoint.derive`)."""
+        return dict(optimizer=self.optimizer, context=self.context, listeners=self.listeners)
 
     # ---- creating and resuming
     @classmethod
@@ -115,11 +120,11 @@ class Run:
                 keep_start(directory, start, config)
             environment = provenance.current()
             write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": environment})
-            run = cls(directory, config, opt, [], None, 0.0, context=RunContext(config, start_episode(directory, config)))
-            run.started_in = environment
-            run.start = None if start is None else [float(x) for x in start]
+            record = rundir.RunRecord(fingerprint.settings(config, environment),
+                                      None if start is None else [float(x) for x in start])
+            run = cls(directory, config, opt, record, context=RunContext(config, start_episode(directory, config)),
+                      listeners=listeners, started_in=environment)
             run.made_directory = made
-            run.listeners = list(listeners)
             rundir.write_history(directory / rundir.HISTORY, [])
         except BaseException:
             rundir.unlock(directory)
@@ -135,23 +140,13 @@ class Run:
             raise UserError(f"run directory not found: {directory}")
         rundir.lock(directory)
         try:
-            run = cls._load(directory)
-            run.listeners = list(listeners)
-            commit_point.rebuild(run)
+            run = cls(**commit_point.load(directory), listeners=listeners)
+            run.environment_differences = provenance.differences(run.started_in)
+            run.repairs = commit_point.rebuild(directory, run.config, run.record, individuals=run.individuals,
+                                               done=run.done, **run._readers())
         except BaseException:
             rundir.unlock(directory)
             raise
-        return run
-
-    @classmethod
-    def _load(cls, directory: Path) -> "Run":
-        """The run in ``directory`` as its checkpoint says (:func:`.checkpoint.load`), nothing repaired yet."""
-        parts = commit_point.load(directory)
-        start, started_in = parts.pop("start"), parts.pop("started_in")
-        run = cls(**parts)
-        run.start = None if start is None else [float(x) for x in start]
-        run.started_in = started_in
-        run.environment_differences = provenance.differences(started_in)
         return run
 
     @property
@@ -164,7 +159,7 @@ class Run:
 
     def episodes(self) -> int:
         """Episodes evaluated by the committed generations (history.csv's evaluations, each genome's presentations)."""
-        return int(sum(rundir.column(self.history, "evaluations"))) * episodes_per_genome(self.config)
+        return int(sum(rundir.column(self.record.history, "evaluations"))) * episodes_per_genome(self.config)
 
     # ---- the loop
     def evolve(self, evaluator: Evaluator, on_generation: Callable[[GenerationStats], None] | None = None) -> dict:
@@ -173,93 +168,97 @@ class Run:
             t0 = time.perf_counter()
             stats = self.step(evaluator)
             stats.wall_seconds = round(time.perf_counter() - t0, 4)
-            self.wall += stats.wall_seconds
+            self.record = self.record.timed(stats.wall_seconds)
             stats.evals_per_second = stats.evaluations / max(stats.wall_seconds, 1e-9)
-            self.history[-1] = stats.row()
             self.checkpoint()
             if on_generation:
                 on_generation(stats)
         return self.finish()
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate the unknown individuals of this generation and write its generation file (not yet committed).
-        The run's best is the fittest individual so far; while the perturbations' schedules still change (before
-        :attr:`~evobiped.physics.perturb.PerturbationOptions.settled_from`) or the pelvis assistance is on, generations are not
-        comparable, so the run's best is the latest generation's, then the fittest since."""
-        opt = self.optimizer
+        """Evaluate the unknown individuals of this generation and make the run's next record, a function of the
+        last one and what the generation gave (the run's best: :meth:`_replaces_best`); no file is written here:
+        :meth:`checkpoint` writes the generation's files and commits the record."""
+        opt, g = self.optimizer, self.optimizer.generation
         pop, unknown = opt.ask()
         context = self.context.now()
         # a plain run's evaluations take no context (an evaluator written before contexts still serves it)
-        more = {} if context.empty else {"context": context}
-        result = evaluator.evaluate(pop[unknown], key=self._key(opt.generation), **more)
+        result = evaluator.evaluate(pop[unknown], key=self._key(g), **({} if context.empty else {"context": context}))
         opt.tell(result)
         self.individuals.told(unknown, result)
-        f, outcome = opt.fitness, self.individuals.outcome
         b = int(opt.ranking()[0])
-        g = opt.generation
-        stats = GenerationStats(
-            generation=g,
-            best=float(f[b]),
-            mean=float(f.mean()),
-            median=float(np.median(f)),
-            worst=float(f.min()),
-            evaluations=int(unknown.sum()),
-            falls=int(outcome["fell"].sum()),
-            unstable=int(outcome["unstable"].sum()),
-            wall_seconds=0.0,
-            best_fell=bool(outcome["fell"][b]),
-            generations_total=self.config.generations,
-            simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
-            longest_seconds=float(np.max(result.end_time, initial=0.0)),
-        )
-        terms = self.individuals.terms_of(b)
-        meta = dict(fitness=float(f[b]), fell=bool(outcome["fell"][b]), end_time=float(outcome["end_time"][b]), seed=self.config.seed,
-                    generation=g, terms=terms)
-        episode = self.context.episode(context)
-        text = genome_text(pop[b], episode, **meta)
-        atomic_write(rundir.generation_file(self.dir, g), text)
-        self.generation_digests.append(rundir.digest(text))
-        rundir.append_individuals(self.dir / rundir.INDIVIDUALS, self.individuals.records(g, f, unknown))
-        # while schedules still change or the assistance holds the walker up, generations are not comparable (nor
-        # the unassisted walker's): the run's best is the latest generation's until then, then the fittest since
-        if self.best is None or not self._held(g) and (self._unsettled(g) or self._unsettled(self.best["generation"])
-                                                       or meta["fitness"] > self.best["fitness"]):
-            self.best, self.best_genome, self.best_walk = meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)
-            self.context.best = context
-        self.history.append(stats.row())
+        stats, terms = self._stats(g, b, unknown, result), self.individuals.terms_of(b)
+        meta = dict(fitness=stats.best, fell=stats.best_fell, end_time=float(self.individuals.outcome["end_time"][b]),
+                    seed=self.config.seed, generation=g, terms=terms)
+        text = genome_text(pop[b], self.context.episode(context), **meta)
+        self.uncommitted = GenerationFiles(g, text, self.individuals.records(g, opt.fitness, unknown))
+        best = None
+        if self._replaces_best(g, stats.best):
+            best, self.context.best = (meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)), context
+        self._next_generation(result, unknown)
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
-        self.history_terms.append({k: v if np.isfinite(v) else None for k, v in means.items()})
-        self.context.after(result, unknown, opt.evaluation_rows(), f)
+        self.record = self.record.committed(
+            stats.row(), {k: v if np.isfinite(v) else None for k, v in means.items()}, rundir.digest(text),
+            optimizer=opt.state().to_dict(), outcome=self.individuals.to_dict(), context=self.context.to_dict(),
+            best=best)
+        return stats
+
+    def _next_generation(self, result, unknown: np.ndarray) -> None:
+        """The context learns from the generation (``result`` of the rows ``unknown`` ``(P,)``), the optimizer makes
+        the next one, and each individual it keeps keeps its outcome."""
+        opt = self.optimizer
+        self.context.after(result, unknown, opt.evaluation_rows(), opt.fitness)
         carried = opt.next_generation()
         if self.context.restart_due:  # the lost-run rule: the search starts over (every individual new)
             self.individuals.carry(opt.start_over(), None)
         else:
-            self.individuals.carry(carried, opt.parent_rows())  # the individuals it keeps keep their outcome
-        return stats
+            self.individuals.carry(carried, opt.parent_rows())
+
+    def _stats(self, g: int, b: int, unknown: np.ndarray, result) -> GenerationStats:
+        """Generation ``g``'s statistics: ``b`` its best row, ``unknown`` ``(P,)`` the rows ``result`` evaluated."""
+        f, outcome = self.optimizer.fitness, self.individuals.outcome
+        return GenerationStats(
+            generation=g, best=float(f[b]), mean=float(f.mean()), median=float(np.median(f)), worst=float(f.min()),
+            evaluations=int(unknown.sum()), falls=int(outcome["fell"].sum()), unstable=int(outcome["unstable"].sum()),
+            wall_seconds=0.0, best_fell=bool(outcome["fell"][b]), generations_total=self.config.generations,
+            simulated_seconds=float(np.sum((result.rows if result.rows is not None else result).end_time)),
+            longest_seconds=float(np.max(result.end_time, initial=0.0)))
+
+    def _replaces_best(self, g: int, fitness: float) -> bool:
+        """Generation ``g``'s best (of ``fitness``) becomes the run's: while schedules still change or the assistance
+        holds the walker up, generations are not comparable (nor the unassisted walker's): the run's best is the
+        latest generation's until then, then the fittest since."""
+        best = self.record.best
+        return best is None or not self._held(g) and (self._unsettled(g) or self._unsettled(best["generation"])
+                                                       or fitness > best["fitness"])
 
     def _key(self, generation: int) -> tuple[int, ...]:
         """What generation ``generation``'s perturbed presentations are drawn from (:meth:`PerturbationOptions.key`)."""
-        return self.config.episode.perturbations.key(self.config.seed, generation, rundir.column(self.history, "best"))
+        bests = rundir.column(self.record.history, "best")
+        return self.config.episode.perturbations.key(self.config.seed, generation, bests)
 
     def _unsettled(self, generation: int) -> bool:
         """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,
         or it was scored in an earlier phase of the curriculum than the last."""
-        return (self.config.episode.perturbations.unsettled(generation, rundir.column(self.history, "best"))
+        return (self.config.episode.perturbations.unsettled(generation, rundir.column(self.record.history, "best"))
                 or self.context.early_phase(generation))
 
     def _held(self, generation: int) -> bool:
         """After a restart, a generation of an early phase leaves a best scored in the last phase as it is."""
-        return bool(self.context.attempts and self.context.attempts.attempt and self.best is not None
-                    and self.context.early_phase(generation) and not self.context.early_phase(self.best["generation"]))
+        best = self.record.best
+        return bool(self.context.attempts and self.context.attempts.attempt and best is not None
+                    and self.context.early_phase(generation) and not self.context.early_phase(best["generation"]))
 
     # ---- files
     def checkpoint(self) -> None:
-        """Commit the generation and derive the files that follow from it (:func:`.checkpoint.commit`)."""
-        commit_point.commit(self)
+        """Commit the evaluated generation: its files, then the record, then the files derived from it
+        (:func:`.checkpoint.commit`)."""
+        commit_point.commit(self.dir, self.config, self.record, self.uncommitted, **self._readers())
+        self.uncommitted = None
 
     def finish(self) -> dict:
         """Write summary.json (the run is complete); returns it."""
-        return commit_point.write_summary(self)
+        return commit_point.write_summary(self.dir, self.config, self.record, context=self.context)
 
     def abandon(self) -> None:
         """Undo :meth:`create` of a run that never evolved (its evaluator could not start): remove the files it wrote,

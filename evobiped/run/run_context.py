@@ -159,7 +159,7 @@ class RunContext:
     def to_dict(self) -> dict:
         if not self.active:
             return {}
-        out = {"history_extra": self.history, "curriculum": self.curriculum.to_dict()}
+        out = {"history_extra": [dict(t) for t in self.history], "curriculum": self.curriculum.to_dict()}
         if self.running:
             out["normaliser"] = self.stats.to_dict()
         out["best_context"] = None if self.best is None else _context_table(self.best)

@@ -2,7 +2,8 @@
 
 ``start.json`` (genome-file format, ``source``: the path given) is written before config.json; the checkpoint
 holds the genome too (``start``).  A resume takes the checkpoint's, else start.json's (a run cut before its first
-commit); only a run made before the run directory kept it reads its source again, as it did then.
+commit); a checkpoint of a format before ``start`` (:mod:`evobiped.files.rundir.record`) is given start.json's,
+or, made before the run directory kept it, the genome its source names, read once more.
 """
 
 from __future__ import annotations
@@ -38,26 +39,35 @@ def start_episode(directory: Path, config: RunConfig):
     return load_genome(file)[1]
 
 
-def kept_start(directory: Path, config: RunConfig, ck) -> np.ndarray | None:
-    """The run's start genome: the checkpoint's, else start.json's (a run cut before its first commit); only a run
-    made before the run directory kept it reads ``config.initial`` again (None here)."""
+def kept_start(directory: Path, config: RunConfig, record: dict | None) -> np.ndarray | None:
+    """The run's start genome: the record's (``record``: checkpoint.json's table, upgraded; None: no checkpoint),
+    else start.json's (a run cut before its first commit)."""
     path, file = directory / rundir.CHECKPOINT, directory / rundir.START
-    stored = ck.get(rundir.START_KEY) if isinstance(ck, dict) else None
+    stored = record.get(rundir.START_KEY) if isinstance(record, dict) else None
     if not config.initial:
-        if stored is not None or (ck is None and file.exists()):
+        if stored is not None or (record is None and file.exists()):
             raise UserError(f"{directory / rundir.CONFIG} names no start genome (initial) but the run was created with one; "
                             "restore it, or start a new run")
         return None
     if stored is not None:
-        if not (isinstance(stored, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in stored)):
-            raise UserError(f"checkpoint {path} is malformed: start must be a list of numbers (the start genome) or null")
+        try:
+            rundir.check_start(stored)
+        except UserError as exc:
+            raise UserError(f"checkpoint {path} is malformed: {exc}") from None
         return config.episode.layout().validate(stored, what=f"checkpoint {path}: start")[0]
-    if isinstance(ck, dict) and rundir.SETTINGS_KEY in ck:
+    if isinstance(record, dict):
         raise UserError(f"checkpoint {path} is malformed: start is null although the run's config names a start genome")
-    if file.exists():
-        genome, _, meta = load_genome(file)
-        if meta.get("source") != config.initial:
-            raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names {config.initial!r} "
-                            "as the start genome; restore it, or start a new run")
-        return genome
-    return None  # a run made before its directory kept the start genome: read from its source, as then
+    return start_file(directory, config)
+
+
+def start_file(directory: Path, config: RunConfig) -> np.ndarray | None:
+    """start.json's genome ``(G,)`` (None: the run's config names none, or a run made before its directory kept
+    it: the resume reads it from its source, as then)."""
+    file = directory / rundir.START
+    if not config.initial or not file.exists():
+        return None
+    genome, _, meta = load_genome(file)
+    if meta.get("source") != config.initial:
+        raise UserError(f"{file} was made from {meta.get('source')!r} but {directory / rundir.CONFIG} names "
+                        f"{config.initial!r} as the start genome; restore it, or start a new run")
+    return genome

@@ -165,9 +165,9 @@ def run_and_retest(directory: str, config: dict, retested: str, name: str, test:
         return read_json(retested, what="retest")
     cfg = RunConfig.from_dict(config)
     d = Path(directory)
-    runs = []  # the run, whose history (the checkpoint's rows) grows as it evolves
+    runs = []  # the run, whose record (the checkpoint's rows) grows as it evolves
     evolve(d if (d / rundir.CONFIG).is_file() else cfg, out=d, on_opened=runs.append)
-    history = [int(x) for x in rundir.column(runs[0].history, "evaluations")]
+    history = [int(x) for x in rundir.column(runs[0].record.history, "evaluations")]
     per = episodes_per_genome(cfg)
     spent = [per * sum(history[:g + 1]) for g in range(len(history))]
     noise = fresh_noise(test["noise"], test["trials"])

@@ -120,7 +120,7 @@ class _Shown:
             self.log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
                                     evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
         self.clock.generation(s.wall_seconds)
-        best = self.run.best or {"fitness": s.best, "fell": s.best_fell}
+        best = self.run.record.best or {"fitness": s.best, "fell": s.best_fell}
         self.line.report(s.generation + 1, generation_note(
             best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean, worst=s.worst,
             evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds)
@@ -156,8 +156,8 @@ def _viewer_log(run, rerun: str):
     from ...files.rundir import history_columns
 
     log = EvolutionLog(recording_id=run.recording_id, **({"spawn": True} if rerun == "spawn" else {"connect": rerun}))
-    if run.history:
-        log.log_history(history_columns(run.history))
+    if run.record.history:
+        log.log_history(history_columns(run.record.history))
     return log
 
 

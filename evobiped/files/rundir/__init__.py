@@ -1,12 +1,13 @@
 """The run-directory format in one place: file names (:mod:`.layout`), history.csv (:mod:`.history_file`), the
-record of every individual (:mod:`.individuals_file`), the lock (:mod:`.locking`), the checkpoint's checks
-(:mod:`.checkpoint_check`), and which genome "a run directory or a genome file" names (:mod:`.genome_source`).
+record of every individual (:mod:`.individuals_file`), the lock (:mod:`.locking`), the run's record
+(checkpoint.json: :mod:`.record`), and which genome "a run directory or a genome file" names (:mod:`.genome_source`).
 
 A run directory (``evobiped evolve --out DIR``)::
 
     start.json             the start genome (genome-file format, ``source``: where it came from), for a run started --from
     config.json            the full resolved RunConfig
-    checkpoint.json        the commit point: optimizer state (key ``optimizer``), history, best genome, outcomes after the last generation
+    checkpoint.json        the commit point, the run's record (:mod:`.record`): its format, optimizer state,
+                           history, best genome, outcomes after the last generation
     history.csv            one row per generation (HISTORY_COLUMNS)           } derived from the checkpoint,
     best.json              best genome of the run so far                      } rebuilt by a resume when
     evolution.rrd          fitness per generation, a Rerun recording          } missing, stale or damaged
@@ -45,8 +46,9 @@ generation is duplicated or lost (:mod:`.individuals_file`).
 """
 
 from .archive_file import ARCHIVE, ArchiveContents, archive_text
-from .checkpoint_check import OLD_OPTIMIZER_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, optimizer_table, validate_checkpoint
-from .generation_check import DIGESTS_KEY, check_generation_files, digest
+from .generation_check import check_generation_files, digest
+from .record import (DIGESTS_KEY, FORMAT, FORMAT_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, RunRecord, check_start,
+                     upgrade)
 from .genome_source import FROM_CHECKPOINT, GenomeSource, check_at_rest, checkpoint_mark, genome_path, resolve_genome
 from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, individuals_text, read_individuals
 from .history_file import HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history, write_history
@@ -59,11 +61,12 @@ from .summary_file import agreeing_summary, summary_table, write_summary_file
 
 __all__ = [
     "ARCHIVE", "ArchiveContents", "archive_text", "agreeing_summary", "summary_table", "sync_file", "write_summary_file", "BEST", "CHECKPOINT", "CONFIG", "DIGESTS_KEY", "check_generation_files", "digest", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
-    "INDIVIDUALS", "LOCK", "OLD_OPTIMIZER_KEY", "OPTIMIZER_KEY", "OUTCOME", "RECORDING", "SETTINGS_KEY", "START",
+    "INDIVIDUALS", "LOCK", "FORMAT", "FORMAT_KEY", "OPTIMIZER_KEY", "RunRecord", "check_start", "upgrade",
+    "OUTCOME", "RECORDING", "SETTINGS_KEY", "START",
     "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",
     "figures_dir", "generation_file", "generation_files", "generation_of", "genome_outputs", "genome_path",
-    "history_columns", "history_text", "individuals_text", "is_unused", "label", "lock", "optimizer_table",
+    "history_columns", "history_text", "individuals_text", "is_unused", "label", "lock",
     "read_history", "read_individuals", "remove_stale_temporaries", "replay_file", "resolve_genome",
-    "robustness_stem", "unlock", "validate_checkpoint", "write_history", "FROM_CHECKPOINT", "check_at_rest",
+    "robustness_stem", "unlock", "write_history", "FROM_CHECKPOINT", "check_at_rest",
     "checkpoint_mark",
 ]

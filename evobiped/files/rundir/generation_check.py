@@ -1,8 +1,9 @@
 """The committed generation files checked against the checkpoint: each ``generations/gen_NNNN.json`` of a committed
 generation must be the file that generation committed.
 
-The checkpoint records each one's digest (``generation_digests``: the SHA-256 of its text; a checkpoint written
-before it was kept: the file's generation and fitness against the history).  A file that is missing, cut, edited or
+The checkpoint records each one's digest (``generation_digests``: the SHA-256 of its text; null, for a generation
+committed before they were kept: the file's generation and fitness against the history).  A file that is missing,
+cut, edited or
 swapped for another is rewritten when the checkpoint holds its genome (the run's best generation: best.json, itself
 derived from the checkpoint), and otherwise refused with one line naming it: no command goes on with another genome
 than the one the run committed under that generation's name.
@@ -15,25 +16,12 @@ from pathlib import Path
 from ...core.errors import UserError
 from ...core.fileio import atomic_write, read_json
 from .layout import BEST, CHECKPOINT, GENERATIONS, generation_file
-
-#: the checkpoint's key of the generation files' digests, one per committed generation
-DIGESTS_KEY = "generation_digests"
+from .record import DIGESTS_KEY, FORMAT, check_digests, upgrade
 
 
 def digest(text: str) -> str:
     """The digest the checkpoint keeps of a generation file's text."""
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-def check_digests(ck: dict) -> None:
-    """UserError unless the checkpoint's digests (when it has them) are one per history row, each a digest or null."""
-    found = ck.get(DIGESTS_KEY)
-    if found is None:
-        return
-    if not isinstance(found, list) or len(found) != len(ck.get("history", [])):
-        raise UserError(f"{DIGESTS_KEY} must be a list of one digest per generation")
-    if not all(d is None or (isinstance(d, str) and len(d) == 64) for d in found):
-        raise UserError(f"{DIGESTS_KEY} must hold SHA-256 digests (64 hexadecimal digits) or null")
 
 
 def _text(path: Path) -> str | None:
@@ -48,7 +36,7 @@ def _holds(text: str | None, g: int, ck: dict, *, genome: bool = False) -> bool:
     fitness (and, for a candidate replacement, the checkpoint's best genome)."""
     if text is None:
         return False
-    digests = ck.get(DIGESTS_KEY) or []
+    digests = ck[DIGESTS_KEY]
     if g < len(digests) and digests[g] is not None and digest(text) == digests[g]:
         return True
     if g < len(digests) and digests[g] is not None and not genome:
@@ -69,14 +57,15 @@ def _holds(text: str | None, g: int, ck: dict, *, genome: bool = False) -> bool:
 
 def check_generation_files(directory: str | Path, ck: dict | None = None) -> list[str]:
     """Check every committed generation file of the run in ``directory`` against its checkpoint (``ck``: already
-    read; None: read it, none there: nothing is committed).  Rewrites a damaged one from best.json where that is
+    read, in the current format; None: read it, of any format, none there: nothing is committed).  Rewrites a
+    damaged one from best.json where that is
     the generation's best, and returns what it rewrote (one sentence each); UserError naming the first file that
     cannot be."""
     d = Path(directory)
     if ck is None:
         if not (d / CHECKPOINT).is_file():
             return []
-        ck = read_json(d / CHECKPOINT, what="checkpoint")
+        ck = upgrade(read_json(d / CHECKPOINT, what="checkpoint", file_format=FORMAT), d)
     if not isinstance(ck, dict) or not isinstance(ck.get("history"), list):
         raise UserError(f"checkpoint {d / CHECKPOINT} is not a checkpoint")
     check_digests(ck)
