@@ -49,6 +49,10 @@ class Task:
     presentations: int = 1
     #: names of the fitness terms :meth:`terms` returns, each ``(n,)`` per simulation row
     term_names: ClassVar[tuple[str, ...]] = ()
+    #: a paragraph docs/usage.md gives above its generated option table (markdown; "": none)
+    docs_note: ClassVar[str] = ""
+    #: what each sensor the task may add reads, name -> a line with its units (docs/gym.md; every sensor has one)
+    sensor_text: ClassVar[dict[str, str]] = {}
     #: named fitness criteria: name -> the task options that select it (the study's conditions, ``evolve --cyclic``)
     criteria: ClassVar[dict[str, dict]] = {}
 

@@ -132,6 +132,12 @@ class CommandTask(WalkTask):
     """Walking as commanded (:class:`~evobiped.tasks.states.CommandState`)."""
 
     name = "command"
+    sensor_text = {
+        "heading_error": "the facing's angle from the commanded facing (rad, + left, within ±π/2)",
+        "command_speed": "the command task's commanded forward speed (m/s)",
+        "command_turning": "the command task's commanded turning rate (rad/s, + left; its sign changes in the stance "
+                           "frame's mirror)",
+        "command_stop": "the command task's stop: 1 at a zero speed command, else 0"}
     Options = CommandOptions
     criteria = {}
 

@@ -155,6 +155,7 @@ class WalkTask(Task):
     #: ``time_up`` s until the walker fell (the episode's length if it did not), ``steps`` stance switches (both only
     #: under the weighted fitness)
     term_names = TERMS
+    sensor_text = {"heading_error": "the facing's angle from the initial facing (rad, + left)"}
     criteria = {
         "plain": {"fitness": "distance", "cyclic_weight": 0.0},
         "cyclic": {"fitness": "distance", "cyclic_weight": 1.0},
