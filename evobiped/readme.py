@@ -27,6 +27,7 @@ from .core.options import markdown_table
 from .optimizers import OPTIMIZERS
 from .physics.perturb import PerturbationOptions
 from .tasks import TASKS
+from .tasks import terms
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 #: the page that holds the option tables
@@ -140,7 +141,7 @@ def generated() -> dict[str, str]:
     """Every generated part outside the option tables, by id."""
     sections = {part: component_sections(kind) for kind, (_, part, _) in REGISTRIES.items()}
     return {"presets": presets_table(), "progress": progress_example(), "environments": environments_table(),
-            "observations": observations(), **sections}
+            "observations": observations(), "terms": terms.terms_table(), **sections}
 
 
 def render(text: str) -> str:

@@ -18,7 +18,7 @@ PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
 @pytest.mark.parametrize("page, ids", [
-    (readme.USAGE, ["progress", "bodies", "controllers", "tasks", "optimizers", "presets"]),
+    (readme.USAGE, ["progress", "bodies", "controllers", "tasks", "terms", "optimizers", "presets"]),
     (readme.GYM, ["environments", "observations"]),
 ])
 def test_generated_parts_agree_with_the_code(page, ids):

@@ -231,7 +231,7 @@ def changing_context(config: RunConfig) -> str | None:
     for what, changes in (("normalise.running", config.normalise.running), ("curriculum", bool(config.curriculum.phases)),
                           ("episode.perturbations", p.pushes > 0 or strong or bool(friction.start) or bool(friction.end)
                            or p.assist > 0 or p.settled_from > 0),
-                          ("random sources", hasattr(task, "draw_sources") and task.draw_sources((config.seed, 0)) is not None)):
+                          ("random sources", task.draw_sources((config.seed, 0)) is not None)):
         if changes:
             return what
     return None

@@ -82,6 +82,16 @@ class Task:
         """Presentation of each simulation row ``(n_rows,)``: genome p's presentation j is row p * S + j."""
         return np.arange(n_rows) % self.presentations
 
+    def draw_sources(self, key: tuple[int, int]) -> Any:
+        """What the task draws anew for generation ``key`` = (run seed, generation), the same for every genome (the
+        steer task's random sources, the command task's drawn commands), handed to :meth:`take_sources`; None (the
+        default): it draws nothing."""
+        return None
+
+    def take_sources(self, state: TaskState, drawn: Any) -> None:
+        """Follow ``drawn`` (a :meth:`draw_sources` draw, not None) in the episode begun as ``state``."""
+        raise NotImplementedError(f"the {self.name} task draws nothing")
+
     def bind_model(self, model) -> None:
         """Look up what the task needs in the compiled model (ConfigError if missing)."""
 
@@ -114,6 +124,9 @@ class Task:
             kept = getattr(state, f.name)
             if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
                 kept[ids] = value[ids]
+            elif isinstance(value, dict):  # arrays by name, per row (the terms' :attr:`WalkState.kept`)
+                for k, v in value.items():
+                    kept[k][ids] = v[ids]
             elif hasattr(kept, "restart"):  # a per-row record of its own (the gait lab's meter, a command schedule)
                 kept.restart(ids)
             elif not isinstance(value, (int, float, str)):

@@ -4,7 +4,7 @@ are ``(n, ...)`` over the episode's simulation rows."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -37,6 +37,8 @@ class WalkState(TaskState):
     travel: np.ndarray | None = None
     yaw: np.ndarray | None = None
     facing_now: np.ndarray | None = None
+    #: what the terms of :data:`evobiped.tasks.terms.WALK_TERMS` with a ``start`` keep, by name ``(n, ...)``
+    kept: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 @dataclass(eq=False, kw_only=True)
