@@ -44,7 +44,7 @@ class EnvOptions:
                                       unit="s", above=0)
     reset_noise_scale: float = option(0.01, "each hinge angle starts U(-s, s) off the body's initial pose", unit="rad", low=0)
     task: str = option("walk", "the task whose fitness increments are the reward (its terms are in `info`)",
-                       choices=tuple(TASKS))
+                       choices=TASKS)  # the registry itself: a task registered later counts
     task_options: Any = option(None, "the task's options (its table); none: its defaults, but the walk task's "
                                "`forward` fitness (forward progress per step; at a fall, the survival credit lost)")
     render_mode: str | None = option(None, "none, or `rgb_array` (needs an OpenGL context)", choices=(None, "rgb_array"))

@@ -36,7 +36,7 @@ class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
-    optimizer: str = option("ga", described(), choices=tuple(OPTIMIZERS))
+    optimizer: str = option("ga", described(), choices=OPTIMIZERS)  # the registry itself: one registered later counts
     #: optimizer name -> its settings (its ``Options``; given as a table or a parsed object), one for every registered
     #: optimizer (defaults where none are given): a config's ``[ga]``, ``[cma]``, ``[es]``, ``[map_elites]`` tables
     optimizer_options: dict = field(default_factory=dict)
