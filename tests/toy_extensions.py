@@ -98,4 +98,4 @@ TOY_TERMS = TermGroup(
     (Term("lateral", "m", "the displacement to the left of the initial facing"),
      Term("ticks_up", "", "control ticks stepped healthy")), "weights naming lateral",
     lambda task: "lateral" in task.weights, _lateral, tick=_count,
-    start=lambda task, body, sims: {"ticks_up": np.zeros(sims.n)})
+    start=lambda task, body, sims, state: {"ticks_up": np.zeros(sims.n)})

@@ -121,16 +121,20 @@ class Task:
             value = getattr(fresh, f.name)
             if f.name in EPISODE_FIELDS or value is None:
                 continue
-            kept = getattr(state, f.name)
-            if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
-                kept[ids] = value[ids]
-            elif isinstance(value, dict):  # arrays by name, per row (the terms' :attr:`WalkState.kept`)
+            if isinstance(value, dict):  # values by name (the terms' ``kept``), each begun anew as a field is
                 for k, v in value.items():
-                    kept[k][ids] = v[ids]
-            elif hasattr(kept, "restart"):  # a per-row record of its own (the gait lab's meter, a command schedule)
-                kept.restart(ids)
-            elif not isinstance(value, (int, float, str)):
-                raise ConfigError(f"{self.name} task: its state {f.name!r} is not kept per row, so rows cannot begin anew")
+                    self._restart_value(k, v, getattr(state, f.name)[k], ids, sims.n)
+            else:
+                self._restart_value(f.name, value, getattr(state, f.name), ids, sims.n)
+
+    def _restart_value(self, name: str, value: Any, kept: Any, ids: np.ndarray, n: int) -> None:
+        """Rows ``ids`` of ``kept`` (the state's ``name``) begun anew as ``value`` (a fresh start's) has them."""
+        if isinstance(value, np.ndarray) and value.shape[:1] == (n,):
+            kept[ids] = value[ids]
+        elif hasattr(kept, "restart"):  # a per-row record of its own (the gait lab's meter, a command schedule)
+            kept.restart(ids)
+        elif not isinstance(value, (int, float, str)):
+            raise ConfigError(f"{self.name} task: its state {name!r} is not kept per row, so rows cannot begin anew")
 
     #: the task reads the controller's neuron outputs (:meth:`on_tick`'s ``neurons``): it needs a controller
     def reads_neurons(self) -> bool:

@@ -17,7 +17,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..physics import gait_lab
+from ..core.errors import ConfigError
+from ..physics import gait, gait_lab
 
 
 @dataclass(frozen=True)
@@ -38,16 +39,17 @@ class TermGroup:
     ``needs`` says in words which options make the task report them, ``wanted(task)`` decides it; ``value(task,
     state, out)`` computes them at the end of an episode (``out``: the terms of the groups before, by name) ->
     name -> ``(n,)``; ``tick(task, body, sims, state, ok, neurons)`` keeps what they need after each control tick
-    (``ok``: the rows stepped and finite); ``start(task, body, sims)`` gives what ``tick`` keeps, name -> ``(n,
-    ...)`` array (in ``state.kept``); ``names(task)``: the names reported where they depend on the options (the gait
-    lab's sampling), else every term's; ``weighable``: the weighted fitness may weigh them."""
+    (``ok``: the rows stepped and finite); ``start(task, body, sims, state)`` gives what ``tick`` keeps, name ->
+    an ``(n, ...)`` array or a per-row record with ``restart(ids)`` (in ``state.kept``); ``names(task)``: the names
+    reported where they depend on the options (the gait lab's sampling), else every term's; ``weighable``: the
+    weighted fitness may weigh them."""
 
     terms: tuple[Term, ...]
     needs: str
     wanted: Callable[[Any], bool]
     value: Callable[[Any, Any, dict], dict[str, np.ndarray]]
     tick: Callable[..., None] | None = None
-    start: Callable[[Any, Any, Any], dict[str, np.ndarray]] | None = None
+    start: Callable[[Any, Any, Any, Any], dict[str, Any]] | None = None
     names: Callable[[Any], tuple[str, ...]] | None = None
     weighable: bool = True
 
@@ -62,18 +64,32 @@ class TermGroup:
         return self.all_names if self.names is None else self.names(task)
 
 
+def _steps_start(task, body, sims, state) -> dict:
+    """Each row's stance leg (:mod:`evobiped.physics.gait`: the episode keeps it from now on) and its steps ``(n,)``."""
+    if body.contact_sensor is None:
+        raise ConfigError(f"the walk task counts steps by foot contact; body {body.name!r} declares no contact sensor")
+    return {"stance": gait.tracker(body.contacts(sims), sims)["stance"].copy(), "steps": np.zeros(sims.n)}
+
+
 def _steps_tick(task, body, sims, state, ok, neurons) -> None:
-    stance = sims.extra["gait"]["stance"][ok]
-    state.steps[ok] += stance != state.stance[ok]
-    state.stance[ok] = stance
+    kept, stance = state.kept, sims.extra["gait"]["stance"][ok]
+    kept["steps"][ok] += stance != kept["stance"][ok]
+    kept["stance"][ok] = stance
+
+
+def _gait_measures_start(task, body, sims, state) -> dict:
+    """The path along the facing (m) and the facing's unwrapped turn (rad) so far ``(n,)``, the facing now
+    ``(n, 2)``."""
+    return {"travel": np.zeros(sims.n), "yaw": np.zeros(sims.n), "facing_now": state.facing.copy()}
 
 
 def _gait_measures_tick(task, body, sims, state, ok, neurons) -> None:
-    f, f1 = state.facing_now[ok], body.heading(sims)[ok]  # the facing before and after this tick
+    kept = state.kept
+    f, f1 = kept["facing_now"][ok], body.heading(sims)[ok]  # the facing before and after this tick
     step = body.planar_position(sims)[ok] - state.position[ok]
-    state.travel[ok] += np.einsum("pi,pi->p", step, f1)
-    state.yaw[ok] += np.arctan2(f[:, 0] * f1[:, 1] - f[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f, f1))
-    state.facing_now[ok] = f1
+    kept["travel"][ok] += np.einsum("pi,pi->p", step, f1)
+    kept["yaw"][ok] += np.arctan2(f[:, 0] * f1[:, 1] - f[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f, f1))
+    kept["facing_now"][ok] = f1
 
 
 def _cyclic_tick(task, body, sims, state, ok, neurons) -> None:
@@ -83,11 +99,11 @@ def _cyclic_tick(task, body, sims, state, ok, neurons) -> None:
 
 def _gait_measures(task, state, out) -> dict[str, np.ndarray]:
     up = np.maximum(np.asarray(state.end_time, float), 1e-9)
-    return {"speed": state.travel / up, "turning": np.degrees(state.yaw) / up}
+    return {"speed": state.kept["travel"] / up, "turning": np.degrees(state.kept["yaw"]) / up}
 
 
 def _lab(task, state, out) -> dict[str, np.ndarray]:
-    lab = state.gait_lab.measure(task.forward(state))
+    lab = state.kept["gait_lab"].measure(task.forward(state))
     return {k: lab[k] for k in task.lab_terms}
 
 
@@ -110,16 +126,21 @@ WALK_TERMS: list[TermGroup] = [
     TermGroup((Term("time_up", "s", "the time until the walker fell (the episode's length if it did not)"),
                Term("steps", "", "stance switches: touchdowns of the swing foot")), "fitness = 'weighted'",
               lambda task: task.counts_steps,
-              lambda task, state, out: {"time_up": np.array(state.end_time, float), "steps": state.steps.copy()},
-              tick=_steps_tick),
+              lambda task, state, out: {"time_up": np.array(state.end_time, float),
+                                        "steps": state.kept["steps"].copy()},
+              tick=_steps_tick, start=_steps_start),
     TermGroup((Term("pace", "m", "the displacement forward, counted up to pace_cap times the time up"),),
               "fitness = 'weighted' and weights naming it", lambda task: task.counts_steps and "pace" in task.weights,
               lambda task, state, out: {"pace": np.minimum(out["forward"], task.options.pace_cap * out["time_up"])}),
     TermGroup((Term("speed", "m/s", "the mean forward speed along the facing over the time up"),
                Term("turning", "deg/s", "the mean turning rate over the time up (+ left)")), "gait_measures = true",
-              lambda task: task.options.gait_measures, _gait_measures, tick=_gait_measures_tick, weighable=False),
-    TermGroup(LAB, "gait_terms = true, or weights naming one", lambda task: task.gait_lab, _lab, tick=lambda task, body, sims, state, ok, neurons: state.gait_lab.tick(
-                  body.tick_feet(sims), ok, sims.time[ok]), names=lambda task: task.lab_terms),
+              lambda task: task.options.gait_measures, _gait_measures, tick=_gait_measures_tick,
+              start=_gait_measures_start, weighable=False),
+    TermGroup(LAB, "gait_terms = true, or weights naming one", lambda task: task.gait_lab, _lab,
+              tick=lambda task, body, sims, state, ok, neurons: state.kept["gait_lab"].tick(
+                  body.tick_feet(sims), ok, sims.time[ok]),
+              start=lambda task, body, sims, state: {"gait_lab": task.gait_meter(body, sims, task.sampling)},
+              names=lambda task: task.lab_terms),
 ]
 
 

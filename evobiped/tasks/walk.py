@@ -55,7 +55,7 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from ..physics import gait, gait_lab
+from ..physics import gait_lab
 from ..core.errors import ConfigError
 from ..core.options import option
 from .base import Task
@@ -208,18 +208,9 @@ class WalkTask(Task):
         state = WalkState(start=p0, position=p0.copy(), facing=body.heading(sims).copy(), n_motor=len(body.actuator_names))
         if self.cyclic_weight:
             state.motor, state.ticks = [], np.zeros(sims.n, int)
-        if self.counts_steps:
-            if body.contact_sensor is None:
-                raise ConfigError(f"the walk task counts steps by foot contact; body {body.name!r} declares no contact sensor")
-            state.stance = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
-            state.steps = np.zeros(sims.n)
-        if self.gait_lab:
-            state.gait_lab = self.gait_meter(body, sims, self.sampling)
-        if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
-            state.travel, state.yaw, state.facing_now = np.zeros(sims.n), np.zeros(sims.n), state.facing.copy()
-        for g in self.term_groups:
+        for g in self.term_groups:  # what each group of terms keeps from tick to tick
             if g.start is not None:
-                state.kept.update(g.start(self, body, sims))
+                state.kept.update(g.start(self, body, sims, state))
         return state
 
     def reads_neurons(self):
