@@ -92,7 +92,7 @@ def direction_words(heading_deg: float) -> str:
 #: fitness name -> what it pays (see the module docstring)
 FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T",
            "weighted": "sum of weights[term] * term"}
-#: the walk task's terms that are not the gait lab's, and those the weighted fitness may weigh (:data:`WALK_TERMS`)
+#: the walk task's terms beside the gait lab's, in the order it reports them (:data:`WALK_TERMS`)
 TERMS = tuple(name for g in WALK_TERMS if g.terms is not LAB for name in g.all_names)
 #: the gait lab's terms (``gait_terms``): the duty factor of each foot, then the measures
 LAB_TERMS = gait_lab.terms("physics_step")
