@@ -80,6 +80,9 @@ class Controller(ABC):
     #: the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.interface.frame`; None: the body's)
     frame: Any = None
 
+    #: the width of the input vector it reads (set by its constructor), whose senses a run's running normaliser
+    #: learns (``EpisodeResult.senses``); None: it reads no such vector
+    n_inputs: int | None = None
     #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.core.options.option` fields)
     Options: ClassVar[type] = ControllerOptions
 
