@@ -1,12 +1,14 @@
 """The generated parts of the documentation: docs/usage.md's option tables, presets table and progress lines,
-docs/gym.md's environments and observation parts.
+docs/gym.md's environments and observation parts, all derived from the registries and the declarations.
 
-An option table sits between ``<!-- options: ID -->`` and ``<!-- end options -->`` in docs/usage.md, ID naming
-the component (``body reil``, ``controller ctrnn``, ``task walk``, ``episode perturbations``, ``optimizer ga``,
-``environment``, ...); any other generated part between ``<!-- generated: ID -->`` and ``<!-- end generated -->``
-(``presets``, ``progress`` in docs/usage.md; ``environments``, ``observation reil``, ``observation taga`` in
-docs/gym.md).  ``python -m evobiped.readme`` rewrites them; tests/test_options.py and tests/test_docs.py check
-that they agree with the code.
+Every registered body, controller, task and optimizer has its section in docs/usage.md, generated whole (heading,
+its ``docs_note``, its option table) between ``<!-- generated: bodies -->`` (``controllers``, ``tasks``,
+``optimizers``) and ``<!-- end generated -->``; every body that declares an environment its row of docs/gym.md's
+``environments`` and its observation table in ``observations`` (each part described by the body's or the task's
+``sensor_text``).  The other option tables sit between ``<!-- options: ID -->`` and ``<!-- end options -->``, ID
+naming them (``episode perturbations``, ``run stop``, ``environment``, ...); any other generated part between
+``<!-- generated: ID -->`` and ``<!-- end generated -->`` (``presets``, ``progress``).  ``python -m evobiped.readme``
+rewrites them; tests/test_options.py and tests/test_docs.py check that they agree with the code.
 """
 
 from __future__ import annotations
@@ -17,18 +19,15 @@ from pathlib import Path
 from .bodies import BODIES
 from .controllers import CONTROLLERS
 from .controllers.base import GENERIC_CONTROLLER_OPTIONS
-from .envs.walkers import EnvOptions
-from .optimizers.cma import CMAOptions
+from .envs.walkers import EnvOptions, env_id, observation
 from .run.curriculum import CurriculumOptions
 from .run.stopping import RestartOptions, StopOptions
-from .optimizers.es import ESOptions
-from .optimizers.map_elites import MapElitesOptions
 from .run.run_config import NormaliseOptions
-from .optimizers.ga import GAOptions
 from .core.options import markdown_table
-from .physics import gait
+from .optimizers import OPTIMIZERS
 from .physics.perturb import PerturbationOptions
 from .tasks import TASKS
+from .tasks import terms
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 #: the page that holds the option tables
@@ -40,81 +39,70 @@ MARKER = re.compile(r"(<!-- options: (?P<id>[a-z0-9_ -]+) -->\n)(?P<table>.*?)(<
 #: any other generated part: its id, the text
 GENERATED = re.compile(r"(<!-- generated: (?P<id>[a-z0-9_ -]+) -->\n)(?P<table>.*?)(<!-- end generated -->)", re.S)
 
-#: the Gymnasium environments: id -> (body, what it is, its action)
-ENVIRONMENTS = {
-    "evobiped/ReilBiped-v0": ("reil", "Reil & Husbands' 3D biped", "`(6,)` PD target angles (rad) in Table II's ranges"),
-    "evobiped/TagaBiped-v0": ("taga", "Taga's sagittal 5-link biped", "`(6,)` joint torques (N m), ±`max_torque`"),
-}
-
-#: what each sensor an observation can hold reads (a body's, a task's), for the observation tables
-SENSOR_TEXT = {
-    "joint_angles": "joint angles (rad) in action order: left hip pitch, left hip roll, left knee, right hip pitch, "
-                    "right hip roll, right knee",
-    "joint_velocities": "their rates (rad/s), same order",
-    "foot_contact": "foot contacts: left, right (0 or 1)",
-    "pelvis_tilt": "pelvis tilt: pitch (+ nose down), roll (+ left side up) (rad)",
-    "pelvis_tilt_rate": "their rates (rad/s)",
-    "com_from_feet": "centre of mass minus the left foot (forward, left), minus the right foot (forward, left) (m, "
-                     "heading frame)",
-    "com_velocity": "centre-of-mass velocity: forward, left (m/s, heading frame)",
-    "stance_leg": "which leg stands: +1 left, −1 right; it changes at the other foot's touchdown after ≥ 0.06 s "
-                  "in the air (`evobiped/physics/gait.py`)",
-    "since_touchdown": "seconds since the stance leg's touchdown, capped at 2 s",
-    "stance_side": "`stance_leg`'s value, not mirrored in the stance frame: a stance-frame network's way to turn",
-    "link_angles": "inertial angles of right thigh, right shank, left thigh, left shank (rad from the horizontal)",
-    "link_velocities": "their rates (rad/s), same order",
-    "ground_contact": "ground contacts: right, left (0 or 1)",
-    "ground_force": "ground forces F_g1..F_g4 (N)",
-    "sound": "the steer task's ear signal s (its sensor, after the body's)",
-    "command_speed": "the command task's commanded forward speed (m/s)",
-    "command_turning": "the command task's commanded turning rate (rad/s, + left; its sign changes in the stance frame's mirror)",
-    "command_stop": "the command task's stop: 1 at a zero speed command, else 0",
-}
+#: the registries whose every entry has a generated section: kind -> (the registry, the part of docs/usage.md that
+#: holds their sections, the config table of their options (None: each optimizer's own ``table``))
+REGISTRIES = {"body": (BODIES, "bodies", "episode.body_options"),
+              "controller": (CONTROLLERS, "controllers", "episode.controller_options"),
+              "task": (TASKS, "tasks", "episode.task_options"), "optimizer": (OPTIMIZERS, "optimizers", None)}
+#: the option tables outside the registries, by section id
+FIXED = {"episode perturbations": PerturbationOptions, "run normalise": NormaliseOptions,
+         "run curriculum": CurriculumOptions, "run stop": StopOptions, "run restart": RestartOptions,
+         "environment": EnvOptions}
 
 
 def tables() -> dict[str, str]:
-    """Every registered component's option table, by section id."""
+    """Every option table, by section id: each registered component's (``body reil``, ``optimizer ga``, ...), then
+    those of :data:`FIXED`."""
     out = {}
-    for kind, reg in (("body", BODIES), ("controller", CONTROLLERS), ("task", TASKS)):
+    for kind, (reg, _, _) in REGISTRIES.items():
         for name, cls in reg.items():
             # every controller's generic options (inputs, genes, latency) are described once, beside the tables
             out[f"{kind} {name}"] = markdown_table(cls.Options, skip=GENERIC_CONTROLLER_OPTIONS if kind == "controller" else ())
-    out["episode perturbations"] = markdown_table(PerturbationOptions)
-    out["optimizer ga"] = markdown_table(GAOptions)
-    out["optimizer cma"] = markdown_table(CMAOptions)
-    out["optimizer es"] = markdown_table(ESOptions)
-    out["optimizer map-elites"] = markdown_table(MapElitesOptions)
-    out["run normalise"] = markdown_table(NormaliseOptions)
-    out["run curriculum"] = markdown_table(CurriculumOptions)
-    out["run stop"] = markdown_table(StopOptions)
-    out["run restart"] = markdown_table(RestartOptions)
-    out["environment"] = markdown_table(EnvOptions)
-    return out
+    return out | {name: markdown_table(options) for name, options in FIXED.items()}
 
 
-def observation(body: str, task: str = "walk") -> dict[str, int]:
-    """The parts of an environment's observation in order (name -> width): the body's sensors, then the task's
-    (those read only on request left out, as the environment does)."""
-    return gait.by_default({**BODIES[body].sensor_widths, **TASKS[task]().sensor_widths()})
+def component_sections(kind: str) -> str:
+    """The sections of every registered component of ``kind`` (``"body"``, ...): a heading naming its config table
+    (the first's; each optimizer's), its ``docs_note``, its option table."""
+    reg, _, table = REGISTRIES[kind]
+    found, out = tables(), []
+    for i, (name, cls) in enumerate(reg.items()):
+        where = f"`[{cls.table if table is None else table}]`"
+        out.append(f"### {kind.title()} `{name}`{f' ({where})' if table is None or i == 0 else ''}\n\n"
+                   + (f"{cls.docs_note}\n\n" if cls.docs_note else "") + found[f"{kind} {name}"])
+    return "\n".join(out)
 
 
 def observation_table(body: str) -> str:
-    """The observation of ``body``'s environment part by part: indices, part, width, what it reads."""
+    """The observation of ``body``'s environment part by part: indices, part, width, what it reads (the body's and
+    the walk task's ``sensor_text``; KeyError for a part neither describes)."""
     rows, at = ["| indices | part | width | what it reads |", "|---|---|---|---|"], 0
+    text = {**BODIES[body].sensor_text, **TASKS["walk"].sensor_text}
     for name, width in observation(body).items():
         span = f"{at}" if width == 1 else f"{at}–{at + width - 1}"
-        rows.append(f"| {span} | `{name}` | {width} | {SENSOR_TEXT[name]} |")
+        rows.append(f"| {span} | `{name}` | {width} | {text[name]} |")
         at += width
     return "\n".join(rows) + "\n"
 
 
+def with_environment() -> list[str]:
+    """The registered bodies that declare a Gymnasium environment."""
+    return [name for name, cls in BODIES.items() if cls.environment is not None]
+
+
 def environments_table() -> str:
     rows = ["| id | body | observation | action |", "|---|---|---|---|"]
-    for env_id, (body, what, action) in ENVIRONMENTS.items():
-        parts = observation(body)
-        rows.append(f"| `{env_id}` | {what} | `({sum(parts.values())},)` float64: {', '.join(f'`{p}`' for p in parts)} "
-                    f"(parts below) | {action} |")
+    for body in with_environment():
+        cls, parts = BODIES[body], observation(body)
+        rows.append(f"| `{env_id(body)}` | {cls.environment.about} | `({sum(parts.values())},)` float64: "
+                    f"{', '.join(f'`{p}`' for p in parts)} (parts below) | `({len(cls.actuators)},)` "
+                    f"{cls.environment.action} |")
     return "\n".join(rows) + "\n"
+
+
+def observations() -> str:
+    """Every environment's observation table, each under its id."""
+    return "\n".join(f"`{env_id(body)}`:\n\n{observation_table(body)}" for body in with_environment())
 
 
 def presets_table() -> str:
@@ -151,10 +139,9 @@ def progress_example() -> str:
 
 def generated() -> dict[str, str]:
     """Every generated part outside the option tables, by id."""
-    out = {"presets": presets_table(), "progress": progress_example(), "environments": environments_table()}
-    for body in {b for b, _, _ in ENVIRONMENTS.values()}:
-        out[f"observation {body}"] = observation_table(body)
-    return out
+    sections = {part: component_sections(kind) for kind, (_, part, _) in REGISTRIES.items()}
+    return {"presets": presets_table(), "progress": progress_example(), "environments": environments_table(),
+            "observations": observations(), "terms": terms.terms_table(), **sections}
 
 
 def render(text: str) -> str:
@@ -167,7 +154,7 @@ def render(text: str) -> str:
 
 
 def sections(text: str) -> list[str]:
-    """The ids of the generated option tables in ``text``, in order."""
+    """The ids of the option tables between markers in ``text``, in order."""
     return [m["id"] for m in MARKER.finditer(text)]
 
 

@@ -10,6 +10,7 @@ from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import ConfigError
 from evobiped.run.run_config import RunConfig
 from evobiped.core.options import markdown_table, option, parse
+from evobiped import readme
 from evobiped.readme import USAGE, render, sections, tables
 from evobiped.tasks import TASKS
 
@@ -17,7 +18,10 @@ from evobiped.tasks import TASKS
 def test_the_usage_pages_tables_are_the_declarations():
     """docs/usage.md's option tables; regenerate with ``python -m evobiped.readme``."""
     text = USAGE.read_text()
-    assert sections(text) == list(tables())  # every component has its section, in registry order
+    assert sections(text) == list(readme.FIXED)  # the tables outside the registries have their markers
+    for kind, (reg, part, _) in readme.REGISTRIES.items():  # every registered component its section, in order
+        headings = [line for line in readme.generated()[part].splitlines() if line.startswith("### ")]
+        assert [line.split("`")[1] for line in headings] == list(reg)
     assert render(text) == text
 
 

@@ -15,7 +15,7 @@ from typing import Any, Callable, ClassVar, Collection, Literal
 import mujoco
 import numpy as np
 
-from ..interface.contract import Actuator
+from ..interface.contract import Actuator, Environment
 from ..core.errors import ConfigError
 from ..physics.gait_lab import FootSample, stacked
 from ..physics.models import load_model, model_path
@@ -51,6 +51,12 @@ class Body(ABC):
     #: action order, each with its leg and joint role, and its sensors, name -> width (see :meth:`sensors`)
     actuators: ClassVar[tuple[Actuator, ...]]
     sensor_widths: ClassVar[dict[str, int]] = {}
+    #: what each sensor reads, name -> a line with its units (docs/gym.md's observation tables; every sensor has one)
+    sensor_text: ClassVar[dict[str, str]] = {}
+    #: a paragraph docs/usage.md gives above its generated option table (markdown; "": none)
+    docs_note: ClassVar[str] = ""
+    #: the body's Gymnasium environment (None: none), registered by :mod:`evobiped.envs` from :data:`BODIES`
+    environment: ClassVar[Environment | None] = None
     #: the sensor telling which feet touch the ground (1/0), and the leg of each of its columns (None: none)
     contact_sensor: ClassVar[tuple[str, tuple[str, ...]] | None] = None
     #: True for a walker confined to its sagittal plane (nothing moves it sideways)

@@ -34,7 +34,7 @@ from typing import ClassVar, Collection
 import mujoco
 import numpy as np
 
-from ..interface.contract import Actuator
+from ..interface.contract import Actuator, Environment
 from ..core.errors import UserError
 from ..physics.sim import Sims
 from ..core.options import option
@@ -108,6 +108,20 @@ class ReilBiped(Body):
         "com_velocity": 2,
         **gait.WIDTHS,
     }
+    sensor_text: ClassVar[dict[str, str]] = {
+        "joint_angles": "joint angles (rad) in action order: left hip pitch, left hip roll, left knee, right hip "
+                        "pitch, right hip roll, right knee",
+        "joint_velocities": "their rates (rad/s), same order",
+        "foot_contact": "foot contacts: left, right (0 or 1)",
+        "pelvis_tilt": "pelvis tilt: pitch (+ nose down), roll (+ left side up) (rad)",
+        "pelvis_tilt_rate": "their rates (rad/s)",
+        "com_from_feet": "centre of mass minus the left foot (forward, left), minus the right foot (forward, left) (m, "
+                         "heading frame)",
+        "com_velocity": "centre-of-mass velocity: forward, left (m/s, heading frame)",
+        **gait.TEXT,
+    }
+    environment: ClassVar[Environment] = Environment(
+        "Reil & Husbands' 3D biped", "PD target angles (rad) in Table II's ranges", 0.02, camera_azimuth=135.0)
     #: standing values (the reset pose: straight legs, feet under the hips 0.25 m either side of the centre of
     #: mass) and scales of about one standard deviation of each reading in a 50 s walk of a balance walker
     sensor_norms: ClassVar[dict[str, tuple[tuple[float, ...], tuple[float, ...]]]] = {

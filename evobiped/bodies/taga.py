@@ -32,7 +32,7 @@ from typing import ClassVar, Collection
 import mujoco
 import numpy as np
 
-from ..interface.contract import Actuator
+from ..interface.contract import Actuator, Environment
 from ..core.errors import ConfigError, UserError
 from ..physics.gait_lab import FootSample
 from ..physics.sim import Sims
@@ -95,6 +95,12 @@ class TagaBiped(Body):
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}
+    sensor_text: ClassVar[dict[str, str]] = {
+        "link_angles": "inertial angles of right thigh, right shank, left thigh, left shank (rad from the horizontal)",
+        "link_velocities": "their rates (rad/s), same order", "ground_contact": "ground contacts: right, left (0 or 1)",
+        "ground_force": "ground forces F_g1..F_g4 (N)"}
+    environment: ClassVar[Environment] = Environment("Taga's sagittal 5-link biped",
+                                                     "joint torques (N m), ±`max_torque`", 0.01)
     #: standing values and scales for a controller that normalises its inputs: about the mean and standard deviation
     #: of each reading over seconds 2-10 of the Appendix D walker's gait (the same for both legs)
     sensor_norms: ClassVar[dict] = {
@@ -166,8 +172,7 @@ class TagaBiped(Body):
         q[rows, self._qadr[0]], q[rows, self._qadr[1]] = INITIAL_HIP
         q[rows, self._qadr[2]], q[rows, self._qadr[4]] = INITIAL_ANGLES["right"] - np.pi / 2, INITIAL_ANGLES["left"] - np.pi / 2
         q[rows, self._qadr[3]] = q[rows, self._qadr[5]] = 0.0
-        sims.qvel[rows] = 0.0
-        sims.qfrc_applied[rows] = 0.0
+        sims.qvel[rows] = sims.qfrc_applied[rows] = 0.0
         for a in self._ground(sims).values():
             a[rows] = 0
         sims.forward(ids)  # after the ground's state, so no reading of the old state is kept
@@ -201,29 +206,23 @@ class TagaBiped(Body):
         self._ground(sims)["torque"][ids] = action
 
     def substep(self, sims: Sims, ids: np.ndarray) -> None:
-        st = self._ground(sims)
-        p = self.p
-        k = self.links(sims)
+        st, p, k = self._ground(sims), self.p, self.links(sims)
         ax, ay = k["ankle"][ids, :, 0], k["ankle"][ids, :, 1]
         vx, vy = k["dankle"][ids, :, 0], k["dankle"][ids, :, 1]
         below = ay - self.terrain(ax) < 0
-        touch = below & ~st["contact"][ids]
-        rest = st["rest"][ids]
+        touch, rest = below & ~st["contact"][ids], st["rest"][ids]
         rest[..., 0] = np.where(touch, ax, rest[..., 0])
         rest[..., 1] = np.where(touch, self.terrain(ax), rest[..., 1])
-        st["rest"][ids] = rest
-        st["contact"][ids] = below
+        st["rest"][ids], st["contact"][ids] = rest, below
         kg, bg = st.get("kg", p["kg"]), st.get("bg", p["bg"])  # the ground under each simulation, else the body's
-        kg = kg[ids, None] if kg.ndim else kg
-        bg = bg[ids, None] if bg.ndim else bg
+        kg, bg = (kg[ids, None] if kg.ndim else kg), (bg[ids, None] if bg.ndim else bg)
         fx = np.where(below, -kg * (ax - rest[..., 0]) - bg * vx, 0.0)
         fy = np.where(below, -kg * (ay - rest[..., 1]) + bg * np.maximum(-vy, 0.0), 0.0)
         st["force"][ids] = np.stack([fx[:, 0], fy[:, 0], fx[:, 1], fy[:, 1]], 1)
         on = (fy > 0).astype(float)  # h(F_g2), h(F_g4) with h(0) = 0
         T = st["torque"][ids]
         t_hip, t_knee, t_ankle = T[:, [0, 3]], T[:, [1, 4]], T[:, [2, 5]] * on
-        thigh, shank = k["thigh"][ids], k["shank"][ids]
-        dthigh, dshank = k["dthigh"][ids], k["dshank"][ids]
+        thigh, shank, dthigh, dshank = k["thigh"][ids], k["shank"][ids], k["dthigh"][ids], k["dshank"][ids]
         over = np.maximum(thigh - shank, 0.0)  # knee hyperextension x5 - x11 (rad)
         knee_rel = dshank - dthigh
         # link torques (in the sense of increasing inertial angle)
@@ -237,11 +236,9 @@ class TagaBiped(Body):
         def moment(r, fx_, fz_):
             return r[..., 1] * fx_ - r[..., 0] * fz_
 
-        q_hip = q_hip + moment(ankle - hip, fx, fy)
-        q_knee = q_knee + moment(ankle - knee, fx, fy)
+        q_hip, q_knee = q_hip + moment(ankle - hip, fx, fy), q_knee + moment(ankle - knee, fx, fy)
         qf = np.zeros((len(ids), 6))
-        qf[:, 0], qf[:, 1] = fx.sum(1), fy.sum(1)
-        qf[:, [2, 4]], qf[:, [3, 5]] = q_hip, q_knee
+        qf[:, 0], qf[:, 1], qf[:, [2, 4]], qf[:, [3, 5]] = fx.sum(1), fy.sum(1), q_hip, q_knee
         sims.qfrc_applied[np.ix_(ids, self._dadr)] = qf
 
     def feet(self, sims: Sims) -> FootSample:

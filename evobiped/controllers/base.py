@@ -61,6 +61,8 @@ class Controller(ABC):
     """Base class; subclasses are registered in :data:`evobiped.controllers.CONTROLLERS`."""
 
     name: ClassVar[str]
+    #: a paragraph docs/usage.md gives above its generated option table (markdown; "": none)
+    docs_note: ClassVar[str] = ""
     #: how :func:`evobiped.interface.mapping.to_action` reads the outputs: "unit": in [0, 1] spanning the joint's range;
     #: "centred": in [0, 1] with 0.5 at 0 rad; "signed": real-valued, centred on 0; "angle": joint targets in rad
     output_kind: ClassVar[Literal["unit", "centred", "centred_full", "signed", "angle"]]
@@ -78,6 +80,9 @@ class Controller(ABC):
     #: the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.interface.frame`; None: the body's)
     frame: Any = None
 
+    #: the width of the input vector it reads (set by its constructor), whose senses a run's running normaliser
+    #: learns (``EpisodeResult.senses``); None: it reads no such vector
+    n_inputs: int | None = None
     #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.core.options.option` fields)
     Options: ClassVar[type] = ControllerOptions
 

@@ -50,6 +50,10 @@ class Linear(Controller):
     """``y = b + W^T x``: no state, every output from every (normalised) input."""
 
     name: ClassVar[str] = "linear"
+    docs_note: ClassVar[str] = (
+        "Joint targets = bias + W · normalised senses: every gene zero is the standing posture. The simplest policy "
+        "that\nevolution strategies turn into a walker from scratch ([the route from scratch]"
+        "(#the-route-from-scratch-evolution-strategies)).")
     output_kind: ClassVar[str] = "angle"
     normalises_inputs = True
 

@@ -74,6 +74,9 @@ class OpenLoop(Controller):
     """Targets as a function of time only; see the module docstring."""
 
     name: ClassVar[str] = "open-loop"
+    docs_note: ClassVar[str] = ("Joint targets as a function of time alone, no sensors (what "
+                                "`scripts/open_loop_probe.py` searches;\nevobiped/controllers/open_loop.py gives the "
+                                "two forms' formulas).")
     output_kind: ClassVar[str] = "angle"
     Options: ClassVar[type] = OpenLoopOptions
 

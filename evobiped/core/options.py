@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import MISSING, field, fields
-from typing import Any, Callable
+from typing import Any, Callable, Collection
 
 from .errors import ConfigError
 from .schedule import Schedule
@@ -24,11 +24,13 @@ from .validate import number
 
 
 def option(default: Any, doc: str, *, unit: str = "", low: float | None = None, high: float | None = None,
-           above: float | None = None, below: float | None = None, integer: bool = False, choices: tuple | None = None,
+           above: float | None = None, below: float | None = None, integer: bool = False,
+           choices: Collection | None = None,
            check: Callable[[Any], None] | None = None, span: str = "", schedule: bool = False) -> Any:
     """A dataclass field: ``default``, its meaning ``doc`` and ``unit``, and what values it takes.
 
-    ``low``/``high``/``above``/``below``/``integer``: a number in that range; ``choices``: one of these;
+    ``low``/``high``/``above``/``below``/``integer``: a number in that range; ``choices``: one of these (a registry
+    itself, read when a value is checked, so that one registered later counts);
     a bool default: true or false; ``check(value)``: anything else (ConfigError without the
     path); ``span``: the range as the README shows it when ``check`` decides it.  A None
     default also takes None.  ``schedule``: the value may also be a schedule over the generations

@@ -9,6 +9,7 @@ its whole batch in one call, and row i of it follows exactly the trajectory of a
 
 from __future__ import annotations
 
+import textwrap
 from typing import ClassVar
 
 import gymnasium
@@ -21,7 +22,8 @@ from ..bodies import BODIES
 from ..core.errors import ConfigError
 from ..core.options import markdown_table
 from .camera import Camera
-from .walkers import EnvOptions, Walkers, env_config
+from ..physics import gait
+from .walkers import EnvOptions, Walkers, env_config, env_name
 
 
 def _walkers(cls, n: int, kwargs: dict) -> tuple[Walkers, EnvOptions]:
@@ -146,63 +148,49 @@ class BipedVectorEnv(VectorEnv):
             self._camera = None
 
 
-_REIL = """Reil & Husbands' 3D biped: PD target angles in, the body's sensors out.
-
-    Observation ``(26,)`` float64, in this order: ``joint_angles`` (6, rad) and
-    ``joint_velocities`` (6, rad/s) in action order, ``foot_contact`` (2: left, right;
-    0/1), ``pelvis_tilt`` (2: pitch, roll; rad) and ``pelvis_tilt_rate`` (2, rad/s),
-    ``com_from_feet`` (4: centre of mass minus the left foot, forward and left, then minus
-    the right foot; m) and ``com_velocity`` (2: forward, left; m/s), in the heading frame;
-    the gait senses ``stance_leg`` (1: +1 while the left leg stands, -1 the right) and
-    ``since_touchdown`` (1: s since the stance leg's touchdown, capped at 2 s); then the
-    task's sensors, if it has any (docs/gym.md has the indices).
-    Action ``(6,)``: PD target angles (rad) of left hip pitch, left hip roll, left knee,
-    right hip pitch, right hip roll, right knee, in Table II's ranges (hip pitch
-    [-1.3, 1.6], hip roll [-0.8, 0.8], knee [-1.4, 0]); values outside are clipped.
-    Reward: the increment of the task's fitness over the step (by default the walk task's
-    forward fitness: forward progress of the pelvis, m, along the direction the walker faced
-    at reset, and at a fall the survival credit it lost); ``info`` has the fitness and the
-    task's terms.  Terminated when it falls (or the simulation blows up:
-    ``info["unstable"]``); truncated at ``seconds``."""
-
-_TAGA = """Taga, Yamaguchi & Shimizu's sagittal 5-link biped: joint torques in, its sensors out.
-
-    Observation ``(14,)`` float64, in this order: ``link_angles`` (4: inertial angles of
-    right thigh, right shank, left thigh, left shank; rad from the horizontal),
-    ``link_velocities`` (4: their rates, rad/s), ``ground_contact`` (2: right, left; 0/1)
-    and ``ground_force`` (4: F_g1..F_g4, N).
-    Action ``(6,)``: torques (N m) of right hip, knee, ankle and left hip, knee, ankle,
-    within +-``max_torque`` (clipped); the ankle torques act only while that foot is on the
-    ground.  The Appendix A ground and joint forces are added before every physics step.
-    Reward: the increment of the task's fitness over the step (by default forward progress
-    of the hip, m, along +x, and at a fall the survival credit lost); ``info`` has the
-    fitness and the task's terms.  Terminated when the hip falls below ``fall_height`` (or
-    the simulation blows up); truncated at ``seconds``."""
-
 _VECTOR = ("\n\n    Vector form: ``num_envs`` walkers stepped in one ``mujoco.batch`` call (next-step autoreset).")
 
 
-class ReilBipedEnv(BipedEnv):
-    __doc__ = _doc(_REIL, "reil")
-    body_name = "reil"
-    default_control_dt = 0.02
-    camera_azimuth = 135.0
+def _summary(body: str) -> str:
+    """What an environment of registered body ``body`` is, from the body's declarations (its ``environment``, its
+    sensors, its actuators), as docstring lines (the default walk task adds no sensor: no task is built here)."""
+    cls = BODIES[body]
+    parts = gait.by_default(cls.sensor_widths)
+    listed = ", ".join(f"``{name}`` ({width}: {cls.sensor_text[name]})" for name, width in parts.items())
+    return "\n    ".join(textwrap.wrap(
+        f"Observation ``({sum(parts.values())},)`` float64, in this order: {listed}; then the task's sensors, if it "
+        f"has any (docs/gym.md has the indices).  Action ``({len(cls.actuators)},)``: {cls.environment.action} "
+        f"({', '.join(a.name for a in cls.actuators)}); values outside are clipped.  Reward: the increment of the "
+        "task's fitness over the step (by default the walk task's forward fitness: forward progress, m, along the "
+        "direction the walker faced at reset, and at a fall the survival credit it lost); ``info`` has the fitness "
+        "and the task's terms.  Terminated when it falls (or the simulation blows up: ``info[\"unstable\"]``); "
+        "truncated at ``seconds``.", 112)).join(
+        (f"{cls.environment.about}: {'PD target angles' if cls.action_kind == 'position' else 'joint torques'} in, "
+         "the body's sensors out.\n\n    ", ""))
 
 
-class TagaBipedEnv(BipedEnv):
-    __doc__ = _doc(_TAGA, "taga")
-    body_name = "taga"
-    default_control_dt = 0.01
+#: body name -> its environment classes (one walker, the vector form), made once
+_CLASSES: dict[str, tuple[type[BipedEnv], type[BipedVectorEnv]]] = {}
 
 
-class ReilBipedVectorEnv(BipedVectorEnv):
-    __doc__ = _doc(_REIL + _VECTOR, "reil")
-    body_name = "reil"
-    default_control_dt = 0.02
-    camera_azimuth = 135.0
+def env_classes(body: str) -> tuple[type[BipedEnv], type[BipedVectorEnv]]:
+    """The environment classes of registered body ``body`` (one walker, the vector form), made once from its
+    declarations: ``<Name>BipedEnv`` and ``<Name>BipedVectorEnv`` (:func:`~evobiped.envs.walkers.env_name`)."""
+    if body not in _CLASSES:
+        spec, name = BODIES[body].environment, env_name(body)
+        fixed = dict(body_name=body, default_control_dt=spec.control_dt, camera_azimuth=spec.camera_azimuth,
+                     __module__=__name__)
+        _CLASSES[body] = (
+            type(f"{name}Env", (BipedEnv,), dict(fixed, __qualname__=f"{name}Env", __doc__=_doc(_summary(body), body))),
+            type(f"{name}VectorEnv", (BipedVectorEnv,),
+                 dict(fixed, __qualname__=f"{name}VectorEnv", __doc__=_doc(_summary(body) + _VECTOR, body))))
+    return _CLASSES[body]
 
 
-class TagaBipedVectorEnv(BipedVectorEnv):
-    __doc__ = _doc(_TAGA + _VECTOR, "taga")
-    body_name = "taga"
-    default_control_dt = 0.01
+def __getattr__(attr: str):
+    """``ReilBipedEnv``, ``TagaBipedVectorEnv``, ...: the environment classes of every registered body with an
+    environment (so that Gymnasium's entry points and pickles find them by name)."""
+    for body, cls in BODIES.items():
+        if cls.environment is not None and attr in (f"{env_name(body)}Env", f"{env_name(body)}VectorEnv"):
+            return env_classes(body)[attr.endswith("VectorEnv")]
+    raise AttributeError(f"module {__name__!r} has no attribute {attr!r}")

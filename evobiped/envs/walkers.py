@@ -13,6 +13,7 @@ ended).
 from __future__ import annotations
 
 import copy
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +21,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from ..bodies import BODIES
 from ..episode import EpisodeConfig, EpisodeState
 from ..episode.parts import parsed
 from ..physics import gait
@@ -36,12 +38,13 @@ class EnvOptions:
     ``task_options`` is parsed when the options are (into the task's frozen ``Options``)."""
 
     seconds: float = option(50.0, "episode length; truncated when reached", unit="s", above=0)
-    control_dt: float | None = option(None, "control period: one step is this much physics (none: the environment's, "
-                                      "0.02 s for Reil, 0.01 s for Taga); a multiple of the body's physics step",
+    control_dt: float | None = option(None, "control period: one step is this much physics (none: the one the body "
+                                      "declares for its environment, docs/gym.md); a multiple of the body's physics "
+                                      "step",
                                       unit="s", above=0)
     reset_noise_scale: float = option(0.01, "each hinge angle starts U(-s, s) off the body's initial pose", unit="rad", low=0)
     task: str = option("walk", "the task whose fitness increments are the reward (its terms are in `info`)",
-                       choices=tuple(TASKS))
+                       choices=TASKS)  # the registry itself: a task registered later counts
     task_options: Any = option(None, "the task's options (its table); none: its defaults, but the walk task's "
                                "`forward` fitness (forward progress per step; at a fall, the survival credit lost)")
     render_mode: str | None = option(None, "none, or `rgb_array` (needs an OpenGL context)", choices=(None, "rgb_array"))
@@ -53,6 +56,22 @@ class EnvOptions:
         if table is None:
             table = {"fitness": "forward"} if self.task == "walk" else {}
         object.__setattr__(self, "task_options", parsed(TASKS[self.task].Options, table, "task_options"))
+
+
+def env_name(body: str) -> str:
+    """The name of registered body ``body``'s environment: ``"reil"`` -> ``"ReilBiped"`` (``evobiped/ReilBiped-v0``)."""
+    return "".join(part.title() for part in re.split(r"[-_]", body)) + "Biped"
+
+
+def env_id(body: str) -> str:
+    """The Gymnasium id of registered body ``body``'s environment, ``evobiped/<env_name>-v0``."""
+    return f"evobiped/{env_name(body)}-v0"
+
+
+def observation(body: str, task: str = "walk") -> dict[str, int]:
+    """The parts of an environment's observation in order (name -> width): the body's sensors, then the task's
+    under its default options (those read only on request left out, as the environment does)."""
+    return gait.by_default({**BODIES[body].sensor_widths, **TASKS[task]().sensor_widths()})
 
 
 def env_config(body: str, default_control_dt: float, kwargs: dict, where: str) -> tuple[EpisodeConfig, EnvOptions]:

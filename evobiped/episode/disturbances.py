@@ -18,7 +18,7 @@ def draw_trials(perturbations: PerturbationOptions | None, task: Task, key: tupl
     """The perturbed presentations of generation key = (run seed, generation) (None: nominal) of an episode of ``seconds``
     s under ``perturbations``, with the task's random sources of that generation (the steer task's sources, the command
     task's drawn commands; shared by every genome); ``n_genes`` None: no controller (no gene noise)."""
-    drawn = task.draw_sources(key) if key is not None and hasattr(task, "draw_sources") else None
+    drawn = task.draw_sources(key) if key is not None else None
     if key is None or (perturbations is None and drawn is None):
         return None
     trials = Trials.nominal(1, n_actuators) if perturbations is None else perturbations.draw(

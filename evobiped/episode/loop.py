@@ -139,7 +139,7 @@ class Episode:
         ctx = context or Context()
         if ctx.weights is not None:
             tstate.weights = dict(ctx.weights)
-        k = self.controller.n_inputs if self.controller is not None and hasattr(self.controller, "n_inputs") else None
+        k = None if self.controller is None else self.controller.n_inputs
         return EpisodeState(
             sims=sims, params=params, task=tstate,
             controller=None if self.controller is None else self.controller.initial_state(params),

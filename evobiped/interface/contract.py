@@ -28,6 +28,18 @@ class Actuator:
     joint: str
 
 
+@dataclass(frozen=True)
+class Environment:
+    """A body's Gymnasium environment (``evobiped/<body class name>-v0``, :mod:`evobiped.envs`): what the body is, what
+    its action is (after its shape, for docs/gym.md), its control period (s) and the camera's azimuth (degrees; 90
+    looks at the walker's left side)."""
+
+    about: str
+    action: str
+    control_dt: float
+    camera_azimuth: float = 90.0
+
+
 def legs(actuators: tuple[Actuator, ...]) -> dict[str, tuple[str, ...]]:
     """``{leg: its joint roles in action order}``, legs in the order their first actuator comes."""
     out: dict[str, tuple[str, ...]] = {}

@@ -121,6 +121,8 @@ class Optimizer:
     table: ClassVar[str] = ""
     #: what it is, in a few words (the ``optimizer`` option's and ``--optimizer``'s help)
     about: ClassVar[str] = ""
+    #: a paragraph docs/usage.md gives above its generated option table (markdown; "": none)
+    docs_note: ClassVar[str] = ""
     #: config.json holds this table in every run (the GA's and CMA-ES's, as it always has), not only in this
     #: optimizer's runs when its settings differ from the defaults
     always_written: ClassVar[bool] = False

@@ -140,6 +140,7 @@ class MapElites(Optimizer):
 
     name, Options, table = "map-elites", MapElitesOptions, "map_elites"
     about = "a repertoire: one elite per cell of two measures; needs the qd extra"
+    docs_note = "A gait repertoire, and what is done with one: docs/repertoire.md."
 
     def __init__(self, layout, config: MapElitesOptions, **start):
         """As every optimizer (:meth:`Optimizer.__init__`); the first batch is the start genome and its mutants, or

@@ -37,6 +37,11 @@ MIN_AIRBORNE = 0.06
 CAP = 2.0
 NAMES = ("stance_leg", "since_touchdown", "stance_side")
 WIDTHS = {"stance_leg": 1, "since_touchdown": 1, "stance_side": 1}
+#: what each sense reads (docs/gym.md's observation tables)
+TEXT = {"stance_leg": "which leg stands: +1 left, −1 right; it changes at the other foot's touchdown after ≥ 0.06 s "
+                      "in the air (`evobiped/physics/gait.py`)",
+        "since_touchdown": "seconds since the stance leg's touchdown, capped at 2 s",
+        "stance_side": "`stance_leg`'s value, not mirrored in the stance frame: a stance-frame network's way to turn"}
 #: senses read only when a controller's ``inputs`` name them: they repeat another outside the stance frame, so a
 #: controller's default inputs and the Gym observation leave them out
 ON_REQUEST = ("stance_side",)

@@ -68,25 +68,28 @@ SAMPLING_HELP = ("how the gait terms sample the feet: `physics_step` (after ever
 #: high while the walker falls)
 LIFT_CAP = 0.05
 G = 9.81
-#: the per-row measures of :meth:`GaitMeter.measure` (plus ``duty_<foot>`` for each foot), with their units
+#: the per-row measures of :meth:`GaitMeter.measure` (plus ``duty_<foot>`` for each foot): name -> (unit, what it is)
 MEASURES = {
-    "duty_min": "smallest duty factor of the feet", "duty_asymmetry": "largest minus smallest duty factor",
-    "airborne": "share of the time up with no foot standing", "double_support": "share of the time up with two feet standing",
-    "steps_per_s": "stance episodes per second up", "step_length": "forward travel per step (m)",
-    "slip": "median stance slip speed (m/s)", "slip_share": "median stance slip over the speed",
-    "sliding": "stance feet's slip distance per second up (m/s; 0 without a stance)",
-    "clearance": "mean peak swing-foot height (m)", "lift": "mean peak swing-foot height, each swing's capped at LIFT_CAP (m)",
-    "knee_swing": "mean knee excursion in swing (rad)",
-    "power": "mean positive mechanical power (W/kg)", "positive_work": "positive mechanical work (J/kg)",
-    "cost_of_transport": "positive work / (m g distance forward)", "froude": "v^2 / (g L)",
+    "duty_min": ("", "smallest duty factor of the feet"), "duty_asymmetry": ("", "largest minus smallest duty factor"),
+    "airborne": ("", "share of the time up with no foot standing"),
+    "double_support": ("", "share of the time up with two feet standing"),
+    "steps_per_s": ("1/s", "stance episodes per second up"), "step_length": ("m", "forward travel per step"),
+    "slip": ("m/s", "median stance slip speed"), "slip_share": ("", "median stance slip over the speed"),
+    "sliding": ("m/s", "stance feet's slip distance per second up (0 without a stance)"),
+    "clearance": ("m", "mean peak swing-foot height"),
+    "lift": ("m", "mean peak swing-foot height, each swing's capped at LIFT_CAP"),
+    "knee_swing": ("rad", "mean knee excursion in swing"),
+    "power": ("W/kg", "mean positive mechanical power"), "positive_work": ("J/kg", "positive mechanical work"),
+    "cost_of_transport": ("", "positive work / (m g distance forward)"), "froude": ("", "v^2 / (g L)"),
 }
 #: the measures of a ``control_tick`` meter (the walk and steer tasks' gait terms under that sampling)
 MEASURES_TICK = tuple(MEASURES)
 MEASURES |= {
-    "slip_p90": "90th percentile of the stance slip speed (m/s)", "slip_p90_share": "slip_p90 over the speed",
-    "slide_per_m": "stance feet's slip distance per metre forward (m/m)",
-    "step_leg": "step length in leg lengths", "step_similar": "step length over dynamic similarity's step at the Froude number",
-    "torque_cost": "mean sum of squared joint torques per kg (N^2 m^2 / kg)",
+    "slip_p90": ("m/s", "90th percentile of the stance slip speed"), "slip_p90_share": ("", "slip_p90 over the speed"),
+    "slide_per_m": ("m/m", "stance feet's slip distance per metre forward"),
+    "step_leg": ("", "step length in leg lengths"),
+    "step_similar": ("", "step length over dynamic similarity's step at the Froude number"),
+    "torque_cost": ("N^2 m^2/kg", "mean sum of squared joint torques per kg"),
 }
 
 

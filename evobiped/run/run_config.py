@@ -36,7 +36,7 @@ class RunConfig:
     """Everything that defines a run; saved as config.json."""
 
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
-    optimizer: str = option("ga", described(), choices=tuple(OPTIMIZERS))
+    optimizer: str = option("ga", described(), choices=OPTIMIZERS)  # the registry itself: one registered later counts
     #: optimizer name -> its settings (its ``Options``; given as a table or a parsed object), one for every registered
     #: optimizer (defaults where none are given): a config's ``[ga]``, ``[cma]``, ``[es]``, ``[map_elites]`` tables
     optimizer_options: dict = field(default_factory=dict)
@@ -231,7 +231,7 @@ def changing_context(config: RunConfig) -> str | None:
     for what, changes in (("normalise.running", config.normalise.running), ("curriculum", bool(config.curriculum.phases)),
                           ("episode.perturbations", p.pushes > 0 or strong or bool(friction.start) or bool(friction.end)
                            or p.assist > 0 or p.settled_from > 0),
-                          ("random sources", hasattr(task, "draw_sources") and task.draw_sources((config.seed, 0)) is not None)):
+                          ("random sources", task.draw_sources((config.seed, 0)) is not None)):
         if changes:
             return what
     return None

@@ -49,6 +49,10 @@ class Task:
     presentations: int = 1
     #: names of the fitness terms :meth:`terms` returns, each ``(n,)`` per simulation row
     term_names: ClassVar[tuple[str, ...]] = ()
+    #: a paragraph docs/usage.md gives above its generated option table (markdown; "": none)
+    docs_note: ClassVar[str] = ""
+    #: what each sensor the task may add reads, name -> a line with its units (docs/gym.md; every sensor has one)
+    sensor_text: ClassVar[dict[str, str]] = {}
     #: named fitness criteria: name -> the task options that select it (the study's conditions, ``evolve --cyclic``)
     criteria: ClassVar[dict[str, dict]] = {}
 
@@ -77,6 +81,16 @@ class Task:
     def presentation_of(self, n_rows: int) -> np.ndarray:
         """Presentation of each simulation row ``(n_rows,)``: genome p's presentation j is row p * S + j."""
         return np.arange(n_rows) % self.presentations
+
+    def draw_sources(self, key: tuple[int, int]) -> Any:
+        """What the task draws anew for generation ``key`` = (run seed, generation), the same for every genome (the
+        steer task's random sources, the command task's drawn commands), handed to :meth:`take_sources`; None (the
+        default): it draws nothing."""
+        return None
+
+    def take_sources(self, state: TaskState, drawn: Any) -> None:
+        """Follow ``drawn`` (a :meth:`draw_sources` draw, not None) in the episode begun as ``state``."""
+        raise NotImplementedError(f"the {self.name} task draws nothing")
 
     def bind_model(self, model) -> None:
         """Look up what the task needs in the compiled model (ConfigError if missing)."""
@@ -107,13 +121,20 @@ class Task:
             value = getattr(fresh, f.name)
             if f.name in EPISODE_FIELDS or value is None:
                 continue
-            kept = getattr(state, f.name)
-            if isinstance(value, np.ndarray) and value.shape[:1] == (sims.n,):
-                kept[ids] = value[ids]
-            elif hasattr(kept, "restart"):  # a per-row record of its own (the gait lab's meter, a command schedule)
-                kept.restart(ids)
-            elif not isinstance(value, (int, float, str)):
-                raise ConfigError(f"{self.name} task: its state {f.name!r} is not kept per row, so rows cannot begin anew")
+            if isinstance(value, dict):  # values by name (the terms' ``kept``), each begun anew as a field is
+                for k, v in value.items():
+                    self._restart_value(k, v, getattr(state, f.name)[k], ids, sims.n)
+            else:
+                self._restart_value(f.name, value, getattr(state, f.name), ids, sims.n)
+
+    def _restart_value(self, name: str, value: Any, kept: Any, ids: np.ndarray, n: int) -> None:
+        """Rows ``ids`` of ``kept`` (the state's ``name``) begun anew as ``value`` (a fresh start's) has them."""
+        if isinstance(value, np.ndarray) and value.shape[:1] == (n,):
+            kept[ids] = value[ids]
+        elif hasattr(kept, "restart"):  # a per-row record of its own (the gait lab's meter, a command schedule)
+            kept.restart(ids)
+        elif not isinstance(value, (int, float, str)):
+            raise ConfigError(f"{self.name} task: its state {name!r} is not kept per row, so rows cannot begin anew")
 
     #: the task reads the controller's neuron outputs (:meth:`on_tick`'s ``neurons``): it needs a controller
     def reads_neurons(self) -> bool:

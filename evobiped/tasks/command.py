@@ -38,7 +38,7 @@ from ..core.options import option
 from .command_schedule import check_times, draw_commands, schedule_of
 from .states import CommandState
 from ..physics.gait_lab import SAMPLING_HELP, check_sampled
-from .walk import LAB_TERMS, TERMS, WalkTask
+from .walk import WalkTask, check_weights
 
 #: the terms the command task adds to the walk task's
 COMMAND_TERMS = ("track_speed", "track_turning", "stand")
@@ -49,13 +49,7 @@ SCHEDULES = ("constant", "piecewise", "drawn")
 
 
 def _weights(v) -> None:
-    if not (isinstance(v, dict) and v and all(isinstance(k, str) for k in v)
-            and all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in v.values())):
-        raise ConfigError(f"must be a table of finite weights by term name, got {v!r}")
-    known = COMMAND_TERMS + tuple(t for t in TERMS if t != "cyclicity") + LAB_TERMS + ("pace",)
-    unknown = [k for k in v if k not in known]
-    if unknown:
-        raise ConfigError(f"names no term of the command task: {', '.join(unknown)} (terms: {', '.join(known)})")
+    check_weights(v, "command", COMMAND_TERMS)
 
 
 def _value(v) -> None:
@@ -132,6 +126,12 @@ class CommandTask(WalkTask):
     """Walking as commanded (:class:`~evobiped.tasks.states.CommandState`)."""
 
     name = "command"
+    sensor_text = {
+        "heading_error": "the facing's angle from the commanded facing (rad, + left, within ±π/2)",
+        "command_speed": "the command task's commanded forward speed (m/s)",
+        "command_turning": "the command task's commanded turning rate (rad/s, + left; its sign changes in the stance "
+                           "frame's mirror)",
+        "command_stop": "the command task's stop: 1 at a zero speed command, else 0"}
     Options = CommandOptions
     criteria = {}
 

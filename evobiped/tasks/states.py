@@ -4,7 +4,8 @@ are ``(n, ...)`` over the episode's simulation rows."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -28,15 +29,10 @@ class WalkState(TaskState):
     motor: list[np.ndarray] | None = None
     ticks: np.ndarray | None = None
     cyclicity: tuple[int, np.ndarray] | None = None
-    #: the weighted fitness: each row's stance leg at its last tick (:mod:`evobiped.physics.gait`) and its steps ``(n,)``
-    stance: np.ndarray | None = None
-    steps: np.ndarray | None = None
-    #: the gait terms' meter
-    gait_lab: GaitMeter | None = None
-    #: the gait measures: m along the facing and rad turned (unwrapped) so far ``(n,)``, the facing at the last tick
-    travel: np.ndarray | None = None
-    yaw: np.ndarray | None = None
-    facing_now: np.ndarray | None = None
+    #: what the terms of :data:`evobiped.tasks.terms.WALK_TERMS` keep from tick to tick, by name (their ``start``):
+    #: the steps (``stance``, ``steps``), the gait measures (``travel``, ``yaw``, ``facing_now``), the gait lab's
+    #: meter (``gait_lab``)
+    kept: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(eq=False, kw_only=True)

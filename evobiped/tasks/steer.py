@@ -155,6 +155,8 @@ class SteerTask(Task):
     """Walking to a sound source (:class:`~evobiped.tasks.states.SteerState`)."""
 
     name = "steer"
+    sensor_text = {"sound": "the steer task's ear signal s (its sensor, after the body's)",
+                   "loudness": "min(1, 1 m^2 / D^2), D the ears' distance to the source (m)"}
     Options = SteerOptions
     #: ``distance`` from the start (m), ``distance_to_source`` from the row's source at the end (m)
     term_names = ("distance", "distance_to_source")

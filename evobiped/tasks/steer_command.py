@@ -83,6 +83,8 @@ class SteerCommandTask(CommandTask):
     SteerCommandState`)."""
 
     name = "steer-command"
+    docs_note = ("A commanded walker steered to a sound source by the rule of `evobiped/tasks/steer_command.py`\n"
+                 "([below](#steering-through-commands)); the command task's options and these:")
     Options = SteerCommandOptions
 
     def __init__(self, options=None, **given):

@@ -55,12 +55,13 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from ..physics import gait, gait_lab
+from ..physics import gait_lab
 from ..core.errors import ConfigError
 from ..core.options import option
 from .base import Task
 from .cycles import count_cycles
 from .states import WalkState
+from .terms import LAB, WALK_TERMS, weighable
 
 
 def displacement_heading(start_xy: np.ndarray, end_xy: np.ndarray, start_facing: np.ndarray) -> np.ndarray:
@@ -91,23 +92,30 @@ def direction_words(heading_deg: float) -> str:
 #: fitness name -> what it pays (see the module docstring)
 FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T",
            "weighted": "sum of weights[term] * term"}
-TERMS = ("distance", "forward", "cyclicity", "time_up", "steps")
-#: the terms ``gait_measures`` adds: mean forward speed (m/s), mean turning rate (deg/s, + left)
-GAIT_TERMS = ("speed", "turning")
+#: the walk task's terms beside the gait lab's, in the order it reports them (:data:`WALK_TERMS`)
+TERMS = tuple(name for g in WALK_TERMS if g.terms is not LAB for name in g.all_names)
 #: the gait lab's terms (``gait_terms``): the duty factor of each foot, then the measures
 LAB_TERMS = gait_lab.terms("physics_step")
 #: those a ``gait_sampling = "control_tick"`` meter gives
 LAB_TERMS_TICK = gait_lab.terms("control_tick")
 
 
-def _weights(v) -> None:
+def check_weights(v, task: str, also: tuple[str, ...] = ()) -> None:
+    """ConfigError unless ``v`` is a table of finite weights whose names are terms ``task`` may weigh (``also``: its
+    own, before the walk task's weighable ones of :data:`WALK_TERMS`)."""
     if not (isinstance(v, dict) and v and all(isinstance(k, str) for k in v)
             and all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in v.values())):
         raise ConfigError(f"must be a table of finite weights by term name, got {v!r}")
-    unknown = [k for k in v if k not in TERMS + LAB_TERMS + ("pace",) or k == "cyclicity"]
+    known = also + weighable()
+    unknown = [k for k in v if k not in known]
     if unknown:
-        raise ConfigError(f"names no term of the walk task: {', '.join(unknown)} (terms: distance, forward, time_up, steps, pace, "
+        plain = ", ".join(k for k in known if k not in LAB_TERMS)
+        raise ConfigError(f"names no term of the {task} task: {', '.join(unknown)} (terms: {plain}, "
                           f"and the gait terms {', '.join(LAB_TERMS)})")
+
+
+def _weights(v) -> None:
+    check_weights(v, "walk")
 
 
 def weighted(terms: dict[str, np.ndarray], weights: dict[str, float]) -> np.ndarray:
@@ -155,6 +163,7 @@ class WalkTask(Task):
     #: ``time_up`` s until the walker fell (the episode's length if it did not), ``steps`` stance switches (both only
     #: under the weighted fitness)
     term_names = TERMS
+    sensor_text = {"heading_error": "the facing's angle from the initial facing (rad, + left)"}
     criteria = {
         "plain": {"fitness": "distance", "cyclic_weight": 0.0},
         "cyclic": {"fitness": "distance", "cyclic_weight": 1.0},
@@ -176,8 +185,8 @@ class WalkTask(Task):
         self.gait_lab = o.gait_terms or (self.fitness_name == "weighted" and any(k in LAB_TERMS for k in self.weights))
         self.sampling = o.gait_sampling
         self.lab_terms = gait_lab.terms(self.sampling) if self.gait_lab else ()
-        self.term_names = ((TERMS if self.counts_steps else TERMS[:3]) + (GAIT_TERMS if o.gait_measures else ())
-                           + self.lab_terms + (("pace",) if "pace" in self.weights else ()))
+        self.term_groups = tuple(g for g in WALK_TERMS if g.wanted(self))  # the table's, as these options report
+        self.term_names = tuple(name for g in self.term_groups for name in g.reported(self))
 
     def sensor_widths(self):
         return {"heading_error": 1} if self.heading_sense else {}
@@ -199,15 +208,9 @@ class WalkTask(Task):
         state = WalkState(start=p0, position=p0.copy(), facing=body.heading(sims).copy(), n_motor=len(body.actuator_names))
         if self.cyclic_weight:
             state.motor, state.ticks = [], np.zeros(sims.n, int)
-        if self.counts_steps:
-            if body.contact_sensor is None:
-                raise ConfigError(f"the walk task counts steps by foot contact; body {body.name!r} declares no contact sensor")
-            state.stance = gait.tracker(body.contacts(sims), sims)["stance"].copy()  # the episode keeps it from now on
-            state.steps = np.zeros(sims.n)
-        if self.gait_lab:
-            state.gait_lab = self.gait_meter(body, sims, self.sampling)
-        if self.options.gait_measures:  # path along the facing (m) and the facing's unwrapped turn (rad) so far
-            state.travel, state.yaw, state.facing_now = np.zeros(sims.n), np.zeros(sims.n), state.facing.copy()
+        for g in self.term_groups:  # what each group of terms keeps from tick to tick
+            if g.start is not None:
+                state.kept.update(g.start(self, body, sims, state))
         return state
 
     def reads_neurons(self):
@@ -218,22 +221,10 @@ class WalkTask(Task):
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
         ok = ids[healthy]
-        if self.options.gait_measures:
-            f, f1 = state.facing_now[ok], body.heading(sims)[ok]  # the facing before and after this tick
-            step = body.planar_position(sims)[ok] - state.position[ok]
-            state.travel[ok] += np.einsum("pi,pi->p", step, f1)
-            state.yaw[ok] += np.arctan2(f[:, 0] * f1[:, 1] - f[:, 1] * f1[:, 0], np.einsum("pi,pi->p", f, f1))
-            state.facing_now[ok] = f1
+        for g in self.term_groups:  # each reads the position of the tick before
+            if g.tick is not None:
+                g.tick(self, body, sims, state, ok, neurons)
         state.position[ok] = body.planar_position(sims)[ok]
-        if self.counts_steps:
-            stance = sims.extra["gait"]["stance"][ok]
-            state.steps[ok] += stance != state.stance[ok]
-            state.stance[ok] = stance
-        if self.gait_lab:
-            state.gait_lab.tick(body.tick_feet(sims), ok, sims.time[ok])
-        if self.cyclic_weight:
-            state.motor.append(neurons[:, : state.n_motor].copy())
-            state.ticks[ok] += 1
 
     def distance(self, state) -> np.ndarray:
         """Eq. 4, ``(P,)`` m."""
@@ -250,18 +241,9 @@ class WalkTask(Task):
         return done[1]
 
     def terms(self, state):
-        c = self.cyclicity(state) if self.cyclic_weight else np.full(len(state.start), np.nan)
-        out = {"distance": self.distance(state), "forward": self.forward(state), "cyclicity": c}
-        if self.counts_steps:
-            out["time_up"], out["steps"] = np.array(state.end_time, float), state.steps.copy()
-            if "pace" in self.weights:
-                out["pace"] = np.minimum(out["forward"], self.options.pace_cap * out["time_up"])
-        if self.options.gait_measures:
-            up = np.maximum(np.asarray(state.end_time, float), 1e-9)
-            out["speed"], out["turning"] = state.travel / up, np.degrees(state.yaw) / up
-        if self.gait_lab:
-            lab = state.gait_lab.measure(self.forward(state))
-            out.update({k: lab[k] for k in self.lab_terms})
+        out = {}
+        for g in self.term_groups:  # in the table's order, each given those before
+            out.update(g.value(self, state, out))
         return out
 
     def end_position(self, body, sims, state):
