@@ -159,3 +159,9 @@ def test_the_cli_runs_a_declared_body_and_refuses_a_bad_one_in_one_line_per_prob
     assert cli("episode", "--body", f"mjcf:{tmp_path / 'none.xml'}", "--seconds", "0.5") == 2
     err = capsys.readouterr().err
     assert "no declaration" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_every_sense_of_a_declared_body_is_described():
+    cls = body_class("mjcf:box_biped")
+    assert set(cls.sensor_text) == set(cls.sensor_widths) and cls.environment is None
+    assert "left knee, left ankle, right hip_pitch" in cls.sensor_text["joint_angles"]

@@ -110,7 +110,15 @@ def _make_class(spec: str, d: Declaration, model: mujoco.MjModel, kind: str) -> 
               "pelvis_tilt": ((0, 1), (1, -1)), "pelvis_tilt_rate": ((0, 1), (1, -1)),
               "com_from_feet": ((2, 3, 0, 1), (1, -1, 1, -1)), "com_velocity": ((0, 1), (1, -1)), **gait.MIRROR}
     fall_height = d.fall_height if d.fall_height is not None else 0.55 * float(data.subtree_com[model.body(d.pelvis).id, 2])
-    attrs = dict(name=f"mjcf:{spec}", model_name=d.model.stem, action_kind=kind, trunk=d.pelvis, floor_geom=d.floor,
+    order = ", ".join(f"{a.leg} {a.joint}" for a in actuators)
+    text = {"joint_angles": f"joint angles (rad) in action order: {order}",
+            "joint_velocities": "their rates (rad/s), same order",
+            "foot_contact": "foot contacts: left, right (0 or 1; the foot's lowest point at or below the floor)",
+            "pelvis_tilt": "pelvis tilt: pitch (+ nose down), roll (+ left side up) (rad)",
+            "pelvis_tilt_rate": "their rates (rad/s)",
+            "com_from_feet": "centre of mass minus the left foot (forward, left), minus the right foot (m, heading frame)",
+            "com_velocity": "centre-of-mass velocity: forward, left (m/s, heading frame)", **gait.TEXT}
+    attrs = dict(name=f"mjcf:{spec}", sensor_text=text, model_name=d.model.stem, action_kind=kind, trunk=d.pelvis, floor_geom=d.floor,
                  contact_sensor=("foot_contact", LEGS), actuators=actuators, sensor_widths=widths, sensor_norms=norms,
                  mirror=mirror, actuator_mirror=(swap, signs), Options=DeclaredOptions, declaration=d,
                  fall_default=fall_height, timestep_default=float(model.opt.timestep),
