@@ -228,6 +228,6 @@ def test_a_scheduled_run_resumes_and_parallelises_identically(tmp_path):
     whole, cut = whole_and_resumed(tmp_path, config)
     assert fitness_history(cut) == fitness_history(whole.dir)
     assert (cut / "best.json").read_text() == (whole.dir / "best.json").read_text()
-    assert config.episode.perturbations.settled_from == 3 and whole.record.best["generation"] >= 3
+    assert config.episode.perturbations.comparable_from == 3 and whole.record.best["generation"] >= 3
     history = fitness_history(whole.dir)
     assert whole.record.best["fitness"] == max(float(r[1]) for r in history[3:])

@@ -20,7 +20,7 @@ from ..core.errors import ConfigError
 from ..physics.gait_lab import FootSample, stacked
 from ..physics.models import load_model, model_path
 from ..physics.sim import Sims
-from ..core.options import option, taken
+from ..core.options import constructor_options, option
 
 
 def model_file_option(stem: str):
@@ -74,7 +74,7 @@ class Body(ABC):
     Options: ClassVar[type]
 
     def __init__(self, options: Any = None, **given):
-        self.options = taken(self.Options, options, given, f"{self.name} body_options")
+        self.options = constructor_options(self.Options, options, given, f"{self.name} body_options")
         self.timestep = float(self.options.timestep)
         self.model_file = self.options.model_file or str(model_path(self.model_name))
 

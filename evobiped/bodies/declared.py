@@ -153,9 +153,9 @@ class DeclaredBiped(Body):
     timestep_default: float
 
     def __init__(self, options=None, **given):
-        from ..core.options import taken
+        from ..core.options import constructor_options
 
-        self.options = taken(self.Options, options, given, f"{self.name} body_options")
+        self.options = constructor_options(self.Options, options, given, f"{self.name} body_options")
         self.model_file = self.options.model_file or str(self.declaration.model)
         self.timestep = float(self.options.timestep if self.options.timestep is not None else self.timestep_default)
         self.fall_height = float(self.options.fall_height if self.options.fall_height is not None else self.fall_default)

@@ -18,7 +18,7 @@ from ..interface.contract import Needs
 from ..core.errors import ConfigError
 from ..interface.frame import FRAMES
 from ..interface.genome import GenomeLayout
-from ..core.options import option, taken
+from ..core.options import constructor_options, option
 
 #: the longest control latency, in control ticks
 MAX_LATENCY = 100
@@ -96,7 +96,7 @@ class Controller(ABC):
     @classmethod
     def own_options(cls, options: Any, given: dict) -> Any:
         """A constructor's options: the parsed ``options`` object, or the keyword settings ``given`` (Python use)."""
-        return taken(cls.Options, options, given, f"{cls.name} controller_options")
+        return constructor_options(cls.Options, options, given, f"{cls.name} controller_options")
 
     def bound(self, dt: float) -> "Controller":
         """This controller stepping at control period ``dt`` (s; the physics step when ``dt`` is None):

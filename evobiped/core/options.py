@@ -127,7 +127,7 @@ def parse(cls: type, values: Any, where: str, *, skip: tuple[str, ...] = ()) -> 
     return parsed
 
 
-def taken(cls: type, options: Any, keywords: dict, where: str) -> Any:
+def constructor_options(cls: type, options: Any, keywords: dict, where: str) -> Any:
     """What a constructor takes: the parsed ``options`` (an instance of ``cls``) as it is, or (Python use) the
     ``keywords`` parsed; ConfigError for both at once."""
     if options is not None and keywords:

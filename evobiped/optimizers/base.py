@@ -167,7 +167,7 @@ class Optimizer:
         return "population", population
 
     @classmethod
-    def settled(cls, options: Any, scored_differently: Callable[[], bool]) -> Any:
+    def resolved(cls, options: Any, scored_differently: Callable[[], bool]) -> Any:
         """``options`` with what depends on the run decided (``scored_differently()``: the run scores one generation
         differently from another); default: as given."""
         return options

@@ -107,7 +107,7 @@ class GA(Optimizer):
         return np.full(len(self.population), -1)
 
     @classmethod
-    def settled(cls, options: GAOptions, scored_differently) -> GAOptions:
+    def resolved(cls, options: GAOptions, scored_differently) -> GAOptions:
         """``reevaluate_survivors`` none: the survivors are scored again exactly when the run scores each generation
         differently."""
         if options.reevaluate_survivors is None:

@@ -145,7 +145,7 @@ class PerturbationOptions:
         return self.presentations > 1 or self.pushes > 0 or bool(fr.start) or bool(fr.end) or strong or self.assist > 0
 
     @property
-    def settled_from(self) -> int:
+    def comparable_from(self) -> int:
         """The first generation from which every schedule has reached its end and ``aggregate_later`` (if any) applies:
         from there on, generations meet disturbances of one distribution and their fitness compares (0: no schedule)."""
         ends = [s.after + s.generations for s in (scheduled(self, n) for n in (*STRENGTHS, "friction", "quantile"))
@@ -174,10 +174,10 @@ class PerturbationOptions:
             return seed, generation, self.assist_clock(generation, best)
         return seed, generation
 
-    def unsettled(self, generation: int, best: list[float]) -> bool:
+    def incomparable(self, generation: int, best: list[float]) -> bool:
         """Generation ``generation`` meets disturbances unlike the final ones: a schedule still changes, or the pelvis
-        assistance is on (``best`` as in :meth:`key`); its fitness does not compare with a settled generation's."""
-        return generation < self.settled_from or self.assist_at(self.assist_clock(generation, best)) > 0
+        assistance is on (``best`` as in :meth:`key`); its fitness does not compare with a later generation's."""
+        return generation < self.comparable_from or self.assist_at(self.assist_clock(generation, best)) > 0
 
     def assist_at(self, clock: int) -> float:
         """The assistance stiffness (N m/rad) at this clock: ``assist`` faded linearly to 0 over ``assist_generations``."""

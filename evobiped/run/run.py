@@ -229,7 +229,7 @@ class Run:
         holds the walker up, generations are not comparable (nor the unassisted walker's): the run's best is the
         latest generation's until then, then the fittest since."""
         best = self.record.best
-        return best is None or not self._held(g) and (self._unsettled(g) or self._unsettled(best["generation"])
+        return best is None or not self._held(g) and (self._incomparable(g) or self._incomparable(best["generation"])
                                                        or fitness > best["fitness"])
 
     def _key(self, generation: int) -> tuple[int, ...]:
@@ -237,10 +237,10 @@ class Run:
         bests = rundir.column(self.record.history, "best")
         return self.config.episode.perturbations.key(self.config.seed, generation, bests)
 
-    def _unsettled(self, generation: int) -> bool:
+    def _incomparable(self, generation: int) -> bool:
         """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,
         or it was scored in an earlier phase of the curriculum than the last."""
-        return (self.config.episode.perturbations.unsettled(generation, rundir.column(self.record.history, "best"))
+        return (self.config.episode.perturbations.incomparable(generation, rundir.column(self.record.history, "best"))
                 or self.context.early_phase(generation))
 
     def _held(self, generation: int) -> bool:

@@ -216,7 +216,7 @@ def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimi
         for b in config.frozen_blocks:
             mutable[slices[b]] = False
     cls = OPTIMIZERS[config.optimizer]
-    options = cls.settled(config.options, lambda: changing_context(config) is not None)
+    options = cls.resolved(config.options, lambda: changing_context(config) is not None)
     return cls(layout, options, seed=config.seed, initial=initial, mutable=mutable)
 
 
@@ -230,7 +230,7 @@ def changing_context(config: RunConfig) -> str | None:
     task = config.episode.parts()[2]
     for what, changes in (("normalise.running", config.normalise.running), ("curriculum", bool(config.curriculum.phases)),
                           ("episode.perturbations", p.pushes > 0 or strong or bool(friction.start) or bool(friction.end)
-                           or p.assist > 0 or p.settled_from > 0),
+                           or p.assist > 0 or p.comparable_from > 0),
                           ("random sources", task.draw_sources((config.seed, 0)) is not None)):
         if changes:
             return what

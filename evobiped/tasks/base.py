@@ -20,7 +20,7 @@ import numpy as np
 
 from ..bodies.base import Body
 from ..core.errors import ConfigError
-from ..core.options import NoOptions, taken
+from ..core.options import NoOptions, constructor_options
 from ..physics.gait_lab import GaitMeter
 from ..physics.sim import Sims
 
@@ -57,7 +57,7 @@ class Task:
     criteria: ClassVar[dict[str, dict]] = {}
 
     def __init__(self, options: Any = None, **given):
-        self.options = taken(self.Options, options, given, f"{self.name} task_options")
+        self.options = constructor_options(self.Options, options, given, f"{self.name} task_options")
         self._gait_constants: tuple[float, float] | None = None  # the body's mass and leg length, once read
 
     def gait_meter(self, body: Body, sims: Sims, sampling: str = "control_tick") -> GaitMeter:
