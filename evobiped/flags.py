@@ -127,7 +127,8 @@ def add_stored_walker(p, dest: str = "source", metavar: str = "SOURCE", *, also:
     """A command's stored walker: the positional ``dest`` (a run directory, its best.json, or a genome JSON file; its
     help ends with ``also``) and ``--generation N`` (help ``generation``), which
     :func:`evobiped.record.source.resolve` reads."""
-    p.add_argument(dest, metavar=metavar, nargs=nargs, help=f"a run directory (its best.json) or a genome JSON file{also}")
+    p.add_argument(dest, metavar=metavar, nargs=nargs, help="a run directory (its best.json) or a genome JSON "
+                                                            f"file{also}")
     p.add_argument("--generation", type=int, metavar="N", help=generation)
     add_allow_unfinished(p)
 
@@ -150,9 +151,9 @@ def unfinished_note(source) -> None:
 
 def add_source_flag(p) -> None:
     p.add_argument("--source", dest="sources", nargs=2, type=finite_float, action="append", metavar=("X", "Y"),
-                   help="a sound source at (X, Y) m for the steer task, or for a commanded walker (its commands then come from "
-                        "its ears), one presentation each; repeat it for several (default: the config's, or the paper's "
-                        "(10, 3) and (10, -3))")
+                   help="a sound source at (X, Y) m for the steer task, or for a commanded walker (its commands then "
+                        "come from its ears), one presentation each; repeat it for several (default: the config's, or "
+                        "the paper's (10, 3) and (10, -3))")
 
 
 def number_list(flag: str, text: str | None, bound: float | None = None, unit: str = "") -> list[float] | None:
@@ -206,16 +207,18 @@ def check_workers(backend: str, workers: int | None, address: str | None) -> Non
     import os
 
     if address is not None and backend != "ray":
-        refuse("--address", f"only a Ray backend connects to a cluster (use --backend ray; the backend here is {backend})")
+        refuse("--address", "only a Ray backend connects to a cluster (use --backend ray; the backend here is "
+                            f"{backend})")
     if workers is not None and backend == "serial":
-        refuse("--workers", "the serial backend runs in this process (use --backend process, thread or ray for workers)")
+        refuse("--workers",
+               "the serial backend runs in this process (use --backend process, thread or ray for workers)")
     from .evaluation import check_worker_count
 
     check_worker_count(backend, workers, address, name="--workers")
     cores = os.cpu_count() or 1
     if workers is not None and workers > cores and address is None:
-        print(f"evobiped: warning: --workers {workers} on {cores} cores: the extra workers share cores and do not run faster",
-              file=sys.stderr)
+        print(f"evobiped: warning: --workers {workers} on {cores} cores: the extra workers share cores and do not run "
+              "faster", file=sys.stderr)
 
 
 def walk_line(walk: dict) -> str:
@@ -231,11 +234,12 @@ RUN_FLAGS = ("preset", "config", "optimizer", "body", "controller", "task", "sou
              "episode_seconds", "cyclic", "seed", "backend", "workers", "address", "initial", "freeze")
 
 
-def run_config(*, preset: str | None = None, config: str | None = None, optimizer: str | None = None, body: str | None = None,
+def run_config(*, preset: str | None = None, config: str | None = None, optimizer: str | None = None,
+               body: str | None = None,
                controller: str | None = None, task: str | None = None, sources=None, population: int | None = None,
                generations: int | None = None, episode_seconds: float | None = None, cyclic: bool | None = None,
-               seed: int | None = None, backend: str | None = None, workers: int | None = None, address: str | None = None,
-               initial: str | None = None, freeze: str | None = None):
+               seed: int | None = None, backend: str | None = None, workers: int | None = None,
+               address: str | None = None, initial: str | None = None, freeze: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
     from .run.run_config import RunConfig, check_tables

@@ -57,7 +57,8 @@ def tables() -> dict[str, str]:
     for kind, (reg, _, _) in REGISTRIES.items():
         for name, cls in reg.items():
             # every controller's generic options (inputs, genes, latency) are described once, beside the tables
-            out[f"{kind} {name}"] = markdown_table(cls.Options, skip=GENERIC_CONTROLLER_OPTIONS if kind == "controller" else ())
+            out[f"{kind} {name}"] = markdown_table(cls.Options, skip=GENERIC_CONTROLLER_OPTIONS if kind == "controller"
+                                                   else ())
     return out | {name: markdown_table(options) for name, options in FIXED.items()}
 
 
@@ -106,12 +107,14 @@ def observations() -> str:
 
 
 def presets_table() -> str:
-    """The shipped presets: controller, optimizer and population, generations and episodes, and the preset's own line."""
+    """The shipped presets: controller, optimizer and population, generations and episodes, and the preset's own
+    line."""
     from .run.run_config import RunConfig, population_of
     from .core.fileio import read_toml
     from .files.presets import describe, names, path, split_declarations
 
-    rows = ["| preset | controller | optimizer, population | generations × episode | what it is |", "|---|---|---|---|---|"]
+    rows = ["| preset | controller | optimizer, population | generations × episode | what it is |",
+            "|---|---|---|---|---|"]
     for name in names():
         settings, declared = split_declarations(name, read_toml(path(name)))
         c = RunConfig.from_dict(settings, where=f"preset {name}")
@@ -121,7 +124,8 @@ def presets_table() -> str:
         population = population_of(c) if population is None else population
         pop = f", {population}" if population else ", its default (CMA-ES: 4 + ⌊3 ln genes⌋)"
         episode = f"{c.generations} × {c.episode.seconds:g} s"
-        what = describe(name).replace("|", "\\|") + (" (needs `--from`)" if declared["needs_start"] else "")  # a table cell
+        # a table cell
+        what = describe(name).replace("|", "\\|") + (" (needs `--from`)" if declared["needs_start"] else "")
         rows.append(f"| `{name}` | `{c.episode.controller}` | {c.optimizer}{pop} | {episode} | {what} |")
     return "\n".join(rows) + "\n"
 

@@ -42,8 +42,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    print("| walker | its speed (m/s) | fit: walked = a + b x command | schedules without a fall | every stretch within 10 % "
-          "| stretches within 10 % | stretch error median / p90 (%) |")
+    print("| walker | its speed (m/s) | fit: walked = a + b x command | schedules without a fall | every stretch "
+          "within 10 % | stretches within 10 % | stretch error median / p90 (%) |")
     print("|---|---|---|---|---|---|---|")
     for i, source in enumerate(args.walkers):
         path = walker_file(source)
@@ -61,8 +61,9 @@ def main(argv=None) -> int:
         write_json(out / f"{name}_speed_battery.json", {**b, "source": str(path)})
         m = b["summary"]
         se = m["stretch_error_pct"]
-        print(f"| {source} | {speed:.2f} | {fit['intercept']:.2f} + {fit['slope']:.2f} v | {m['no_fall']} of {m['schedules']} "
-              f"| {m['passed']} | {m['within']} of {m['stretches']} | {se['median']:.1f} / {se['p90']:.1f} |", flush=True)
+        print(f"| {source} | {speed:.2f} | {fit['intercept']:.2f} + {fit['slope']:.2f} v | {m['no_fall']} of "
+              f"{m['schedules']} | {m['passed']} | {m['within']} of {m['stretches']} | {se['median']:.1f} / "
+              f"{se['p90']:.1f} |", flush=True)
     return 0
 
 

@@ -8,10 +8,10 @@ Each seed is one ``evobiped evolve --preset P --seed S --backend serial`` run (`
 going at ``--deadline`` s is stopped with SIGTERM (it checkpoints: resume it later with ``evobiped evolve --resume``).
 Then every ``--every``-th generation file up to the first forward walker, and the last, whose walker stayed up in
 training is tested alone,
-nominally, by :func:`evobiped.analysis.selection.forward_walker`: no fall in 200 s, >= 20 m in its first 50 s within +-30
-degrees of its initial facing.  ``study.json`` records per seed the wall time, the generations run, the first
-generation with a forward walker and what it cost (genomes evaluated, episodes, wall seconds of evolution), and the fittest forward
-walker found (its file).  ``--figure`` draws the fraction of seeds with a walker against generations.
+nominally, by :func:`evobiped.analysis.selection.forward_walker`: no fall in 200 s, >= 20 m in its first 50 s within
++-30 degrees of its initial facing.  ``study.json`` records per seed the wall time, the generations run, the first
+generation with a forward walker and what it cost (genomes evaluated, episodes, wall seconds of evolution), and the
+fittest forward walker found (its file).  ``--figure`` draws the fraction of seeds with a walker against generations.
 """
 
 from __future__ import annotations
@@ -44,10 +44,13 @@ def evolve_all(preset: str, seed_list: list[int], out: Path, jobs: int, generati
     while waiting or running:
         while waiting and len(running) < jobs:
             s = waiting.pop(0)
-            cmd = [sys.executable, "-m", "evobiped", "evolve", "--preset", preset, "--seed", str(s), "--backend", "serial",
-                   "--out", str(out / f"seed{s}"), "--quiet"] + (["--generations", str(generations)] if generations else []) \
+            cmd = [sys.executable, "-m", "evobiped", "evolve", "--preset", preset, "--seed", str(s), "--backend",
+                   "serial",
+                   "--out", str(out / f"seed{s}"), "--quiet"] + (["--generations", str(generations)] if generations
+                                                                 else []) \
                 + (["--config", config] if config else [])
-            running[s] = (subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=open(out / f"seed{s}.log", "w")), time.time())
+            running[s] = (subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=open(out / f"seed{s}.log", "w")),
+                          time.time())
         for s, (p, started) in list(running.items()):
             if p.poll() is not None:
                 wall[s] = time.time() - started
@@ -71,7 +74,8 @@ def check_run(args: tuple[Path, int]) -> dict:
     from evobiped.analysis.selection import forward_walker
 
     run, every = args
-    hist = rundir.read_history(run / rundir.HISTORY) if (run / rundir.HISTORY).is_file() else {"generation": np.zeros(0)}
+    hist = rundir.read_history(run / rundir.HISTORY) if (run / rundir.HISTORY).is_file() else {"generation": np.zeros(
+        0)}
     n = len(hist["generation"])
     config = json.loads((run / rundir.CONFIG).read_text())
     R = int(config["episode"].get("perturbations", {}).get("presentations", 1))
@@ -94,7 +98,8 @@ def check_run(args: tuple[Path, int]) -> dict:
     if found is not None:  # genomes evaluated up to and with that generation, and episodes (one per presentation)
         cost = {"evaluations": int(evals[found]), "episodes": int(evals[found]) * R,
                 "wall_seconds": round(float(np.sum(hist["wall_seconds"][: found + 1])), 1)}
-    return {"run": str(run), "generations": n, "first_walker": found, "cost": cost, "best_walker": best, "checked": checked}
+    return {"run": str(run), "generations": n, "first_walker": found, "cost": cost, "best_walker": best,
+            "checked": checked}
 
 
 def study(a) -> None:
@@ -108,15 +113,17 @@ def study(a) -> None:
         results = list(pool.map(check_run, [(out / f"seed{s}", a.every) for s in seed_list]))
     for s, r in zip(seed_list, results):
         r["seed"], r["wall_seconds"] = s, round(wall.get(s, float("nan")), 1)
-    doc = {"preset": a.preset, "config": a.config, "seeds": seed_list, "jobs": a.jobs, "cores": os.cpu_count(), "evolve_seconds": round(evolve_s, 1),
-           "load_average": os.getloadavg(), "every": a.every, "results": results}
+    doc = {"preset": a.preset, "config": a.config, "seeds": seed_list, "jobs": a.jobs, "cores": os.cpu_count(),
+           "evolve_seconds": round(evolve_s, 1), "load_average": os.getloadavg(), "every": a.every, "results": results}
     (out / "study.json").write_text(json.dumps(doc, indent=1))
     walkers = sum(r["first_walker"] is not None for r in results)
-    print(f"{a.preset}: forward walkers in {walkers} of {len(results)} seeds ({evolve_s:.0f} s evolving, {a.jobs} jobs on {os.cpu_count()} cores)")
+    print(f"{a.preset}: forward walkers in {walkers} of {len(results)} seeds ({evolve_s:.0f} s evolving, {a.jobs} jobs "
+          f"on {os.cpu_count()} cores)")
     for r in results:
         b = r["best_walker"]
         print(f"  seed {r['seed']}: {r['generations']} generations in {r['wall_seconds']} s; first walker at "
-              f"{r['first_walker']}; " + (f"best {b['distance']:.1f} m at {b['heading_deg']:+.0f} deg (generation {b['generation']})" if b else "none"))
+              f"{r['first_walker']}; " + (f"best {b['distance']:.1f} m at {b['heading_deg']:+.0f} deg (generation "
+                                          f"{b['generation']})" if b else "none"))
 
 
 def figure(a) -> None:
@@ -132,7 +139,9 @@ def figure(a) -> None:
         top = max(r["generations"] for r in res)
         g = np.arange(top + 1)
         frac = [np.mean([r["first_walker"] is not None and r["first_walker"] <= x for r in res]) for x in g]
-        ax.step(g, frac, where="post", label=f"{doc['preset']}{' + ' + Path(doc['config']).stem if doc.get('config') else ''} ({len(res)} seeds)")
+        ax.step(g, frac, where="post",
+                label=f"{doc['preset']}{' + ' + Path(doc['config']).stem if doc.get('config') else ''} ({len(res)} "
+                      "seeds)")
     ax.set_xlabel("generation")
     ax.set_ylabel("fraction of seeds with a forward walker")
     ax.set_ylim(-0.02, 1.02)

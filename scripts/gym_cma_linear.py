@@ -20,7 +20,8 @@ from evobiped.envs import ReilBipedVectorEnv
 
 
 def episode_returns(venv: ReilBipedVectorEnv, params: np.ndarray, seed: int):
-    """Run one episode of each row's policy ``params`` ``(N, 150)``; returns (return, steps up, progress m), each ``(N,)``."""
+    """Run one episode of each row's policy ``params`` ``(N, 150)``; returns (return, steps up, progress m), each
+    ``(N,)``."""
     w = venv.walkers
     n, n_obs, n_act = params.shape[0], w.obs_size, len(w.low)
     W = params[:, : n_act * n_obs].reshape(n, n_act, n_obs)
@@ -45,7 +46,8 @@ def main() -> None:
     ap.add_argument("--generations", type=int, default=60)
     ap.add_argument("--popsize", type=int, default=24)
     ap.add_argument("--seconds", type=float, default=5.0, help="episode length (s)")
-    ap.add_argument("--survival-credit", type=float, default=5.0, help="the forward fitness's survival credit (m, default 5)")
+    ap.add_argument("--survival-credit", type=float, default=5.0,
+                    help="the forward fitness's survival credit (m, default 5)")
     ap.add_argument("--sigma", type=float, default=0.1, help="CMA-ES initial step")
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args()
@@ -54,7 +56,8 @@ def main() -> None:
     venv = ReilBipedVectorEnv(a.popsize, seconds=a.seconds,
                               task_options={"fitness": "forward", "survival_credit": a.survival_credit})
     n_params = (venv.walkers.obs_size + 1) * len(venv.walkers.low)
-    es = cma.CMAEvolutionStrategy(np.zeros(n_params), a.sigma, {"popsize": a.popsize, "seed": a.seed + 1, "verbose": -9})
+    es = cma.CMAEvolutionStrategy(np.zeros(n_params), a.sigma,
+                                  {"popsize": a.popsize, "seed": a.seed + 1, "verbose": -9})
     t0 = time.perf_counter()
     max_steps = venv.walkers.episode.n_ticks
     for g in range(a.generations):
@@ -63,8 +66,8 @@ def main() -> None:
         es.tell(list(X), list(-ret))  # pycma minimises
         i = int(np.argmax(ret))
         print(f"gen {g:3d}  best return {ret[i]:6.2f} (up {steps[i] * venv.walkers.control_dt:4.2f} s, "
-              f"{prog[i]:5.2f} m)  mean {ret.mean():6.2f}  up the whole episode {int((steps == max_steps).sum()):2d}/{len(ret)}  "
-              f"{time.perf_counter() - t0:6.1f} s", flush=True)
+              f"{prog[i]:5.2f} m)  mean {ret.mean():6.2f}  up the whole episode "
+              f"{int((steps == max_steps).sum()):2d}/{len(ret)}  {time.perf_counter() - t0:6.1f} s", flush=True)
     mean = np.tile(es.mean, (a.popsize, 1))
     ret, steps, prog = episode_returns(venv, mean, seed=12345)  # the final mean on fresh reset noise
     print(f"final mean policy on {a.popsize} fresh resets: return {ret.mean():.2f} (min {ret.min():.2f}), "

@@ -17,7 +17,8 @@ import numpy as np
 from evobiped.envs import ReilBipedVectorEnv, TagaBipedVectorEnv
 from evobiped.physics.sim import Sims
 
-ENVS = {"reil": (ReilBipedVectorEnv, dict(fall_height=1e-6, fall_tilt=np.pi)), "taga": (TagaBipedVectorEnv, dict(fall_height=1e-9))}
+ENVS = {"reil": (ReilBipedVectorEnv, dict(fall_height=1e-6, fall_tilt=np.pi)),
+        "taga": (TagaBipedVectorEnv, dict(fall_height=1e-9))}
 
 
 def main() -> None:

@@ -28,8 +28,8 @@ from evobiped.repertoire.damage import parse_damage
 from evobiped.repertoire.elites import load_repertoire
 from evobiped.repertoire.trial_error import TrialAndError
 
-DAMAGES = ("weak:left_knee:0.5", "weak:right_hip_pitch:0.5", "short:left:0.05", "short:right:0.03", "locked:left_hip_roll",
-           "locked:right_knee", "weak:right_knee:0.5", "weak:left_hip_roll:0.5")
+DAMAGES = ("weak:left_knee:0.5", "weak:right_hip_pitch:0.5", "short:left:0.05", "short:right:0.03",
+           "locked:left_hip_roll", "locked:right_knee", "weak:right_knee:0.5", "weak:left_hip_roll:0.5")
 #: (label, search settings): the default first, then the rho sweep, the kappa sweep at two rho, the two baselines
 SETTINGS = (("ucb rho 0.15 kappa 0.05 (default)", dict(rho=0.15, kappa=0.05)),
             *((f"ucb rho {r} kappa 0.05", dict(rho=r, kappa=0.05)) for r in (0.05, 0.1, 0.25, 0.4)),
@@ -39,10 +39,13 @@ SETTINGS = (("ucb rho 0.15 kappa 0.05 (default)", dict(rho=0.15, kappa=0.05)),
 
 
 def search_once(rep, damage, settings: dict, seed: int, trials: int, pose_noise: float) -> dict:
-    attempts, _ = adapt(rep, damage, search=TrialAndError(trials=trials, seed=seed, **settings), pose_noise=pose_noise, seed=seed)
+    attempts, _ = adapt(rep, damage, search=TrialAndError(trials=trials, seed=seed, **settings), pose_noise=pose_noise,
+                        seed=seed)
     first = next((n for n, t in enumerate(attempts, 1) if walks(t)), None)
-    return {"found": first is not None, "first_walk": first if first is not None else trials + 1, "stopped_after": len(attempts),
-            "best_distance": max(t.distance for t in attempts if not t.fell) if any(not t.fell for t in attempts) else 0.0}
+    return {"found": first is not None, "first_walk": first if first is not None else trials + 1,
+            "stopped_after": len(attempts),
+            "best_distance": max(t.distance for t in attempts if not t.fell) if any(not t.fell for t in attempts)
+                else 0.0}
 
 
 def main(argv=None) -> int:
@@ -63,11 +66,13 @@ def main(argv=None) -> int:
         runs = [dict(damage=str(d), seed=s, **search_once(rep, d, settings, s, a.trials, a.pose_noise))
                 for d in damages for s in range(a.seeds)]
         rows.append({"setting": label, "options": settings, "runs": runs})
-        print(f"{label}: {sum(r['found'] for r in runs)} of {len(runs)} found a walking gait", file=sys.stderr, flush=True)
+        print(f"{label}: {sum(r['found'] for r in runs)} of {len(runs)} found a walking gait", file=sys.stderr,
+              flush=True)
     base = [r["first_walk"] for r in rows[0]["runs"]]
     lines = [f"Archive {a.run}; {len(damages)} damages x {a.seeds} seeds; trials of 50 s, each off the nominal pose by "
              f"Gaussian noise of {a.pose_noise} rad; at most {a.trials} trials.", "",
-             "| setting | found a walk | Wilson 95 % | trials to the first walk, median (IQR) | trials until stopped, median | A vs default | p vs default |",
+             "| setting | found a walk | Wilson 95 % | trials to the first walk, median (IQR) | trials until stopped, "
+             "median | A vs default | p vs default |",
              "|---|---|---|---|---|---|---|"]
     for row in rows:
         runs = row["runs"]
@@ -78,13 +83,15 @@ def main(argv=None) -> int:
         mine = [r["first_walk"] for r in runs]
         same = row is rows[0]
         row.update(found=k, n=n, wilson=[lo, hi], first_walk_median=med, first_walk_iqr=[q1, q3], stopped_median=stop,
-                   a_vs_default=None if same else vargha_delaney(mine, base), p_vs_default=None if same else mann_whitney_p(mine, base))
+                   a_vs_default=None if same else vargha_delaney(mine, base), p_vs_default=None if same
+                       else mann_whitney_p(mine, base))
         lines.append(f"| {row['setting']} | {k} of {n} | {lo:.2f}–{hi:.2f} | {med:g} ({q1:g}–{q3:g}) | {stop:g} | "
                      + ("– | – |" if same else f"{row['a_vs_default']:.2f} | {row['p_vs_default']:.3f} |"))
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.md").write_text("\n".join(lines) + "\n")
-    (out / "results.json").write_text(json.dumps({"archive": a.run, "damages": list(DAMAGES), "seeds": a.seeds, "trials": a.trials,
+    (out / "results.json").write_text(json.dumps({"archive": a.run, "damages": list(DAMAGES), "seeds": a.seeds,
+                                                  "trials": a.trials,
                                                   "pose_noise": a.pose_noise, "settings": rows}, indent=1) + "\n")
     print("\n".join(lines))
     return 0

@@ -62,7 +62,8 @@ def episode_config(args, body_options: dict) -> EpisodeConfig:
     """The episode the probe searches: the open-loop controller in the family's form, or the CTRNN."""
     if args.family == "ctrnn":
         return EpisodeConfig(seconds=args.seconds, body_options=body_options)
-    return EpisodeConfig(controller="open-loop", controller_options={"form": args.family}, seconds=args.seconds, body_options=body_options)
+    return EpisodeConfig(controller="open-loop", controller_options={"form": args.family}, seconds=args.seconds,
+                         body_options=body_options)
 
 
 def truncation(episode, score, args, rng) -> None:
@@ -75,8 +76,8 @@ def truncation(episode, score, args, rng) -> None:
         g = genes(pop)
         res = episode.run(g)
         order = np.argsort(-score(g, res))
-        print(f"round {r:2d}: longest survival {res.end_time[order[0]]:5.2f} s (distance {res.fitness[order[0]]:.2f} m), "
-              f"top-10 mean {res.end_time[order[:10]].mean():5.2f} s", flush=True)
+        print(f"round {r:2d}: longest survival {res.end_time[order[0]]:5.2f} s (distance {res.fitness[order[0]]:.2f} "
+              f"m), top-10 mean {res.end_time[order[:10]].mean():5.2f} s", flush=True)
         elite = pop[order[:elite_n]]
         pop = np.clip(np.repeat(elite, -(-P // elite_n), axis=0)[:P] + rng.normal(0, 0.05, (P, G)), 0, 1)
         pop[:elite_n] = elite
@@ -84,7 +85,8 @@ def truncation(episode, score, args, rng) -> None:
 
 def cma(episode, score, args) -> None:
     """CMA-ES (pycma) over the layout's bounded genes, stopping early when pycma's rules fire and no restart is left."""
-    es = CMAES(episode.controller.layout, CMAOptions(population=args.population, sigma0=args.sigma0, restarts=args.restarts), seed=args.seed)
+    es = CMAES(episode.controller.layout, CMAOptions(population=args.population, sigma0=args.sigma0,
+                                                     restarts=args.restarts), seed=args.seed)
     t0 = time.time()
     for g in range(args.rounds):
         pop, _ = es.ask()
@@ -108,7 +110,8 @@ def score(genomes: np.ndarray, res) -> np.ndarray:
     s = res.end_time + 0.01 * res.fitness
     i = int(np.argmax(s))
     if s[i] > best["score"]:
-        best.update(score=s[i], survival=float(res.end_time[i]), distance=float(res.fitness[i]), genome=genomes[i].copy())
+        best.update(score=s[i], survival=float(res.end_time[i]), distance=float(res.fitness[i]),
+                    genome=genomes[i].copy())
     return s
 
 
@@ -124,8 +127,10 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=30.0)
     ap.add_argument("--planar", action="store_true", help="hold the pelvis in the sagittal plane (a diagnostic body; "
                     "its model is a temporary file, which a saved genome names)")
-    ap.add_argument("--body-option", action="append", default=[], metavar="KEY=VALUE", help="e.g. kp=5, fall_height=0.4, model_file=...")
-    ap.add_argument("--save", metavar="FILE", help="write the best genome found as a genome file (evobiped replay FILE)")
+    ap.add_argument("--body-option", action="append", default=[], metavar="KEY=VALUE",
+                    help="e.g. kp=5, fall_height=0.4, model_file=...")
+    ap.add_argument("--save", metavar="FILE",
+                    help="write the best genome found as a genome file (evobiped replay FILE)")
     args = ap.parse_args()
     opts: dict = {"model_file": planar_model()} if args.planar else {}
     for kv in args.body_option:
@@ -147,11 +152,12 @@ def main() -> None:
         ap.error(str(exc))
     res = episode.run(best["genome"])
     names = episode.controller.layout.names()
-    genes = ", ".join(f"{n} {x:.3g}" for n, x in zip(names, best["genome"])) if len(names) <= 12 else f"{len(names)} genes"
+    genes = ", ".join(f"{n} {x:.3g}" for n, x in zip(names,
+                                                     best["genome"])) if len(names) <= 12 else f"{len(names)} genes"
     print(f"best: survival {res.end_time[0]:.2f} s, distance {res.fitness[0]:.2f} m; {genes}")
     if args.save:
-        save_genome(args.save, best["genome"], cfg, fitness=float(res.fitness[0]), fell=bool(res.fell[0]), end_time=float(res.end_time[0]),
-                    seed=args.seed, search=args.search)
+        save_genome(args.save, best["genome"], cfg, fitness=float(res.fitness[0]), fell=bool(res.fell[0]),
+                    end_time=float(res.end_time[0]), seed=args.seed, search=args.search)
         print(f"saved {args.save}: evobiped replay {args.save}")
 
 

@@ -44,19 +44,21 @@ def main(argv=None) -> int:
         met = fell = 0
         worst = []
         for speeds in schedules:
-            out = follow(rep, speeds, a.hold, ramp=a.ramp, ramp_down=a.ramp_down, correction=a.correction, overshoot=a.overshoot)
+            out = follow(rep, speeds, a.hold, ramp=a.ramp, ramp_down=a.ramp_down, correction=a.correction,
+                         overshoot=a.overshoot)
             down = not all(s.up for s in out)
             err = max(s.error for s in out)
             ok = not down and err <= TOLERANCE
             met, fell = met + ok, fell + down
             worst.append(err)
             print(f"{','.join(f'{v:g}' for v in speeds)}: walked {' '.join(f'{s.measured:.3f}' for s in out)}; "
-                  f"worst window {100 * err:.1f} % off" + (", FELL" if down else "") + (" - met" if ok else ""), flush=True)
+                  f"worst window {100 * err:.1f} % off" + (", FELL" if down else "") + (" - met" if ok else ""),
+                  flush=True)
     except UserError as e:
         print(f"speed_knob_battery: error: {e}", file=sys.stderr)
         return 2
-    print(f"{met} of {len(schedules)} schedules had every window within {100 * TOLERANCE:g} % and no fall; {fell} fell; "
-          f"median worst window {100 * float(np.median(worst)):.1f} %")
+    print(f"{met} of {len(schedules)} schedules had every window within {100 * TOLERANCE:g} % and no fall; {fell} "
+          f"fell; median worst window {100 * float(np.median(worst)):.1f} %")
     return 0
 
 

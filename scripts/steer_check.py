@@ -17,7 +17,8 @@ import numpy as np
 from evobiped.files.genome_file import load_genome
 from evobiped.tasks.sound import with_sources
 
-TEST_SOURCES = [(r * np.cos(np.radians(b)), r * np.sin(np.radians(b))) for r in (6.0, 10.0, 14.0) for b in (-60, -30, 0, 30, 60)]
+TEST_SOURCES = [(r * np.cos(np.radians(b)), r * np.sin(np.radians(b))) for r in (6.0, 10.0, 14.0)
+                for b in (-60, -30, 0, 30, 60)]
 
 
 class _Reach:
@@ -67,11 +68,13 @@ def main(argv=None) -> int:
     for r in rows:
         arr = "-" if r["arrived_s"] is None else f"{r['arrived_s']:.1f}"
         up = "-" if r["up_after_arrival_s"] is None else f"{r['up_after_arrival_s']:.1f}"
-        print(f"{str(tuple(r['source'])):>18} {r['final_m']:>10.2f} {arr:>12} {up:>13}  {'at %.1f s' % r['end_s'] if r['fell'] else 'no'}")
+        print(f"{str(tuple(r['source'])):>18} {r['final_m']:>10.2f} {arr:>12} {up:>13}  "
+              f"{'at %.1f s' % r['end_s'] if r['fell'] else 'no'}")
     final = [r["final_m"] for r in rows]
     stayed = sum(r["up_after_arrival_s"] is not None and r["up_after_arrival_s"] >= 50 and not r["fell"] for r in rows)
     print(f"median final distance {np.median(final):.2f} m (range {min(final):.2f}-{max(final):.2f}); fell in "
-          f"{sum(r['fell'] for r in rows)} of {len(rows)}; reached within {a.reach:g} m and up 50 s after in {stayed} of {len(rows)}")
+          f"{sum(r['fell'] for r in rows)} of {len(rows)}; reached within {a.reach:g} m and up 50 s after in {stayed} "
+          f"of {len(rows)}")
     return 0
 
 

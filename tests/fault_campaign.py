@@ -9,9 +9,10 @@ configs, hostile settings files, genome files, ``select`` on damaged runs, runs 
 damaged generation files, worker counts beyond the machine per backend, an empty value for every flag, and a run
 directory whose name is not UTF-8; and the newer commands' numbers, environment (``MUJOCO_GL``, ``ulimit -n``), paths
 that are no file, a run being written, ``gait``'s outputs killed between them, the experiments'
-outputs (``g3 --out``, ``g3 --reproduce``, ``taga --reproduce``) killed between them, and ``ulimit -v``.  The classes after the first fourteen run their commands under a memory guard
-(a quarter of the machine, at most 8 GiB of address space) and check every case for residue: temporaries, a set's
-mark, a video's temporary folder, processes that outlived their command.
+outputs (``g3 --out``, ``g3 --reproduce``, ``taga --reproduce``) killed between them, and ``ulimit -v``.  The classes
+after the first fourteen run their commands under a memory guard (a quarter of the machine, at most 8 GiB of address
+space) and check every case for residue: temporaries, a set's mark, a video's temporary folder, processes that outlived
+their command.
 
 Each case ends in one verdict: ``identical`` (the run completed and equals an undisturbed one file for file, wall
 times aside), ``resumed`` (it stopped, with one line where it could say one, and ``--resume`` completed it, equal
@@ -20,7 +21,8 @@ the same), ``refused`` (one line on stderr, exit status 2, and nothing of the ru
 asked), or a failure: ``traceback``, ``hang`` (no answer within the
 time limit), ``silent`` (accepted and wrong: exit 0 where a refusal is due, or a completed run that differs),
 ``stale`` (a read of a run being written accepted without saying so), ``residue`` (a file left
-behind), ``orphan`` (a process that outlived its command), ``mixed`` (a new output beside an old one of the same command) and ``other``.  The exit status is 1 when any case fails.
+behind), ``orphan`` (a process that outlived its command), ``mixed`` (a new output beside an old one of the same
+command) and ``other``.  The exit status is 1 when any case fails.
 
     python scripts/fault_campaign.py --repeat 50 --out /tmp/campaign      # about an hour on 2 cores
     python scripts/fault_campaign.py --repeat 2 --classes worker-sigkill group-kill
@@ -45,8 +47,8 @@ import time
 from collections import Counter, defaultdict
 from pathlib import Path
 
-from .fault_cases import (CHECKPOINT_EDITS, CONFIG_EDITS, DEEP, DIFFERS, GENOME_EDITS, NUMBERS, SELECT_DAMAGE, SETTINGS, edit,
-                          number_case)
+from .fault_cases import (CHECKPOINT_EDITS, CONFIG_EDITS, DEEP, DIFFERS, GENOME_EDITS, NUMBERS, SELECT_DAMAGE, SETTINGS,
+                          edit, number_case)
 from .test_faults import children, contents, files  # the fault tests' process tree, run contents and file snapshots
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -78,8 +80,10 @@ def command(*args, cwd=None, env=None, timeout=LIMIT, guarded=False) -> tuple[in
     """``evobiped ARGS`` in a child process (``guarded``: under the memory guard): (exit status, None on a hang;
     stderr; stdout).  Processes left in its process group afterwards are killed and noted in :data:`LEFTOVER`."""
     env = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
-    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, env=env, text=True, errors="replace",
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, preexec_fn=guard if guarded else None)
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], cwd=cwd, env=env, text=True,
+                         errors="replace",
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, preexec_fn=guard
+                             if guarded else None)
     try:
         out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -124,7 +128,8 @@ def start(d: Path) -> subprocess.Popen:
             signal.signal(s, signal.SIG_DFL)
         os.setpgrp()
 
-    return subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *PROCESS, "--out", str(d)], text=True, stdout=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *PROCESS, "--out", str(d)], text=True,
+                            stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=defaults)
 
 
@@ -211,7 +216,9 @@ def resumed(d: Path, reference: dict, rc, err: str) -> str:
         return "hang"
     if "Traceback" in err:
         return "traceback"
-    if rc not in (0, 2, -signal.SIGKILL, *(128 + s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP))) or rc == 2 and not one_line(err):
+    if rc not in (0, 2, -signal.SIGKILL, *(128 + s
+                                           for s in (signal.SIGINT, signal.SIGTERM,
+                                                     signal.SIGHUP))) or rc == 2 and not one_line(err):
         return "other"
     how = "identical" if rc == 0 else "refused, resumed" if rc == 2 else "resumed"
     for _ in range(3):
@@ -352,10 +359,16 @@ def cma_cases(work: Path) -> list[tuple[str, str]]:
         return [_case("cma run", verdict(rc, err))]
     out = []
     cases = {
-        "20,000 told generations": lambda ck: {**ck, "settings": ck["settings"], "optimizer": {"name": "cma", "generation": 20000,
-                                                "told": [[0.0] * len(ck["optimizer"]["fitness"])] * 20000, "fitness": ck["optimizer"]["fitness"]}},
-        "strategy names os.system": lambda ck: {**ck, "optimizer": json.loads(json.dumps(ck["optimizer"]).replace('"cma.sampler:', '"os:', 1))},
-        "strategy arrays cut": lambda ck: {**ck, "optimizer": json.loads(json.dumps(ck["optimizer"]).replace('"b64": "', '"b64": "AAAA', 1))},
+        "20,000 told generations": lambda ck: {**ck, "settings": ck["settings"],
+                                               "optimizer": {"name": "cma", "generation": 20000,
+                                                "told": [[0.0] * len(ck["optimizer"]["fitness"])] * 20000,
+                                                             "fitness": ck["optimizer"]["fitness"]}},
+        "strategy names os.system": lambda ck: {**ck,
+                                                "optimizer": json.loads(json.dumps(ck["optimizer"]).replace(
+                                                    '"cma.sampler:', '"os:', 1))},
+        "strategy arrays cut": lambda ck: {**ck,
+                                           "optimizer": json.loads(json.dumps(ck["optimizer"]).replace(
+                                               '"b64": "', '"b64": "AAAA', 1))},
     }
     for name, change in cases.items():
         c = work / f"cma-{len(out)}"
@@ -387,11 +400,13 @@ def settings_cases(work: Path) -> list[tuple[str, str]]:
         f.write_text(text + "\n")
         d = work / f"s{len(out)}"
         population = [] if "population" in name else ["--population", "4"]
-        rc, err, _ = command("evolve", "--config", f, "--episode-seconds", "1", *population, "--backend", "thread", "--workers", "2",
-                             "--out", d, "--quiet")
+        rc, err, _ = command("evolve", "--config", f, "--episode-seconds", "1", *population, "--backend", "thread",
+                             "--workers", "2", "--out", d, "--quiet")
         out.append(_case(name, "silent" if d.exists() else refusal(rc, err, words)))
-    rc, err, _ = command("evolve", "--preset", "walker-ctrnn-distilled", "--out", work / "preset", "--quiet", timeout=60)
-    out.append(_case("preset needing --from without it", "silent" if (work / "preset").exists() else refusal(rc, err, "--from")))
+    rc, err, _ = command("evolve", "--preset", "walker-ctrnn-distilled", "--out", work / "preset", "--quiet",
+                         timeout=60)
+    out.append(_case("preset needing --from without it", "silent" if (work / "preset").exists()
+                     else refusal(rc, err, "--from")))
     return out
 
 
@@ -470,7 +485,8 @@ def residue(*dirs: Path) -> list[str]:
     the system's, processes of its commands (:data:`LEFTOVER`)."""
     import tempfile
 
-    found = [str(p) for d in dirs if Path(d).is_dir() for pat in (".*.tmp*", ".*.incomplete") for p in Path(d).rglob(pat)]
+    found = [str(p) for d in dirs if Path(d).is_dir() for pat in (".*.tmp*", ".*.incomplete")
+             for p in Path(d).rglob(pat)]
     found += [str(p) for p in Path(tempfile.gettempdir()).glob("tmp*/video.mp4")]
     return found
 
@@ -497,10 +513,11 @@ def start_signal(d: Path, reference) -> str:
     done = d.parent / "done"
     what = random.choice(["evolve", "replay", "select", "help", "group"])
     args = {"evolve": ["evolve", *RUN, "--backend", "serial", "--out", d], "help": ["evolve", "-h"],
-            "replay": ["replay", done, "--seconds", "1", "--out", d / "r.rrd"], "select": ["select", done, "--seconds", "1"],
-            "group": ["evolve", *PROCESS, "--out", d]}[what]
+            "replay": ["replay", done, "--seconds", "1", "--out", d / "r.rrd"],
+            "select": ["select", done, "--seconds", "1"], "group": ["evolve", *PROCESS, "--out", d]}[what]
     d.mkdir(parents=True, exist_ok=True) if what in ("replay", "select") else None
-    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], text=True, errors="replace", stdout=subprocess.PIPE,
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], text=True, errors="replace",
+                         stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
     time.sleep(random.uniform(0.5, 1.5) if what == "group" else random.uniform(0.02, 0.6))
     if kill(p.pid, signal.SIGINT) if what != "group" else _killpg(p.pid, signal.SIGINT):
@@ -518,7 +535,8 @@ def start_signal(d: Path, reference) -> str:
             return "python-start"
         return "traceback"
     lines = [x for x in err.splitlines() if not x.startswith(RETRY_NOTE)]
-    if p.returncode not in (0, 130, -signal.SIGINT) or len(lines) > 1:  # -SIGINT: before Python's handler, as a shell's 130
+    # -SIGINT: before Python's handler, as a shell's 130
+    if p.returncode not in (0, 130, -signal.SIGINT) or len(lines) > 1:
         return "other"
     if p.returncode in (130, -signal.SIGINT) and what in ("evolve", "group") and (d / "config.json").exists():
         rc, err, _ = command("evolve", "--resume", d, "--quiet")
@@ -594,14 +612,19 @@ def generation_cases(work: Path, done: Path) -> list[tuple[str, str]]:
                 shutil.copytree(done, d)
                 harm(d, g)
                 before = files(d)
-                args = {"resume": ["evolve", "--resume", d], "replay": ["replay", d, "--generation", g, "--seconds", "1"],
+                args = {"resume": ["evolve", "--resume", d],
+                        "replay": ["replay", d, "--generation", g, "--seconds", "1"],
                         "select": ["select", d, "--seconds", "1"]}[cmd]
                 rc, err, _ = command(*args)
                 v = verdict(rc, err)
                 if g == best:  # rewritten from the checkpoint, as committed
-                    v = "rewritten" if rc == 0 and gen(d, g).read_bytes() == gen(done, g).read_bytes() else v.replace("identical", "silent")
+                    v = "rewritten" if rc == 0 and gen(d,
+                                                       g).read_bytes() == gen(done,
+                                                                              g).read_bytes() else v.replace(
+                                                                                  "identical", "silent")
                 else:  # refused by name, nothing changed
-                    v = "silent" if v == "identical" or (v == "refused" and (gen(d, g).name not in err or files(d) != before)) else v
+                    v = "silent" if v == "identical" or (v == "refused"
+                                                         and (gen(d, g).name not in err or files(d) != before)) else v
                 out.append(_case(f"gen_{g:04d}.json {name}, {cmd}", _checked(v, d)))
     return out
 
@@ -612,12 +635,16 @@ def worker_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     for backend in ("thread", "process", "ray"):
         for n in ("100000", "1000000000"):
             d = work / f"workers-{len(out)}"
-            rc, err, _ = command("evolve", *RUN, "--backend", backend, "--workers", n, "--out", d, guarded=True, timeout=60)
-            out.append(_case(f"--backend {backend} --workers {n}", _checked(verdict(rc, err).replace("identical", "silent"), d)))
+            rc, err, _ = command("evolve", *RUN, "--backend", backend, "--workers", n, "--out", d, guarded=True,
+                                 timeout=60)
+            out.append(_case(f"--backend {backend} --workers {n}",
+                             _checked(verdict(rc, err).replace("identical", "silent"), d)))
         (work / "workers.toml").write_text("workers = 100000\n")
         d = work / f"workers-{len(out)}"
-        rc, err, _ = command("evolve", *RUN, "--backend", backend, "--config", work / "workers.toml", "--out", d, guarded=True, timeout=60)
-        out.append(_case(f"--backend {backend}, workers = 100000 in a settings file", _checked(verdict(rc, err).replace("identical", "silent"), d)))
+        rc, err, _ = command("evolve", *RUN, "--backend", backend, "--config", work / "workers.toml", "--out", d,
+                             guarded=True, timeout=60)
+        out.append(_case(f"--backend {backend}, workers = 100000 in a settings file",
+                         _checked(verdict(rc, err).replace("identical", "silent"), d)))
     return out
 
 
@@ -639,7 +666,8 @@ def empty_cases(work: Path, done: Path) -> list[tuple[str, str]]:
             cwd.mkdir()
             rc, err, _ = command(name, *args, cwd=cwd, guarded=True, timeout=60)
             v = verdict(rc, err).replace("identical", "silent")
-            out.append(_case(f"{name} {' '.join(args) or 'POSITIONAL'}", _checked(v, cwd) if not any(cwd.iterdir()) or v != "refused" else "residue"))
+            out.append(_case(f"{name} {' '.join(args) or 'POSITIONAL'}", _checked(v, cwd) if not any(cwd.iterdir())
+                             or v != "refused" else "residue"))
     return out
 
 
@@ -648,8 +676,10 @@ def latin1_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     d = work / os.fsdecode(b"run\xff")
     env = {"LC_ALL": "C.UTF-8"}
     out = []
-    for name, args in (("evolve --out", ["evolve", *RUN, "--backend", "serial", "--out", d]), ("evolve --resume", ["evolve", "--resume", d]),
-                       ("evolve --resume again", ["evolve", "--resume", d]), ("replay --figures", ["replay", d, "--seconds", "1", "--figures"]),
+    for name, args in (("evolve --out", ["evolve", *RUN, "--backend", "serial", "--out", d]),
+                       ("evolve --resume", ["evolve", "--resume", d]),
+                       ("evolve --resume again", ["evolve", "--resume", d]),
+                       ("replay --figures", ["replay", d, "--seconds", "1", "--figures"]),
                        ("select", ["select", d, "--seconds", "1"])):
         rc, err, _ = command(*args, env=env)
         v = verdict(rc, err)
@@ -659,7 +689,8 @@ def latin1_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     return out
 
 
-FIXED.update({"generation-file": generation_cases, "workers": worker_cases, "empty-string": empty_cases, "non-utf8": latin1_cases})
+FIXED.update({"generation-file": generation_cases, "workers": worker_cases, "empty-string": empty_cases,
+              "non-utf8": latin1_cases})
 
 
 # ---- the newer commands: numbers, the environment, paths that are no file, a run being written, gait's outputs
@@ -704,20 +735,22 @@ def environment_cases(work: Path, done: Path) -> list[tuple[str, str]]:
             cwd = work / f"env-{len(out)}"
             cwd.mkdir()
             rc, err, _ = command(*args, cwd=cwd, env={"MUJOCO_GL": value}, guarded=True, timeout=120)
-            out.append(_case(f"MUJOCO_GL={value!r} {name}", _checked(verdict(rc, err).replace("refused", "silent"), cwd)))
+            out.append(_case(f"MUJOCO_GL={value!r} {name}",
+                             _checked(verdict(rc, err).replace("refused", "silent"), cwd)))
         cwd = work / f"env-{len(out)}"
         cwd.mkdir()
         rc, err, _ = command("replay", walker, "--seconds", "0.5", "--video", "v.mp4", "--out", "r.rrd", cwd=cwd,
                              env={"MUJOCO_GL": value}, guarded=True, timeout=120)
         v = refusal(rc, err, "MUJOCO_GL") if value.strip().lower() != "egl" else verdict(rc, err)
         out.append(_case(f"MUJOCO_GL={value!r} replay --video", _checked(v, cwd)))
-    for files in (12, 14):
+    for open_files in (12, 14):
         for backend in ("process", "thread"):
             cwd = work / f"env-{len(out)}"
             cwd.mkdir()
-            rc, err = _limited(["evolve", *RUN, "--backend", backend, "--workers", "2", "--out", cwd / "run"], files, cwd)
+            rc, err = _limited(["evolve", *RUN, "--backend", backend, "--workers", "2", "--out", cwd / "run"],
+                               open_files, cwd)
             v = "hang" if rc is None else refusal(rc, err, "too many open files") if rc != 0 else "identical"
-            out.append(_case(f"ulimit -n {files}, evolve --backend {backend}", _checked(v, cwd)))
+            out.append(_case(f"ulimit -n {open_files}, evolve --backend {backend}", _checked(v, cwd)))
     return out
 
 
@@ -729,7 +762,8 @@ def odd_path_cases(work: Path, done: Path) -> list[tuple[str, str]]:
                         ("device", "is a character device")):
         for args in (["replay", "{p}", "--seconds", "0.5"], ["episode", "--genome", "{p}"], ["gait-report", "{p}"],
                      ["robustness", "{p}"], ["gait", "{p}", "--speed", "0.5"], ["distill", "{p}"],
-                     ["genome", "command-calibrate", "{p}", "out.json"], ["genome", "ranges", "{p}", "out.json", "--block", "weights", "-1", "1"]):
+                     ["genome", "command-calibrate", "{p}", "out.json"],
+                     ["genome", "ranges", "{p}", "out.json", "--block", "weights", "-1", "1"]):
             cwd = work / f"odd-{len(out)}"
             cwd.mkdir()
             p = Path("/dev/null") if kind == "device" else cwd / kind
@@ -742,7 +776,8 @@ def odd_path_cases(work: Path, done: Path) -> list[tuple[str, str]]:
             rc, err, _ = command(*[a.format(p=p) for a in args], cwd=cwd, guarded=True, timeout=60)
             v = refusal(rc, err, words)
             out.append(_case(f"{kind} to {args[0]}{' ' + args[1] if args[0] == 'genome' else ''}",
-                             "residue" if v == "refused" and [x for x in cwd.iterdir() if x != p] else _checked(v, cwd)))
+                             "residue" if v == "refused" and [x for x in cwd.iterdir() if x != p]
+                                 else _checked(v, cwd)))
     return out
 
 
@@ -755,8 +790,10 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     """The commands that read a run, on one an evolve is writing: refused by name (or, ``--allow-unfinished``, the
     generation recorded); a selection made then, read once the run went on: refused, never reused silently."""
     d = work / "live"
-    p = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", "--population", "4", "--generations", "300", "--seconds",
-                          "0.5", "--backend", "serial", "--quiet", "--out", str(d)], env={**os.environ, "PYTHONPATH": str(ROOT)},
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", "--population", "4", "--generations", "300",
+                          "--seconds",
+                          "0.5", "--backend", "serial", "--quiet", "--out", str(d)],
+                         env={**os.environ, "PYTHONPATH": str(ROOT)},
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     out = []
     try:
@@ -765,7 +802,8 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
             time.sleep(0.05)
         words = f"is being written by process {p.pid}; wait or pass --allow-unfinished"
         for args in (["select", d, "--seconds", "1", "--top", "1"], ["replay", d, "--seconds", "0.5"],
-                     ["replay", d / "best.json", "--seconds", "0.5"], ["replay", d, "--generation", "0", "--seconds", "0.5"],
+                     ["replay", d / "best.json", "--seconds", "0.5"],
+                     ["replay", d, "--generation", "0", "--seconds", "0.5"],
                      ["gait-report", d, "--seconds", "1"], ["robustness", d, "--seconds", "2", "--push-after", "1"],
                      ["distill", d, "--iterations", "1"]):
             rc, err, _ = command(*args, guarded=True, timeout=60)
@@ -774,7 +812,8 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
         chosen = json.loads((d / "selected.json").read_text()).get("from_checkpoint") if rc == 0 else None
         v = verdict(rc, err) if rc != 0 else "identical" if chosen and chosen.get("writer") == p.pid else "silent"
         out.append(_case("select --allow-unfinished of a run being written", _stale(v)))
-        for args in (["replay", d, "--seconds", "0.5", "--allow-unfinished"], ["gait-report", d, "--seconds", "1", "--allow-unfinished"]):
+        for args in (["replay", d, "--seconds", "0.5", "--allow-unfinished"],
+                     ["gait-report", d, "--seconds", "1", "--allow-unfinished"]):
             rc, err, _ = command(*args, guarded=True, timeout=60)
             v = verdict(rc, err) if rc != 0 else "identical" if "is being written by process" in err else "silent"
             out.append(_case(f"{args[0]} --allow-unfinished of a run being written", _stale(v)))
@@ -783,7 +822,8 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     finally:
         p.kill()
         p.communicate()
-    for args in (["replay", d / "selected.json", "--seconds", "0.5"], ["gait-report", d / "selected.json", "--seconds", "1"]):
+    for args in (["replay", d / "selected.json", "--seconds", "0.5"],
+                 ["gait-report", d / "selected.json", "--seconds", "1"]):
         rc, err, _ = command(*args, guarded=True, timeout=60)
         out.append(_case(f"{args[0]} of a selection the run has gone past",
                          _stale(refusal(rc, err, "choose again with evobiped select"))))
@@ -791,7 +831,8 @@ def live_run_cases(work: Path, done: Path) -> list[tuple[str, str]]:
 
 
 def gait_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
-    """A commanded walker's gait (its JSON and figure one set) SIGKILLed at each rename of its outputs, then run again."""
+    """A commanded walker's gait (its JSON and figure one set) SIGKILLed at each rename of its outputs, then run
+    again."""
     out = []
     walker = ROOT / "docs" / "walkers" / "ctrnn_command_seed1.json"
     args = ["gait", walker, "--speed", "0.5", "--hold", "3"]
@@ -815,8 +856,8 @@ def gait_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
     return out
 
 
-FIXED.update({"numbers": number_cases, "environment": environment_cases, "odd-path": odd_path_cases, "live-run": live_run_cases,
-              "gait-output": gait_output_cases})
+FIXED.update({"numbers": number_cases, "environment": environment_cases, "odd-path": odd_path_cases,
+              "live-run": live_run_cases, "gait-output": gait_output_cases})
 
 
 # ---- the experiments' outputs as one set; too little address space
@@ -859,15 +900,15 @@ def reproduce_output_cases(work: Path, done: Path) -> list[tuple[str, str]]:
             if sorted(x.name for x in d.iterdir()) != ["g3_fig4_diagrams.png", "g3_fig4_frequency.png"]:
                 v = "residue"
         out.append(_case(f"g3 --out killed at rename {n}, run again", _checked(v, d)))
-    for what, args, files, kills in (
+    for what, args, outputs, kills in (
             ("g3 --reproduce", ["g3", "--reproduce", "{d}", *G3_QUICK], g3_outputs, (2, 9, 20, 30)),
             ("taga --reproduce", ["taga", "--reproduce", "{d}", "--quick", "--quiet"], taga_outputs, (2, 3))):
         for n in kills:
             d = work / f"{what.split()[0]}-reproduce-{n}"
             d.mkdir()
-            for f in files(d):
+            for f in outputs(d):
                 f.write_bytes(old)
-            v = _set_after_kill([a.format(d=d) for a in args], d, files(d), n, old)
+            v = _set_after_kill([a.format(d=d) for a in args], d, outputs(d), n, old)
             if not v:  # the next run says the previous was cut short, before its own mark (killed there)
                 rc, err, _ = command(*[a.format(d=d) for a in args], env={"EVOBIPED_FAULT_KILL_AT_REPLACE": "1"},
                                      guarded=True)
@@ -980,7 +1021,8 @@ def campaign(work: Path, classes: list[str], repeat: int, show: bool = False) ->
                 notes.append(f"{name}: orphan: {'; '.join(LEFTOVER)}")
                 LEFTOVER.clear()
         struck = f"  ({', '.join(f'{k} {n}' for k, n in STRUCK.items())})" if name in RANDOM else ""
-        print(f"{name:<22} {sum(results[name].values()):>4} cases  " + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())) + struck,
+        print(f"{name:<22} {sum(results[name].values()):>4} cases  "
+              + ", ".join(f"{k} {n}" for k, n in sorted(results[name].items())) + struck,
               flush=True)
     return results, notes
 
@@ -1002,7 +1044,8 @@ def main(argv: list[str] | None = None) -> int:
     results, notes = campaign(Path(args.out), classes, args.repeat, args.show)
     total = sum((sum(c.values()) for c in results.values()))
     failed = {f: sum(c[f] for c in results.values()) for f in FAILURES}
-    print(f"{total} cases in {len(results)} classes, {time.time() - t0:.0f} s: " + ", ".join(f"{n} {f}" for f, n in failed.items()))
+    print(f"{total} cases in {len(results)} classes, {time.time() - t0:.0f} s: "
+          + ", ".join(f"{n} {f}" for f, n in failed.items()))
     for n in notes:
         print("  " + n)
     return 1 if any(failed.values()) else 0

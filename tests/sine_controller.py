@@ -36,14 +36,16 @@ class Sine(Controller):
     def needs(cls, options: SineOptions) -> Needs:
         return Needs()
 
-    def __init__(self, options: SineOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
+    def __init__(self, options: SineOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None,
+                 actuators=None, **given):
         self.options = self.own_options(options, given)
         self.n_outputs, self.dt, self.input_names = int(n_outputs), float(self.options.dt), ()
         n = self.n_outputs
         self._layout = GenomeLayout((
             GeneBlock(name="amplitude", size=n, low=0.0, high=1.0, init_mean=0.3, init_sigma=0.2, mutation_sigma=0.1),
             GeneBlock(name="frequency", size=n, low=0.2, high=3.0, init_mean=1.0, init_sigma=0.5, mutation_sigma=0.2),
-            GeneBlock(name="phase", size=n, low=0.0, high=2 * np.pi, init_mean=np.pi, init_sigma=1.0, mutation_sigma=0.5),
+            GeneBlock(name="phase", size=n, low=0.0, high=2 * np.pi, init_mean=np.pi, init_sigma=1.0,
+                      mutation_sigma=0.5),
         ))
 
     @property
@@ -55,7 +57,8 @@ class Sine(Controller):
         return np.zeros(len(params["amplitude"]))
 
     def neuron_outputs(self, params, state):
-        return 0.5 + 0.5 * params["amplitude"] * np.sin(2 * np.pi * params["frequency"] * state[:, None] + params["phase"])
+        return 0.5 + 0.5 * params["amplitude"] * np.sin(2 * np.pi * params["frequency"] * state[:, None]
+                                                        + params["phase"])
 
     def step(self, params, state, inputs):
         return state + self.dt, self.neuron_outputs(params, state)

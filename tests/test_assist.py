@@ -111,7 +111,8 @@ def test_a_gated_assisted_run_resumes_bit_identically(tmp_path):
     whole, cut = whole_and_resumed(tmp_path, cfg)
     assert fitness_history(cut) == fitness_history(whole.dir)
     assert (cut / "best.json").read_text() == (whole.dir / "best.json").read_text()
-    clocks = [cfg.episode.perturbations.key(3, g, [float(r[1]) for r in fitness_history(whole.dir)])[2] for g in range(4)]
+    clocks = [cfg.episode.perturbations.key(3, g, [float(r[1]) for r in fitness_history(whole.dir)])[2]
+              for g in range(4)]
     assert clocks[-1] > 0  # the gate was passed: the resumed run had to rebuild a clock that moved
 
 

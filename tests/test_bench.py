@@ -26,22 +26,26 @@ def test_raw_replay_on_threads_reproduces_the_closed_loop_episodes_exactly():
     assert r["efficiency_one_core"] == pytest.approx(m["eval"] / m["raw 1"])
     assert r["efficiency_pool"] == pytest.approx(m["pool 2"] / m["raw 2"])
     assert r["efficiency_threads"] == pytest.approx(m["threads 2"] / m["raw 2"])
-    assert r["scaling_raw"] == pytest.approx(m["raw 2"] / m["raw 1"]) and r["scaling_pool"] == pytest.approx(m["pool 2"] / m["pool 1"])
+    assert r["scaling_raw"] == pytest.approx(m["raw 2"] / m["raw 1"]) and r["scaling_pool"] == pytest.approx(m[
+        "pool 2"] / m["pool 1"])
 
 
 def test_cli_json(capsys):
     assert main(["bench", "--population", "1", "--seconds", "0.5", "--workers", "1", "--repeats", "1", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert r["population"] == 1 and r["repeats"] == 1 and r["simulated_seconds"] == pytest.approx(0.5)
-    assert {k: len(v) for k, v in r["wall_seconds"].items()} == dict.fromkeys(r["median_sim_s_per_s"], 1)  # one repeat ran
+    # one repeat ran
+    assert {k: len(v) for k, v in r["wall_seconds"].items()} == dict.fromkeys(r["median_sim_s_per_s"], 1)
     m = r["median_sim_s_per_s"]
     assert set(m) == {"raw 1", "eval", "pool 1", "threads 1"} and all(np.isfinite(v) and v > 0 for v in m.values())
     # one worker: the efficiencies are each evaluator's rate over the one raw rate
-    assert r["efficiency_one_core"] == pytest.approx(m["eval"] / m["raw 1"]) and r["efficiency_pool"] == pytest.approx(m["pool 1"] / m["raw 1"])
+    assert r["efficiency_one_core"] == pytest.approx(m["eval"] / m["raw 1"]) and r["efficiency_pool"] == pytest.approx(
+        m["pool 1"] / m["raw 1"])
 
 
 def test_cli_quick_sizes_and_overrides(capsys):
-    """--quick: 16 walkers, 5 repeats, --seconds overriding its 4 s; each measurement ran 5 times (not only reported)."""
+    """--quick: 16 walkers, 5 repeats, --seconds overriding its 4 s; each measurement ran 5 times (not only
+    reported)."""
     assert main(["bench", "--quick", "--seconds", "0.2", "--workers", "1", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert (r["population"], r["episode_seconds"], r["repeats"]) == (16, 0.2, 5)
@@ -51,7 +55,8 @@ def test_cli_quick_sizes_and_overrides(capsys):
     assert all(m[k] == pytest.approx(16 * 0.2 / np.median(v)) for k, v in r["wall_seconds"].items())
 
 
-@pytest.mark.parametrize("args, words", [(["--population", "0"], "must be > 0"), (["--repeats", "0"], "must be > 0"), (["--body", "tripod"], "unknown body 'tripod'")])
+@pytest.mark.parametrize("args, words", [(["--population", "0"], "must be > 0"), (["--repeats", "0"], "must be > 0"),
+                                         (["--body", "tripod"], "unknown body 'tripod'")])
 def test_cli_bad_arguments(capsys, args, words):
     try:
         rc = main(["bench", *args])
@@ -62,9 +67,11 @@ def test_cli_bad_arguments(capsys, args, words):
 
 def test_presentations_measurement_counts_every_presentation(capsys):
     """(e) simulates R presentations of each walker: R times the simulated seconds of (b)."""
-    assert main(["bench", "--population", "2", "--seconds", "0.5", "--workers", "1", "--repeats", "1", "--presentations", "3", "--json"]) == 0
+    assert main(["bench", "--population", "2", "--seconds", "0.5", "--workers", "1", "--repeats", "1",
+                 "--presentations", "3", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
-    assert r["simulated_seconds_each"]["eval x3"] == pytest.approx(3 * r["simulated_seconds_each"]["eval"]) == pytest.approx(3.0)
+    assert r["simulated_seconds_each"]["eval x3"] == pytest.approx(3 * r["simulated_seconds_each"][
+        "eval"]) == pytest.approx(3.0)
     m = r["median_sim_s_per_s"]
     assert r["presentation_cost"] == pytest.approx(m["eval"] / m["eval x3"])
     assert m["eval x3"] == pytest.approx(3.0 / r["wall_seconds"]["eval x3"][0])

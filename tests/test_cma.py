@@ -16,7 +16,8 @@ from evobiped.interface.genome import GeneBlock, GenomeLayout
 
 from .test_evolve import fitness_history
 
-LAYOUT = GenomeLayout((GeneBlock(name="x", size=10, low=-5.0, high=5.0, init_mean=3.0, init_sigma=1.0, mutation_sigma=1.0),))
+LAYOUT = GenomeLayout((GeneBlock(name="x", size=10, low=-5.0, high=5.0, init_mean=3.0, init_sigma=1.0,
+                                 mutation_sigma=1.0),))
 
 
 def optimise(opt, f, generations):
@@ -78,7 +79,8 @@ def test_ipop_restart_doubles_the_population():
     assert opt.restart == 1 and len(opt.ask()[0]) == 8
 
 
-@pytest.mark.parametrize("bad", [dict(population=1), dict(sigma0=0.0), dict(sigma0=float("nan")), dict(sigma0=2.0), dict(restarts=-1), dict(population=True)])
+@pytest.mark.parametrize("bad", [dict(population=1), dict(sigma0=0.0), dict(sigma0=float("nan")), dict(sigma0=2.0),
+                                 dict(restarts=-1), dict(population=True)])
 def test_bad_settings(bad):
     with pytest.raises(ConfigError):
         CMAOptions(**bad)
@@ -86,13 +88,16 @@ def test_bad_settings(bad):
 
 def test_tampered_state_is_refused():
     opt = CMAES(LAYOUT, CMAOptions(population=4), seed=0)
-    good = json.loads(json.dumps(optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0), lambda p: -np.abs(p).sum(axis=1), 2).state().to_dict()))
+    good = json.loads(json.dumps(optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=0),
+                                          lambda p: -np.abs(p).sum(axis=1), 2).state().to_dict()))
     strategy = good["strategy"]
     foreign = json.loads(json.dumps(strategy).replace('"cma.sampler:', '"os:', 1))  # a class outside pycma named
     assert foreign != strategy
     old = {"name": "cma", "generation": 2, "fitness": [None] * 4}
-    for bad in ({**good, "strategy": "x"}, {**good, "strategy": foreign}, {**good, "strategy": {**strategy, "asked": strategy["es"]}},
-                {**good, "generation": "5"}, {"name": "ga"}, {**good, "fitness": [1.0]}, {**good, "restart": 3}, {**good, "restart": True},
+    for bad in ({**good, "strategy": "x"}, {**good, "strategy": foreign},
+                {**good, "strategy": {**strategy, "asked": strategy["es"]}},
+                {**good, "generation": "5"}, {"name": "ga"}, {**good, "fitness": [1.0]}, {**good, "restart": 3},
+                {**good, "restart": True},
                 {**old, "told": [[1.0] * 3, [1.0] * 4]}, {**old, "told": "x"}, {**old, "told": [[1.0] * 4, ["x"] * 4]},
                 {**old, "generation": 5, "told": [[1.0] * 4] * 2}):
         with pytest.raises(UserError):
@@ -123,7 +128,8 @@ def test_a_resume_costs_the_same_at_any_generation():
     f = lambda p: -np.abs(p).sum(axis=1)  # noqa: E731
     costs = []
     for n in (2, 200):
-        state = json.loads(json.dumps(optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=1), f, n).state().to_dict()))
+        state = json.loads(json.dumps(optimise(CMAES(LAYOUT, CMAOptions(population=4), seed=1), f,
+                                               n).state().to_dict()))
         t = time.perf_counter()
         b = CMAES(LAYOUT, CMAOptions(population=4), seed=1)
         b.restore(b.state_from(state))
@@ -133,7 +139,8 @@ def test_a_resume_costs_the_same_at_any_generation():
 
 
 SMALL = RunConfig(episode=EpisodeConfig(controller="simbicon", seconds=1.0, task_options={"fitness": "forward"}),
-                  optimizer="cma", optimizer_options={"cma": CMAOptions(population=6)}, generations=4, seed=2, backend="serial")
+                  optimizer="cma", optimizer_options={"cma": CMAOptions(population=6)}, generations=4, seed=2,
+                  backend="serial")
 
 
 def test_cma_run_resumes_bit_identically(tmp_path):
@@ -160,7 +167,8 @@ def test_resume_with_another_optimizer_is_refused(tmp_path, capsys):
     assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'optimizer "cma" → "ga"' in err[0]
-    ck = json.loads((tmp_path / "r" / "checkpoint.json").read_text())  # a checkpoint of before the settings were recorded
+    # a checkpoint of before the settings were recorded
+    ck = json.loads((tmp_path / "r" / "checkpoint.json").read_text())
     older = {k: v for k, v in ck.items() if k not in ("settings", "start", "format")}
     (tmp_path / "r" / "checkpoint.json").write_text(json.dumps(older))
     assert main(["evolve", "--resume", str(tmp_path / "r"), "--quiet"]) == 2

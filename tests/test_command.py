@@ -41,7 +41,8 @@ def commanded_genome(path, **episode):
 
 def test_the_stance_frame_mirror_keeps_the_speed_and_negates_the_turning():
     cfg = EpisodeConfig(body="reil", controller="ctrnn", task="command", seconds=1.0,
-                        controller_options={"frame": "stance", "inputs": ["command_speed", "command_turning", "joint_angles"]})
+                        controller_options={"frame": "stance",
+                                            "inputs": ["command_speed", "command_turning", "joint_angles"]})
     ep = cfg.build()
     frame = ep.controller.frame
     x = np.tile(np.r_[0.5, 0.2, np.arange(6.0)], (2, 1))
@@ -57,7 +58,8 @@ def test_drawn_commands_are_the_generations_for_every_genome_and_change_mid_epis
     again = ep.task.draw_sources((7, 3)).steps(12.0)
     s = draw.steps(12.0)
     assert np.array_equal(s.speed, again.speed) and np.array_equal(s.turning, again.turning)
-    assert len(s.times) == 6 and len(set(s.speed.tolist())) > 1 and len(set(s.turning.tolist())) > 1  # changes mid-episode
+    # changes mid-episode
+    assert len(s.times) == 6 and len(set(s.speed.tolist())) > 1 and len(set(s.turning.tolist())) > 1
     other = ep.task.draw_sources((7, 4)).steps(12.0)
     assert not np.array_equal(other.speed, s.speed)  # another generation, other commands
     assert ((s.speed == 0) | ((s.speed >= 0.2) & (s.speed <= 0.8))).all() and (np.abs(s.turning) <= 0.35).all()
@@ -65,7 +67,9 @@ def test_drawn_commands_are_the_generations_for_every_genome_and_change_mid_epis
     for k in range(3):  # every genome of the generation is told the same: the draw's stretch of the time
         senses = ep.task.sensors(ep.body, state.sims, state.task)
         i = int(np.floor(2.5 * k / 2.0 + 1e-9))
-        assert (senses["command_speed"][:, 0] == s.speed[i]).all() and (senses["command_turning"][:, 0] == s.turning[i]).all()
+        assert (senses["command_speed"][:,
+                                        0] == s.speed[i]).all() and (senses["command_turning"][:, 0] == s.turning[
+                                            i]).all()
         ep.advance(state, 2.5)
     assert ep.task.draw_sources(None) is None  # a nominal episode: the documented tour
     assert ep.task.nominal.speed.tolist() == [0.5, 0.8, 0.5, 0.5, 0.2, 0.0]
@@ -73,9 +77,9 @@ def test_drawn_commands_are_the_generations_for_every_genome_and_change_mid_epis
 
 def test_the_same_key_draws_bit_identical_commands_in_another_process():
     code = ("from evobiped.episode import EpisodeConfig\n"
-            "t = EpisodeConfig(body='reil', controller='linear', task='command', seconds=1.0, task_options={'schedule': 'drawn'},"
-            " controller_options={'inputs': ['command_speed', 'command_turning']}).parts()[2]\n"
-            "s = t.draw_sources((11, 5)).steps(40.0)\n"
+            "t = EpisodeConfig(body='reil', controller='linear', task='command', seconds=1.0, "
+            "task_options={'schedule': 'drawn'}, controller_options={'inputs': ['command_speed', "
+            "'command_turning']}).parts()[2]\ns = t.draw_sources((11, 5)).steps(40.0)\n"
             "print(s.speed.tobytes().hex(), s.turning.tobytes().hex())")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     s = standing(schedule="drawn").task.draw_sources((11, 5)).steps(40.0)
@@ -110,8 +114,10 @@ def test_tracking_terms_of_a_walker_that_stands_match_a_hand_calculation():
 
 
 def test_the_walk_tasks_gait_terms_stay_available():
-    ep = standing(weights={"track_speed": 1.0, "airborne": -1.0, "sliding": -1.0, "positive_work": -1.0, "duty_left": 1.0})
-    assert {"airborne", "sliding", "positive_work", "duty_left", "track_speed", "track_turning", "stand"} <= set(ep.task.term_names)
+    ep = standing(weights={"track_speed": 1.0, "airborne": -1.0, "sliding": -1.0, "positive_work": -1.0,
+                           "duty_left": 1.0})
+    assert {"airborne", "sliding", "positive_work", "duty_left", "track_speed", "track_turning",
+            "stand"} <= set(ep.task.term_names)
     r = ep.run(np.zeros((1, ep.controller.layout.size)))
     assert np.isfinite(r.fitness).all()
 
@@ -130,7 +136,8 @@ def test_evobiped_gait_follows_a_commanded_genome(tmp_path, capsys):
         assert {"walked_speed", "walked_turning", "speed_error_pct", "fell"} <= set(s)
     assert json.loads((out / "tiny_command.json").read_text())["stretches"] == report["stretches"]
     assert (out / "tiny_command.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert main(["gait", str(tmp_path / "tiny.json"), "--stretch", "0.5", "--out", str(out)]) == 0  # its nominal schedule
+    # its nominal schedule
+    assert main(["gait", str(tmp_path / "tiny.json"), "--stretch", "0.5", "--out", str(out)]) == 0
     assert "nominal schedule" in capsys.readouterr().out
 
 
@@ -143,8 +150,10 @@ def test_clipping_to_the_trained_range():
 
 @pytest.mark.parametrize("options, words", [
     ({"schedule": "piecewise", "times": [-1.0, 2.0], "speed": [0.3, 0.4], "turning": [0.0, 0.0]}, "must be >= 0"),
-    ({"schedule": "piecewise", "times": [0.0, 2.0, 1.0], "speed": [0.3, 0.4, 0.5], "turning": [0, 0, 0]}, "strictly increasing"),
-    ({"schedule": "piecewise", "times": [0.0, 2.0], "speed": [0.3, 0.4, 0.5], "turning": [0.0, 0.0]}, "one speed and one turning"),
+    ({"schedule": "piecewise", "times": [0.0, 2.0, 1.0], "speed": [0.3, 0.4, 0.5], "turning": [0, 0, 0]},
+     "strictly increasing"),
+    ({"schedule": "piecewise", "times": [0.0, 2.0], "speed": [0.3, 0.4, 0.5], "turning": [0.0, 0.0]},
+     "one speed and one turning"),
     ({"schedule": "piecewise", "times": [0.0, 2.0], "speed": [0.3, float("nan")], "turning": [0.0, 0.0]}, "finite"),
     ({"schedule": "constant", "speed": float("inf")}, "finite"),
     ({"schedule": "drawn", "speed_low": 0.9, "speed_high": 0.5}, "must not exceed"),
@@ -170,7 +179,8 @@ def test_bad_input_to_gait_is_one_line_and_writes_nothing(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "is not a commanded walker" in err and "\n" not in err
     assert not out.exists()
-    with pytest.raises(ConfigError, match="not sensors of the body or task"):  # the command senses on a task without them
+    # the command senses on a task without them
+    with pytest.raises(ConfigError, match="not sensors of the body or task"):
         EpisodeConfig(body="reil", controller="linear", task="walk", seconds=1.0,
                       controller_options={"inputs": ["command_speed"]}).parts()
 
@@ -186,12 +196,14 @@ def test_the_steering_rule_reads_bearing_and_distance_from_the_ears():
     speed, turning, heard = steering_command(ear_signal(left, right, q), (a + b) / 2, ear=e, gain=1.0, turning_max=10.0)
     c = 2 * D * e * np.sin(theta)  # the law of cosines from each ear: |e - q|^2 = D^2 + e^2 -+ c
     assert heard == pytest.approx(1 / np.sqrt((1 / (D ** 2 + e ** 2 - c) + 1 / (D ** 2 + e ** 2 + c)) / 2), rel=1e-9)
-    assert turning[[0, 1, 3]] == pytest.approx(theta[[0, 1, 3]], abs=0.01)  # the bearing, within the distance estimate's error
+    # the bearing, within the distance estimate's error
+    assert turning[[0, 1, 3]] == pytest.approx(theta[[0, 1, 3]], abs=0.01)
     assert 1.0 < turning[2] < theta[2]  # 1 m away at 80 deg it reads 66 deg: the loudness overstates the nearness
     assert speed[0] == pytest.approx(0.6) and speed[1] == pytest.approx(0.6)  # farther than slow_from (2 m): full speed
     assert speed[2] == pytest.approx(0.2 + 0.4 * (heard[2] - 0.3) / 1.7)  # slower as it gets near
     behind = np.array([[-5.0, 1.0]])  # a source behind on the left is heard as its mirror in front, on the left
-    s, w, _ = steering_command(ear_signal(left[:1], right[:1], behind), (intensity(left[:1], behind) + intensity(right[:1], behind)) / 2, ear=e)
+    s, w, _ = steering_command(ear_signal(left[:1], right[:1], behind),
+                               (intensity(left[:1], behind) + intensity(right[:1], behind)) / 2, ear=e)
     assert w[0] > 0
     with pytest.raises(ConfigError):
         steering_command(0.0, 0.5, ear=e, reach=4.0)
@@ -247,6 +259,7 @@ def test_a_run_on_drawn_commands_resumed_on_two_workers_is_bit_identical(tmp_pat
 
 def test_a_replay_of_a_commanded_walker_says_which_commands_it_follows(tmp_path, capsys):
     commanded_genome(tmp_path / "tiny.json")
-    assert main(["replay", str(tmp_path / "tiny.json"), "--seconds", "0.2", "--out", str(tmp_path / "r.rrd"), "--quiet"]) == 0
+    assert main(["replay", str(tmp_path / "tiny.json"), "--seconds", "0.2", "--out", str(tmp_path / "r.rrd"),
+                 "--quiet"]) == 0
     lines = [x for x in capsys.readouterr().out.splitlines() if x.startswith("commands:")]
     assert len(lines) == 1 and "the fixed tour of its drawn range (0.5 m/s +0 deg/s from 0 s, 0.8 m/s" in lines[0]

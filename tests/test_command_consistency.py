@@ -26,7 +26,8 @@ def test_every_refusal_is_one_line_with_one_prefix(argv, capsys):
     assert err.startswith("evobiped: error: ") and err.count("\n") == 1, err
 
 
-@pytest.mark.parametrize("text, words", [("nan", "must be a finite number, got nan"), ("inf", "must be a finite number"),
+@pytest.mark.parametrize("text, words", [("nan", "must be a finite number, got nan"),
+                                         ("inf", "must be a finite number"),
                                          ("0", "must be > 0, got 0"), ("-2", "must be > 0, got -2")])
 def test_a_size_that_is_not_a_number_says_so(text, words, capsys):
     assert cli("evolve", "--seconds", text) == 2
@@ -66,11 +67,13 @@ def test_two_runs_selected_genomes_replay_into_their_own_run_directories(tmp_pat
         (tmp_path / run).mkdir(parents=True)
         (tmp_path / run / "config.json").write_text("{}")
         outs.append(default_out(resolve(_genome(tmp_path / run / "selected.json"))))
-    assert [o.relative_to(tmp_path).as_posix() for o in outs] == ["runs/a/replay_selected.rrd", "runs/b/replay_selected.rrd",
+    assert [o.relative_to(tmp_path).as_posix() for o in outs] == ["runs/a/replay_selected.rrd",
+                                                                  "runs/b/replay_selected.rrd",
                                                                    "elsewhere/c/replay_selected.rrd"]
     student = resolve(_genome(tmp_path / "runs" / "distill_x" / "student.json"))  # under runs/: beside it
     assert default_out(student).relative_to(tmp_path).as_posix() == "runs/distill_x/replay_student.rrd"
-    shipped = resolve(_genome(tmp_path / "repo" / "docs" / "walker.json"))  # anywhere else: runs/<stem>, never beside it
+    # anywhere else: runs/<stem>, never beside it
+    shipped = resolve(_genome(tmp_path / "repo" / "docs" / "walker.json"))
     assert default_out(shipped).as_posix() == "runs/walker/replay_walker.rrd"
 
 

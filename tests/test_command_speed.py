@@ -12,7 +12,8 @@ import pytest
 
 from evobiped.analysis.commanded import follow_commands
 from evobiped.analysis.gait_report import gait_report
-from evobiped.analysis.speed_battery import _windows, calibrate_speed, gait_at_speeds, random_schedules, speed_battery, stop_and_go
+from evobiped.analysis.speed_battery import (_windows, calibrate_speed, gait_at_speeds, random_schedules, speed_battery,
+                                             stop_and_go)
 from evobiped.core.errors import UserError
 from evobiped.core.options import given
 from evobiped.episode.remap import input_widths
@@ -93,7 +94,8 @@ def test_the_speed_battery_scores_the_walk_it_follows(framed):
             assert len(s["windows_pct"]) == 3  # measured from 3 s into the 6 s stretch: three whole 1 s windows
             assert s["within"] == (s["error_pct"] <= 10.0)
     m = b["summary"]
-    assert m["schedules"] == 2 and m["stretches"] == 4 and m["within"] == sum(s["within"] for r in b["schedules"] for s in r["stretches"])
+    assert m["schedules"] == 2 and m["stretches"] == 4 and m["within"] == sum(s["within"] for r in b["schedules"]
+                                                                              for s in r["stretches"])
 
 
 def test_window_errors_match_a_hand_calculation():
@@ -158,7 +160,8 @@ def test_calibration_makes_a_walker_told_half_as_hard_walk_as_told(stopping, tmp
     i, j = at["command_speed"], at["command_stop"]
     std = list(norm["std"])
     std[i] *= 2  # every command now moves its frame half as far: it walks nearer its reference speed
-    weak = dataclasses.replace(cfg, controller_options={**given(cfg.controller_options), "input_norm": {**norm, "std": std}})
+    weak = dataclasses.replace(cfg, controller_options={**given(cfg.controller_options),
+                                                        "input_norm": {**norm, "std": std}})
     off = follow_commands(weak, g, [0.0], [0.3], [0.0], 15.0)["stretches"][0]["walked_speed"]
     assert off > 0.4  # told 0.3 m/s, it walks well above
     fixed, fit = calibrate_speed(weak, g, [0.3, 0.45, 0.6, 0.75])
@@ -216,7 +219,8 @@ def test_the_replay_recording_logs_commanded_against_walked(tmp_path):
     for c in rr.chunk.RrdReader(out).stream():
         if c.entity_path in ("/commands/speed", "/commands/turning") and not c.is_static:
             rb = c.to_record_batch()
-            t = np.array([x.total_seconds() if hasattr(x, "total_seconds") else x for x in rb.column("sim_time").to_pylist()])
+            t = np.array([x.total_seconds() if hasattr(x, "total_seconds") else x
+                          for x in rb.column("sim_time").to_pylist()])
             series[c.entity_path] = (t, np.array(rb.column("Scalars:scalars").to_pylist(), float))
     t, v = series["/commands/speed"]
     told, walked = v[:, 0], v[:, 1]  # a row at t holds the command from t on (the last, at 10 s, the next stretch's)

@@ -55,7 +55,8 @@ def _permutation_p(a, b) -> float:
     return sum(abs(ranks[list(s)].sum() - mean) >= observed - 1e-12 for s in splits) / len(splits)
 
 
-@pytest.mark.parametrize("a, b", [([1.1, 2.3, 3.7], [4.2, 5.0, 6.1, 0.5]), ([0.3, 0.9, 1.7, 2.2], [1.0, 1.5, 2.9, 3.3, 4.4]),
+@pytest.mark.parametrize("a, b", [([1.1, 2.3, 3.7], [4.2, 5.0, 6.1, 0.5]),
+                                  ([0.3, 0.9, 1.7, 2.2], [1.0, 1.5, 2.9, 3.3, 4.4]),
                                   ([5.0, 6.0], [1.0, 2.0, 3.0]), ([0.0, 0.0, 1.0], [1.0, 1.0, 1.0]),
                                   ([3.0, 3.0, 5.0, 0.0, 3.0], [3.0, 1.0, 1.0, 5.0, 2.0, 0.0]),
                                   ([1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0], [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0])])
@@ -87,8 +88,8 @@ def test_a_run_stops_at_the_first_generation_boundary_where_its_episodes_reach_t
     plain = RunConfig.from_dict({"episode": {"seconds": 0.2}, "ga": {"population": 4}, "generations": 50, "budget": 9,
                                  "backend": "serial"})
     assert evolve(plain, out=tmp_path / "a")["evaluations"] == 10  # 4, then 2 new each: 4, 6, 8, 10 >= 9
-    twice = RunConfig.from_dict({"episode": {"seconds": 0.2, "perturbations": {"presentations": 2}}, "ga": {"population": 4},
-                                 "generations": 50, "budget": 9, "backend": "serial"})
+    twice = RunConfig.from_dict({"episode": {"seconds": 0.2, "perturbations": {"presentations": 2}},
+                                 "ga": {"population": 4}, "generations": 50, "budget": 9, "backend": "serial"})
     summary = evolve(twice, out=tmp_path / "b")  # 2 episodes a genome: 8, then 12 >= 9
     assert (summary["generations"], summary["evaluations"]) == (2, 6)
     assert cli("evolve", "--resume", tmp_path / "b", "--quiet") == 0  # an ordinary run directory, complete
@@ -108,7 +109,8 @@ def test_the_walker_and_forward_tests_without_noise_are_forward_walkers():
         found = forward_walker(config, g)
         assert (found["forward"], found["walker"]) == (forward, walker)
         for test, expected in (("forward", forward), ("walker", walker)):
-            assert retest(config, g, seed=0, noise=none, measure="fitness", success=Success(test=test))["success"] == expected
+            assert retest(config, g, seed=0, noise=none, measure="fitness",
+                          success=Success(test=test))["success"] == expected
 
 
 def test_fresh_presentations_are_new_draws_the_same_for_one_seed():
@@ -123,7 +125,8 @@ def test_fresh_presentations_are_new_draws_the_same_for_one_seed():
     assert len(set(first["measure"])) == 3  # three draws, three walks
     assert retest(config, genome, seed=2, noise=noise, measure="distance", success=crit)["measure"] != first["measure"]
     assert FRESH_GENERATION > 10**6  # beyond any run's generations: drawn by no run
-    assert first["passed"] == [d >= 0.1 for d in first["measure"]] and first["value"] == float(np.median(first["measure"]))
+    assert first["passed"] == [d >= 0.1
+                               for d in first["measure"]] and first["value"] == float(np.median(first["measure"]))
     with pytest.raises(UserError, match="not fitness nor a term"):
         parse_success("speed>=1", ("distance",))
 
@@ -136,7 +139,8 @@ population = 4
 [episode]
 seconds = {seconds}
 """
-FLAGS = ["--seeds", "2", "--budget", "12", "--trials", "2", "--checkpoints", "2", "--success", "distance>=0.2", "--quiet"]
+FLAGS = ["--seeds", "2", "--budget", "12", "--trials", "2", "--checkpoints", "2", "--success", "distance>=0.2",
+         "--quiet"]
 
 
 def _configs(where, seconds=0.5):
@@ -218,7 +222,8 @@ def test_a_resumed_comparison_finishes_an_interrupted_run_and_gives_the_same_res
     assert cli("compare", "--resume", c, "--quiet") == 0
     for name in ("results.json", "results.md"):
         assert (where / "a" / name).read_bytes() == (c / name).read_bytes()
-    assert cli("compare", *configs, "--resume", c, "--seeds", "2", "--quiet") == 0  # the same ones named again: nothing to do
+    # the same ones named again: nothing to do
+    assert cli("compare", *configs, "--resume", c, "--seeds", "2", "--quiet") == 0
     assert (where / "a" / "results.json").read_bytes() == (c / "results.json").read_bytes()
 
 

@@ -77,8 +77,8 @@ def perturbed_run(tmp_path_factory):
     """A tiny evolve with perturbations (serial, 2 generations of 4, 0.3 s), and what its process constructed."""
     where = tmp_path_factory.mktemp("evolve")
     (where / "c.toml").write_text("[episode.perturbations]\n" + "".join(f"{k} = {v}\n" for k, v in PERTURBED.items()))
-    counts = constructions('evobiped.cli.main(["evolve", "--config", "c.toml", "--generations", "2", "--population", "4", '
-                           '"--seconds", "0.3", "--backend", "serial", "--out", "run", "--quiet"])', where)
+    counts = constructions('evobiped.cli.main(["evolve", "--config", "c.toml", "--generations", "2", "--population", '
+                           '"4", "--seconds", "0.3", "--backend", "serial", "--out", "run", "--quiet"])', where)
     return where / "run", counts
 
 
@@ -128,7 +128,8 @@ from evobiped.distill import DistillOptions, collect, student_config
 from evobiped.files.genome_file import load_genome
 g, teacher, _ = load_genome({str(WALKERS / "simbicon_cma_seed3.json")!r})
 student = student_config(teacher.nominal(), {{"n_neurons": 8}}, seconds=0.2)
-collect(teacher, g, student, student.layout().init_mean, beta=0.5, options=DistillOptions(rollouts=2, seconds=0.2), key=(0, 0))
+collect(teacher, g, student, student.layout().init_mean, beta=0.5, options=DistillOptions(rollouts=2, seconds=0.2),
+        key=(0, 0))
 student.build().run(student.layout().init_mean)
 ''', Path.cwd())
     once_each(counts, "compile", "ReilBiped", "Simbicon", "CTRNN", "WalkTask")
@@ -144,7 +145,8 @@ def test_configs_of_the_same_tables_share_their_parts_and_write_back_what_they_w
     a = EpisodeConfig(seconds=1.0, body_options={"kp": 100})
     same = EpisodeConfig(seconds=1.0, body_options={"kp": 100})
     longer = dataclasses.replace(a, seconds=3.0)
-    assert all(x is y for x, y in zip(a.parts(), same.parts())) and all(x is y for x, y in zip(a.parts(), longer.parts()))
+    assert all(x is y for x, y in zip(a.parts(), same.parts())) and all(x is y for x,
+                                                                        y in zip(a.parts(), longer.parts()))
     as_float = EpisodeConfig(seconds=1.0, body_options={"kp": 100.0})
     assert as_float.body_options is not a.body_options and as_float.parts()[0] is not a.parts()[0]
     assert type(a.to_dict()["body_options"]["kp"]) is int and type(as_float.to_dict()["body_options"]["kp"]) is float

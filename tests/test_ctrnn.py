@@ -106,7 +106,8 @@ def test_configurable_time_constants():
     assert (lay.low[tau][0], lay.high[tau][0], lay.init_mean[tau][0]) == (0.04, 1.0, 0.52)
     assert lay.init_sigma[tau][0] == pytest.approx(0.32) == lay.mutation_sigma[tau][0]
     g = lay.init_mean.copy()
-    g[lay.slices()["weights"]], g[tau], g[lay.slices()["biases"]], g[lay.slices()["input_weights"]] = 0.0, 0.04, 0.0, 1.0
+    g[lay.slices()["weights"]], g[tau], g[lay.slices()["biases"]], g[lay.slices()[
+        "input_weights"]] = 0.0, 0.04, 0.0, 1.0
     p = net.decode(g[None])
     A = net.initial_state(p)
     for _ in range(5):  # 0.1 s = 2.5 tau of a unit step: 1 - (1 - 0.02/0.04)^5

@@ -57,14 +57,16 @@ def test_the_exponential_substeps_follow_a_fine_integration_of_a_random_network(
     """Ten neurons, weights anywhere in [-16, 16], tau in [0.02, 2] s (the from-scratch walker's range), biases in
     [-4, 4]: over 1 s every output stays within 0.1 of the fine integration's; Euler's is 0.2 or more away."""
     rng = np.random.default_rng(seed)
-    W, tau, alpha = rng.uniform(-16, 16, (10, 10)), np.exp(rng.uniform(np.log(0.02), np.log(2.0), 10)), rng.uniform(-4, 4, 10)
+    W, tau, alpha = rng.uniform(-16, 16, (10, 10)), np.exp(rng.uniform(np.log(0.02), np.log(2.0),
+                                                                       10)), rng.uniform(-4, 4, 10)
     exact = reference(W, tau, alpha, 1.0)
     assert np.abs(stepped("exponential", W, tau, alpha, 1.0) - exact).max() < 0.1
     assert np.abs(stepped("euler", W, tau, alpha, 1.0) - exact).max() > 0.2
 
 
 def test_networks_of_different_substeps_in_one_batch_step_as_they_do_alone(rng):
-    net = CTRNN(n_outputs=2, n_neurons=3, inputs={"s": 1}, time_constants=[0.02, 2.0], tau_scale="log", integration="exponential")
+    net = CTRNN(n_outputs=2, n_neurons=3, inputs={"s": 1}, time_constants=[0.02, 2.0], tau_scale="log",
+                integration="exponential")
     g = net.layout.sample(rng, 4)
     g[0, net.layout.slices()["weights"]] = 0.0  # one substep for this one, many for the others
     p = net.decode(g)

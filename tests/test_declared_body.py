@@ -71,7 +71,8 @@ def test_the_reil_model_declared_reads_the_hand_written_bodys_senses_and_walks_i
     hand = EpisodeConfig(body="reil", controller="ctrnn", seconds=3.0, controller_options=opts).build()
     made = EpisodeConfig(body=declared_reil, controller="ctrnn", seconds=3.0, controller_options=opts,
                          body_options={"timestep": 0.005}).build()  # the Reil body's step (its model file's: 2 ms)
-    G = np.random.default_rng(0).uniform(hand.controller.layout.low, hand.controller.layout.high, (4, hand.controller.layout.size))
+    G = np.random.default_rng(0).uniform(hand.controller.layout.low, hand.controller.layout.high,
+                                         (4, hand.controller.layout.size))
     ra, rb = hand.run(G), made.run(G)
     assert np.array_equal(ra.fitness, rb.fitness) and np.array_equal(ra.end_position, rb.end_position)
     assert np.array_equal(ra.end_time, rb.end_time)
@@ -151,7 +152,8 @@ def test_a_bad_declaration_is_refused_one_line_per_problem(tmp_path, edit, words
 def test_the_cli_runs_a_declared_body_and_refuses_a_bad_one_in_one_line_per_problem(tmp_path, capsys):
     assert cli("episode", "--body", "mjcf:box_biped", "--seconds", "0.5", "--seed", "0") == 0
     shutil.copy(model_path("reil_biped"), tmp_path / "b.xml")
-    (tmp_path / "b.toml").write_text(REIL_DECLARATION.replace('"left_knee"]', '"left_kne"]').replace('pelvis = "pelvis"\n', ""))
+    (tmp_path / "b.toml").write_text(REIL_DECLARATION.replace('"left_knee"]',
+                                                              '"left_kne"]').replace('pelvis = "pelvis"\n', ""))
     capsys.readouterr()
     assert cli("episode", "--body", f"mjcf:{tmp_path / 'b.xml'}", "--seconds", "0.5") == 2
     err = capsys.readouterr().err

@@ -24,7 +24,8 @@ def test_the_fitted_recurrence_is_the_ctrnn_that_runs():
     fitter = Fitter(cfg, DistillOptions(), seed=0)
     body, ctrl, _ = cfg.parts()
     rng = np.random.default_rng(1)
-    genome = np.clip(ctrl.layout.init_mean + 0.5 * ctrl.layout.init_sigma * rng.normal(size=ctrl.layout.size), ctrl.layout.low, ctrl.layout.high)
+    genome = np.clip(ctrl.layout.init_mean + 0.5 * ctrl.layout.init_sigma * rng.normal(size=ctrl.layout.size),
+                     ctrl.layout.low, ctrl.layout.high)
     x = rng.normal(size=(60, ctrl.n_inputs))
     params = ctrl.decode(genome)
     state, want = ctrl.initial_state(params), []
@@ -39,7 +40,8 @@ def test_rollouts_label_the_student_s_states_with_the_teacher_s_executed_actions
     """With the teacher's share 1 the rollout is the teacher's own (latency included), and each label is the
     action its body executed, which a plain teacher episode shows its listener."""
     g, cfg, _ = load_genome(WALKERS / "simbicon_cma_seed3.json")
-    teacher = dataclasses.replace(cfg.nominal(), seconds=2.0, controller_options={**given(cfg.controller_options), "latency": 1})
+    teacher = dataclasses.replace(cfg.nominal(), seconds=2.0,
+                                  controller_options={**given(cfg.controller_options), "latency": 1})
     student = student_config(teacher, {"n_neurons": 12})
     opts = DistillOptions(rollouts=1, seconds=2.0, target_noise=0.0, pose_noise=0.0)
     roll = collect(teacher, g, student, student.layout().init_mean, beta=1.0, options=opts, key=(0, 0))

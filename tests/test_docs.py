@@ -1,4 +1,5 @@
-"""The documentation a newcomer follows agrees with the tool: generated tables, docstrings, shipped walkers, commands."""
+"""The documentation a newcomer follows agrees with the tool: generated tables, docstrings, shipped walkers,
+commands."""
 
 from __future__ import annotations
 
@@ -88,7 +89,8 @@ def test_every_shipped_walker_records_its_outcome(path):
     for r in rows:
         assert 0 < r["end_time"] <= cfg.seconds and (r["fell"] or r["end_time"] == cfg.seconds), r
         assert r["distance"] >= 0 and (r["heading_deg"] is None or -180 <= r["heading_deg"] <= 180), r
-        assert r["distance"] == pytest.approx(math.dist([0.0, 0.0], r["end_position"]), abs=0.5), r  # starts near the origin
+        # starts near the origin
+        assert r["distance"] == pytest.approx(math.dist([0.0, 0.0], r["end_position"]), abs=0.5), r
     assert outcome["tolerance"] == asdict(TOLERANCE)
 
 
@@ -162,7 +164,8 @@ def test_no_settings_file_is_given_as_a_one_line_comment(page):
 
 def readme_commands() -> list[list[str]]:
     text = (ROOT / "README.md").read_text().replace("\\\n", " ")  # continued lines joined
-    lines = [line.split("#")[0].strip() for block in re.findall(r"```bash\n(.*?)```", text, re.S) for line in block.splitlines()]
+    lines = [line.split("#")[0].strip() for block in re.findall(r"```bash\n(.*?)```", text, re.S)
+             for line in block.splitlines()]
     return [shlex.split(line.replace(".venv/bin/", "")) for line in lines
             if line.startswith(".venv/bin/evobiped ") or line.startswith("evobiped ")]
 

@@ -11,7 +11,8 @@ import pytest
 
 gymnasium = pytest.importorskip("gymnasium")
 
-from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402  (importing registers the environments)
+# importing registers the environments
+from evobiped.envs import ReilBipedEnv, ReilBipedVectorEnv, TagaBipedEnv, TagaBipedVectorEnv  # noqa: E402
 from evobiped.core.errors import ConfigError  # noqa: E402
 
 IDS = ["evobiped/ReilBiped-v0", "evobiped/TagaBiped-v0"]
@@ -213,7 +214,8 @@ def _python(code: str, **env) -> subprocess.CompletedProcess:
 
 
 def test_rendering_without_an_opengl_context_is_one_clear_error():
-    code = "import gymnasium, evobiped.envs\ntry:\n    gymnasium.make('evobiped/ReilBiped-v0', render_mode='rgb_array')\nexcept Exception as e:\n    print(type(e).__name__, e)"
+    code = ("import gymnasium, evobiped.envs\ntry:\n    gymnasium.make('evobiped/ReilBiped-v0', "
+            "render_mode='rgb_array')\nexcept Exception as e:\n    print(type(e).__name__, e)")
     out = _python(code, MUJOCO_GL="glfw").stdout
     assert out.startswith("ConfigError rgb_array: cannot render frames: no OpenGL context") and out.count("\n") == 1
     assert "MUJOCO_GL=glfw" in out and "libosmesa6" in out

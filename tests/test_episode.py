@@ -40,7 +40,8 @@ class Constant(Controller):
 
     def __init__(self, n_outputs=6):
         self.n_outputs = n_outputs
-        self._layout = GenomeLayout((GeneBlock(name="o", size=n_outputs, low=0, high=1, init_mean=0.5, init_sigma=0, mutation_sigma=0),))
+        self._layout = GenomeLayout((GeneBlock(name="o", size=n_outputs, low=0, high=1, init_mean=0.5, init_sigma=0,
+                                               mutation_sigma=0),))
 
     layout = property(lambda self: self._layout)
     initial_state = lambda self, p: None  # noqa: E731
@@ -131,7 +132,8 @@ def test_an_episode_continued_in_pieces_is_the_whole_episode_and_can_change_cour
     from evobiped.files.genome_file import load_genome
 
     g, cfg, _ = load_genome(WALKERS / "simbicon_seed1.json")
-    ep = dataclasses.replace(cfg, perturbations=dict(presentations=2, pushes=2, push_force=10.0, target_noise=0.01)).build()
+    ep = dataclasses.replace(cfg, perturbations=dict(presentations=2, pushes=2, push_force=10.0,
+                                                     target_noise=0.01)).build()
     trials = ep.trials_for((0, 1))
     whole = ep.run(g, seconds=3.0, trials=trials)
     state = ep.start(g, seconds=3.0, trials=trials)

@@ -68,7 +68,8 @@ def test_a_perturbed_reil_walk_forked_keeps_its_noise_streams_and_pushes():
     """The shipped SIMBICON walker under target noise and pushes: forked at 1 s, one copy's gains are
     halved; each copy equals a fresh run with the same change, and the unchanged one the uninterrupted run."""
     g, cfg, _ = load_genome(str(WALKERS / "simbicon_seed1.json"))
-    cfg = dataclasses.replace(cfg, seconds=3.0, perturbations=dict(pushes=1, push_after=0.5, push_force=40.0, target_noise=0.02))
+    cfg = dataclasses.replace(cfg, seconds=3.0, perturbations=dict(pushes=1, push_after=0.5, push_force=40.0,
+                                                                   target_noise=0.02))
     ep = cfg.build()
     g = np.tile(g, (2, 1))
     trials = ep.trials_for((1, 0))
@@ -119,7 +120,8 @@ def test_a_state_forked_mid_walk_continues_each_action_sequence_as_a_fresh_run(b
     ep = _outside(body, dt)
     rng = np.random.default_rng(5)
     mid = (ep.low + ep.high) / 2
-    first, left, right = (np.clip(mid + size * rng.uniform(-1, 1, (30, 3, len(mid))), ep.low, ep.high) for _ in range(3))
+    first, left, right = (np.clip(mid + size * rng.uniform(-1, 1, (30, 3, len(mid))), ep.low, ep.high)
+                          for _ in range(3))
 
     def fresh(actions):
         state = ep.start(3)
@@ -138,7 +140,8 @@ def test_a_state_forked_mid_walk_continues_each_action_sequence_as_a_fresh_run(b
     assert state.ticks == fork.ticks == 60 and not np.array_equal(state.sims.qpos, fork.sims.qpos)
     for a, b in ((state, fresh(np.concatenate([first, left]))), (fork, fresh(np.concatenate([first, right])))):
         ra, rb = ep.result(a), ep.result(b)
-        assert np.array_equal(ra.fitness, rb.fitness) and all(np.array_equal(ra.terms[k], rb.terms[k], equal_nan=True) for k in ra.terms)
+        assert np.array_equal(ra.fitness, rb.fitness) and all(np.array_equal(ra.terms[k], rb.terms[k], equal_nan=True)
+                                                              for k in ra.terms)
 
 
 def test_a_controller_s_advance_is_its_actions_through_step():
@@ -183,8 +186,10 @@ def test_restarted_rows_begin_anew_while_the_others_go_on():
     whole = ep.start(2)
     for a in acts:
         ep.step(whole, a)
-    assert np.array_equal(state.sims.qpos[1], alone.sims.qpos[1]) and np.array_equal(state.sims.qpos[0], whole.sims.qpos[0])
-    assert np.array_equal(ep.result(state).terms["forward"], [ep.result(whole).terms["forward"][0], ep.result(alone).terms["forward"][1]])
+    assert np.array_equal(state.sims.qpos[1],
+                          alone.sims.qpos[1]) and np.array_equal(state.sims.qpos[0], whole.sims.qpos[0])
+    assert np.array_equal(ep.result(state).terms["forward"],
+                          [ep.result(whole).terms["forward"][0], ep.result(alone).terms["forward"][1]])
 
 
 def test_a_result_handed_out_stays_as_it_was_after_a_restart():
@@ -200,6 +205,7 @@ def test_a_result_handed_out_stays_as_it_was_after_a_restart():
     state.sims.qpos[1, :2] += 0.5  # the walker somewhere else, turned, when its row begins anew
     state.sims.qpos[1, 3:7] = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
     state.sims.forward()
-    ep.restart(state, np.array([1]), pose=lambda sims, ids: (sims.qpos.__setitem__((ids, slice(0, 2)), 0.7), sims.forward(ids)))
+    ep.restart(state, np.array([1]), pose=lambda sims,
+               ids: (sims.qpos.__setitem__((ids, slice(0, 2)), 0.7), sims.forward(ids)))
     assert not np.array_equal(state.start_position[1], kept[0][1])  # the state's own start moved
     assert np.array_equal(first.start_position, kept[0]) and np.array_equal(first.start_facing, kept[1])

@@ -21,18 +21,20 @@ from evobiped.physics.sim import Sims
 from .conftest import cli
 
 STANCE_LINEAR = dict(body="reil", controller="linear", task="walk", seconds=1.0,
-                     controller_options={"frame": "stance"}, task_options={"fitness": "weighted", "heading_sense": True})
+                     controller_options={"frame": "stance"},
+                     task_options={"fitness": "weighted", "heading_sense": True})
 
 
 def mirror_reil_state(model, sims: Sims, i: int) -> None:
-    """Row ``i`` becomes its left/right mirror image about the walker's x-z plane (the Reil model's roll axes are mirrored,
-    so the legs' joint angles swap without a sign)."""
+    """Row ``i`` becomes its left/right mirror image about the walker's x-z plane (the Reil model's roll axes are
+    mirrored, so the legs' joint angles swap without a sign)."""
     q, v = sims.qpos[i].copy(), sims.qvel[i].copy()
     q[1], v[1] = -q[1], -v[1]  # y
     w, x, y, z = q[3:7]
     q[3:7] = (w, -x, y, -z)  # a reflection y -> -y turns rotations about x and z the other way
     v[3], v[5] = -v[3], -v[5]
-    for a, b in (("left_hip_pitch", "right_hip_pitch"), ("left_hip_roll", "right_hip_roll"), ("left_knee", "right_knee")):
+    for a, b in (("left_hip_pitch", "right_hip_pitch"), ("left_hip_roll", "right_hip_roll"),
+                 ("left_knee", "right_knee")):
         qa, qb = model.joint(a).qposadr[0], model.joint(b).qposadr[0]
         da, db = model.joint(a).dofadr[0], model.joint(b).dofadr[0]
         q[qa], q[qb] = q[qb], q[qa]
@@ -41,7 +43,8 @@ def mirror_reil_state(model, sims: Sims, i: int) -> None:
 
 
 def test_the_reil_body_declares_its_mirror_truly():
-    """A mirrored body reads the mirror of every sense it declares (a walked, asymmetric state, not the symmetric reset)."""
+    """A mirrored body reads the mirror of every sense it declares (a walked, asymmetric state, not the symmetric
+    reset)."""
     ep = EpisodeConfig(body="reil", controller="simbicon", seconds=2.0).build()
     state = ep.start(np.zeros(ep.controller.layout.size) + ep.controller.layout.init_mean)
     rng = np.random.default_rng(3)
@@ -97,7 +100,8 @@ def test_a_mirrored_pose_gives_mirrored_targets():
 ])
 def test_es_and_curriculum_settings_refused_with_one_line(tmp_path, capsys, setting, msg):
     (tmp_path / "c.toml").write_text(setting + "\n")
-    code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "c.toml", "--out", tmp_path / "r", "--generations", 1)
+    code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "c.toml", "--out", tmp_path / "r",
+               "--generations", 1)
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and msg in err, err
     assert not (tmp_path / "r").exists()
@@ -113,7 +117,8 @@ def test_a_stance_frame_on_a_body_without_a_mirror_is_refused():
 
     BODIES["lopsided"] = Lopsided
     try:
-        with pytest.raises(ConfigError, match="frame: 'stance' needs a bilateral body with foot contacts; body 'lopsided' declares no"):
+        with pytest.raises(ConfigError, match="frame: 'stance' needs a bilateral body with foot contacts; body "
+                                              "'lopsided' declares no"):
             EpisodeConfig(body="lopsided", controller="linear", controller_options={"frame": "stance"}).parts()
     finally:
         del BODIES["lopsided"]
@@ -136,7 +141,8 @@ def test_es_climbs_a_quadratic_and_ranks_are_centred():
     layout = GenomeLayout((GeneBlock(name="x", size=5, low=-10, high=10, init_mean=0, init_sigma=1, mutation_sigma=1),))
     target = np.array([1.0, -2.0, 0.5, 3.0, 0.0])
     for method in ("openai", "ars"):
-        es = EvolutionStrategy(layout, ESOptions(method=method, pairs=8, sigma=0.1, learning_rate=0.1, weight_decay=0.0), seed=1)
+        es = EvolutionStrategy(layout, ESOptions(method=method, pairs=8, sigma=0.1, learning_rate=0.1,
+                                                 weight_decay=0.0), seed=1)
         start = np.linalg.norm(es.theta - target)
         for _ in range(300):
             pop, unknown = es.ask()
@@ -160,7 +166,8 @@ def test_an_es_run_resumes_bit_identically_with_its_normaliser_and_curriculum(tm
         "optimizer": "es", "generations": 4, "seed": 3, "backend": "serial",
         "episode": {**STANCE_LINEAR, "seconds": 0.4, "perturbations": {"presentations": 2, "pose_noise": 0.01}},
         "es": {"pairs": 3}, "normalise": {"running": True},
-        "curriculum": {"phases": [{"time_up": 2.0, "steps": 0.5}, {"forward": 10.0, "time_up": 5.0}], "advance_for": 1}})
+        "curriculum": {"phases": [{"time_up": 2.0, "steps": 0.5}, {"forward": 10.0, "time_up": 5.0}],
+                       "advance_for": 1}})
     whole, cut_dir = whole_and_resumed(tmp_path, config, stop_after=1)
     assert _history(whole.dir) == _history(cut_dir)
     a, b = (json.loads((d / "checkpoint.json").read_text()) for d in (whole.dir, cut_dir))
@@ -219,7 +226,8 @@ def test_the_ga_and_cma_es_run_in_the_stance_frame_with_a_running_normaliser(tmp
     from evobiped.episode import Context
 
     again = config.episode.build().run(population, context=Context(weights={"time_up": 2.0, "steps": 0.5}))
-    assert ck["normaliser"]["count"] == pytest.approx(np.round(again.end_time / 0.02).sum()) and ck["normaliser"]["count"] > 0
+    assert ck["normaliser"]["count"] == pytest.approx(np.round(again.end_time / 0.02).sum()) and ck["normaliser"][
+        "count"] > 0
     fittest_up = not again.fell[np.argmax(again.fitness)]  # the curriculum's walker: the fittest; up: on to phase 1
     assert ck["history_extra"][0]["phase"] == 0 and ck["curriculum"]["phase"] == int(fittest_up)
 
@@ -233,8 +241,8 @@ def test_a_ctrnn_with_a_direct_path_contains_the_linear_policy():
     lin = EpisodeConfig(controller="linear", **common).build()
     net = EpisodeConfig(controller="ctrnn", controller_options={
         "n_neurons": 8, "motor": "full", "normalise_inputs": True, "centre_crossing": True, "tau_scale": "log",
-        "time_constants": [0.02, 2.0], "outputs": "after", "direct": True, "direct_scale": 0.3, "input_weights": [-5.0, 5.0],
-        "inputs": list(lin.controller.input_names)}, **common).build()
+        "time_constants": [0.02, 2.0], "outputs": "after", "direct": True, "direct_scale": 0.3,
+        "input_weights": [-5.0, 5.0], "inputs": list(lin.controller.input_names)}, **common).build()
     rng = np.random.default_rng(5)
     b = rng.normal(0, 0.2, 6)
     W = rng.normal(0, 0.1, (lin.controller.n_inputs, 6))
@@ -281,7 +289,8 @@ def test_the_taga_body_declares_its_mirror_truly():
         assert not np.allclose(x[0], x[1]), name
     names = [a.name for a in body.actuators]
     perm, _ = body.actuator_mirror
-    assert [names[i] for i in perm] == [n.replace("right", "L").replace("left", "right").replace("L", "left") for n in names]
+    assert [names[i] for i in perm] == [n.replace("right", "L").replace("left", "right").replace("L", "left")
+                                        for n in names]
 
 
 def test_evolve_runs_the_es_preset_from_the_command_line(tmp_path, capsys):
@@ -298,7 +307,8 @@ def test_evolve_runs_the_es_preset_from_the_command_line(tmp_path, capsys):
     ck = json.loads((tmp_path / "run" / "checkpoint.json").read_text())
     episode = run_config(preset="walker-es-linear", config=str(tmp_path / "short.toml")).episode.build()
     assert ck["optimizer"]["name"] == "es" and ck["optimizer"]["generation"] == 2
-    assert len(ck["optimizer"]["theta"]) == episode.controller.layout.size and len(ck["optimizer"]["fitness"]) == 2 * 2 + 1
+    assert len(ck["optimizer"]["theta"]) == episode.controller.layout.size and len(ck["optimizer"][
+        "fitness"]) == 2 * 2 + 1
     with open(tmp_path / "run" / "history.csv") as f:
         rows = list(csv.DictReader(f))
     assert [(r["phase"], float(r["evaluation_up"])) for r in rows] == [("0", 1.0), ("0", 1.0)]
@@ -315,7 +325,8 @@ def test_a_stance_frame_network_s_motor_neurons_are_labelled_by_leg_role():
 
     names = ("left_hip_pitch", "left_hip_roll", "left_knee", "right_hip_pitch", "right_hip_roll", "right_knee")
     framed, plain = (SimpleNamespace(actuator_names=names, stance_frame=f) for f in (True, False))
-    assert [_motor_label(framed, i) for i in (0, 2, 3, 5)] == ["stance hip_pitch", "stance knee", "swing hip_pitch", "swing knee"]
+    assert [_motor_label(framed, i) for i in (0, 2, 3, 5)] == ["stance hip_pitch", "stance knee", "swing hip_pitch",
+                                                               "swing knee"]
     assert _motor_label(plain, 3) == "right_hip_pitch" and _motor_label(framed, 7) == "output 8"
 
 

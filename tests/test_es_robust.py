@@ -35,8 +35,8 @@ def test_a_run_from_a_genome_file_starts_from_its_normaliser():
 
 
 def test_inputs_are_matched_by_name_and_a_new_input_starts_at_its_declared_norm():
-    """The run reads the seed's inputs less its first (heading_error) and plus the pelvis height: every shared input keeps
-    the seed's centre and scale, shifted to its new place; the new one is declared."""
+    """The run reads the seed's inputs less its first (heading_error) and plus the pelvis height: every shared input
+    keeps the seed's centre and scale, shifted to its new place; the new one is declared."""
     _, cfg, _ = load_genome(SEED)
     frozen = cfg.controller_options.input_norm
     table = tomllib.loads(preset_path("walker-ctrnn-es").read_text())
@@ -58,8 +58,9 @@ def test_without_a_running_normaliser_nothing_is_seeded():
 
 
 def test_evolve_runs_an_es_preset_from_a_walker_on_the_command_line(tmp_path):
-    """`evobiped evolve --preset walker-es-robust --from WALKER` (the command-line evaluator passes the run's context on):
-    generation 0's theta is the seed walker, normalised as it was evolved, so it stays up its (shortened) episode."""
+    """`evobiped evolve --preset walker-es-robust --from WALKER` (the command-line evaluator passes the run's context
+    on): generation 0's theta is the seed walker, normalised as it was evolved, so it stays up its (shortened)
+    episode."""
     import csv
     import json
 
@@ -75,16 +76,16 @@ def test_evolve_runs_an_es_preset_from_a_walker_on_the_command_line(tmp_path):
 
 
 def test_the_shipped_robust_walker_reaches_its_documented_random_phase_battery():
-    """ctrnn_es_robust_seed0 (walker-es-robust, seed 0, generation 74) on the battery with pushes at random phases (seed 2,
-    after 12.5 s): its recorded figures, one trial per family allowed to tip; the targets it meets, met."""
+    """ctrnn_es_robust_seed0 (walker-es-robust, seed 0, generation 74) on the battery with pushes at random phases (seed
+    2, after 12.5 s): its recorded figures, one trial per family allowed to tip; the targets it meets, met."""
     import json
 
     from evobiped.analysis.robustness import battery, summarise
 
     documented = json.loads((WALKERS / "ctrnn_es_robust_seed0_phases2_robustness.json").read_text())
     genome, cfg, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0.json")
-    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"],
-                             phase_seed=documented["phase_seed"]))
+    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"],
+                             push_after=documented["push_after"], phase_seed=documented["phase_seed"]))
     got = {r["family"]: r["survived"] for r in rows}
     want = {r["family"]: r["survived"] for r in documented["families"]}
     assert got.keys() == want.keys() and all(abs(got[f] - want[f]) <= 1 for f in want), (got, want)
@@ -93,15 +94,18 @@ def test_the_shipped_robust_walker_reaches_its_documented_random_phase_battery()
 
 
 def test_the_shipped_hearing_ctrnn_reaches_both_paper_sources_and_stays_up():
-    """steer_ctrnn_es_seed0 passes within 0.5 m of (10, 3) and (10, -3) m and is still up 50 s after (it circles them)."""
+    """steer_ctrnn_es_seed0 passes within 0.5 m of (10, 3) and (10, -3) m and is still up 50 s after (it circles
+    them)."""
     import importlib.util
     from pathlib import Path
 
-    spec = importlib.util.spec_from_file_location("steer_check", Path(__file__).resolve().parent.parent / "scripts" / "steer_check.py")
+    spec = importlib.util.spec_from_file_location("steer_check",
+                                                  Path(__file__).resolve().parent.parent / "scripts" / "steer_check.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     rows = mod.check(WALKERS / "steer_ctrnn_es_seed0.json", [(10.0, 3.0), (10.0, -3.0)], 65.0, 0.5)
-    assert all(r["arrived_s"] is not None and r["arrived_s"] < 15 and not r["fell"] and r["up_after_arrival_s"] >= 50 for r in rows), rows
+    assert all(r["arrived_s"] is not None and r["arrived_s"] < 15 and not r["fell"] and r["up_after_arrival_s"] >= 50
+               for r in rows), rows
 
 
 def test_a_run_from_a_walker_resumed_elsewhere_keeps_its_seeded_normaliser(tmp_path, monkeypatch):
@@ -136,8 +140,9 @@ TIGHT = ["--block", "weights", -2, 2, "--block", "biases", -1, 1, "--block", "in
 
 
 def test_a_walker_declared_with_tight_ranges_is_the_same_walker_and_the_battery_noise_is_smaller(tmp_path):
-    """ctrnn_es_robust_seed0_tight is evobiped genome ranges' output: the shipped genes, the same episode, ranges 8 (recurrent
-    weights) to 5 (direct) times narrower; the battery's 1 % gene noise draws on the paper's ranges fell it in all 8."""
+    """ctrnn_es_robust_seed0_tight is evobiped genome ranges' output: the shipped genes, the same episode, ranges 8
+    (recurrent weights) to 5 (direct) times narrower; the battery's 1 % gene noise draws on the paper's ranges fell it
+    in all 8."""
     from evobiped.analysis.robustness import GENE_NOISE, GENE_NOISE_DRAWS, GENE_NOISE_SEED
 
     robust = WALKERS / "ctrnn_es_robust_seed0.json"
@@ -147,9 +152,11 @@ def test_a_walker_declared_with_tight_ranges_is_the_same_walker_and_the_battery_
     gt, ct, _ = load_genome(WALKERS / "ctrnn_es_robust_seed0_tight.json")
     assert np.array_equal(gt, g) and np.array_equal(load_genome(out)[0], g) and ct == load_genome(out)[1]
     paper, tight = cfg.build(), ct.build()
-    span = {n: (paper.controller.layout.high - paper.controller.layout.low)[s] / (tight.controller.layout.high - tight.controller.layout.low)[s]
+    span = {n: (paper.controller.layout.high
+                - paper.controller.layout.low)[s] / (tight.controller.layout.high - tight.controller.layout.low)[s]
             for n, s in paper.controller.layout.slices().items()}
-    assert (span["weights"] == 8.0).all() and (span["direct_weights"] == 5.0).all() and (span["time_constants"] == 1.0).all()
+    assert (span["weights"] == 8.0).all() and (span["direct_weights"] == 5.0).all() and (span[
+        "time_constants"] == 1.0).all()
     a, b = paper.run(g, seconds=5.0), tight.run(g, seconds=5.0)
     assert np.array_equal(a.end_position, b.end_position)
     noise = np.random.default_rng(GENE_NOISE_SEED).normal(0.0, GENE_NOISE, (GENE_NOISE_DRAWS, g.size))
@@ -162,4 +169,5 @@ def test_gene_ranges_refuses_a_range_that_would_clip_a_gene(tmp_path, capsys):
     assert _gene_ranges(WALKERS / "ctrnn_es_robust_seed0.json", out, "--block", "weights", -0.5, 0.5) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "clipped" in err[0] and not out.exists()
-    assert _gene_ranges(WALKERS / "ctrnn_es_robust_seed0.json", out, "--block", "weights", 2, -2) == 2 and not out.exists()
+    assert _gene_ranges(WALKERS / "ctrnn_es_robust_seed0.json", out, "--block", "weights", 2,
+                        -2) == 2 and not out.exists()

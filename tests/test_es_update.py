@@ -37,7 +37,8 @@ def test_tied_values_share_their_rank_so_a_tied_pair_gives_no_step():
     start = es.theta.copy()
     generations(es, lambda pop: np.zeros(len(pop)), 5)
     assert np.array_equal(es.theta, start)
-    old = EvolutionStrategy(layout, ESOptions(pairs=8, sigma=0.1, learning_rate=0.1, weight_decay=0.0, ties="order"), seed=4)
+    old = EvolutionStrategy(layout, ESOptions(pairs=8, sigma=0.1, learning_rate=0.1, weight_decay=0.0, ties="order"),
+                            seed=4)
     generations(old, lambda pop: np.zeros(len(pop)), 5)
     assert np.abs(old.theta - start).max() > 0.1  # the first-shipped ranks: five steps of about the learning rate
 
@@ -58,20 +59,22 @@ def test_weight_decay_pulls_each_block_to_its_centre_and_leaves_the_time_constan
     generations(es, lambda pop: np.zeros(len(pop)), 60)
     assert np.array_equal(es.theta[tau], start[tau])
     assert np.abs(es.theta[weights]).max() < 3.0 and np.abs(es.theta[off] - 2.0).max() < 0.8
-    old = EvolutionStrategy(layout, ESOptions(pairs=4, sigma=0.01, weight_decay=0.5, **FIRST_SHIPPED), seed=0, initial=start)
+    old = EvolutionStrategy(layout, ESOptions(pairs=4, sigma=0.01, weight_decay=0.5, **FIRST_SHIPPED), seed=0,
+                            initial=start)
     generations(old, lambda pop: np.zeros(len(pop)), 60)
     assert np.exp(old.theta[tau]).min() > 0.25  # the first-shipped decay: tau pulled towards 1 s
 
 
 def test_a_bound_builds_no_momentum_and_a_clipped_sample_is_credited_with_the_move_it_made():
-    """theta on its upper bound, the fitness rising beyond it for 20 generations, then falling: theta leaves the bound at
-    the first step after the turn (no momentum was kept pushing into it).  A gene of zero range (every sample clipped
+    """theta on its upper bound, the fitness rising beyond it for 20 generations, then falling: theta leaves the bound
+    at the first step after the turn (no momentum was kept pushing into it).  A gene of zero range (every sample clipped
     back onto theta) gets no gradient and no moments."""
     layout = GenomeLayout((block("x", size=2), block("fixed", size=1, low=0.5, high=0.5)))
     start = np.array([1.0, 0.0, 0.5])
     rising = lambda pop: pop[:, 0] + 0.1 * pop[:, 1]  # noqa: E731
     for first_shipped, leaves in (({}, True), (FIRST_SHIPPED, False)):
-        es = EvolutionStrategy(layout, ESOptions(pairs=8, sigma=0.05, weight_decay=0.0, **first_shipped), seed=2, initial=start)
+        es = EvolutionStrategy(layout, ESOptions(pairs=8, sigma=0.05, weight_decay=0.0, **first_shipped), seed=2,
+                               initial=start)
         generations(es, rising, 20)
         assert es.theta[0] == 1.0
         assert bool(es.m[0] == 0.0) is leaves and bool(es.m[2] == 0.0 and es.v[2] == 0.0) is leaves
@@ -80,8 +83,8 @@ def test_a_bound_builds_no_momentum_and_a_clipped_sample_is_credited_with_the_mo
 
 
 def test_an_unstable_ars_rollout_does_not_erase_the_other_pairs():
-    """ARS on a linear fitness with one unstable + row: the step still follows the fitness's gradient (the stand-in is the
-    generation's worst finite value), where a stand-in 10^6 below it made sigma_f measure only that row and the step
+    """ARS on a linear fitness with one unstable + row: the step still follows the fitness's gradient (the stand-in is
+    the generation's worst finite value), where a stand-in 10^6 below it made sigma_f measure only that row and the step
     point along that pair's -eps."""
     layout = GenomeLayout((block(size=8, low=-10.0, high=10.0),))
     slope = np.linspace(-1.0, 1.0, 8)
@@ -130,7 +133,8 @@ def test_bad_es_update_settings_are_one_line(tmp_path, capsys, setting):
     from .conftest import cli
 
     (tmp_path / "c.toml").write_text(f"[es]\n{setting}\n")
-    code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "c.toml", "--out", tmp_path / "r", "--generations", 1)
+    code = cli("evolve", "--preset", "walker-es-linear", "--config", tmp_path / "c.toml", "--out", tmp_path / "r",
+               "--generations", 1)
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and f"es.{setting.split()[0]}: must be one of" in err, err
     assert not (tmp_path / "r").exists()

@@ -26,7 +26,8 @@ from evobiped.run.run_context import HISTORY_EXTRA, STOP_COLUMN
 
 from .conftest import cli
 
-SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), optimizer_options={"ga": GAOptions(population=8)}, generations=3, seed=7, backend="serial")
+SMALL = RunConfig(episode=EpisodeConfig(seconds=1.5), optimizer_options={"ga": GAOptions(population=8)}, generations=3,
+                  seed=7, backend="serial")
 
 
 def fitness_history(run_dir) -> list[list[str]]:
@@ -51,7 +52,8 @@ def test_history_identical_on_every_backend(tmp_path):
     ref, best = evolve_with(tmp_path, "serial", "serial")
     assert len(ref) == SMALL.generations
     assert float(ref[-1][1]) > 0  # somebody moved
-    runs = [evolve_with(tmp_path, "p1", "process", 1), evolve_with(tmp_path, "p2", "process", 2), evolve_with(tmp_path, "t3", "thread", 3)]
+    runs = [evolve_with(tmp_path, "p1", "process", 1), evolve_with(tmp_path, "p2", "process", 2),
+            evolve_with(tmp_path, "t3", "thread", 3)]
     pytest.importorskip("ray")
     runs.append(evolve_with(tmp_path, "ray", "ray", 2))
     for hist, b in runs:
@@ -229,12 +231,15 @@ def test_individuals_jsonl_records_every_row_with_its_lineage(tmp_path):
     for g, rows in enumerate(by):
         best = max(rows, key=lambda r: r["fitness"])
         stored = json.loads((run.dir / "generations" / f"gen_{g:04d}.json").read_text())
-        assert {f: best[f] for f in ("fitness", "fell", "end_time", "terms")} == {f: stored[f] for f in ("fitness", "fell", "end_time", "terms")}
+        assert {f: best[f] for f in ("fitness", "fell", "end_time",
+                                     "terms")} == {f: stored[f] for f in ("fitness", "fell", "end_time", "terms")}
     ck = json.loads((run.dir / "checkpoint.json").read_text())["outcome"]
     new = [i for i, r in enumerate(ck["previous"]) if r is None]
     assert len(new) == P - k and all(ck[f][i] is None for f in ("fell", "unstable", "end_time") for i in new)
-    assert all(ck["terms"]["distance"][i] is None for i in new) and all(ck["end_time"][i] > 0 for i in range(P) if i not in new)
-    # each child of the next generation is nearest, gene by gene, to the survivor that was its parent (a few mutated loci)
+    assert all(ck["terms"]["distance"][i] is None for i in new) and all(ck["end_time"][i] > 0 for i in range(P)
+                                                                        if i not in new)
+    # each child of the next generation is nearest, gene by gene, to the survivor that was its parent (a few mutated
+    # loci)
     pop = np.array(json.loads((run.dir / "checkpoint.json").read_text())["optimizer"]["population"])
     holder = {p: j for j, p in enumerate(ck["previous"]) if p is not None}
     for i in new:
@@ -268,7 +273,8 @@ def test_what_a_resume_keeps_of_individuals_jsonl(tmp_path):
     kept; a resume that finds committed generations missing says so."""
     from evobiped.files.rundir import committed_size, individuals_text
 
-    rows = lambda g, n: [{"generation": g, "row": i, "evaluated": True, "previous": None, "parents": None, "fitness": 1.0,  # noqa: E731
+    rows = lambda g, n: [{"generation": g, "row": i, "evaluated": True, "previous": None, "parents": None,
+                          "fitness": 1.0,  # noqa: E731
                           "fell": False, "unstable": False, "end_time": 1.0, "terms": {}} for i in range(n)]
     path = tmp_path / "individuals.jsonl"
     three, four = individuals_text(rows(3, 2)), individuals_text(rows(4, 2))
@@ -282,7 +288,8 @@ def test_what_a_resume_keeps_of_individuals_jsonl(tmp_path):
         run.evolve(ev)
     run.close()
     (run.dir / "individuals.jsonl").unlink()
-    assert f"individuals.jsonl lacks generations 0..{SMALL.generations - 1} (not in the checkpoint: lost)" in Run.resume(run.dir).repairs
+    lost = f"individuals.jsonl lacks generations 0..{SMALL.generations - 1} (not in the checkpoint: lost)"
+    assert lost in Run.resume(run.dir).repairs
 
 
 def snapshot(d: Path) -> dict:
@@ -292,7 +299,8 @@ def snapshot(d: Path) -> dict:
 @pytest.fixture
 def finished_run(tmp_path):
     d = tmp_path / "done"
-    assert cli("evolve", "--population", 4, "--generations", 1, "--episode-seconds", 0.5, "--backend", "serial", "--out", d, "--quiet") == 0
+    assert cli("evolve", "--population", 4, "--generations", 1, "--episode-seconds", 0.5, "--backend", "serial",
+               "--out", d, "--quiet") == 0
     return d
 
 
@@ -354,7 +362,8 @@ def test_flags_override_config_file(tmp_path):
     out = tmp_path / "run"
     assert cli("evolve", "--config", cfg, "--generations", 1, "--backend", "serial", "--out", out, "--quiet") == 0
     saved = json.loads((out / "config.json").read_text())
-    assert (saved["generations"], saved["seed"], saved["ga"]["population"], saved["episode"]["seconds"]) == (1, 3, 6, 0.5)
+    assert (saved["generations"], saved["seed"], saved["ga"]["population"],
+            saved["episode"]["seconds"]) == (1, 3, 6, 0.5)
     assert len(fitness_history(out)) == 1
 
 
@@ -365,15 +374,18 @@ def test_existing_run_directory_is_left_untouched(finished_run, capsys):
     assert snapshot(finished_run) == before
 
 
-def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_checked(finished_run, tmp_path, monkeypatch, capsys):
+def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_checked(
+    finished_run, tmp_path, monkeypatch, capsys):
     """The evolve use case checks everything, creates or resumes the run, and only then starts the evaluator (the
     process pool); an evaluator that cannot start removes the new run again."""
     from evobiped.core.errors import UserError
     from evobiped.evaluation import backends as evaluate
 
     started = []
-    monkeypatch.setattr(evaluate, "make_evaluator", lambda *a, **k: started.append(a) or pytest.fail("a worker started"))
-    for flags, words in ((["--out", finished_run], "already holds a run"), (["--from", tmp_path / "gone.json", "--out", tmp_path / "x"],
+    monkeypatch.setattr(evaluate, "make_evaluator", lambda *a, **k: started.append(a)
+                        or pytest.fail("a worker started"))
+    for flags, words in ((["--out", finished_run], "already holds a run"),
+                         (["--from", tmp_path / "gone.json", "--out", tmp_path / "x"],
                                                                                "no such run directory or genome file")):
         assert cli("evolve", "--generations", 1, "--backend", "process", "--workers", 2, *flags, "--quiet") == 2
         assert words in capsys.readouterr().err and not started
@@ -384,7 +396,8 @@ def test_no_worker_starts_before_the_run_directory_and_the_start_genome_are_chec
         raise UserError("cannot start the workers")
 
     monkeypatch.setattr(evaluate, "make_evaluator", fails)
-    assert cli("evolve", "--generations", 1, "--population", 4, "--backend", "process", "--workers", 2, "--out", tmp_path / "y", "--quiet") == 2
+    assert cli("evolve", "--generations", 1, "--population", 4, "--backend", "process", "--workers", 2, "--out",
+               tmp_path / "y", "--quiet") == 2
     assert "cannot start the workers" in capsys.readouterr().err and len(started) == 1
     assert not (tmp_path / "y").exists()  # the run it had created is gone: the same --out works again
 
@@ -415,7 +428,8 @@ def test_mismatched_checkpoint(finished_run, capsys):
     cfg["ga"]["population"] = 6
     (finished_run / "config.json").write_text(json.dumps(cfg))
     assert cli("evolve", "--resume", finished_run) == 2
-    assert "config.json differs from the one this checkpoint was made with: ga.population 4 → 6" in capsys.readouterr().err
+    differs = "config.json differs from the one this checkpoint was made with: ga.population 4 → 6"
+    assert differs in capsys.readouterr().err
     ck = json.loads((finished_run / "checkpoint.json").read_text())
     older = {k: v for k, v in ck.items() if k not in ("settings", "start", "format")}
     (finished_run / "checkpoint.json").write_text(json.dumps(older))
@@ -450,14 +464,18 @@ def test_unstable_simulation_scores_as_a_fall(tmp_path):
 def test_ctrl_c_stops_at_a_generation_boundary_and_resumes(tmp_path):
     """SIGINT to a real `evobiped evolve`: exit 130, a valid checkpoint, and --resume finishes the same history."""
     cfg = tmp_path / "c.toml"
-    cfg.write_text("[episode.body_options]\nfall_height = 0.01\nfall_tilt = 3.14159\n")  # no early ends: ~0.2 s per generation
-    args = ["--config", str(cfg), "--population", "6", "--generations", "12", "--episode-seconds", "3", "--seed", "4", "--backend", "serial"]
+    # no early ends: ~0.2 s per generation
+    cfg.write_text("[episode.body_options]\nfall_height = 0.01\nfall_tilt = 3.14159\n")
+    args = ["--config", str(cfg), "--population", "6", "--generations", "12", "--episode-seconds", "3", "--seed", "4",
+            "--backend", "serial"]
     ref = tmp_path / "ref"
     assert cli("evolve", *args, "--out", ref, "--quiet") == 0
     cut = tmp_path / "cut"
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    # Ctrl-C as a terminal delivers it, even when this test runs in a background job (which ignores SIGINT, and children inherit that)
-    proc = subprocess.Popen([sys.executable, "-m", "evobiped.cli", "evolve", *args, "--out", str(cut)], stderr=subprocess.PIPE, text=True, env=env,
+    # Ctrl-C as a terminal delivers it, even when this test runs in a background job (which ignores SIGINT, and children
+    # inherit that)
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped.cli", "evolve", *args, "--out", str(cut)],
+                            stderr=subprocess.PIPE, text=True, env=env,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 60
     while time.time() < deadline and not (cut / "checkpoint.json").exists():
@@ -486,7 +504,8 @@ def rerun_series(path, entity) -> dict[int, float]:
     for c in rr.chunk.RrdReader(path).stream():
         if c.entity_path == entity and not c.is_static:
             rb = c.to_record_batch()
-            out.update(zip(rb.column("generation").to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
+            out.update(zip(rb.column("generation").to_pylist(),
+                           (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
     return out
 
 

@@ -45,7 +45,8 @@ def test_the_cli_offers_them(toys, capsys):
 def test_the_generated_docs_describe_them(toys):
     parts, tables = readme.generated(), readme.tables()
     assert "### Body `toy`" in parts["bodies"] and tables["body toy"] in parts["bodies"]
-    assert "### Optimizer `random` (`[random]`)" in parts["optimizers"] and "| `population` | `6` |" in tables["optimizer random"]
+    assert "### Optimizer `random` (`[random]`)" in parts["optimizers"] and "| `population` | `6` |" in tables[
+        "optimizer random"]
     assert "| `lateral` | m | weights naming lateral |" in parts["terms"]
     assert "`evobiped/ToyBiped-v0` | a toy: Reil's biped renamed | `(26,)`" in parts["environments"]
     assert "`evobiped/ToyBiped-v0`:" in parts["observations"]

@@ -1,5 +1,5 @@
-"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a killed run's processes, a dead worker, a lost Ray node, two writers,
-a full disk, tampered files (huge numbers, foreign formats) and hostile configs.
+"""Fault injection on ``evobiped evolve``: kills between every pair of writes, a killed run's processes, a dead worker,
+a lost Ray node, two writers, a full disk, tampered files (huge numbers, foreign formats) and hostile configs.
 
 Each fault ends in a completed run equal to an undisturbed one (wall times aside) or in one line on
 stderr with exit status 2 and nothing lost.  Runs are tiny (4 walkers, 0.5 s episodes, 2 generations):
@@ -26,7 +26,8 @@ from evobiped.files.rundir import HISTORY_COLUMNS
 from .conftest import cli
 
 ROOT = Path(__file__).resolve().parents[1]
-RUN = ["--population", "4", "--generations", "2", "--episode-seconds", "0.5", "--backend", "serial", "--seed", "3", "--quiet"]
+RUN = ["--population", "4", "--generations", "2", "--episode-seconds", "0.5", "--backend", "serial", "--seed", "3",
+       "--quiet"]
 #: atomic renames of an undisturbed RUN: config, history header, 5 per generation, summary
 WRITES = 2 + 5 * 2 + 1
 
@@ -34,7 +35,8 @@ WRITES = 2 + 5 * 2 + 1
 def evolve(*args, env=None, **kw) -> subprocess.CompletedProcess:
     """``python -m evobiped evolve ARGS`` in a child process (a kill there does not touch the tests)."""
     env = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
-    return subprocess.run([sys.executable, "-m", "evobiped", "evolve", *map(str, args)], capture_output=True, text=True, env=env, **kw)
+    return subprocess.run([sys.executable, "-m", "evobiped", "evolve", *map(str, args)], capture_output=True, text=True,
+                          env=env, **kw)
 
 
 
@@ -48,7 +50,8 @@ def contents(d: Path) -> dict:
         if not p.is_file() or name == ".lock":
             continue
         if name == "evolution.rrd":
-            for s in ("best", "mean", "median", "worst", "counts/evaluations", "counts/falls", "counts/unstable", "terms/best_distance"):
+            for s in ("best", "mean", "median", "worst", "counts/evaluations", "counts/falls", "counts/unstable",
+                      "terms/best_distance"):
                 out[f"{name}:{s}"] = recording_series(p, f"/evolution/{s}")
         elif name == "history.csv":
             wall = HISTORY_COLUMNS.index("wall_seconds")
@@ -161,15 +164,26 @@ def tamper(path: Path, change) -> None:
 TAMPER = {
     "history is a number": (lambda ck: {**ck, "history": 5}, "history must be a list"),
     "best is a string": (lambda ck: {**ck, "best": "x"}, "best must be a table"),
-    "best fitness inf": (lambda ck: {**ck, "best": {**ck["best"], "fitness": float("inf")}}, "best.fitness must be finite"),
-    "best fitness not in the history": (lambda ck: {**ck, "best": {**ck["best"], "fitness": 1e9}}, "best.fitness must be the best fitness of"),
-    "fitness list too short": (lambda ck: {**ck, "optimizer": {**ck["optimizer"], "fitness": ck["optimizer"]["fitness"][:2]}}, "ga.fitness must be a list of 4"),
-    "gene 1e300": (lambda ck: {**ck, "optimizer": {**ck["optimizer"], "population": [[1e300] + r[1:] for r in ck["optimizer"]["population"]]}}, "outside the gene's bounds"),
-    "best gene 1e300": (lambda ck: {**ck, "best_genome": [1e300] + ck["best_genome"][1:]}, "best_genome[0] must be within"),
-    "history row of text": (lambda ck: {**ck, "history": [["a"] * 9] * 2}, "history[0].generation must be a whole number"),
-    "generation is text": (lambda ck: {**ck, "optimizer": {**ck["optimizer"], "generation": "2"}}, "ga.generation must be a whole number"),
+    "best fitness inf": (lambda ck: {**ck, "best": {**ck["best"], "fitness": float("inf")}},
+                         "best.fitness must be finite"),
+    "best fitness not in the history": (lambda ck: {**ck, "best": {**ck["best"], "fitness": 1e9}},
+                                        "best.fitness must be the best fitness of"),
+    "fitness list too short": (lambda ck: {**ck,
+                                           "optimizer": {**ck["optimizer"], "fitness": ck["optimizer"]["fitness"][:2]}},
+                               "ga.fitness must be a list of 4"),
+    "gene 1e300": (lambda ck: {**ck, "optimizer": {**ck["optimizer"],
+                                                   "population": [[1e300] + r[1:]
+                                                                  for r in ck["optimizer"]["population"]]}},
+                   "outside the gene's bounds"),
+    "best gene 1e300": (lambda ck: {**ck, "best_genome": [1e300] + ck["best_genome"][1:]},
+                        "best_genome[0] must be within"),
+    "history row of text": (lambda ck: {**ck, "history": [["a"] * 9] * 2},
+                            "history[0].generation must be a whole number"),
+    "generation is text": (lambda ck: {**ck, "optimizer": {**ck["optimizer"], "generation": "2"}},
+                           "ga.generation must be a whole number"),
     "no optimizer state": (lambda ck: {k: v for k, v in ck.items() if k != "optimizer"}, "optimizer is missing"),
-    "written by CMA-ES": (lambda ck: {**ck, "optimizer": {**ck["optimizer"], "name": "cma"}}, "written by the 'cma' optimizer"),
+    "written by CMA-ES": (lambda ck: {**ck, "optimizer": {**ck["optimizer"], "name": "cma"}},
+                          "written by the 'cma' optimizer"),
     "null": (lambda ck: None, "is null"),
     "a list": (lambda ck: [], "expected a table"),
 }
@@ -197,7 +211,8 @@ def test_a_deleted_checkpoint_does_not_restart_the_run(done, capsys):
 def test_two_runs_into_one_directory_one_wins(tmp_path, reference):
     d = tmp_path / "run"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    procs = [subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *RUN[:-3], "--seed", str(seed), "--quiet", "--out", str(d)],
+    procs = [subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *RUN[:-3], "--seed", str(seed), "--quiet",
+                               "--out", str(d)],
                               stderr=subprocess.PIPE, text=True, env=env) for seed in (3, 4)]
     results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
     codes = sorted(rc for rc, _ in results)
@@ -212,7 +227,8 @@ def test_two_runs_into_one_directory_one_wins(tmp_path, reference):
 def test_resume_of_a_running_run_is_refused_and_a_dead_owner_frees_it(tmp_path, reference, capsys):
     d = tmp_path / "run"
     slow = [*RUN[:2], "--generations", "2000", *RUN[4:]]
-    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *slow, "--out", str(d)], env={**os.environ, "PYTHONPATH": str(ROOT)})
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *slow, "--out", str(d)],
+                            env={**os.environ, "PYTHONPATH": str(ROOT)})
     try:
         deadline = time.time() + 60
         while not (d / "checkpoint.json").exists() and time.time() < deadline:
@@ -310,8 +326,8 @@ def test_read_only_run_directory(done, capsys):
         p.chmod(0o555)
     try:
         if root:
-            r = subprocess.run([*AS_USER, sys.executable, "-m", "evobiped", "evolve", "--resume", str(done)], capture_output=True, text=True,
-                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+            r = subprocess.run([*AS_USER, sys.executable, "-m", "evobiped", "evolve", "--resume", str(done)],
+                               capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
             rc, err = r.returncode, r.stderr
         else:
             rc, err = cli("evolve", "--resume", done), capsys.readouterr().err
@@ -352,8 +368,10 @@ def test_hostile_config_is_one_line_and_writes_nothing(tmp_path, capsys, text, m
     assert not (tmp_path / "run").exists()
 
 
-@pytest.mark.parametrize("episode, words", [({"seconds": 0}, "episode.seconds: must be > 0"), ({"seconds": True}, "must be a number"),
-                                             ({"body_options": {"timestep": 0}}, "episode.body_options.timestep: must be in")])
+@pytest.mark.parametrize("episode, words", [({"seconds": 0}, "episode.seconds: must be > 0"),
+                                            ({"seconds": True}, "must be a number"),
+                                             ({"body_options": {"timestep": 0}},
+                                              "episode.body_options.timestep: must be in")])
 def test_replaying_a_genome_with_a_hostile_episode_is_one_line(reference, tmp_path, capsys, episode, words):
     g = json.loads((reference / "best.json").read_text())
     g["episode"].update(episode)
@@ -389,12 +407,14 @@ LONG = [*RUN[:2], "--generations", "2000", *RUN[4:6], "--seed", "3", "--backend"
 
 
 def start_long(d: Path) -> tuple[subprocess.Popen, list[int]]:
-    """A long process-backend run into ``d``, once its first generation is committed; its pool workers and resource tracker."""
+    """A long process-backend run into ``d``, once its first generation is committed; its pool workers and resource
+    tracker."""
     def defaults():  # as a terminal delivers them, even where this test runs under nohup or in a background job
         for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             signal.signal(s, signal.SIG_DFL)
 
-    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *LONG, "--quiet", "--out", str(d)], stderr=subprocess.PIPE, text=True,
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", *LONG, "--quiet", "--out", str(d)],
+                            stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=defaults)
     deadline = time.time() + 60
     while not (d / "checkpoint.json").exists() and time.time() < deadline:
@@ -457,7 +477,8 @@ def test_a_stop_signal_during_a_checkpoint_waits_for_both_files(tmp_path, monkey
     from evobiped.run.run import Run
     from evobiped.run.run_config import RunConfig
 
-    config = RunConfig.from_dict({"episode": {"seconds": 0.5}, "ga": {"population": 4}, "generations": 2, "backend": "serial"})
+    config = RunConfig.from_dict({"episode": {"seconds": 0.5}, "ga": {"population": 4}, "generations": 2,
+                                  "backend": "serial"})
     run = Run.create(tmp_path / "r", config)
     write = commit_point.write_json
 
@@ -502,7 +523,8 @@ def test_episode_length_is_refused_before_any_worker_or_file(tmp_path, capsys, b
 @pytest.mark.parametrize("backend", ["serial", "thread", "process", "ray"])
 def test_episode_seconds_flag_is_refused_before_any_worker_or_file(tmp_path, capsys, backend):
     workers = [] if backend == "serial" else ["--workers", "2"]
-    assert cli("evolve", *RUN[:4], "--episode-seconds", "1e-9", "--backend", backend, *workers, "--quiet", "--out", tmp_path / "run") == 2
+    assert cli("evolve", *RUN[:4], "--episode-seconds", "1e-9", "--backend", backend, *workers, "--quiet", "--out",
+               tmp_path / "run") == 2
     one_line_error(capsys.readouterr().err, "episode seconds = 1e-09 gives 5e-08 control ticks")
     assert not (tmp_path / "run").exists()
 
@@ -515,7 +537,8 @@ def test_resume_of_a_run_with_a_bad_episode_length_is_one_line(done, capsys, bac
     (done / "config.json").write_text(json.dumps(cfg))
     before = files(done)
     assert cli("evolve", "--resume", done, "--backend", backend) == 2
-    one_line_error(capsys.readouterr().err, "differs from the one this checkpoint was made with: episode.seconds 0.5 → 1e-09")
+    one_line_error(capsys.readouterr().err, "differs from the one this checkpoint was made with: episode.seconds 0.5 → "
+                                            "1e-09")
     assert files(done) == before
 
 
@@ -593,8 +616,8 @@ def test_a_run_directory_that_cannot_be_listed(tmp_path, capsys):
         if os.geteuid() == 0:
             if shutil.which(AS_USER[0]) is None:
                 pytest.skip("root lists any directory and there is no setpriv to drop that power")
-            r = subprocess.run([*AS_USER, sys.executable, "-m", "evobiped", "evolve", *RUN, "--out", str(d)], capture_output=True, text=True,
-                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+            r = subprocess.run([*AS_USER, sys.executable, "-m", "evobiped", "evolve", *RUN, "--out", str(d)],
+                               capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
             rc, err = r.returncode, r.stderr
         else:
             rc, err = cli("evolve", *RUN, "--out", d), capsys.readouterr().err
@@ -633,10 +656,12 @@ def test_a_lost_ray_worker_is_one_line(monkeypatch, how):
     from evobiped.evaluation.ray_backend import RayEvaluator
 
     if how == "node died error":  # the result of a task on the lost node
-        monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))
+        monkeypatch.setattr(FakeActorPool, "outcome",
+                            staticmethod(lambda: ray.exceptions.NodeDiedError("the node running this actor died")))
         words = r"^Ray lost a worker \(NodeDiedError: .*resume the run with evobiped evolve --resume$"
     else:  # Ray waits for room to restart the actor: no result, ever
-        monkeypatch.setattr(FakeActorPool, "outcome", staticmethod(lambda: TimeoutError("Timed out waiting for result")))
+        monkeypatch.setattr(FakeActorPool, "outcome",
+                            staticmethod(lambda: TimeoutError("Timed out waiting for result")))
         words = r"^a Ray node running this run's workers died \(1 of 2 nodes lost\); .*evobiped evolve --resume$"
     ev = RayEvaluator.__new__(RayEvaluator)  # no cluster: actors on nodes a and b, b dead
     ev.config, ev.chunk, ev.actors, ev.nodes = EpisodeConfig(seconds=0.1), None, [None, None], {"a", "b"}
@@ -660,7 +685,8 @@ def test_a_generation_lost_to_the_evaluator_keeps_the_run_resumable(tmp_path, ca
         def evaluate(self, genomes, key=None):
             LosesSecondGeneration.calls += 1
             if LosesSecondGeneration.calls == 2:
-                raise UserError("Ray lost a worker (NodeDiedError: ...); the last checkpoint is kept: resume the run with evobiped evolve --resume")
+                raise UserError("Ray lost a worker (NodeDiedError: ...); the last checkpoint is kept: resume the run "
+                                "with evobiped evolve --resume")
             return super().evaluate(genomes, key)
 
     monkeypatch.setattr(evaluate, "make_evaluator", lambda episode, *a, **k: LosesSecondGeneration(episode))

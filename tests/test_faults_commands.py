@@ -17,7 +17,8 @@ TINY = '[ga]\npopulation = 4\n[episode]\nseconds = 1.0\n'
 
 
 def _start(*args) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE,
                             text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
 
 
@@ -85,8 +86,10 @@ def test_a_figure_in_a_missing_folder_is_refused_before_the_episode(capsys):
 
 
 def _gait(out: Path, kill_at: int | None = None) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(ROOT), **({"EVOBIPED_FAULT_KILL_AT_REPLACE": str(kill_at)} if kill_at else {})}
-    return subprocess.run([sys.executable, "-m", "evobiped", "gait", str(WALKERS / "ctrnn_command_seed1.json"), "--speed", "0.5",
+    env = {**os.environ, "PYTHONPATH": str(ROOT),
+           **({"EVOBIPED_FAULT_KILL_AT_REPLACE": str(kill_at)} if kill_at else {})}
+    return subprocess.run([sys.executable, "-m", "evobiped", "gait", str(WALKERS / "ctrnn_command_seed1.json"),
+                           "--speed", "0.5",
                            "--hold", "3", "--out", str(out)], capture_output=True, text=True, env=env, timeout=120)
 
 
@@ -105,18 +108,21 @@ def test_a_gait_killed_between_its_json_and_figure_leaves_no_old_figure_beside_a
 # ---- a run another process is writing
 @pytest.fixture
 def live_run(tmp_path):
-    """A run directory an evolve (serial, 400 generations of tiny episodes) is writing; the evolve ends with the test."""
+    """A run directory an evolve (serial, 400 generations of tiny episodes) is writing; the evolve ends with the
+    test."""
     d = tmp_path / "run"
-    p = _start("evolve", "--population", "4", "--generations", "400", "--seconds", "0.5", "--backend", "serial", "--quiet",
-               "--out", d)
+    p = _start("evolve", "--population", "4", "--generations", "400", "--seconds", "0.5", "--backend", "serial",
+               "--quiet", "--out", d)
     _wait_for(p, d / "checkpoint.json")
     yield d, p
     p.kill()
     p.communicate(timeout=60)
 
 
-@pytest.mark.parametrize("command", [["select", "{d}", "--seconds", "1", "--top", "1"], ["replay", "{d}", "--seconds", "0.5"],
-                                     ["replay", "{d}/best.json", "--seconds", "0.5"], ["gait-report", "{d}", "--seconds", "1"],
+@pytest.mark.parametrize("command", [["select", "{d}", "--seconds", "1", "--top", "1"],
+                                     ["replay", "{d}", "--seconds", "0.5"],
+                                     ["replay", "{d}/best.json", "--seconds", "0.5"],
+                                     ["gait-report", "{d}", "--seconds", "1"],
                                      ["robustness", "{d}", "--seconds", "2", "--push-after", "1"]])
 def test_a_run_being_written_is_refused_in_one_line(live_run, capsys, command):
     d, p = live_run
@@ -125,7 +131,8 @@ def test_a_run_being_written_is_refused_in_one_line(live_run, capsys, command):
     assert not [x for x in d.iterdir() if x.name.startswith(("selected", "replay", "robustness", ".select", ".replay"))]
 
 
-def test_a_selection_from_a_run_being_written_records_its_generation_and_is_not_reused_once_the_run_went_on(live_run, capsys):
+def test_a_selection_from_a_run_being_written_records_its_generation_and_is_not_reused_once_the_run_went_on(
+    live_run, capsys):
     import json
 
     d, p = live_run
@@ -134,7 +141,8 @@ def test_a_selection_from_a_run_being_written_records_its_generation_and_is_not_
     chosen = json.loads((d / "selected.json").read_text())["from_checkpoint"]
     assert chosen["generations"] >= 1 and chosen["writer"] == p.pid and chosen["digest"]
     deadline = time.time() + 60
-    while json.loads((d / "checkpoint.json").read_text())["history"].__len__() == chosen["generations"] and time.time() < deadline:
+    while json.loads((d / "checkpoint.json").read_text())["history"].__len__() == chosen[
+        "generations"] and time.time() < deadline:
         time.sleep(0.1)
     p.kill()
     p.communicate(timeout=60)

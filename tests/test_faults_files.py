@@ -141,8 +141,8 @@ def test_a_hostile_settings_file_is_one_line_before_anything_is_written(tmp_path
     (tmp_path / "c.toml").write_text(text + "\n")
     sizes = [] if "population" in name else ["--population", "4"]
     cyclic = [] if "steer" in text else ["--cyclic"]  # the steer task has no cyclic criterion
-    assert cli("evolve", "--config", tmp_path / "c.toml", *sizes, "--episode-seconds", "1", *cyclic, "--backend", "thread",
-               "--workers", "2", "--out", tmp_path / "x") == 2
+    assert cli("evolve", "--config", tmp_path / "c.toml", *sizes, "--episode-seconds", "1", *cyclic, "--backend",
+               "thread", "--workers", "2", "--out", tmp_path / "x") == 2
     one_line_error(capsys.readouterr().err, words)
     assert not (tmp_path / "x").exists()
 
@@ -169,7 +169,9 @@ def test_an_older_cma_log_longer_than_the_history_is_refused_at_once(tmp_path, c
     d = tmp_path / "cma"
     assert cli("evolve", *RUN, "--optimizer", "cma", "--out", d) == 0
     lam = len(json.loads((d / "checkpoint.json").read_text())["optimizer"]["fitness"])
-    edit(d / "checkpoint.json", lambda ck: {**ck, "optimizer": {"name": "cma", "generation": 20000, "told": [[0.0] * lam] * 20000,
+    edit(d / "checkpoint.json", lambda ck: {**ck,
+                                            "optimizer": {"name": "cma", "generation": 20000,
+                                                          "told": [[0.0] * lam] * 20000,
                                                                 "fitness": [None] * lam}})
     t = time.perf_counter()
     assert cli("evolve", "--resume", d) == 2
@@ -185,7 +187,8 @@ def test_a_population_beyond_memory_is_refused_before_any_worker(tmp_path, capsy
         raise AssertionError("workers started")
 
     monkeypatch.setattr(evaluate, "make_evaluator", no_workers)
-    assert cli("evolve", "--population", "5000000", "--backend", "thread", "--workers", "2", "--out", tmp_path / "x") == 2
+    assert cli("evolve", "--population", "5000000", "--backend", "thread", "--workers", "2", "--out",
+               tmp_path / "x") == 2
     one_line_error(capsys.readouterr().err, "population 5000000 needs about")
     assert not (tmp_path / "x").exists()
 
@@ -211,4 +214,5 @@ def test_a_stop_signal_after_the_last_file_says_the_run_is_complete(tmp_path, ca
     monkeypatch.setattr(evolve_cmd, "hms", interrupted)  # while the final line is written
     assert cli("evolve", *RUN, "--out", tmp_path / "r") == 130
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "interrupted after the run completed: all 2 generations and summary.json are written" in err, err
+    assert err.count(
+        "\n") == 1 and "interrupted after the run completed: all 2 generations and summary.json are written" in err, err

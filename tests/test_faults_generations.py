@@ -95,6 +95,7 @@ def test_the_best_generations_file_is_rewritten_from_the_checkpoint(finished, ru
 def test_replay_and_select_rewrite_the_best_generations_file_and_go_on(finished, run, capsys, command):
     g = best_generation(run)
     _swap(run, g)
-    args = {"replay": ["replay", run, "--generation", g], "select": ["select", run, "--seconds", "1", "--top", "2"]}[command]
+    args = {"replay": ["replay", run, "--generation", g],
+            "select": ["select", run, "--seconds", "1", "--top", "2"]}[command]
     assert cli(*args) == 0, capsys.readouterr().err
     assert gen(run, g).read_bytes() == gen(finished, g).read_bytes()

@@ -27,8 +27,8 @@ def guarded(*args, timeout: float = 60, memory: int = 4 * 2**30, **kw) -> subpro
         os.setsid()
 
     env = {**os.environ, "PYTHONPATH": str(ROOT), **kw.pop("env", {})}
-    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, encoding="utf-8", errors="replace", env=env,
-                          timeout=timeout, preexec_fn=limit, **kw)
+    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, encoding="utf-8",
+                          errors="replace", env=env, timeout=timeout, preexec_fn=limit, **kw)
 
 
 # ---- worker counts beyond the machine
@@ -111,8 +111,8 @@ def test_resume_of_a_path_that_is_not_utf8_repairs_nothing(latin1_run):
 # ---- Ctrl-C at any moment from the start: one line, never a traceback
 def _interrupt(args, delay: float, group: bool = False) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         env=env, start_new_session=True)
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", *map(str, args)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, env=env, start_new_session=True)
     time.sleep(delay)
     with pytest.raises(ProcessLookupError) if p.poll() is not None else _nothing():
         (os.killpg if group else os.kill)(p.pid, signal.SIGINT)
@@ -140,7 +140,8 @@ def test_ctrl_c_while_a_command_starts_is_one_line(latin1_run, tmp_path, command
         if _interpreters_own(r.stderr):
             continue
         assert "Traceback" not in r.stderr and r.stderr.count("\n") <= 1, (delay, r.stderr)
-        assert r.returncode in (0, 130, -signal.SIGINT), (delay, r.returncode, r.stderr)  # -SIGINT: before Python's handler
+        # -SIGINT: before Python's handler
+        assert r.returncode in (0, 130, -signal.SIGINT), (delay, r.returncode, r.stderr)
 
 
 def _interpreters_own(err: str) -> bool:
@@ -153,7 +154,8 @@ def _interpreters_own(err: str) -> bool:
 
 @pytest.mark.parametrize("delay", [0.7, 0.85, 1.0, 1.15, 1.3])
 def test_ctrl_c_to_the_process_group_while_workers_start_is_one_line(tmp_path, delay):
-    r = _interrupt(["evolve", *TINY, "--backend", "process", "--workers", "2", "--out", tmp_path / "run"], delay, group=True)
+    r = _interrupt(["evolve", *TINY, "--backend", "process", "--workers", "2", "--out", tmp_path / "run"], delay,
+                   group=True)
     assert "Traceback" not in r.stderr and r.stderr.count("\n") <= 1, r.stderr
     assert r.returncode in (0, 130), r.stderr
 
@@ -201,8 +203,8 @@ def test_an_interrupt_before_the_first_commit_claims_no_checkpoint(tmp_path):
 
 @pytest.mark.parametrize("optimizer", ["cma", "es"])
 def test_population_one_is_not_the_gas_to_refuse(tmp_path, capsys, optimizer):
-    cli("evolve", "--optimizer", optimizer, "--population", 1, "--generations", 1, "--seconds", 0.5, "--backend", "serial",
-        "--quiet", "--out", tmp_path / "run")
+    cli("evolve", "--optimizer", optimizer, "--population", 1, "--generations", 1, "--seconds", 0.5, "--backend",
+        "serial", "--quiet", "--out", tmp_path / "run")
     assert "ga.population" not in capsys.readouterr().err
 
 
@@ -221,7 +223,8 @@ def test_a_config_that_is_a_directory_says_so(tmp_path, capsys):
 
 def test_a_settings_file_with_a_byte_order_mark_is_read(tmp_path):
     (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbfseed = 4\n")
-    assert cli("evolve", "--config", tmp_path / "s.toml", *TINY[:-3], "--backend", "serial", "--quiet", "--out", tmp_path / "run") == 0
+    assert cli("evolve", "--config", tmp_path / "s.toml", *TINY[:-3], "--backend", "serial", "--quiet", "--out",
+               tmp_path / "run") == 0
     assert '"seed": 4' in (tmp_path / "run" / "config.json").read_text()
 
 
@@ -241,7 +244,8 @@ def test_out_of_a_run_suggests_resume_and_leaves_its_lock_alone(plain_run, capsy
 
 
 # ---- presets that tune a given genome
-STARTED = ["repertoire-balance", "steer-generalist", "walker-simbicon-robust", "walker-simbicon-teacher", "walker-ctrnn-distilled"]
+STARTED = ["repertoire-balance", "steer-generalist", "walker-simbicon-robust", "walker-simbicon-teacher",
+           "walker-ctrnn-distilled"]
 
 
 @pytest.mark.parametrize("preset", STARTED)
@@ -316,7 +320,8 @@ def test_a_select_killed_between_its_two_files_leaves_no_old_candidates_beside_a
     assert not ((d / "selected.json").exists() and (d / "selected_candidates.json").exists()), "one file of each select"
     r = guarded("select", d, "--seconds", "1")
     assert r.returncode == 0 and "the previous select was cut short" in r.stderr, r.stderr
-    assert (d / "selected.json").exists() and (d / "selected_candidates.json").exists() and not list(d.glob(".*incomplete"))
+    assert (d / "selected.json").exists() and (d / "selected_candidates.json").exists() and not list(d.glob(
+        ".*incomplete"))
 
 
 # ---- Ray's agents end with a killed run
@@ -326,8 +331,10 @@ def test_no_ray_process_outlives_a_killed_run(tmp_path):
     from .test_faults import children
 
     d = tmp_path / "run"
-    p = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", "--population", "8", "--generations", "200", "--seconds", "2",
-                          "--backend", "ray", "--workers", "2", "--quiet", "--out", str(d)], env={**os.environ, "PYTHONPATH": str(ROOT)},
+    p = subprocess.Popen([sys.executable, "-m", "evobiped", "evolve", "--population", "8", "--generations", "200",
+                          "--seconds", "2",
+                          "--backend", "ray", "--workers", "2", "--quiet", "--out", str(d)],
+                         env={**os.environ, "PYTHONPATH": str(ROOT)},
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.time() + 240
     while not (d / "checkpoint.json").exists() and time.time() < deadline:

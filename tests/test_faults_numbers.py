@@ -38,8 +38,8 @@ WALKER = ROOT / "docs" / "walkers" / "ctrnn_walk_seed1.json"
 
 def _run(*args, env: dict) -> subprocess.CompletedProcess:
     e = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
-    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, text=True, timeout=120,
-                          env={**e, "PYTHONPATH": str(ROOT), **env})
+    return subprocess.run([sys.executable, "-m", "evobiped", *map(str, args)], capture_output=True, text=True,
+                          timeout=120, env={**e, "PYTHONPATH": str(ROOT), **env})
 
 
 @pytest.mark.parametrize("value", ["osmesa-not-a-backend", "bogus", "EGL "])
@@ -88,7 +88,8 @@ def _instance(cls: type) -> BaseException:
     import inspect
     import signal
 
-    params = [p for p in inspect.signature(cls.__init__).parameters.values() if p.name != "self" and p.default is p.empty]
+    params = [p for p in inspect.signature(cls.__init__).parameters.values() if p.name != "self"
+              and p.default is p.empty]
     if cls.__name__ == "Interrupted":
         return cls(signal.SIGTERM)
     if [p.name for p in params] == ["path", "exc"]:
@@ -114,8 +115,10 @@ def test_too_few_file_descriptors_for_the_pool_is_one_line(tmp_path, files):
     def few():
         resource.setrlimit(resource.RLIMIT_NOFILE, (files, resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
 
-    r = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--population", "4", "--generations", "2", "--seconds", "0.5",
-                        "--backend", "process", "--workers", "2", "--quiet", "--out", str(tmp_path / "run")], capture_output=True,
+    r = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--population", "4", "--generations", "2",
+                        "--seconds", "0.5",
+                        "--backend", "process", "--workers", "2", "--quiet", "--out", str(tmp_path / "run")],
+                       capture_output=True,
                        text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)}, preexec_fn=few)
     assert r.returncode == 2, r.stderr
     one_line_error("".join(x for x in r.stderr.splitlines(True) if not x.startswith("evobiped: a worker died")),
@@ -124,8 +127,8 @@ def test_too_few_file_descriptors_for_the_pool_is_one_line(tmp_path, files):
 
 def test_mujocos_warnings_leave_no_log_file_in_the_current_folder(tmp_path):
     code = ("import mujoco\nfrom evobiped.physics.models import load_model, models_dir\n"
-            "m = load_model(models_dir() / 'reil_biped.xml'); d = mujoco.MjData(m); d.qvel[:] = 1e300; mujoco.mj_step(m, d)\n"
-            "assert d.warning[mujoco.mjtWarning.mjWARN_BADQVEL].number == 1\n")
+            "m = load_model(models_dir() / 'reil_biped.xml'); d = mujoco.MjData(m); d.qvel[:] = 1e300; "
+            "mujoco.mj_step(m, d)\nassert d.warning[mujoco.mjtWarning.mjWARN_BADQVEL].number == 1\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path,
                        env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert r.returncode == 0 and "The simulation is unstable" in r.stderr, r.stderr

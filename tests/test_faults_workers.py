@@ -23,7 +23,8 @@ def genomes(n=6):
 
 
 def same(a, b) -> bool:
-    return np.array_equal(a.fitness, b.fitness) and np.array_equal(a.end_time, b.end_time) and np.array_equal(a.fell, b.fell)
+    return np.array_equal(a.fitness, b.fitness) and np.array_equal(a.end_time,
+                                                                   b.end_time) and np.array_equal(a.fell, b.fell)
 
 
 def dead(pid: int) -> bool:
@@ -55,7 +56,8 @@ def test_workers_killed_between_generations_cost_one_retry(how):
 
 
 def test_a_pool_that_breaks_at_every_submit_stops_after_the_last_retry(monkeypatch):
-    """Every fresh pool refuses its batches (as one whose workers died at once): MAX_RETRIES retries, then one UserError."""
+    """Every fresh pool refuses its batches (as one whose workers died at once): MAX_RETRIES retries, then one
+    UserError."""
     from concurrent.futures.process import BrokenProcessPool
 
     class Broken:
@@ -107,7 +109,8 @@ def test_workers_killed_at_random_moments(tmp_path):
         results, notes = campaign(tmp_path / "c", ["worker-sigkill", "worker-storm", "late-signal"], repeat=1)
     finally:
         random.setstate(kept)
-    assert {name: sum(c.values()) for name, c in results.items()} == {"worker-sigkill": 1, "worker-storm": 1, "late-signal": 1}
+    assert {name: sum(c.values()) for name, c in results.items()} == {"worker-sigkill": 1, "worker-storm": 1,
+                                                                      "late-signal": 1}
     assert not notes and not any(c[f] for c in results.values() for f in FAILURES), (dict(results), notes)
 
 

@@ -77,7 +77,8 @@ def test_survivors_sit_in_a_column_without_a_time_scale(captured):
     from evobiped.record.png.robustness_figure import robustness_figure
     from evobiped.analysis.robustness import Trial
 
-    trials = [Trial("push 5 N", f"d{i}", i % 2 == 0, 30.0 if i % 2 == 0 else 5.0 + i, 1.0 + i, 1.0 + i) for i in range(8)]
+    trials = [Trial("push 5 N", f"d{i}", i % 2 == 0, 30.0 if i % 2 == 0 else 5.0 + i, 1.0 + i, 1.0 + i)
+              for i in range(8)]
     robustness_figure(trials, "r.png", title="t", seconds=30.0)
     b = captured[0].axes[1]
     labels = [t.get_text() for t in b.get_xticklabels()]

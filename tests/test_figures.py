@@ -8,7 +8,8 @@ from evobiped.record.png import figures
 from evobiped.record.trajectory import record
 
 pytest.importorskip("matplotlib")
-MAX_PX = (figures.MAX_SIZE[0] * figures.DPI + 200, figures.MAX_SIZE[1] * figures.DPI + 200)  # + the tight bounding box's margins
+# + the tight bounding box's margins
+MAX_PX = (figures.MAX_SIZE[0] * figures.DPI + 200, figures.MAX_SIZE[1] * figures.DPI + 200)
 
 
 def png_size(path) -> tuple[int, int]:
@@ -102,7 +103,8 @@ def test_the_motion_sequence_is_one_steady_stride_in_one_window(captured):
     from evobiped.files.genome_file import load_genome
     from pathlib import Path
 
-    genome, cfg, _ = load_genome(Path(__file__).resolve().parent.parent / "docs" / "walkers" / "simbicon_cma_seed5.json")
+    genome, cfg, _ = load_genome(Path(
+        __file__).resolve().parent.parent / "docs" / "walkers" / "simbicon_cma_seed5.json")
     _, traj = record(cfg.build(), genome, seconds=12.5)
     t0, t1, what = figures.steady_stride(traj)
     assert 10.0 <= t0 < t1 < 12.5 and 0.3 < t1 - t0 < 2.0 and what.startswith("one stride")
@@ -138,7 +140,8 @@ def test_the_robustness_figure_decodes_its_markers_and_spreads_the_survivors(cap
     b = captured[0].axes[1]
     labels = [t.get_text() for t in b.get_legend().get_texts()]
     assert {"push 5 N", "friction", "slope", "still up at the end", "fell (at its time up)"} <= set(labels)
-    up = np.concatenate([c.get_offsets()[:, 0] for c in b.collections if len(c.get_offsets()) and c.get_offsets()[0, 1] in (10.0, 9.0)])
+    up = np.concatenate([c.get_offsets()[:, 0] for c in b.collections if len(c.get_offsets())
+                         and c.get_offsets()[0, 1] in (10.0, 9.0)])
     assert len(np.unique(up)) == 21 and up.min() >= 30.0  # 21 survivors, 21 distinct places in the band
     a = captured[0].axes[0]
     said = "\n".join(t.get_text() for t in a.texts) + "\n".join(t.get_text() for t in a.get_yticklabels())

@@ -59,7 +59,8 @@ def test_integrator_converges():
 
 
 #: Fig. 8A / 9 sweep, state reset per I: Table 1's ranges, boundaries in the lower gait
-CLAIM2 = {0.08: "walk", 0.12: "walk", 0.17: "walk", 0.19: "trot", 0.25: "trot", 0.26: "pace", 0.35: "pace", 0.36: "gallop", 0.45: "gallop"}
+CLAIM2 = {0.08: "walk", 0.12: "walk", 0.17: "walk", 0.19: "trot", 0.25: "trot", 0.26: "pace", 0.35: "pace",
+          0.36: "gallop", 0.45: "gallop"}
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +72,8 @@ def test_fig8a_gait_order_claim2(fig8a_sweep):
     labels = [g.label for g in fig8a_sweep.gaits]
     assert labels == list(CLAIM2.values())
     for g in fig8a_sweep.gaits:
-        tpl = {"walk": (0, 0.5, 0.75, 0.25), "trot": (0, 0.5, 0.5, 0), "pace": (0, 0.5, 0, 0.5), "gallop": (0, 0, 0.5, 0.5)}[g.label]
+        tpl = {"walk": (0, 0.5, 0.75, 0.25), "trot": (0, 0.5, 0.5, 0), "pace": (0, 0.5, 0, 0.5),
+               "gallop": (0, 0, 0.5, 0.5)}[g.label]
         assert np.all(gaits.circ_dist(g.phases, tpl) < 0.02)
 
 
@@ -133,7 +135,8 @@ class _Actions:
 
 def _predicted_period_s(ctrl, D, go):
     """Period (s) of the same network integrated on its own by g3sim.simulate."""
-    net = g3net.G3Network(cells=ctrl.cells, D=tuple(map(tuple, D)), lags=tuple(ctrl.lag_steps * ctrl.h), delta=(0.0,) * ctrl.n)
+    net = g3net.G3Network(cells=ctrl.cells, D=tuple(map(tuple, D)), lags=tuple(ctrl.lag_steps * ctrl.h),
+                          delta=(0.0,) * ctrl.n)
     tr = g3sim.simulate(net, g3sim.go_schedule([go]), 60.0, dt=0.01, sample_dt=0.01)
     return gaits.analyse_gait(tr.t, tr.x[0], t_start=30.0).period / ctrl.time_scale
 
@@ -143,7 +146,8 @@ def test_g3_controller_drives_reil_body_at_the_network_frequency():
     the GO knob from 0.1 to 0.2 at t = 10 s speeds the rhythm up as predicted."""
     from evobiped.episode import EpisodeConfig
 
-    cfg = EpisodeConfig(body="reil", controller="g3", seconds=20.0, body_options={"fall_height": 1e-3, "fall_tilt": np.pi},
+    cfg = EpisodeConfig(body="reil", controller="g3", seconds=20.0,
+                        body_options={"fall_height": 1e-3, "fall_tilt": np.pi},
                         controller_options={"go": [[0.0, 0.1], [10.0, 0.2]]})
     ep = cfg.build()
     ctrl = ep.controller
@@ -172,7 +176,8 @@ def test_g3_controller_drives_reil_body_at_the_network_frequency():
 def test_g3_controller_bad_options():
     from evobiped.episode import EpisodeConfig
 
-    for opts, msg in (({"go": -0.1}, ">= 0"), ({"go": []}, "empty"), ({"go": [[1.0, 0.1], [0.5, 0.2]]}, "increase"), ({"time_scale": 0}, "> 0")):
+    for opts, msg in (({"go": -0.1}, ">= 0"), ({"go": []}, "empty"), ({"go": [[1.0, 0.1], [0.5, 0.2]]}, "increase"),
+                      ({"time_scale": 0}, "> 0")):
         with pytest.raises(ConfigError, match=msg):
             EpisodeConfig(body="reil", controller="g3", controller_options=opts).build()
 
@@ -193,7 +198,8 @@ def test_cli_g3_json_and_figures(tmp_path, capsys):
 
 
 def test_cli_g3_reproduce_hands_the_folder_step_and_t_run_to_the_reproduction(tmp_path, monkeypatch):
-    """``evobiped g3 --reproduce DIR``: the paper's defaults (step 0.01, 200 per level) unless --step/--t-run say otherwise."""
+    """``evobiped g3 --reproduce DIR``: the paper's defaults (step 0.01, 200 per level) unless --step/--t-run say
+    otherwise."""
     from evobiped.cli import main
     from evobiped.experiments.g3 import g3_reproduce
 
@@ -209,7 +215,8 @@ def test_cli_g3_reproduce_hands_the_folder_step_and_t_run_to_the_reproduction(tm
 def test_reproduce_ranges_are_contiguous_runs_of_one_gait():
     from evobiped.experiments.g3.g3_reproduce import ranges
 
-    assert ranges([0.1, 0.2, 0.3, 0.4], ["walk", "walk", "trot", "walk"]) == [["walk", 0.1, 0.2], ["trot", 0.3, 0.3], ["walk", 0.4, 0.4]]
+    assert ranges([0.1, 0.2, 0.3, 0.4], ["walk", "walk", "trot", "walk"]) == [["walk", 0.1, 0.2], ["trot", 0.3, 0.3],
+                                                                              ["walk", 0.4, 0.4]]
 
 
 @pytest.mark.parametrize(

@@ -76,7 +76,8 @@ def _result(fitness, fell, unstable, end_time):
     """An EpisodeResult of walkers that went ``fitness`` m along +x, with the term ``distance`` beside it."""
     n = len(fitness)
     end = np.stack([fitness, np.zeros(n)], 1)
-    return EpisodeResult(fitness=fitness, fell=fell, unstable=unstable, end_time=end_time, start_position=np.zeros((n, 2)),
+    return EpisodeResult(fitness=fitness, fell=fell, unstable=unstable, end_time=end_time,
+                         start_position=np.zeros((n, 2)),
                          end_position=end, start_facing=np.tile([1.0, 0.0], (n, 1)), terms={"distance": fitness.copy()})
 
 
@@ -97,9 +98,11 @@ def test_survivors_keep_their_outcome():
     carried = ind.to_dict()
     assert carried["end_time"] == [50.0, 40.0, 30.0, None, None, None] and carried["fell"] == [False] * 3 + [None] * 3
     assert carried["previous"] == [2, 4, 0, None, None, None] and carried["parents"] == [None, None, None, 2, 4, 0]
-    assert ind.terms_of(1) == {"distance": 4.0} and ind.walk_of(0) == {"distance": 5.0, "heading_deg": 0.0, "displacement": [5.0, 0.0]}
+    assert ind.terms_of(1) == {"distance": 4.0} and ind.walk_of(0) == {"distance": 5.0, "heading_deg": 0.0,
+                                                                       "displacement": [5.0, 0.0]}
     _, unknown = ga.ask()
-    r = _result(np.array([6.0, 1.0, 2.0]), np.array([False, True, True]), np.array([False, False, True]), np.array([60.0, 1.5, 2.5]))
+    r = _result(np.array([6.0, 1.0, 2.0]), np.array([False, True, True]), np.array([False, False, True]),
+                np.array([60.0, 1.5, 2.5]))
     ga.tell(r)
     ind.told(unknown, r)
     assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
@@ -158,8 +161,10 @@ def test_table_iii_numbers_are_config_values(tmp_path):
     from evobiped.run import Run, RunConfig
     from evobiped.evaluation import make_evaluator
 
-    genes = {"weights": {"init_mean": 2.0, "init_sigma": 0.0}, "time_constants": {"mutation_sigma": 0.0, "low": 1.0, "high": 3.0}}
-    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}), optimizer_options={"ga": GAOptions(population=10)}, generations=3, backend="serial")
+    genes = {"weights": {"init_mean": 2.0, "init_sigma": 0.0},
+             "time_constants": {"mutation_sigma": 0.0, "low": 1.0, "high": 3.0}}
+    cfg = RunConfig(episode=EpisodeConfig(seconds=0.2, controller_options={"genes": genes}),
+                    optimizer_options={"ga": GAOptions(population=10)}, generations=3, backend="serial")
     run = Run.create(tmp_path / "r", cfg)
     layout = cfg.episode.build().controller.layout
     s = layout.slices()
@@ -174,7 +179,8 @@ def test_table_iii_numbers_are_config_values(tmp_path):
 
 @pytest.mark.parametrize(
     "genes, words",
-    [({"wieghts": {"init_sigma": 1}}, "no gene block 'wieghts'"), ({"weights": {"sigma": 1}}, "expected a table of"), ({"biases": {"low": 5, "high": 1}}, "bad size or bounds")],
+    [({"wieghts": {"init_sigma": 1}}, "no gene block 'wieghts'"), ({"weights": {"sigma": 1}}, "expected a table of"),
+     ({"biases": {"low": 5, "high": 1}}, "bad size or bounds")],
 )
 def test_bad_gene_overrides(genes, words):
     from evobiped.episode import EpisodeConfig
@@ -185,8 +191,9 @@ def test_bad_gene_overrides(genes, words):
 
 
 def test_children_carry_about_one_mutation_each_at_the_block_sigma():
-    """Mutation at the per-locus rate 1 / G: over 2,000 children the number of changed genes is Binomial(G, 1/G) (mean 1,
-    about (1 - 1/G)^G = 37 % unchanged), and a changed gene moves by the Gaussian of its block's sigma (Table III)."""
+    """Mutation at the per-locus rate 1 / G: over 2,000 children the number of changed genes is Binomial(G, 1/G) (mean
+    1, about (1 - 1/G)^G = 37 % unchanged), and a changed gene moves by the Gaussian of its block's sigma (Table
+    III)."""
     ga = GA(LAYOUT, GAOptions(population=4000), seed=11)
     parents = ga.population.copy()
     fitness = np.arange(4000, dtype=float)

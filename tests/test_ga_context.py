@@ -12,11 +12,13 @@ from .conftest import cli
 CHANGING = [
     ({"normalise": {"running": True}, "episode": {"controller": "linear", "controller_options": {"frame": "stance"}}},
      "normalise.running"),
-    ({"curriculum": {"phases": [{"distance": 1.0}, {"distance": 2.0}]}, "episode": {"task_options": {"fitness": "weighted"}}},
+    ({"curriculum": {"phases": [{"distance": 1.0}, {"distance": 2.0}]},
+      "episode": {"task_options": {"fitness": "weighted"}}},
      "curriculum"),
     ({"episode": {"perturbations": {"pose_noise": 0.01}}}, "episode.perturbations"),
     ({"episode": {"perturbations": {"pushes": 1}}}, "episode.perturbations"),
-    ({"episode": {"perturbations": {"presentations": 2, "target_offset": {"start": 0.0, "end": 0.02, "generations": 5}}}},
+    ({"episode": {"perturbations": {"presentations": 2,
+                                    "target_offset": {"start": 0.0, "end": 0.02, "generations": 5}}}},
      "episode.perturbations"),
     ({"episode": {"task": "steer", "task_options": {
         "random_sources": 2, "source_distance": [5.0, 15.0], "source_bearing": [-60.0, 60.0]}}}, "random sources"),
@@ -56,5 +58,6 @@ def test_a_bad_reevaluate_survivors_is_one_line(tmp_path, capsys):
     (tmp_path / "c.toml").write_text("[ga]\nreevaluate_survivors = 'yes'\n")
     code = cli("evolve", "--config", tmp_path / "c.toml", "--out", tmp_path / "r", "--generations", 1)
     err = capsys.readouterr().err
-    assert code == 2 and len(err.strip().splitlines()) == 1 and "ga.reevaluate_survivors: must be true or false" in err, err
+    assert code == 2 and len(
+        err.strip().splitlines()) == 1 and "ga.reevaluate_survivors: must be true or false" in err, err
     assert not (tmp_path / "r").exists()

@@ -36,7 +36,7 @@ def test_contacts_are_mujocos_contact_list_and_slip_the_contact_points_velocity(
     st = ep.start(g[None], seconds=6.0)
     m = st.sims.model
     floor, feet = m.geom("floor").id, [m.geom("left_foot").id, m.geom("right_foot").id]
-    changes, seen = 0, set()
+    seen = set()
     for _ in range(300):
         ep.advance(st, ticks=1)
         s, d = ep.body.feet(st.sims), st.sims.batch.get_data(0)
@@ -181,7 +181,8 @@ def test_the_tail_of_the_slip_and_the_stride_against_hand_calculations():
     assert m["slide_per_m"] == pytest.approx(stance_slips.sum() * dt / 2.0)  # slid metres per metre forward
     steps = m["steps_per_s"] * 4.0
     fr = 0.5 ** 2 / 9.81
-    assert m["step_leg"] == pytest.approx(2.0 / steps) and m["step_similar"] == pytest.approx((2.0 / steps) / (1.15 * fr ** 0.3))
+    assert m["step_leg"] == pytest.approx(2.0 / steps) and m["step_similar"] == pytest.approx((2.0 / steps) / (
+        1.15 * fr ** 0.3))
     torque = np.tile([1.0, -2.0, 0.0, 3.0, 0.0, 0.0], (T, 1))
     m = measure_one({**sample, "torque": torque}, dt, forward=2.0, mass=1.0, leg_length=1.0, feet=("left", "right"))
     assert m["torque_cost"] == pytest.approx(14.0)  # 1 + 4 + 9 N^2 m^2 at every sample, per kg
@@ -222,7 +223,8 @@ def test_gait_terms_refuse_a_body_without_feet_and_bad_weights(monkeypatch):
         EpisodeConfig(task_options={"fitness": "weighted", "weights": {"slide_per_m": -1.0}})
     with pytest.raises(ConfigError, match="gait_sampling"):
         EpisodeConfig(task_options={"gait_terms": True, "gait_sampling": "every_tick"})
-    EpisodeConfig(task_options={"fitness": "weighted", "weights": {"slide_per_m": -1.0}, "gait_sampling": "physics_step"})
+    EpisodeConfig(task_options={"fitness": "weighted", "weights": {"slide_per_m": -1.0},
+                                "gait_sampling": "physics_step"})
     g, cfg, _ = load_genome(WALKERS / "ctrnn_es_seed5.json")
     for bad in (float("inf"), 0.0, -1.0):
         with pytest.raises(UserError, match="--seconds"):

@@ -89,8 +89,8 @@ def test_a_run_that_may_stop_early_says_its_time_left_is_a_bound(tmp_path):
     import sys
 
     def lines(*extra):
-        out = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--preset", "walker-ctrnn-walk", "--generations", "2",
-                              "--population", "4", "--seconds", "0.2", "--workers", "1", *extra],
+        out = subprocess.run([sys.executable, "-m", "evobiped", "evolve", "--preset", "walker-ctrnn-walk",
+                              "--generations", "2", "--population", "4", "--seconds", "0.2", "--workers", "1", *extra],
                              capture_output=True, text=True, timeout=300)
         assert out.returncode == 0, out.stderr
         return (out.stdout + out.stderr).splitlines()

@@ -30,7 +30,8 @@ def test_command_start_adds_the_command_senses_at_zero_weight_and_keeps_every_ot
     g, cfg, meta = load_genome(out)
     old_g, old, _ = load_genome(WALK)
     assert meta["source"] == str(WALK)
-    assert cfg.controller_options.inputs == read_toml(preset_path("walker-command-tune"))["episode"]["controller_options"]["inputs"]
+    assert cfg.controller_options.inputs == read_toml(preset_path("walker-command-tune"))["episode"][
+        "controller_options"]["inputs"]
     c, c_old = cfg.build().controller, old.build().controller
     columns, old_columns = _columns(cfg), _columns(old)
     assert set(columns) - set(old_columns) == {"command_speed", "command_turning", "command_stop"}
@@ -49,10 +50,13 @@ def test_command_start_adds_the_command_senses_at_zero_weight_and_keeps_every_ot
     (["ranges", "ctrnn_es_robust_seed0.json", "--block", "weights", "a", "b"], "low and high must be numbers"),
     (["ranges", "ctrnn_es_robust_seed0.json", "--block", "nope", "-1", "1"], "no gene block 'nope'"),
     (["ranges", "ctrnn_es_robust_seed0.json", "--block", "weights", "2", "-2"], "is empty"),
-    (["hearing-start", "--walker", "ctrnn_walk_seed1.json", "--reference-distance", "0"], "--reference-distance: must be > 0"),
+    (["hearing-start", "--walker", "ctrnn_walk_seed1.json", "--reference-distance", "0"],
+     "--reference-distance: must be > 0"),
     (["hearing-start", "--walker", "steer_ctrnn_es_seed0.json"], "does not read heading_error"),
-    (["hearing-start", "--walker", "ctrnn_walk_preset_seed1.json"], "integrated by 'exponential', --preset steer-es's by 'euler' (take --preset steer-walk)"),
-    (["hearing-start", "--walker", "ctrnn_walk_preset_seed1.json", "--preset", "walker-ctrnn"], "must be a steering preset of a network that hears"),
+    (["hearing-start", "--walker", "ctrnn_walk_preset_seed1.json"], "integrated by 'exponential', --preset steer-es's "
+                                                                    "by 'euler' (take --preset steer-walk)"),
+    (["hearing-start", "--walker", "ctrnn_walk_preset_seed1.json", "--preset", "walker-ctrnn"],
+     "must be a steering preset of a network that hears"),
     (["rewire", "--walker", "ctrnn_es_seed5.json", "--drop", "loudness"], "does not read loudness"),
     (["rewire", "--walker", "ctrnn_es_seed5.json", "--add", "joint_angles"], "already reads joint_angles"),
     (["command-start", "--walker", "steer_simbicon_seed0.json"], "a simbicon genome cannot become a ctrnn genome"),

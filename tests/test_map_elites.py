@@ -24,7 +24,8 @@ GAIT = {"fitness": "weighted", "weights": {"time_up": 1.0}, "gait_measures": Tru
 #: a short balance-controller repertoire run
 TINY = {"optimizer": "map-elites", "generations": 4, "seed": 2, "backend": "serial",
         "episode": {"body": "reil", "controller": "simbicon", "seconds": 1.0, "task_options": GAIT},
-        "map_elites": {"resolution": [5, 4], "low": [0.0, -40.0], "high": [1.0, 40.0], "batch": 6, "sigma": 0.05, "line_sigma": 0.3}}
+        "map_elites": {"resolution": [5, 4], "low": [0.0, -40.0], "high": [1.0, 40.0], "batch": 6, "sigma": 0.05,
+                       "line_sigma": 0.3}}
 
 
 class Track:
@@ -178,8 +179,9 @@ def test_an_archive_is_seeded_from_a_genome_file(tmp_path):
 ])
 def test_bad_map_elites_settings_one_line_exit_2_nothing_written(tmp_path, capsys, setting, words):
     cfg = tmp_path / "me.toml"
-    cfg.write_text("optimizer = 'map-elites'\n[episode]\ncontroller = 'simbicon'\nseconds = 1.0\n[episode.task_options]\n"
-                   "fitness = 'weighted'\ngait_measures = true\n[map_elites]\n" + setting + "\n")
+    cfg.write_text("optimizer = 'map-elites'\n[episode]\ncontroller = 'simbicon'\nseconds = "
+                   "1.0\n[episode.task_options]\nfitness = 'weighted'\ngait_measures = true\n[map_elites]\n" + setting
+                       + "\n")
     out = tmp_path / "run"
     assert cli("evolve", "--config", cfg, "--out", out, "--quiet") == 2
     err = capsys.readouterr().err.strip()
@@ -200,9 +202,11 @@ def test_without_pyribs_one_line(monkeypatch):
     ("genome", [0.5] * 5, "map-elites.genome must be a list of rows of 13 finite numbers"),  # a row of another length
     ("genome", {"dtype": "<f8", "b64": "AAAAAAAA+H8=", "shape": [1, 1]}, "map-elites.genome must hold finite numbers"),
     ("fitness", "x", "map-elites.fitness must be a list of finite numbers or nulls"),
-    ("genome", {"dtype": "<f8", "b64": "AAAA", "shape": [1, 13]}, "map-elites.genome: 3 bytes do not hold 1 x 13 float64 numbers"),
+    ("genome", {"dtype": "<f8", "b64": "AAAA", "shape": [1, 13]}, "map-elites.genome: 3 bytes do not hold 1 x 13 "
+                                                                  "float64 numbers"),
     ("genome", {"dtype": "<f8", "b64": "not base64!", "shape": [0, 13]}, "map-elites.genome: b64 is not base64"),
-    ("genome", {"dtype": "<f4", "b64": "", "shape": [0, 13]}, 'map-elites.genome must be a list of numbers or {dtype: "<f8", shape, b64}'),
+    ("genome", {"dtype": "<f4", "b64": "", "shape": [0, 13]}, 'map-elites.genome must be a list of numbers or {dtype: '
+                                                              '"<f8", shape, b64}'),
     ("index", 999, "map-elites.index must be different cells 0 to 19"),
     ("measures", [[5.0, 0.0]], "map-elites.measures do not lie in the cells map-elites.index names"),
 ])
@@ -217,8 +221,10 @@ def test_a_damaged_archive_in_the_checkpoint_is_refused_in_one_line(tmp_path, ca
     table = ck["optimizer"]
     rows = unpacked_floats(table["genome"], "genome")
     if field == "measures":  # one elite whose measures lie in another cell
-        table["index"], table["genome"], table["objective"] = table["index"][:1], packed_floats(rows[:1]), table["objective"][:1]
-        table["fell"], table["end_time"], table["task_fitness"] = table["fell"][:1], table["end_time"][:1], table["task_fitness"][:1]
+        table["index"], table["genome"], table["objective"] = table["index"][:1], packed_floats(rows[:1]), table[
+            "objective"][:1]
+        table["fell"], table["end_time"], table["task_fitness"] = table["fell"][:1], table["end_time"][:1], table[
+            "task_fitness"][:1]
         table["index"][0] = 0
     if field == "genome":
         table[field] = value if isinstance(value, dict) else [value] + rows[1:].tolist()
@@ -231,7 +237,8 @@ def test_a_damaged_archive_in_the_checkpoint_is_refused_in_one_line(tmp_path, ca
 
 
 def test_parents_up_draws_only_elites_that_stayed_up():
-    """parents = up: with a vanishing step each new genome is a copy of an elite that did not fall; all: of any elite."""
+    """parents = up: with a vanishing step each new genome is a copy of an elite that did not fall; all: of any
+    elite."""
     layout = EpisodeConfig(body="reil", controller="simbicon").layout()
     drawn = {}
     for parents in ("up", "all"):
@@ -258,7 +265,8 @@ def _result(fitness, fell, speed):
 @pytest.mark.parametrize("backend", ["thread", "ray"])
 def test_the_archive_is_the_same_on_threads_and_on_ray_actors(tmp_path, backend):
     """The same short repertoire run evaluated serially, on two threads and on two Ray actors: archive.json and the
-    checkpoint's elites are identical (the batch's rows are evaluated wherever, and their results come back in order)."""
+    checkpoint's elites are identical (the batch's rows are evaluated wherever, and their results come back in
+    order)."""
     if backend == "ray":
         pytest.importorskip("ray")
     config = RunConfig.from_dict({**TINY, "generations": 2})

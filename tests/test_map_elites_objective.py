@@ -24,11 +24,13 @@ class Result:
         n = len(fitness)
         self.fitness, self.fell, self.end_time = np.array(fitness, float), np.zeros(n), np.full(n, 20.0)
         m = np.array(measures, float)
-        self.terms = {"speed": m[:, 0], "turning": m[:, 1], "distance": np.zeros(n) if distance is None else np.array(distance)}
+        self.terms = {"speed": m[:, 0], "turning": m[:, 1], "distance": np.zeros(n) if distance is None
+                      else np.array(distance)}
 
 
 def archive(**options) -> MapElites:
-    return MapElites(EpisodeConfig(body="reil", controller="simbicon").layout(), MapElitesOptions(**GRID, **options), seed=0)
+    return MapElites(EpisodeConfig(body="reil", controller="simbicon").layout(), MapElitesOptions(**GRID, **options),
+                     seed=0)
 
 
 def test_the_offset_qd_score_grows_when_a_cell_of_negative_objective_is_filled():
@@ -38,7 +40,8 @@ def test_the_offset_qd_score_grows_when_a_cell_of_negative_objective_is_filled()
     opt.tell(Result([-5.0, -3.0, -4.0], [[0.1, 0.0], [0.6, 0.0], [0.12, 0.0]]))
     assert opt.progress[-1][2] == pytest.approx(6.0 + 7.0)  # speeds 0.1 and 0.12 share a cell: -4 keeps it
     opt.next_generation()
-    opt.tell(Result([-8.0, -9.0, -9.5], [[0.9, 20.0], [0.1, 1.0], [0.6, -1.0]]))  # a new cell; two worse than their cells' elites
+    # a new cell; two worse than their cells' elites
+    opt.tell(Result([-8.0, -9.0, -9.5], [[0.9, 20.0], [0.1, 1.0], [0.6, -1.0]]))
     assert opt.progress[-1][2] == pytest.approx(6.0 + 7.0 + 2.0)
     assert opt.progress[-1][2] == pytest.approx(float(opt.archive.stats.qd_score))
     plain = archive()
@@ -47,9 +50,9 @@ def test_the_offset_qd_score_grows_when_a_cell_of_negative_objective_is_filled()
 
 
 def test_objective_terms_keep_the_better_walker_where_the_fitness_saturates(tmp_path):
-    """Two walkers of one cell that both stay up (time up 20 s, the fitness saturated): the fitness alone keeps the first;
-    with objective_terms = {distance = 0.05} the one that went 3 m replaces the one that went 1 m.  archive.json's objective
-    is the task's fitness (what a replay compares), the archive's objective the sum."""
+    """Two walkers of one cell that both stay up (time up 20 s, the fitness saturated): the fitness alone keeps the
+    first; with objective_terms = {distance = 0.05} the one that went 3 m replaces the one that went 1 m.
+    archive.json's objective is the task's fitness (what a replay compares), the archive's objective the sum."""
     for terms, kept in (({}, 1.0), ({"distance": 0.05}, 3.0)):
         opt = archive(objective_terms=terms)
         opt.tell(Result([20.0, 20.0, 20.0], [[0.1, 0.0], [0.6, 0.0], [0.9, 0.0]], distance=[1.0, 1.0, 1.0]))

@@ -18,8 +18,8 @@ from .sine_controller import Sine
 def test_a_registered_sine_controller_evolves_on_every_body_and_replays(body, tmp_path, monkeypatch):
     monkeypatch.setitem(CONTROLLERS, Sine.name, Sine)  # the one registration line
     out = tmp_path / "run"
-    assert cli("evolve", "--body", body, "--controller", "sine", "--generations", 2, "--population", 4, "--episode-seconds", 0.4,
-               "--backend", "serial", "--seed", 1, "--out", out, "--quiet") == 0
+    assert cli("evolve", "--body", body, "--controller", "sine", "--generations", 2, "--population", 4,
+               "--episode-seconds", 0.4, "--backend", "serial", "--seed", 1, "--out", out, "--quiet") == 0
     with open(out / "history.csv") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["generation"]) for r in rows] == [0, 1]

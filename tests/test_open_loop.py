@@ -1,4 +1,5 @@
-"""The open-loop controller (scripts/open_loop_probe.py's gaits): its two forms on the bodies, and a probe's genome replays."""
+"""The open-loop controller (scripts/open_loop_probe.py's gaits): its two forms on the bodies, and a probe's genome
+replays."""
 
 import runpy
 import sys
@@ -29,15 +30,16 @@ def test_sine_form_targets_and_episode_on_the_reil_body():
     ep = EpisodeConfig(controller="open-loop", seconds=1.0).build()
     ctrl, lay = ep.controller, ep.controller.layout
     assert lay.size == 9 and ctrl.output_kind == "angle" and ctrl.input_names == ()
-    g = sine_genome(lay, frequency=1.0, hip_amplitude=0.4, hip_offset=0.1, knee_amplitude=0.5, knee_offset=-0.3, knee_phase=0.0,
-                    roll_amplitude=0.0, roll_offset=0.05)
+    g = sine_genome(lay, frequency=1.0, hip_amplitude=0.4, hip_offset=0.1, knee_amplitude=0.5, knee_offset=-0.3,
+                    knee_phase=0.0, roll_amplitude=0.0, roll_offset=0.05)
     p = ctrl.decode(g)
     # a quarter period in: the left hip at offset + amplitude, the right (half a period behind) at offset - amplitude;
     # left knee min(0, -0.3 + 0.5) = 0, right knee -0.8; actuators: left hip pitch, hip roll, knee, then the right's
     out = ctrl.neuron_outputs(p, np.array([0.25]))[0]
     assert out == pytest.approx([0.5, 0.05, 0.0, -0.3, 0.05, -0.8])
     # neutral targets (no rhythm, straight legs) stand: no fall, the pelvis stays put
-    still = sine_genome(lay, hip_amplitude=0.0, hip_offset=0.0, knee_amplitude=0.0, knee_offset=0.0, roll_amplitude=0.0, roll_offset=0.0)
+    still = sine_genome(lay, hip_amplitude=0.0, hip_offset=0.0, knee_amplitude=0.0, knee_offset=0.0, roll_amplitude=0.0,
+                        roll_offset=0.0)
     r = ep.run(np.stack([still, g]))
     assert not r.fell[0] and r.end_time[0] == 1.0 and abs(r.fitness[0]) < 0.02
     assert np.isfinite(r.fitness).all() and abs(r.fitness[1]) > 0.05  # the rhythm moves the walker
@@ -54,8 +56,8 @@ def test_fourier_form_drives_any_body_and_the_sine_form_is_refused_on_the_taga_b
 
 def test_a_probe_genome_saved_by_the_script_replays_to_its_fitness(tmp_path, monkeypatch, capsys):
     out = tmp_path / "best.json"
-    monkeypatch.setattr(sys, "argv", ["open_loop_probe.py", "--search", "cma", "--family", "sine", "--rounds", "3", "--population", "4",
-                                      "--seconds", "1", "--seed", "2", "--save", str(out)])
+    monkeypatch.setattr(sys, "argv", ["open_loop_probe.py", "--search", "cma", "--family", "sine", "--rounds", "3",
+                                      "--population", "4", "--seconds", "1", "--seed", "2", "--save", str(out)])
     runpy.run_path(str(PROBE), run_name="__main__")
     genome, cfg, meta = load_genome(out)
     assert cfg.controller == "open-loop" and given(cfg.controller_options) == {"form": "sine"} and len(genome) == 9

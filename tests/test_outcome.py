@@ -40,7 +40,8 @@ def test_headings_compare_across_the_backwards_seam_and_a_looser_tolerance_passe
 def test_a_partial_stored_outcome_compares_what_it_has():
     """An older file: fell and end time of the genome only; a run's best: the first presentation's walk."""
     assert compare({"fell": False, "end_time": 50.0}, replayed(row(), row(distance=1.0)))[1] == []
-    assert compare({"fell": False, "end_time": 50.0, "rows": [{"distance": 20.0}]}, replayed(row(distance=30.0), row()))[1] == [
+    assert compare({"fell": False, "end_time": 50.0, "rows": [{"distance": 20.0}]},
+                   replayed(row(distance=30.0), row()))[1] == [
         "presentation 1: distance 30.00 m, stored 20.00 m (allowed +-1.00 m)"]
     assert compare({"fell": True, "end_time": 3.0}, replayed(row()))[1] == ["stayed up, stored: fell at 3.00 s"]
 

@@ -16,7 +16,8 @@ from evobiped.core.schedule import Schedule
 from .conftest import WALKERS
 
 WALKER = str(WALKERS / "simbicon_seed1.json")
-PERTURBED = dict(presentations=3, pushes=2, push_force=10.0, target_noise=0.01, target_offset=0.02, pose_noise=0.02, friction=[0.8, 1.2])
+PERTURBED = dict(presentations=3, pushes=2, push_force=10.0, target_noise=0.01, target_offset=0.02, pose_noise=0.02,
+                 friction=[0.8, 1.2])
 
 
 def test_trials_depend_on_seed_and_generation_only():
@@ -65,7 +66,9 @@ def test_push_changes_momentum_by_the_impulse(tmp_path):
     centre-of-mass velocity by F T / M against the same motion unpushed (within 1 %: the joints'
     armature, 0.01 kg m^2 on every degree of freedom, the free root's too, adds a little inertia)."""
     xml = model_path("reil_biped").read_text()
-    xml = xml.replace('<option timestep="0.002"', '<option gravity="0 0 0" timestep="0.002"').replace('<body name="pelvis" pos="0 0 1.08">', '<body name="pelvis" pos="0 0 3.0">')
+    xml = xml.replace('<option timestep="0.002"',
+                      '<option gravity="0 0 0" timestep="0.002"').replace('<body name="pelvis" pos="0 0 1.08">',
+                                                                          '<body name="pelvis" pos="0 0 3.0">')
     path = tmp_path / "float.xml"
     path.write_text(xml)
     ep = EpisodeConfig(controller="ctrnn", seconds=0.6, body_options={"model_file": str(path)}).build()
@@ -106,7 +109,8 @@ def test_slope_and_friction_change_the_model_of_their_batch_only():
 RAMP = {"start": 2.0, "end": 10.0, "generations": 8, "after": 4}
 
 
-@pytest.mark.parametrize("generation, value", [(0, 2.0), (4, 2.0), (5, 3.0), (8, 6.0), (11, 9.0), (12, 10.0), (500, 10.0)])
+@pytest.mark.parametrize("generation, value", [(0, 2.0), (4, 2.0), (5, 3.0), (8, 6.0), (11, 9.0), (12, 10.0),
+                                               (500, 10.0)])
 def test_a_schedule_holds_ramps_linearly_then_holds(generation, value):
     """start until `after`, then (end - start) / generations more per generation, then end: 2 + (g - 4) N."""
     assert Schedule.of(RAMP).at(generation) == pytest.approx(value, abs=1e-12)
@@ -118,23 +122,27 @@ def test_a_schedule_holds_ramps_linearly_then_holds(generation, value):
 def test_scheduled_strengths_reach_each_generations_trials():
     """The pushes of generation g have the ramp's force; the quantile and the aggregate switch as declared;
     the draws still depend on (seed, generation) alone."""
-    cfg = PerturbationOptions.from_dict(dict(presentations=3, pushes=2, push_force=RAMP, slope={"start": 0.0, "end": 0.05, "generations": 10},
+    cfg = PerturbationOptions.from_dict(dict(presentations=3, pushes=2, push_force=RAMP,
+                                             slope={"start": 0.0, "end": 0.05, "generations": 10},
                                              quantile={"start": 0.5, "end": 0.1, "generations": 4}, aggregate="mean",
                                              aggregate_later="quantile", aggregate_from=3))
     for g in (0, 5, 8, 20):
         t = cfg.draw((3, g), seconds=20.0, n_actuators=6)
         assert np.allclose(np.linalg.norm(t.push_force, axis=2), 2.0 + min(max(g - 4, 0), 8))
         assert 0 <= t.slope <= 0.005 * min(g, 10) and (t.slope > 0) == (g > 0)
-        assert t.aggregate == ("quantile" if g >= 3 else "mean") and t.quantile == pytest.approx(max(0.5 - 0.1 * g, 0.1))
+        assert t.aggregate == ("quantile" if g >= 3
+                               else "mean") and t.quantile == pytest.approx(max(0.5 - 0.1 * g, 0.1))
         again = cfg.draw((3, g), seconds=20.0, n_actuators=6)
-        assert np.array_equal(t.push_start, again.push_start) and (t.slope, t.slope_direction) == (again.slope, again.slope_direction)
+        assert np.array_equal(t.push_start, again.push_start) and (t.slope,
+                                                                   t.slope_direction) == (
+                                                                       again.slope, again.slope_direction)
     f = np.array([[0.0, 1.0, 2.0, 3.0, 4.0]])
     assert Trials.nominal(5, 6, aggregate="quantile", quantile=0.1).combine(f)[0] == pytest.approx(0.4)
 
 
 def test_constant_options_draw_as_before_schedules_existed():
-    """A run without schedules, slopes or gene noise draws exactly what the code before them drew (its history is unchanged):
-    the same generator, the same draws in the same order."""
+    """A run without schedules, slopes or gene noise draws exactly what the code before them drew (its history is
+    unchanged): the same generator, the same draws in the same order."""
     cfg = PerturbationOptions(**PERTURBED)
     t = cfg.draw((5, 2), seconds=20.0, n_actuators=6)
     rng = np.random.default_rng([5, 2, 0x7E57])
@@ -142,13 +150,15 @@ def test_constant_options_draw_as_before_schedules_existed():
     offset, seed = rng.normal(0.0, 0.02, (3, 6)), int(rng.integers(2**63))
     pose, friction = rng.normal(0.0, 0.02, (3, 6)), float(rng.uniform(0.8, 1.2))
     assert np.array_equal(t.push_force[..., 0], 10.0 * np.cos(angle)) and np.array_equal(t.push_start, start)
-    assert np.array_equal(t.target_offset, offset) and t.noise_seed == seed and np.array_equal(t.pose_offset, pose) and t.friction == friction
+    assert np.array_equal(t.target_offset,
+                          offset) and t.noise_seed == seed and np.array_equal(t.pose_offset,
+                                                                              pose) and t.friction == friction
     assert t.slope == 0.0 and t.gene_noise is None
 
 
 def test_gene_noise_is_the_jittered_genome_run_nominally_and_shared_by_the_generation():
-    """Presentation r of any genome runs that genome + noise_r x (high - low), clipped: its fitness is that of the jittered
-    genome alone, nominal; every genome of the generation meets the same noise rows."""
+    """Presentation r of any genome runs that genome + noise_r x (high - low), clipped: its fitness is that of the
+    jittered genome alone, nominal; every genome of the generation meets the same noise rows."""
     g, cfg, _ = load_genome(WALKER)
     ep = dataclasses.replace(cfg, perturbations={"presentations": 2, "gene_noise": 0.05}).build()
     trials = ep.trials_for((0, 1))
@@ -160,13 +170,16 @@ def test_gene_noise_is_the_jittered_genome_run_nominally_and_shared_by_the_gener
     for i in range(2):
         jittered = np.clip(g + trials.gene_noise[i] * (lay.high - lay.low), lay.low, lay.high)
         assert r.rows.fitness[2 + i] == nominal.run(jittered, seconds=3.0).fitness[0]
-        assert r.rows.fitness[i] == nominal.run(lay.jitter(other[None], trials.gene_noise[i:i + 1])[0], seconds=3.0).fitness[0]
+        assert r.rows.fitness[i] == nominal.run(lay.jitter(other[None], trials.gene_noise[i:i + 1])[0],
+                                                seconds=3.0).fitness[0]
     assert not np.array_equal(r.rows.fitness[2:], np.repeat(nominal.run(g, seconds=3.0).fitness, 2))
 
 
-@pytest.mark.parametrize("direction, unit", [(0.0, (1, 0)), (np.pi, (-1, 0)), (np.pi / 2, (0, 1)), (-np.pi / 2, (0, -1))])
+@pytest.mark.parametrize("direction, unit", [(0.0, (1, 0)), (np.pi, (-1, 0)), (np.pi / 2, (0, 1)),
+                                             (-np.pi / 2, (0, -1))])
 def test_a_slope_rises_towards_its_direction(direction, unit):
-    """Gravity, seen in the floor's frame, pulls down the slope: against the direction the floor rises, by g sin(atan s)."""
+    """Gravity, seen in the floor's frame, pulls down the slope: against the direction the floor rises, by g sin(atan
+    s)."""
     g, cfg, _ = load_genome(WALKER)
     ep = cfg.build()
     gx, gy, gz = ep.sims(1, slope=0.05, slope_direction=direction).model.opt.gravity
@@ -182,8 +195,10 @@ def test_a_slope_rises_towards_its_direction(direction, unit):
     ({"friction": [2.0, 1.0]}, "friction: must be"),
     ({"aggregate": "median"}, "aggregate: must be one of"),
     ({"target_noise": float("nan")}, "target_noise: must be finite"),
-    ({"push_force": {"start": 2.0, "end": 10.0, "generations": -5}}, "push_force.generations: the ramp's end (generation -5) precedes its start"),
-    ({"slope": {"start": 0.0, "end": 0.03, "generations": 5, "after": -1}}, "slope.after: the ramp cannot begin before generation 0"),
+    ({"push_force": {"start": 2.0, "end": 10.0, "generations": -5}}, "push_force.generations: the ramp's end "
+                                                                     "(generation -5) precedes its start"),
+    ({"slope": {"start": 0.0, "end": 0.03, "generations": 5, "after": -1}},
+     "slope.after: the ramp cannot begin before generation 0"),
     ({"target_offset": {"start": 0.0, "end": -0.02, "generations": 5}}, "target_offset.end: must be >= 0 rad"),
     ({"friction": {"start": [1.0, 1.0], "end": [0.0, 1.5], "generations": 5}}, "friction.end: must be"),
     ({"gene_noise": {"start": -0.01, "end": 0.01, "generations": 5}}, "gene_noise.start: must be >= 0"),
@@ -192,7 +207,8 @@ def test_a_slope_rises_towards_its_direction(direction, unit):
     ({"quantile": 0}, "quantile: must be > 0"),
     ({"quantile": {"start": 0.5, "end": 1.5, "generations": 3}}, "quantile.end: must be < 1"),
     ({"pose_noise": {"start": 0.01, "end": 0.02}}, "pose_noise: a schedule needs start, end and generations"),
-    ({"pose_noise": {"start": 0.01, "end": 0.02, "generations": 3, "until": 9}}, "pose_noise: a schedule takes start, end, generations, after"),
+    ({"pose_noise": {"start": 0.01, "end": 0.02, "generations": 3, "until": 9}},
+     "pose_noise: a schedule takes start, end, generations, after"),
     ({"aggregate_later": "best"}, "aggregate_later: must be one of"),
 ])
 def test_bad_perturbations(bad, words):
@@ -202,7 +218,8 @@ def test_bad_perturbations(bad, words):
 
 
 @pytest.mark.parametrize("line", ["push_force = -3", "push_force = {start = 5.0, end = 1.0, generations = -2}",
-                                  "quantile = 1.5", "gene_noise = 1.0", "slope = {start = 0.0, end = 0.03, generations = 4, after = -2}"])
+                                  "quantile = 1.5", "gene_noise = 1.0",
+                                  "slope = {start = 0.0, end = 0.03, generations = 4, after = -2}"])
 def test_bad_perturbation_config_file_one_line_nothing_written(tmp_path, capsys, line):
     cfg = tmp_path / "p.toml"
     cfg.write_text(f"[episode.perturbations]\n{line}\n")
@@ -220,11 +237,13 @@ def test_a_scheduled_run_resumes_and_parallelises_identically(tmp_path):
 
     from .test_evolve import fitness_history, whole_and_resumed
 
-    ramp = {"presentations": 2, "pushes": 1, "push_after": 0.2, "push_force": {"start": 0.0, "end": 20.0, "generations": 3},
-            "gene_noise": {"start": 0.0, "end": 0.05, "generations": 2, "after": 1}, "slope": {"start": 0.0, "end": 0.1, "generations": 3},
+    ramp = {"presentations": 2, "pushes": 1, "push_after": 0.2,
+            "push_force": {"start": 0.0, "end": 20.0, "generations": 3},
+            "gene_noise": {"start": 0.0, "end": 0.05, "generations": 2, "after": 1},
+            "slope": {"start": 0.0, "end": 0.1, "generations": 3},
             "aggregate": "mean", "aggregate_later": "worst", "aggregate_from": 2}
-    config = RunConfig(episode=EpisodeConfig(seconds=1.5, perturbations=ramp), optimizer_options={"ga": GAOptions(population=8)}, generations=5, seed=7,
-                       backend="serial")
+    config = RunConfig(episode=EpisodeConfig(seconds=1.5, perturbations=ramp),
+                       optimizer_options={"ga": GAOptions(population=8)}, generations=5, seed=7, backend="serial")
     whole, cut = whole_and_resumed(tmp_path, config)
     assert fitness_history(cut) == fitness_history(whole.dir)
     assert (cut / "best.json").read_text() == (whole.dir / "best.json").read_text()

@@ -58,7 +58,8 @@ def test_an_elite_replays_bit_for_bit_and_the_figures_are_drawn(archive_run, cap
     (("gait", "{run}", "--speed", "0.5", "--correction", "-1"), "--correction: must be a finite number >= 0 s"),
     (("gait", "{run}", "--speed", "0.5", "--ramp-down", "nan"), "--ramp-down: must be a finite number"),
     (("gait", "{run}", "--speed", "0.5", "--overshoot", "1"), "--overshoot: must be a fraction in [0, 1)"),
-    (("adapt", "{run}", "--damage", "weak:left_elbow:0.5"), "the reil body has no joint 'left_elbow' (its joints: left_hip_pitch"),
+    (("adapt", "{run}", "--damage", "weak:left_elbow:0.5"), "the reil body has no joint 'left_elbow' (its joints: "
+                                                            "left_hip_pitch"),
     (("adapt", "{run}", "--damage", "short:middle:0.05"), "has no leg 'middle' (its legs: left, right)"),
     (("adapt", "{run}", "--damage", "weak:left_knee:1.5"), "F must be a fraction 0 to 1"),
 ])
@@ -124,7 +125,8 @@ def test_damage_changes_the_model_as_named():
 
 def test_prior_distance_is_the_chord_of_the_circle():
     assert prior_distance(np.array([0.5]), np.array([0.0]), 50.0)[0] == 25.0
-    assert prior_distance(np.array([0.5]), np.array([360 / 50]), 50.0)[0] == pytest.approx(0.0, abs=1e-12)  # a full circle
+    # a full circle
+    assert prior_distance(np.array([0.5]), np.array([360 / 50]), 50.0)[0] == pytest.approx(0.0, abs=1e-12)
     r = 0.5 / np.radians(360 / 100)  # half a circle: the diameter
     assert prior_distance(np.array([0.5]), np.array([360 / 100]), 50.0)[0] == pytest.approx(2 * r)
 
@@ -145,8 +147,10 @@ def test_the_gp_after_one_trial_and_the_search_on_a_known_damage():
     assert trials[0].elite == 49 and true[trials[-1].elite] > 0 and len(trials) <= 6
     tried = [t.elite for t in trials]
     after, _ = posterior(x, prior / 2, tried, np.array([t.performance for t in trials]) / 2, rho=0.15, noise=1e-3)
-    before, _ = posterior(x, prior / 2, tried[:-1], np.array([t.performance for t in trials[:-1]]) / 2, rho=0.15, noise=1e-3)
-    assert trials[-1].performance / 2 >= 0.9 * after.max() and max(t.performance for t in trials[:-1]) / 2 < 0.9 * before.max()
+    before, _ = posterior(x, prior / 2, tried[:-1], np.array([t.performance for t in trials[:-1]]) / 2, rho=0.15,
+                          noise=1e-3)
+    assert trials[-1].performance / 2 >= 0.9 * after.max() and max(t.performance
+                                                                   for t in trials[:-1]) / 2 < 0.9 * before.max()
     assert len(TrialAndError().run(x, prior, lambda k: (float(prior[k]), False, 50.0, 50.0))) == 1
     # only an acceptable trial (here: performance >= 1.45, gaits 22 to 24) may end the search
     strict = TrialAndError().run(x, prior, lambda k: (float(true[k]), false_if(true[k]), 50.0, 50.0),
@@ -178,9 +182,11 @@ def test_noisy_trials_are_drawn_per_trial_and_seed(capsys):
     ``--kappa`` below 0 and an unknown ``--order``: one line, exit 2."""
     args = (WALKERS.parent / "repertoire", "--damage", "weak:left_knee:0.5", "--trials", "2", "--order", "prior")
     runs = []
-    for extra in (("--pose-noise", "0.05", "--seed", "1"), ("--pose-noise", "0.05", "--seed", "1"), ("--pose-noise", "0.05", "--seed", "2"), ()):
+    for extra in (("--pose-noise", "0.05", "--seed", "1"), ("--pose-noise", "0.05", "--seed", "1"),
+                  ("--pose-noise", "0.05", "--seed", "2"), ()):
         assert cli("adapt", *args, *extra) == 0
-        runs.append([line.split(": ", 1)[1] for line in capsys.readouterr().out.splitlines() if line.strip().startswith("trial ")])
+        runs.append([line.split(": ", 1)[1] for line in capsys.readouterr().out.splitlines()
+                     if line.strip().startswith("trial ")])
     assert runs[0] == runs[1] and runs[0] != runs[2] and runs[3] != runs[0]
     for bad in (("--kappa", "-1"), ("--order", "best")):
         assert cli("adapt", *args, *bad) == 2
@@ -193,8 +199,8 @@ def false_if(performance: float) -> bool:
 
 
 def test_the_knob_switches_to_the_gait_most_like_the_current_one():
-    """Among the walking elites within 5 % of the commanded speed, ``like`` picks the genome nearest the current elite's;
-    without it, the nearest in speed and turning."""
+    """Among the walking elites within 5 % of the commanded speed, ``like`` picks the genome nearest the current
+    elite's; without it, the nearest in speed and turning."""
     from pathlib import Path
 
     from evobiped.episode import EpisodeConfig
@@ -231,5 +237,5 @@ def test_a_shipped_archive_is_never_written_into(tmp_path, monkeypatch, capsys):
     assert "the replay equals it bit for bit" in capsys.readouterr().out
     assert {p.name: p.stat().st_mtime_ns for p in shipped.iterdir()} == before
     made = sorted(str(p.relative_to(tmp_path)) for p in (tmp_path / "runs").rglob("*.*"))
-    assert made == ["runs/repertoire/figures_archive/archive.png", "runs/repertoire/figures_archive/archive_progress.png",
-                    "runs/repertoire/replay_cell_20_29.rrd"]
+    assert made == ["runs/repertoire/figures_archive/archive.png",
+                    "runs/repertoire/figures_archive/archive_progress.png", "runs/repertoire/replay_cell_20_29.rrd"]

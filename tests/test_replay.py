@@ -67,11 +67,13 @@ def test_run_directory_recording_holds_the_evolution_and_figures(run_dir, tmp_pa
     for c in rr.chunk.RrdReader(out).stream():
         if c.entity_path == "/evolution/best" and not c.is_static:
             rb = c.to_record_batch()
-            best.update(zip(rb.column("generation").to_pylist(), (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
+            best.update(zip(rb.column("generation").to_pylist(),
+                            (v[0] for v in rb.column("Scalars:scalars").to_pylist())))
     history = np.loadtxt(run_dir / "history.csv", delimiter=",", skiprows=1)
     assert best == {int(g): b for g, b in history[:, :2]}
     names = sorted(p.name for p in (tmp_path / "figs").iterdir())
-    assert names == ["fitness.png", "footfalls.png", "ground_trajectory.png", "motion_sequence.png", "motor_neurons.png", "stick_figure.png"]
+    assert names == ["fitness.png", "footfalls.png", "ground_trajectory.png", "motion_sequence.png",
+                     "motor_neurons.png", "stick_figure.png"]
 
 
 def test_replay_of_a_genome_file_writes_under_runs_not_beside_it(tmp_path, capsys):
@@ -91,7 +93,8 @@ def test_replay_of_a_genome_file_writes_under_runs_not_beside_it(tmp_path, capsy
     assert (Path.cwd() / "runs" / "walker" / "replay_walker.rrd").is_file()
     assert (Path.cwd() / "runs" / "walker" / "figures_walker" / "ground_trajectory.png").is_file()
     # a shorter replay is not compared with the stored fitness
-    assert main(["replay", str(tmp_path / "repo" / "walker.json"), "--seconds", "0.1", "--out", str(tmp_path / "short.rrd")]) == 0
+    assert main(["replay", str(tmp_path / "repo" / "walker.json"), "--seconds", "0.1", "--out",
+                 str(tmp_path / "short.rrd")]) == 0
     assert "not compared" in capsys.readouterr().out
 
 
@@ -131,8 +134,10 @@ def test_a_replay_in_another_numerical_environment_reports_the_drift_and_checks_
     assert main(["replay", str(tmp_path / "w.json"), "--quiet", "--out", str(tmp_path / "w.rrd")]) == 0
     out = capsys.readouterr().out
     assert "numerical environment differs from the stored one: numpy SIMD SOME_OTHER_KERNELS -> " in out
-    assert "drift -1e-09" in out and "outcome holds within the declared tolerance" in out and "up 50 s (as stored)" in out
-    _walker_file(tmp_path / "far.json", environment={"numpy_simd": ["SOME_OTHER_KERNELS"]}, outcome_change={"distance": 33.0})
+    assert "drift -1e-09" in out and "outcome holds within the declared tolerance" in out
+    assert "up 50 s (as stored)" in out
+    _walker_file(tmp_path / "far.json", environment={"numpy_simd": ["SOME_OTHER_KERNELS"]},
+                 outcome_change={"distance": 33.0})
     assert main(["replay", str(tmp_path / "far.json"), "--quiet", "--out", str(tmp_path / "w.rrd")]) == 1
     assert "outcome DIFFERS: distance 38.63 m, stored 33.00 m (allowed +-1.65 m)" in capsys.readouterr().out
     # in the recorded environment the same 1e-9 is a failure: bit for bit is promised there

@@ -51,7 +51,8 @@ def test_a_lost_ga_run_starts_over_every_patience_generations_and_resumes_bit_fo
     best9 = json.loads((whole.dir / "generations" / "gen_0009.json").read_text())["genome"]
     assert np.isclose(fresh, best9, rtol=0, atol=1e-12).all(axis=1).any()
     ck = json.loads((whole.dir / "checkpoint.json").read_text())
-    assert {k: v for k, v in ck["restarts"].items() if k != "fallen"} == {"attempt": 3, "phase_since": 9, "lost": summary["lost"]}
+    assert {k: v for k, v in ck["restarts"].items() if k != "fallen"} == {"attempt": 3, "phase_since": 9,
+                                                                          "lost": summary["lost"]}
     cut = _evolve(tmp_path / "cut", config, stop_at=6)  # after the second restart
     resumed = Run.resume(cut.dir)
     with make_evaluator(config.episode, "serial") as ev:
@@ -61,7 +62,8 @@ def test_a_lost_ga_run_starts_over_every_patience_generations_and_resumes_bit_fo
     assert again["optimizer"] == ck["optimizer"] and again["restarts"] == ck["restarts"] and again["best"] == ck["best"]
     plain = _evolve(tmp_path / "plain", _config())
     ours = [row[: len(fitness_history(plain.dir)[0])] for row in fitness_history(whole.dir)]  # less the rule's columns
-    assert fitness_history(plain.dir)[:3] == ours[:3] and fitness_history(plain.dir)[3] != ours[3]  # the same until lost
+    # the same until lost
+    assert fitness_history(plain.dir)[:3] == ours[:3] and fitness_history(plain.dir)[3] != ours[3]
 
 
 def test_es_starts_over_at_its_start_point_with_adams_moments_and_sigma_from_nothing(tmp_path):
@@ -80,7 +82,8 @@ def test_es_starts_over_at_its_start_point_with_adams_moments_and_sigma_from_not
 def test_a_lost_run_can_stop_or_warn_and_says_so(tmp_path, capsys):
     stopped = _evolve(tmp_path / "stop", _config(patience=[4], action="stop"))
     summary = json.loads((stopped.dir / "summary.json").read_text())
-    assert summary["generations"] == 4 and summary["lost"] == [{"generation": 3, "phase": 0, "action": "stop", "why": "patience"}]
+    assert summary["generations"] == 4 and summary["lost"] == [{"generation": 3, "phase": 0, "action": "stop",
+                                                                "why": "patience"}]
     warned = _evolve(tmp_path / "warn", _config(patience=[4], action="warn"))
     assert json.loads((warned.dir / "summary.json").read_text())["generations"] == 10
     cfg = tmp_path / "lost.toml"
@@ -103,13 +106,12 @@ def test_a_lost_run_can_stop_or_warn_and_says_so(tmp_path, capsys):
     ({"restart": {"patience": [5], "action": "pray"}}, "restart.action"),
     ({"restart": {"patience": [5]}, "optimizer": "cma"}, "cannot start over"),
     ({"budget": 7}, "budget: 7 episodes is less than one generation's 8"),
-    ({"restart": {"patience": [5], "fallen_for": [3, 3]}}, "restart.fallen_for: one entry per entry of restart.patience (1), got 2"),
+    ({"restart": {"patience": [5], "fallen_for": [3, 3]}}, "restart.fallen_for: one entry per entry of "
+                                                           "restart.patience (1), got 2"),
 ])
 def test_bad_restart_rules_and_budgets_are_one_line_and_write_nothing(tmp_path, capsys, table, words):
     with pytest.raises(ConfigError, match=words.replace("(", r"\(").replace(")", r"\)")):
         RunConfig.from_dict({"ga": {"population": 8}, **table})
-    import tomllib  # noqa: F401  (the file below is TOML)
-
     lines = [f"{k} = {json.dumps(v)}" for k, v in table.items() if not isinstance(v, dict)]
     lines += ["[ga]", "population = 8"]
     for k, v in table.items():

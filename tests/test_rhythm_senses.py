@@ -30,7 +30,8 @@ def test_senses_feed_each_oscillator_push_pull_through_its_gains():
     c = ep.controller
     assert c.feedback == "senses" and c.normalises_inputs and c.output_kind == "angle"
     k = c.n_inputs
-    assert list(c.input_names) == INPUTS and k == sum(c._widths.values()) == 19 and [b.name for b in c.layout.blocks][-2:] == ["bias", "sense_gain"]
+    assert list(c.input_names) == INPUTS and k == sum(c._widths.values()) == 19 and [b.name for b in c.layout.blocks][
+        -2:] == ["bias", "sense_gain"]
     rng = np.random.default_rng(3)
     gains = rng.uniform(-1, 1, (2, c.n_osc * k))
     G = np.stack([_genome(c, rng, sense_gain=g) for g in gains])

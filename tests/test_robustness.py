@@ -26,19 +26,20 @@ def trials():
 
 def test_the_battery_has_the_documented_trials(trials):
     rows = {r["family"]: r["trials"] for r in summarise(trials)}
-    assert rows == {"push 5 N": 32, "push 10 N": 32, "push 15 N": 32, "push 20 N": 32, "offset 0.05 rad": 8, "offset 0.1 rad": 8,
-                    "gene noise 1 %": 8, "friction": 4, "slope 3 %": 4, "slope 5 %": 4}
+    assert rows == {"push 5 N": 32, "push 10 N": 32, "push 15 N": 32, "push 20 N": 32, "offset 0.05 rad": 8,
+                    "offset 0.1 rad": 8, "gene noise 1 %": 8, "friction": 4, "slope 3 %": 4, "slope 5 %": 4}
     labels = [t.label for t in trials if t.family == "offset 0.05 rad"]
     assert len(set(labels)) == 8 and "roll opposite -" in labels
     pushes = {t.label for t in trials if t.family == "push 20 N"}
     assert len(pushes) == 32 and {"forward-left, phase 3/4", "backward-right, phase 0/4"} <= pushes
-    assert [t.label for t in trials if t.family == "slope 5 %"] == ["5 % uphill", "5 % downhill", "5 % rising to the left", "5 % rising to the right"]
+    assert [t.label for t in trials if t.family == "slope 5 %"] == ["5 % uphill", "5 % downhill",
+                                                                    "5 % rising to the left", "5 % rising to the right"]
     assert score(trials) == sum(t.survived for t in trials) / 164
 
 
 def test_a_gene_noise_and_a_slope_trial_equal_their_disturbance_run_on_their_own(trials):
-    """'gene noise 1 %, draw 2' is the walker with the battery's third noise draw (seed 1, 1 % of each gene's range) alone;
-    '3 % rising to the left' is the episode on that floor."""
+    """'gene noise 1 %, draw 2' is the walker with the battery's third noise draw (seed 1, 1 % of each gene's range)
+    alone; '3 % rising to the left' is the episode on that floor."""
     g, cfg, _ = load_genome(WALKER)
     ep = cfg.nominal().build()
     lay = ep.controller.layout
@@ -76,7 +77,8 @@ def test_cli_writes_table_json_and_png(tmp_path, capsys):
     report = json.loads((Path.cwd() / "runs" / "w" / "w_robustness.json").read_text())  # never beside the genome file
     assert len(report["trials"]) == 164 and report["seconds"] == 8.0
     survived = sum(t["survived"] for t in report["trials"])
-    assert report["score"] == survived / 164 and f"robustness score: {survived / 164:.3f} ({survived} of 164 trials survived)" in out
+    assert report["score"] == survived / 164
+    assert f"robustness score: {survived / 164:.3f} ({survived} of 164 trials survived)" in out
     assert (Path.cwd() / "runs" / "w" / "w_robustness.png").read_bytes()[:4] == b"\x89PNG"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["w.json"]
 
@@ -99,7 +101,8 @@ def test_on_the_sagittal_taga_body_the_battery_is_the_forward_and_backward_pushe
 
     ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=3.0).build()
     trials = battery(ep, preset_genome(ep.controller), seconds=3.0, push_after=1.0)
-    assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15, 20) for _ in range(8)] + ["gene noise 1 %"] * 8
+    assert [t.family for t in trials] == [f"push {f} N" for f in (5, 10, 15, 20)
+                                          for _ in range(8)] + ["gene noise 1 %"] * 8
     assert {t.label.split(",")[0] for t in trials if t.family.startswith("push")} == {"forward", "backward"}
     fwd = {t.label: t.forward for t in trials if t.family == "push 15 N"}
     assert all(fwd[f"forward, phase {i}/4"] > fwd[f"backward, phase {i}/4"] + 0.01 for i in range(4))
@@ -118,8 +121,8 @@ def test_a_body_without_a_contact_sensor_is_refused(tmp_path, capsys):
 
 
 def test_pushes_at_random_phases_fall_where_their_seed_says_and_each_equals_its_push_alone():
-    """--phase-seed: each push trial at its own phase of the stride, drawn from the seed; a trial equals that push run alone,
-    the same seed gives the same phases, another seed other ones, and the fixed phases are still i/4."""
+    """--phase-seed: each push trial at its own phase of the stride, drawn from the seed; a trial equals that push run
+    alone, the same seed gives the same phases, another seed other ones, and the fixed phases are still i/4."""
     from evobiped.analysis.robustness import DIRECTIONS, PHASES, push_phases, stride, unit
 
     g, cfg, _ = load_genome(WALKER)
@@ -138,17 +141,20 @@ def test_pushes_at_random_phases_fall_where_their_seed_says_and_each_equals_its_
     assert t.family == "push 10 N" and t.label == f"{d}, phase {a[k]:.2f}"
     ux, uy = unit(d)
     r = ep.run(g, seconds=8.0, trials=Trials.nominal(1, 6, push_start=np.array([[t0 + period * a[k]]]),
-                                                      push_force=np.array([[[10 * ux, 10 * uy, 0.0]]]), push_duration=0.1)).rows
+                                                      push_force=np.array([[[10 * ux, 10 * uy, 0.0]]]),
+                                                     push_duration=0.1)).rows
     assert t.end_time == r.end_time[0] and t.forward == r.end_position[0, 0] - r.start_position[0, 0]
 
 
 def test_cli_phase_seed_writes_its_own_report_and_refuses_a_negative_seed(tmp_path, capsys):
-    assert main(["robustness", WALKER, "--seconds", "6", "--push-after", "3", "--phase-seed", "3", "--out", str(tmp_path), "--quiet"]) == 0
+    assert main(["robustness", WALKER, "--seconds", "6", "--push-after", "3", "--phase-seed", "3", "--out",
+                 str(tmp_path), "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "push 10 N" in out and "gene noise 1 %" in out
     report = json.loads((tmp_path / "simbicon_seed1_phases3_robustness.json").read_text())
     assert report["phase_seed"] == 3 and (tmp_path / "simbicon_seed1_phases3_robustness.png").exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["simbicon_seed1_phases3_robustness.json", "simbicon_seed1_phases3_robustness.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["simbicon_seed1_phases3_robustness.json",
+                                                          "simbicon_seed1_phases3_robustness.png"]
     with pytest.raises(SystemExit) as refused:  # an argument's refusal: argparse's exit, status 2
         main(["robustness", WALKER, "--phase-seed", "-1", "--out", str(tmp_path / "o")])
     assert refused.value.code == 2

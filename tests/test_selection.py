@@ -23,7 +23,8 @@ def test_the_long_run_outranks_the_episode_then_heading_then_distance():
 
 
 def _tuned(tmp_path, walker: str, *, sigma0: float, seconds: float):
-    """A two-generation CMA-ES run of the balance controller --from ``walker`` (steps ``sigma0``, episodes of ``seconds``)."""
+    """A two-generation CMA-ES run of the balance controller --from ``walker`` (steps ``sigma0``, episodes of
+    ``seconds``)."""
     cfg = tmp_path / "c.toml"
     cfg.write_text(f'optimizer = "cma"\n[cma]\npopulation = 4\nsigma0 = {sigma0}\n[episode]\ncontroller = "simbicon"\n'
                    f'seconds = {seconds}\n[episode.task_options]\nfitness = "forward"\n')

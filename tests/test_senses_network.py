@@ -15,11 +15,13 @@ from evobiped.interface.mapping import to_action
 
 from .test_ctrnn import genome
 
-SENSES = ["joint_angles", "joint_velocities", "foot_contact", "pelvis_tilt", "pelvis_tilt_rate", "com_from_feet", "com_velocity"]
+SENSES = ["joint_angles", "joint_velocities", "foot_contact", "pelvis_tilt", "pelvis_tilt_rate", "com_from_feet",
+          "com_velocity"]
 
 
 def test_outputs_after_the_update_let_a_sense_reach_a_motor_in_the_same_tick():
-    """One neuron, input weight v: before (the paper's order) O = sigma(A(t) - alpha), after O = sigma(A(t+dt) - alpha)."""
+    """One neuron, input weight v: before (the paper's order) O = sigma(A(t) - alpha), after O = sigma(A(t+dt) -
+    alpha)."""
     x = np.array([[2.0]])
     outs = {}
     for order in ("before", "after"):
@@ -34,7 +36,8 @@ def test_outputs_after_the_update_let_a_sense_reach_a_motor_in_the_same_tick():
 def test_log_time_constants_and_centre_crossing_biases():
     net = CTRNN(n_outputs=2, n_neurons=2, time_constants=[0.02, 5.0], tau_scale="log", centre_crossing=True)
     s = net.layout.slices()["time_constants"]
-    assert net.layout.low[s].tolist() == pytest.approx([np.log(0.02)] * 2) and net.layout.high[s].tolist() == pytest.approx([np.log(5.0)] * 2)
+    assert net.layout.low[s].tolist() == pytest.approx([np.log(0.02)] * 2) and net.layout.high[
+        s].tolist() == pytest.approx([np.log(5.0)] * 2)
     assert np.exp(net.layout.init_mean[s][0]) == pytest.approx(np.sqrt(0.02 * 5.0))  # geometric mean, 0.32 s
     W = [[1.0, -2.0], [3.0, 4.0]]  # w_ij from i to j
     p = net.decode(genome(net, W, [np.log(0.1), np.log(2.0)], [0.5, -0.5]))
@@ -59,7 +62,8 @@ def test_the_input_weight_block_has_its_own_range_and_sigma():
     net = CTRNN(n_outputs=6, n_neurons=20, inputs={"a": 3}, input_weights=[-25.0, 25.0], input_sigma=0.5)
     s = net.layout.slices()["input_weights"]
     assert net.layout.size == 20 * 20 + 40 + 60
-    assert set(net.layout.low[s]) == {-25.0} and set(net.layout.init_sigma[s]) == {0.5} and set(net.layout.mutation_sigma[s]) == {0.5}
+    assert set(net.layout.low[s]) == {-25.0} and set(net.layout.init_sigma[s]) == {0.5} and set(
+        net.layout.mutation_sigma[s]) == {0.5}
     assert set(net.layout.high[: 400]) == {16.0}  # the recurrent weights keep the paper's range
 
 
@@ -91,8 +95,10 @@ def test_normalising_a_sensor_with_no_declared_scale_is_one_line():
 
     BODIES["undeclared"] = Undeclared
     try:
-        with pytest.raises(ConfigError, match="normalises its inputs, but no standing value and scale is declared for link_angles"):
-            EpisodeConfig(body="undeclared", controller_options=dict(normalise_inputs=True, inputs=["link_angles"])).build()
+        with pytest.raises(ConfigError, match="normalises its inputs, but no standing value and scale is declared for "
+                                              "link_angles"):
+            EpisodeConfig(body="undeclared", controller_options=dict(normalise_inputs=True,
+                                                                     inputs=["link_angles"])).build()
     finally:
         del BODIES["undeclared"]
 

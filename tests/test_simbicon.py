@@ -157,7 +157,8 @@ def test_the_legs_swap_when_the_swing_foot_lands_after_step_time():
 
 
 def test_the_stance_hip_turns_a_tilted_pelvis_back():
-    """In zero gravity with the left foot standing, the stance hip's new target accelerates the pelvis against its tilt."""
+    """In zero gravity with the left foot standing, the stance hip's new target accelerates the pelvis against its
+    tilt."""
     ep = build_episode(body="reil", controller="simbicon", seconds=1.0)
     body, ctrl = ep.body, ep.controller
     m = ep.model
@@ -181,11 +182,13 @@ def test_the_stance_hip_turns_a_tilted_pelvis_back():
 
 
 def test_bad_pairings_are_one_clear_error():
-    with pytest.raises(ConfigError, match="'simbicon' .body 'taga', task 'walk'. needs a left and a right leg with the joints "
-                                          "hip_pitch, hip_roll, knee, the body has right: hip, knee, ankle; left: hip, knee, ankle"):
+    with pytest.raises(ConfigError, match="'simbicon' .body 'taga', task 'walk'. needs a left and a right leg with the "
+                                          "joints hip_pitch, hip_roll, knee, the body has right: hip, knee, ankle; "
+                                          "left: hip, knee, ankle"):
         EpisodeConfig(body="taga", controller="simbicon").layout()
     with pytest.raises(ConfigError, match="gives angle outputs, which body 'taga' cannot take as torques"):
-        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators), WalkTask(), seconds=1.0)
+        Episode(TagaBiped(), Simbicon(n_outputs=6, inputs=WIRED, actuators=ReilBiped.actuators), WalkTask(),
+                seconds=1.0)
     with pytest.raises(ConfigError, match="needs the sensors foot_contact, pelvis_tilt, .*; its inputs leave them out"):
         EpisodeConfig(controller="simbicon", controller_options={"inputs": ["joint_angles"]}).layout()
     # the episode checks the contract (once): a body whose centre-of-mass velocity is 1 wide is refused
@@ -203,7 +206,8 @@ def test_simbicon_finds_its_joints_by_role_not_by_column():
     b = Simbicon(n_outputs=6, inputs=WIRED, actuators=mirrored)
     g = _genome(a, step_time=0.3, hip_early=0.5, cd=0.4, pelvis_gain=0.6)
     q = np.array([0.1, 0.02, -0.05, -0.2, 0.03, -0.3])
-    x = dict(foot_contact=[1, 1], pelvis_tilt=[0.05, -0.04], com_from_feet=[0.1, -0.2, 0.0, 0.3], com_velocity=[0.5, -0.1])
+    x = dict(foot_contact=[1, 1], pelvis_tilt=[0.05, -0.04], com_from_feet=[0.1, -0.2, 0.0, 0.3],
+             com_velocity=[0.5, -0.1])
     pa, pb = a.decode(g), b.decode(g)
     _, out_a = a.step(pa, a.initial_state(pa), _inputs(a, joint_angles=q, **x))
     _, out_b = b.step(pb, b.initial_state(pb), _inputs(b, joint_angles=np.r_[q[3:], q[:3]], **x))
@@ -249,7 +253,8 @@ def test_the_evolved_walker_in_docs_walks_50_s_and_10_m():
 
 
 def test_com_velocity_equals_mujocos_subtree_velocity_in_motion():
-    """A walker mid-stride (spinning, legs swinging): the sensor against mj_subtreeVel, rotated into the heading frame."""
+    """A walker mid-stride (spinning, legs swinging): the sensor against mj_subtreeVel, rotated into the heading
+    frame."""
     body = ReilBiped()
     m = body.build_model()
     rng = np.random.default_rng(5)
@@ -278,7 +283,8 @@ def test_hearing_biases_the_swing_targets_by_the_sound_signal():
     x = np.zeros((1, 1 + sum(WIRED.values())))
     x[0, ctrl._at["foot_contact"]] = [1, 1]
     x[0, ctrl._at["com_from_feet"]] = [0.1, -0.2, 0.0, 0.3]
-    _, quiet = deaf.step(deaf.decode(_genome(deaf, **base)), deaf.initial_state(deaf.decode(_genome(deaf, **base))), x[:, 1:])
+    _, quiet = deaf.step(deaf.decode(_genome(deaf, **base)), deaf.initial_state(deaf.decode(_genome(deaf, **base))),
+                         x[:, 1:])
     for sound_forward, sound_lateral in [(0.0, 0.0), (0.3, 0.0), (0.0, 0.2), (-0.1, 0.25)]:
         params = ctrl.decode(_genome(ctrl, **base, sound_forward=sound_forward, sound_lateral=sound_lateral))
         x[0, 0] = 0.5  # the source on the left
@@ -292,11 +298,13 @@ def test_hearing_biases_the_swing_targets_by_the_sound_signal():
 @pytest.mark.parametrize("s, heard", [(0.5, 0.1), (-0.8, -0.1), (0.06, 0.06), (-0.1, -0.1)])
 def test_the_sound_limit_clips_what_the_hearing_genes_act_on(s, heard):
     """sound_limit = 0.1: the targets of a walker hearing s are those it sets for s clipped to +-0.1, i.e.
-    the forward target shifted by sound_forward * heard (right leg swinging), the outward one by -sound_lateral * heard."""
+    the forward target shifted by sound_forward * heard (right leg swinging), the outward one by -sound_lateral *
+    heard."""
     heard_inputs = {"sound": 1, **WIRED}
     ctrl = Simbicon(n_outputs=6, inputs=heard_inputs, actuators=ReilBiped.actuators)
     clipped = Simbicon(n_outputs=6, inputs=heard_inputs, actuators=ReilBiped.actuators, sound_limit=0.1)
-    params = ctrl.decode(_genome(ctrl, step_time=0.3, hip_early=0.5, knee_early=-1.0, cd=0.4, sound_forward=0.3, sound_lateral=0.2))
+    params = ctrl.decode(_genome(ctrl, step_time=0.3, hip_early=0.5, knee_early=-1.0, cd=0.4, sound_forward=0.3,
+                                 sound_lateral=0.2))
     x = np.zeros((1, 1 + sum(WIRED.values())))
     x[0, ctrl._at["foot_contact"]] = [1, 1]
     x[0, 0] = 0.0

@@ -32,7 +32,8 @@ def test_signal_equals_the_closed_form(D, theta):
 def test_signal_vanishes_facing_the_source_flips_across_the_midline_and_grows_nearer():
     left, right = ears_facing_x()
     assert ear_signal(left, right, np.array([[10.0, 0.0]]))[0] == 0.0
-    assert ear_signal(left, right, np.array([[10.0, 1.0]]))[0] > 0 > ear_signal(left, right, np.array([[10.0, -1.0]]))[0]
+    assert ear_signal(left, right, np.array([[10.0, 1.0]]))[0] > 0 > ear_signal(left, right,
+                                                                                np.array([[10.0, -1.0]]))[0]
     near = [abs(ear_signal(left, right, np.array([[d * np.cos(0.5), d * np.sin(0.5)]]))[0]) for d in (20, 10, 5, 2, 1)]
     assert all(a < b for a, b in zip(near, near[1:]))
 
@@ -148,7 +149,8 @@ SMALL = ["--population", 6, "--generations", 3, "--episode-seconds", 1.5, "--bac
 @pytest.fixture(scope="module")
 def walker(tmp_path_factory):
     d = tmp_path_factory.mktemp("walker") / "run"
-    assert cli("evolve", "--population", 6, "--generations", 2, "--episode-seconds", 1.5, "--backend", "serial", "--out", d, "--quiet") == 0
+    assert cli("evolve", "--population", 6, "--generations", 2, "--episode-seconds", 1.5, "--backend", "serial",
+               "--out", d, "--quiet") == 0
     return d
 
 
@@ -191,7 +193,8 @@ def test_bad_input(tmp_path, capsys, setup, words):
     args = ["evolve", "--task", "steer", *SMALL, "--out", tmp_path / "out"]
     if setup == "g3-walker":
         g3 = tmp_path / "g3"
-        assert cli("evolve", "--controller", "g3", "--population", 4, "--generations", 1, "--episode-seconds", 0.5, "--backend", "serial", "--out", g3, "--quiet") == 0
+        assert cli("evolve", "--controller", "g3", "--population", 4, "--generations", 1, "--episode-seconds", 0.5,
+                   "--backend", "serial", "--out", g3, "--quiet") == 0
         capsys.readouterr()
         args += ["--from", g3]
     elif setup == "one-number-source":
@@ -203,7 +206,8 @@ def test_bad_input(tmp_path, capsys, setup, words):
         cfg.write_text("[episode.task_options]\n" + {"no-sources": "sources = []", "bad-fitness": 'fitness = "near"',
                                                      "no-penalty": 'fitness = "arrive"\nfall_penalty = 0',
                                                      "bad-gait-term": "gait_weights = {stride = -1.0}",
-                                                     "nan-gait-weight": "gait_weights = {airborne = nan}"}[setup] + "\n")
+                                                     "nan-gait-weight": "gait_weights = {airborne = nan}"}[setup]
+                       + "\n")
         args += ["--config", cfg]
     elif setup == "taga":
         args += ["--body", "taga"]
@@ -228,7 +232,8 @@ def test_replay_records_every_presentation_and_draws_figs_12_13(walker, tmp_path
     paths = {c.entity_path for c in rr.chunk.RrdReader(out / "replay_best.rrd").stream()}
     assert {"/sensors/sound", "/world/source", "/world/sources"} <= paths
     # every presentation: its path, its source and the ear signal on the way
-    assert {f"/{w}presentations/{j}/{x}" for j in (1, 2) for w, x in (("world/", "path"), ("world/", "source"), ("", "sound"))} <= paths
+    assert {f"/{w}presentations/{j}/{x}" for j in (1, 2) for w,
+            x in (("world/", "path"), ("world/", "source"), ("", "sound"))} <= paths
 
 
 # ---- sources on the command line: one presentation each
@@ -258,9 +263,11 @@ def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys
     genome, cfg, _ = load_genome(hearing_walker / "best.json")
     for q, row in zip(sources, out["sources"]):  # each presentation alone, on a one-source episode
         alone = with_sources(cfg, [q]).build().run(genome)
-        assert row["source"] == q and row["final_distance"] == pytest.approx(np.linalg.norm(alone.end_position[0] - q), abs=1e-12)
+        assert row["source"] == q and row["final_distance"] == pytest.approx(np.linalg.norm(alone.end_position[0] - q),
+                                                                             abs=1e-12)
     final = [row["final_distance"] for row in out["sources"]]
-    assert out["median_final_distance"] == final[int(np.argsort(final)[1])] and out["worst_final_distance"] == max(final)
+    assert out["median_final_distance"] == final[int(np.argsort(final)[1])] and out["worst_final_distance"] == max(
+        final)
     assert out["falls"] == sum(row["fell"] for row in out["sources"])
 
 
@@ -270,7 +277,8 @@ def test_episode_prints_the_final_distance_to_each_source(hearing_walker, capsys
     (["--source", "nan", "1"], "--source: must be a finite number"),
 ])
 def test_bad_sources_are_one_line(hearing_walker, tmp_path, capsys, argv, words):
-    for cmd in (["episode", "--genome", str(hearing_walker / "best.json")], ["evolve", "--task", "steer", "--out", str(tmp_path / "x")]):
+    for cmd in (["episode", "--genome", str(hearing_walker / "best.json")],
+                ["evolve", "--task", "steer", "--out", str(tmp_path / "x")]):
         try:
             rc = main([*cmd, *argv])
         except SystemExit as exc:
@@ -285,8 +293,8 @@ def test_a_source_for_a_walking_task_and_a_two_source_battery_are_refused(hearin
     assert main(["evolve", "--source", "3", "3", "--out", str(tmp_path / "y")]) == 2 and not (tmp_path / "y").exists()
     assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet"]) == 2
     assert "runs one presentation" in capsys.readouterr().err
-    assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet", "--source", "8", "2",
-                 "--out", str(tmp_path / "b")]) == 0
+    assert main(["robustness", str(hearing_walker), "--seconds", "2", "--push-after", "1", "--quiet", "--source", "8",
+                 "2", "--out", str(tmp_path / "b")]) == 0
     assert len(json.loads((tmp_path / "b" / "robustness.json").read_text())["trials"]) == 164
 
 
@@ -301,7 +309,8 @@ def test_terms_per_presentation_are_the_distances_to_each_source():
     assert set(r.terms) == set(ep.task.term_names) == {"distance", "distance_to_source"}
     rows = r.rows
     np.testing.assert_array_equal(rows.terms["distance_to_source"], -rows.fitness)
-    np.testing.assert_allclose(rows.terms["distance"], np.linalg.norm(rows.end_position - rows.start_position, axis=1), rtol=1e-15)
+    np.testing.assert_allclose(rows.terms["distance"], np.linalg.norm(rows.end_position - rows.start_position, axis=1),
+                               rtol=1e-15)
     assert r.terms["distance_to_source"].shape == (3, 2)
     np.testing.assert_array_equal(r.terms["distance_to_source"].mean(axis=1), -r.fitness)
 
@@ -320,7 +329,8 @@ def test_the_steer_generalist_preset_is_listed_and_runs(tmp_path, capsys):
     listed = {line.split()[0]: line.split(None, 1)[1] for line in capsys.readouterr().out.splitlines()}
     assert listed["steer-generalist"].startswith("Steering to any sound source and arriving standing")
     out = tmp_path / "run"
-    assert cli("evolve", "--preset", "steer-generalist", "--from", WALKERS / "steer_simbicon_six_sources.json", "--population", 4,
+    assert cli("evolve", "--preset", "steer-generalist", "--from", WALKERS / "steer_simbicon_six_sources.json",
+               "--population", 4,
                "--generations", 1, "--episode-seconds", 1.0, "--backend", "serial", "--quiet", "--out", out) == 0
     episode = json.loads((out / "config.json").read_text())["episode"]
     assert episode["task"] == "steer" and episode["task_options"]["fitness"] == "arrive"

@@ -1,5 +1,5 @@
-"""A steering policy trained over random sources: the declared source distribution (drawn per generation, shared by every
-genome), the reward for lingering at the source, moving a walker's genes onto new inputs, and bad input."""
+"""A steering policy trained over random sources: the declared source distribution (drawn per generation, shared by
+every genome), the reward for lingering at the source, moving a walker's genes onto new inputs, and bad input."""
 
 import dataclasses
 import json
@@ -48,8 +48,8 @@ def test_a_generation_draws_its_sources_from_the_declared_distribution_and_every
 def test_lingering_within_reach_is_paid_and_a_fall_stays_below_any_walker_up():
     task = SteerTask(sources=[[10, 0], [5, 5]], fitness="arrive", reach=0.5, reach_bonus=4.0)
     src = task.sources
-    state = SteerState(start=np.zeros((2, 2)), position=src + [[0.3, 0.0], [3.0, 0.0]], source=src, near=np.array([50.0, 0.0]),
-                       ticks=100, end_time=np.array([30.0, 30.0]), seconds=30.0)
+    state = SteerState(start=np.zeros((2, 2)), position=src + [[0.3, 0.0], [3.0, 0.0]], source=src,
+                       near=np.array([50.0, 0.0]), ticks=100, end_time=np.array([30.0, 30.0]), seconds=30.0)
     f = task.fitness(state)
     assert f == pytest.approx([-0.3 + 4.0 * 0.5, -3.0])
     worst_up = task.fitness(dataclasses.replace(state, position=src + 1e3, near=np.zeros(2))).mean()
@@ -67,18 +67,21 @@ def test_a_walker_moved_onto_reordered_inputs_walks_exactly_as_before():
     inputs = list(old.controller_options.inputs)
     opts = {**given(old.controller_options), "inputs": inputs[1:] + inputs[:1]}
     new = dataclasses.replace(old, controller_options=opts)
-    new = dataclasses.replace(new, controller_options={**opts, "input_norm": remap_norm(old.controller_options.input_norm, old, new)})
+    new = dataclasses.replace(new, controller_options={**opts,
+                                                       "input_norm": remap_norm(old.controller_options.input_norm, old,
+                                                                                new)})
     moved = remap_inputs(g, old, new)
     assert not np.array_equal(moved, g)
     a, b = old.build().run(g, seconds=3.0), new.build().run(moved, seconds=3.0)
-    assert b.fitness[0] == pytest.approx(a.fitness[0], rel=1e-9) and np.allclose(a.end_position, b.end_position, rtol=0, atol=1e-9)
+    assert b.fitness[0] == pytest.approx(a.fitness[0],
+                                         rel=1e-9) and np.allclose(a.end_position, b.end_position, rtol=0, atol=1e-9)
     heard = remap_inputs(g, old, new, copy={})
     assert np.array_equal(heard, moved)
 
 
 def test_the_hearing_start_replaces_the_heading_by_the_ear_signal(tmp_path):
-    """evobiped genome hearing-start: the sound rows are minus the heading rows, every other gene the walker's; the steer-es
-    preset's episode takes the genome."""
+    """evobiped genome hearing-start: the sound rows are minus the heading rows, every other gene the walker's; the
+    steer-es preset's episode takes the genome."""
     out = tmp_path / "h.json"
     assert cli("genome", "hearing-start", out, "--walker", SEED) == 0
     g, cfg, _ = load_genome(out)
@@ -104,7 +107,9 @@ def test_a_walking_network_hears_under_its_own_integration(tmp_path):
     g, cfg, _ = load_genome(out)
     old_g, old, _ = load_genome(walker)
     assert cfg.controller_options.integration == old.controller_options.integration == "exponential"
-    heard = dataclasses.replace(cfg.nominal(), seconds=10.0, task_options={**given(cfg.task_options), "sources": [[5000.0, 0.0]], "random_sources": 0})
+    heard = dataclasses.replace(cfg.nominal(), seconds=10.0,
+                                task_options={**given(cfg.task_options), "sources": [[5000.0, 0.0]],
+                                              "random_sources": 0})
     walked = dataclasses.replace(old.nominal(), seconds=10.0)
     a, b = heard.build().run(g[None]), walked.build().run(old_g[None])
     assert not a.fell[0] and not b.fell[0] and b.walk()["distance"] > 5.0
@@ -131,7 +136,8 @@ def test_bad_source_distributions_are_refused_with_one_line(tmp_path, capsys, op
 
 def test_offsets_on_a_body_of_torques_are_refused_with_one_line(tmp_path, capsys):
     cfg = tmp_path / "t.toml"
-    cfg.write_text('[episode]\nbody = "taga"\ncontroller = "matsuoka"\nseconds = 1.0\n[episode.perturbations]\ntarget_offset = 0.05\n')
+    cfg.write_text('[episode]\nbody = "taga"\ncontroller = "matsuoka"\nseconds = '
+                   '1.0\n[episode.perturbations]\ntarget_offset = 0.05\n')
     assert cli("evolve", "--config", cfg, "--generations", "1", "--backend", "serial", "--out", tmp_path / "o") == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "target_offset" in err[0] and "torques" in err[0]
@@ -168,7 +174,8 @@ def test_a_hearing_walker_given_the_distance_cue_with_zero_weights_walks_as_befo
     a, b = old.nominal().build().run(g, seconds=4.0), new.nominal().build().run(moved, seconds=4.0)
     assert np.array_equal(a.end_position, b.end_position) and np.array_equal(a.end_time, b.end_time)
     rows, w = new.parts()[1].layout.slices()["direct_weights"], moved.copy()
-    w[rows] = np.where(np.arange(rows.stop - rows.start) // 6 == 1, 0.5, moved[rows])  # loudness (input 1) to six motors
+    # loudness (input 1) to six motors
+    w[rows] = np.where(np.arange(rows.stop - rows.start) // 6 == 1, 0.5, moved[rows])
     c = new.nominal().build().run(w, seconds=4.0)
     assert not np.allclose(c.end_position, b.end_position, atol=1e-3)
 
@@ -183,7 +190,8 @@ def test_the_rewired_start_walks_as_before_with_zero_side_weights_and_turns_both
         return load_genome(out)
 
     g, old, _ = load_genome(SEED)
-    kept, cfg, _ = rewire(tmp_path / "kept.json", "--drop", "since_touchdown", "--add", "since_touchdown", "--add", "stance_side")
+    kept, cfg, _ = rewire(tmp_path / "kept.json", "--drop", "since_touchdown", "--add", "since_touchdown", "--add",
+                          "stance_side")
     assert cfg.controller_options.inputs[-2:] == ["since_touchdown", "stance_side"]
     a, b = old.nominal().build().run(g, seconds=4.0), cfg.nominal().build().run(kept, seconds=4.0)
     assert np.array_equal(a.end_position, b.end_position) and np.array_equal(a.end_time, b.end_time)

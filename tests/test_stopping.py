@@ -18,8 +18,8 @@ from .test_evolve import Stop, fitness_history
 
 def _config(**stop) -> RunConfig:
     ga = {"population": 8}
-    return RunConfig.from_dict({"episode": {"seconds": 1.5}, "ga": ga, "generations": 12, "seed": 3, "backend": "serial",
-                                "stop": stop})
+    return RunConfig.from_dict({"episode": {"seconds": 1.5}, "ga": ga, "generations": 12, "seed": 3,
+                                "backend": "serial", "stop": stop})
 
 
 def _evolve(path, config, stop_at=None) -> Run:
@@ -39,7 +39,8 @@ def _evolve(path, config, stop_at=None) -> Run:
 
 def test_a_fitness_rule_stops_where_the_history_says_and_a_resume_stops_there_too(tmp_path):
     plain = _evolve(tmp_path / "plain", _config())
-    best = [float(r[1]) for r in fitness_history(plain.dir)]  # the GA's fittest of each generation is its evaluation walker
+    # the GA's fittest of each generation is its evaluation walker
+    best = [float(r[1]) for r in fitness_history(plain.dir)]
     above = float(np.quantile(best, 0.4))
     met = [b >= above for b in best]
     want = next(g for g in range(1, len(met)) if met[g] and met[g - 1])  # the first of two generations running

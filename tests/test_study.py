@@ -16,7 +16,8 @@ from .conftest import cli
 @pytest.mark.parametrize(
     "k, n, low, high",
     # textbook values of the 95 % Wilson score interval (e.g. Newcombe 1998, Table I; Agresti & Coull 1998)
-    [(0, 10, 0.0, 0.2775), (1, 10, 0.0179, 0.4042), (8, 10, 0.4902, 0.9433), (5, 10, 0.2366, 0.7634), (10, 100, 0.0552, 0.1744), (80, 100, 0.7112, 0.8666)],
+    [(0, 10, 0.0, 0.2775), (1, 10, 0.0179, 0.4042), (8, 10, 0.4902, 0.9433), (5, 10, 0.2366, 0.7634),
+     (10, 100, 0.0552, 0.1744), (80, 100, 0.7112, 0.8666)],
 )
 def test_wilson_interval_known_values(k, n, low, high):
     lo, hi = wilson_interval(k, n)
@@ -46,21 +47,27 @@ def test_histogram_edges_cover_every_value_in_metre_bins():
 
 def test_summarize_synthetic_outcomes():
     """10 plain runs, 1 stable (the paper's 10 %); 5 cyclic runs, 4 stable."""
-    outs = [{"condition": "plain", "distance": 7.0 + i, "fell": True, "walks_indefinitely": None, "wall_seconds": 10.0} for i in range(9)]
-    outs.append({"condition": "plain", "distance": 20.5, "fell": False, "walks_indefinitely": True, "wall_seconds": 100.0})
-    outs += [{"condition": "cyclic", "distance": f, "fell": False, "walks_indefinitely": f > 20, "wall_seconds": 50.0} for f in (19.0, 20.0, 21.0, 22.0)]
+    outs = [{"condition": "plain", "distance": 7.0 + i, "fell": True, "walks_indefinitely": None, "wall_seconds": 10.0}
+            for i in range(9)]
+    outs.append({"condition": "plain", "distance": 20.5, "fell": False, "walks_indefinitely": True,
+                 "wall_seconds": 100.0})
+    outs += [{"condition": "cyclic", "distance": f, "fell": False, "walks_indefinitely": f > 20, "wall_seconds": 50.0}
+             for f in (19.0, 20.0, 21.0, 22.0)]
     outs.append({"condition": "cyclic", "distance": 3.0, "fell": True, "walks_indefinitely": None, "wall_seconds": 5.0})
     plain, cyclic = summarize(outs, ("plain", "cyclic"))
     assert (plain["runs"], plain["stable"], plain["success_rate"]) == (10, 1, 0.1)
     assert (plain["ci95_low"], plain["ci95_high"]) == pytest.approx((0.0179, 0.4042), abs=5e-5)
     assert plain["stable_mean_m"] == 20.5 and math.isnan(plain["stable_std_m"])
-    assert plain["unstable_mean_m"] == 11.0 and plain["unstable_std_m"] == pytest.approx(np.std(np.arange(7.0, 16.0), ddof=1))
+    assert plain["unstable_mean_m"] == 11.0 and plain["unstable_std_m"] == pytest.approx(np.std(np.arange(
+        7.0, 16.0), ddof=1))
     assert plain["wall_seconds"] == 190.0 and plain["walks_indefinitely"] == 1
-    assert (cyclic["stable"], cyclic["success_rate"], cyclic["stable_mean_m"], cyclic["walks_indefinitely"]) == (4, 0.8, 20.5, 2)
+    assert (cyclic["stable"], cyclic["success_rate"], cyclic["stable_mean_m"],
+            cyclic["walks_indefinitely"]) == (4, 0.8, 20.5, 2)
 
 
 
-TINY = ["--population", 4, "--generations", 2, "--episode-seconds", 1, "--recheck-seconds", 3, "--workers", 2, "--quiet"]
+TINY = ["--population", 4, "--generations", 2, "--episode-seconds", 1, "--recheck-seconds", 3, "--workers", 2,
+        "--quiet"]
 
 
 def test_tiny_study_end_to_end(tmp_path, capsys):
@@ -69,7 +76,8 @@ def test_tiny_study_end_to_end(tmp_path, capsys):
     table = capsys.readouterr().out
     assert "| plain | 2 |" in table and "| cyclic | 2 |" in table
     runs = list(csv.DictReader(open(out / "runs.csv")))
-    assert [(r["condition"], r["seed"]) for r in runs] == [("plain", "0"), ("plain", "1"), ("cyclic", "0"), ("cyclic", "1")]
+    assert [(r["condition"], r["seed"]) for r in runs] == [("plain", "0"), ("plain", "1"), ("cyclic", "0"),
+                                                           ("cyclic", "1")]
     for r in runs:  # each row is its run directory's best walker
         d = out / r["condition"] / f"seed_{int(r['seed']):03d}"
         best = json.loads((d / "best.json").read_text())
@@ -77,7 +85,8 @@ def test_tiny_study_end_to_end(tmp_path, capsys):
         if r["condition"] == "plain":  # eq. 4: fitness is the distance
             assert float(r["distance"]) == best["fitness"]
         assert len((d / "history.csv").read_text().splitlines()) == 3
-        assert json.loads((d / "config.json").read_text())["episode"]["task_options"]["cyclic_weight"] == (1.0 if r["condition"] == "cyclic" else 0.0)
+        assert json.loads((d / "config.json").read_text())["episode"]["task_options"]["cyclic_weight"] == (1.0 if r[
+            "condition"] == "cyclic" else 0.0)
     t = {row["condition"]: row for row in json.loads((out / "table.json").read_text())["conditions"]}
     for c in ("plain", "cyclic"):
         stable = sum(1 for r in runs if r["condition"] == c and r["fell"] == "False")
@@ -100,7 +109,8 @@ def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     from evobiped.evaluation import make_evaluator
     from evobiped.experiments.reil.study import StudyConfig, open_study, run_dir, run_study
 
-    cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0), optimizer_options={"ga": GAOptions(population=4)}, generations=3),
+    cfg = StudyConfig(run=RunConfig(episode=EpisodeConfig(seconds=1.0),
+                                    optimizer_options={"ga": GAOptions(population=4)}, generations=3),
                       runs=1, conditions=("plain",), recheck_seconds=3.0)
     ref = run_study(tmp_path / "whole", cfg, backend="serial")
 
@@ -119,7 +129,8 @@ def test_interrupted_study_resumes_unfinished_runs(tmp_path):
     first = (d / "generations" / "gen_0000.json").stat().st_mtime_ns
     (resumed,) = run_study(out, cfg, backend="serial")
     assert (d / "generations" / "gen_0000.json").stat().st_mtime_ns == first  # generation 0 was not redone
-    assert {k: v for k, v in resumed.items() if k != "wall_seconds"} == {k: v for k, v in ref[0].items() if k != "wall_seconds"}
+    assert {k: v for k, v in resumed.items() if k != "wall_seconds"} == {k: v for k, v in ref[0].items()
+                                                                         if k != "wall_seconds"}
     from evobiped.files.rundir import read_history
 
     whole = read_history(run_dir(tmp_path / "whole", "plain", 0, cfg) / "history.csv")
@@ -170,15 +181,16 @@ def test_a_different_study_in_the_directory_is_refused(tmp_path, capsys):
 def test_controller_and_optimizer_axes(tmp_path, capsys):
     """One command compares controllers and optimizers: one run directory per cell, each with its settings."""
     out = tmp_path / "axes"
-    assert cli("study", "--runs", 1, "--controllers", "ctrnn,simbicon", "--optimizers", "ga,cma", "--conditions", "forward",
-               *TINY, "--out", out) == 0
+    assert cli("study", "--runs", 1, "--controllers", "ctrnn,simbicon", "--optimizers", "ga,cma", "--conditions",
+               "forward", *TINY, "--out", out) == 0
     table = capsys.readouterr().out
     cells = ["ctrnn-ga-forward", "ctrnn-cma-forward", "simbicon-ga-forward", "simbicon-cma-forward"]
     for c in cells:
         assert f"| {c} | 1 |" in table
         cfg = json.loads((out / c / "seed_000" / "config.json").read_text())
         controller, optimizer, _ = c.split("-")
-        assert (cfg["episode"]["controller"], cfg["optimizer"], cfg["episode"]["task_options"]["fitness"]) == (controller, optimizer, "forward")
+        assert (cfg["episode"]["controller"], cfg["optimizer"],
+                cfg["episode"]["task_options"]["fitness"]) == (controller, optimizer, "forward")
     runs = list(csv.DictReader(open(out / "runs.csv")))
     assert [r["condition"] for r in runs] == cells
     for r in runs:  # heading of the displacement, in degrees from the initial facing

@@ -1,5 +1,6 @@
 """The Taga biped and its Matsuoka rhythm generator against Taga, Yamaguchi & Shimizu 1991
-(walking, running, push recovery, the rhythm generator), the stride metrics on synthetic contact sequences, and the CLI."""
+(walking, running, push recovery, the rhythm generator), the stride metrics on synthetic contact sequences, and the
+CLI."""
 
 import re
 
@@ -137,7 +138,8 @@ def test_feedback_eed6_reads_x14_minus_half_pi():
     assert f[5] == pytest.approx(3.0 * (1.8 - np.pi / 2))
     assert f[4] == -f[5] and f[6] == -f[7]
     # flexor and extensor of each hip receive opposite angle feedback; contact terms +-a4
-    assert f[0] + f[1] == pytest.approx(0.0) and f[0] - f[1] == pytest.approx(2 * (1.5 * (1.5 - np.pi / 2) - 1.0 * (1.7 - np.pi / 2) + 1.5 * (1.6 - np.pi / 2) + 1.5))
+    assert f[0] + f[1] == pytest.approx(0.0) and f[0] - f[1] == pytest.approx(2 * (1.5 * (1.5 - np.pi / 2) - 1.0 * (
+        1.7 - np.pi / 2) + 1.5 * (1.6 - np.pi / 2) + 1.5))
 
 
 # ---------------------------------------------------------------- stride metrics
@@ -270,7 +272,8 @@ def test_cli_reproduce_runs_the_paper_into_the_folder(tmp_path, monkeypatch):
                         calls.append((out, quick, quiet)))
     assert main(["taga", "--reproduce", str(tmp_path / "r"), "--quick", "--quiet"]) == 0
     assert main(["taga", "--reproduce", str(tmp_path / "r")]) == 0
-    assert calls == [(str(tmp_path / "r"), True, True), (str(tmp_path / "r"), False, False)] and (tmp_path / "r").is_dir()
+    assert calls == [(str(tmp_path / "r"), True, True),
+                     (str(tmp_path / "r"), False, False)] and (tmp_path / "r").is_dir()
 
 
 def test_reproduce_tables_format_cells_as_the_summary_shows_them():
@@ -316,11 +319,13 @@ def test_every_body_controller_pair_runs_or_is_refused_by_the_contract():
             cfg = EpisodeConfig(body=body, controller=ctrl, seconds=0.2)
             why = problem(ccls.needs(parse(ccls.Options, {}, "options")), Offer(bcls.actuators, bcls.sensor_widths))
             if why is None and (ccls.output_kind, bcls.action_kind) not in MAPS:  # the outputs' kind is declared too
-                with pytest.raises(ConfigError, match=f"controller '{ctrl}' gives {ccls.output_kind} outputs, which body '{body}' cannot take"):
+                with pytest.raises(ConfigError, match=f"controller '{ctrl}' gives {ccls.output_kind} outputs, which "
+                                                      f"body '{body}' cannot take"):
                     cfg.layout()
                 continue
             if why is not None:
-                with pytest.raises(ConfigError, match=re.escape(f"controller '{ctrl}' (body '{body}', task 'walk') {why}")):
+                with pytest.raises(ConfigError, match=re.escape(f"controller '{ctrl}' (body '{body}', task 'walk') "
+                                                                f"{why}")):
                     cfg.layout()
                 continue
             ep = cfg.build()

@@ -36,10 +36,12 @@ REFUSED = [
     (["g3", "--reproduce", "out", "--go", "0.1", "--continue"], "--go/--continue: --reproduce"),
     (["g3", "fig4", "--step", "0.1"], "--step: it spaces the sweeps of --reproduce"),
     (["g3"], "g3: give a PRESET"),
-    (["taga", "--reproduce", "out", "--u0", "6", "--json"], "--u0/--json: --reproduce runs the paper's own experiments"),
+    (["taga", "--reproduce", "out", "--u0", "6", "--json"],
+     "--u0/--json: --reproduce runs the paper's own experiments"),
     (["taga", "--quick"], "--quick: it coarsens the grids of --reproduce"),
     (["replay", "GENOME", "--spawn"], "cannot spawn a Rerun viewer: no display here"),
-    (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"], "--save-genome: the folder no/such/dir does not exist"),
+    (["taga", "--seconds", "1", "--window", "1", "--save-genome", "no/such/dir/t.json"],
+     "--save-genome: the folder no/such/dir does not exist"),
 ]
 
 
@@ -70,7 +72,8 @@ def test_unknown_body_option_names_the_valid_ones(tmp_path, capsys):
     cfg.write_text("[episode.body_options]\nkpp = 3\n")
     assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err
-    assert "episode.body_options.kpp: unknown option (choose from timestep, kp," in err and "__init__" not in err and err.count("\n") == 1
+    assert "episode.body_options.kpp: unknown option (choose from timestep, kp," in err
+    assert "__init__" not in err and err.count("\n") == 1
 
 
 def _help(command: str) -> str:
@@ -79,7 +82,8 @@ def _help(command: str) -> str:
 
 
 @pytest.mark.parametrize("command, listed", [
-    ("evolve", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon", "walk, steer", "serial, process, thread, ray", "paper, paper-cyclic"]),
+    ("evolve", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon", "walk, steer",
+                "serial, process, thread, ray", "paper, paper-cyclic"]),
     ("episode", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon"]),
     ("bench", ["reil, taga", "ctrnn, g3, linear, matsuoka, open-loop, simbicon"]),
     ("study", ["serial, process, thread, ray", "paper, paper-cyclic"]),
@@ -127,13 +131,15 @@ def test_every_long_command_reports_in_one_line_shape(capsys):
                    "elapsed 0:01:02  left ~0:12:40\n")
     got = []
     progress.Progress("study", 4, "runs", emit=got.append).report(1, "last: plain seed 0")
-    assert len(got) == 1 and re.fullmatch(r"study:  25% \(1 of 4 runs; last: plain seed 0\)  elapsed 0:00:00  left ~0:00:00", got[0])
+    assert len(got) == 1 and re.fullmatch(r"study:  25% \(1 of 4 runs; last: plain seed 0\)  elapsed 0:00:00  left "
+                                          r"~0:00:00", got[0])
 
 
 def test_the_robustness_table_has_one_header_per_column_and_names_its_statistics():
     from evobiped.analysis.robustness import table
 
-    rows = [{"family": "push 5 N", "trials": 32, "survived": 30, "survival": 30 / 32, "forward_m": 12.345, "median_fall_s": 14.5},
+    rows = [{"family": "push 5 N", "trials": 32, "survived": 30, "survival": 30 / 32, "forward_m": 12.345,
+             "median_fall_s": 14.5},
             {"family": "slope", "trials": 2, "survived": 2, "survival": 1.0, "forward_m": -1.0, "median_fall_s": None}]
     head, *lines = table(rows).splitlines()
     cols = re.split(r" {2,}", head.strip())
@@ -183,8 +189,8 @@ def test_a_closed_output_pipe_ends_quietly():
     import subprocess
     import sys
 
-    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "presets"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)))
+    proc = subprocess.Popen([sys.executable, "-m", "evobiped", "presets"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)))
     proc.stdout.close()  # before the child has imported anything, so its first write meets a closed pipe
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 141 and err == b""

@@ -87,7 +87,8 @@ def test_presentations_side_by_side_and_the_time_burned_in(walk):
     frames, times = render_frames([walk, walk], ["a", "b"], fps=2.0, size=(64, 48))
     assert np.allclose(times, [0.0, 0.5, 1.0, 1.5, 2.0])
     assert frames.shape == (5, 48, 128, 3)
-    below = (frames[:, 30:, :64] != frames[:, 30:, 64:]).any(axis=-1)  # the same walker twice: below the names, the same
+    # the same walker twice: below the names, the same
+    below = (frames[:, 30:, :64] != frames[:, 30:, 64:]).any(axis=-1)
     assert below.mean() < 0.002  # panels (but for a stray rasterised pixel)
     assert not np.array_equal(frames[:, :20, :64], frames[:, :20, 64:])  # each panel named
     corner = (slice(0, 24), slice(0, 40))  # where the name and the time are written

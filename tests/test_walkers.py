@@ -38,8 +38,10 @@ def test_a_forward_walker_walks_forwards_and_stays_up_200_s(name):
 @pytest.mark.parametrize("name", sorted(p.stem.removesuffix("_robustness") for p in WALKERS.glob("*_robustness.json")))
 def test_a_shipped_walker_still_reaches_its_documented_battery_figures(name):
     documented = json.loads((WALKERS / f"{name}_robustness.json").read_text())
-    genome, cfg, _ = load_genome(WALKERS / f"{re.sub(r'_phases[0-9]+$', '', name)}.json")  # <walker>_phasesN: pushes at random phases
-    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"], push_after=documented["push_after"],
+    # <walker>_phasesN: pushes at random phases
+    genome, cfg, _ = load_genome(WALKERS / f"{re.sub(r'_phases[0-9]+$', '', name)}.json")
+    rows = summarise(battery(cfg.nominal().build(), genome, seconds=documented["seconds"],
+                             push_after=documented["push_after"],
                                      phase_seed=documented.get("phase_seed")))
     got = {r["family"]: r["survived"] for r in rows}
     want = {r["family"]: r["survived"] for r in documented["families"]}
@@ -58,7 +60,8 @@ def test_a_forward_fitness_walker_replays_with_its_fitness_so_far(tmp_path, caps
     ep.advance(state, 2.0)
     forward = float(ep.task.forward(state.task)[0])
     assert forward > 0.5 and ep.task.fitness(state.task)[0] == pytest.approx(forward + 5.0)
-    assert main(["replay", str(WALKERS / "simbicon_cma_seed5.json"), "--seconds", "2", "--out", str(tmp_path / "r.rrd"), "--quiet"]) == 0
+    assert main(["replay", str(WALKERS / "simbicon_cma_seed5.json"), "--seconds", "2", "--out", str(tmp_path / "r.rrd"),
+                 "--quiet"]) == 0
     assert (tmp_path / "r.rrd").stat().st_size > 0
 
 
@@ -85,8 +88,8 @@ def test_the_six_source_steering_walker_reaches_sources_it_never_heard():
     from evobiped.tasks.sound import with_sources
 
     genome, cfg, _ = load_genome(WALKERS / "steer_simbicon_six_sources.json")
-    sources = [[3, -5.196], [5.196, -3], [6, 0], [5.196, 3], [3, 5.196], [5, -8.66], [8.66, -5], [10, 0], [8.66, 5], [5, 8.66],
-               [7, -12.124], [12.124, -7], [14, 0], [12.124, 7], [7, 12.124]]  # as in docs/steering.md
+    sources = [[3, -5.196], [5.196, -3], [6, 0], [5.196, 3], [3, 5.196], [5, -8.66], [8.66, -5], [10, 0], [8.66, 5],
+               [5, 8.66], [7, -12.124], [12.124, -7], [14, 0], [12.124, 7], [7, 12.124]]  # as in docs/steering.md
     rows = with_sources(cfg, sources).build().run(genome).rows
     distances = np.linalg.norm(rows.end_position - np.array(sources), axis=1)
     assert np.median(distances) <= 1.5
@@ -120,12 +123,14 @@ def test_a_shipped_walker_replays_under_either_family_of_numpy_kernels(disable, 
     env = {**os.environ, "NPY_DISABLE_CPU_FEATURES": disable, "PYTHONPATH": str(ROOT)}
     walker = WALKERS / "steer_simbicon_seed0.json"
     probe = "import json, evobiped.core.provenance as p; print(json.dumps(p.current()))"
-    here = json.loads(subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True).stdout)
+    here = json.loads(subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True,
+                                     check=True).stdout)
     _, _, meta = load_genome(walker)
     from evobiped.core.provenance import differences
 
     same = not differences(meta["environment"], here)
-    run = subprocess.run([sys.executable, "-m", "evobiped", "replay", str(walker), "--quiet", "--out", str(tmp_path / "r.rrd")],
+    run = subprocess.run([sys.executable, "-m", "evobiped", "replay", str(walker), "--quiet", "--out",
+                          str(tmp_path / "r.rrd")],
                          env=env, capture_output=True, text=True, cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
     if same:
@@ -134,7 +139,8 @@ def test_a_shipped_walker_replays_under_either_family_of_numpy_kernels(disable, 
         assert "numerical environment differs" in run.stdout and "outcome holds" in run.stdout
 
 
-@pytest.mark.parametrize("name, least, widest", [("ctrnn_distilled_seed5", 25.0, 35.0), ("ctrnn_distilled_seed3", 12.0, 30.0),
+@pytest.mark.parametrize("name, least, widest", [("ctrnn_distilled_seed5", 25.0, 35.0),
+                                                 ("ctrnn_distilled_seed3", 12.0, 30.0),
                                                 ("ctrnn_tuned_seed1", 20.0, 30.0)])
 def test_a_distilled_ctrnn_walks_200_s_with_the_network_alone(name, least, widest):
     """A 40-neuron CTRNN sets every joint target (no balance law, no latency in the loop): no fall in 200 s, at
@@ -180,7 +186,8 @@ def test_the_shipped_from_scratch_walkers_gaits_are_their_docs_rows(name, failed
     cells = dict(zip(head, (c.strip() for c in row.strip("|").split("|"))))
     assert cells["up"] == "200 s up" and cells["walks?"] == ("yes" if not failed else "no: " + ", ".join(failed))
     assert float(cells["speed (m/s)"]) == pytest.approx(r["speed"], abs=0.02)
-    assert [float(x) for x in cells["duty L / R"].split("/")] == pytest.approx([r["duty_left"], r["duty_right"]], abs=0.02)
+    assert [float(x) for x in cells["duty L / R"].split("/")] == pytest.approx([r["duty_left"], r["duty_right"]],
+                                                                               abs=0.02)
     assert float(cells["step (m)"]) == pytest.approx(r["step_length"], abs=0.02)
     assert float(cells["CoT"]) == pytest.approx(r["cost_of_transport"], abs=0.1)
     assert float(cells["slid (cm/m)"]) == pytest.approx(100 * r["slide_per_m"], abs=1.0)

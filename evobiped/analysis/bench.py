@@ -116,7 +116,8 @@ def bench(
     config = replace(episode, stop_on_fall=False)
     ep = config.build()
     if ep.body.has_custom_forces:
-        raise ConfigError(f"bench: body {config.body!r} adds forces in Python between physics steps; (a) cannot replay it open-loop")
+        raise ConfigError(f"bench: body {config.body!r} adds forces in Python between physics steps; (a) cannot replay "
+                          "it open-loop")
     genomes = GA(ep.controller.layout, GAOptions(population=max(2, population)), seed=seed).ask()[0][:population]
     sim_seconds = population * ep.n_ticks * ep.control_dt
 
@@ -140,7 +141,8 @@ def bench(
                 if n == 1:
                     state, _ = rollout.rollout(model, data[0], initial[None], ctrl[p : p + 1], nstep=nstep)
                 else:
-                    state, _ = threads.rollout(model, data[:n], initial[None], ctrl[p : p + group], nstep=nstep, chunk_size=1)
+                    state, _ = threads.rollout(model, data[:n], initial[None], ctrl[p : p + group], nstep=nstep,
+                                               chunk_size=1)
                 finals[p : p + len(state)] = state[:, -1, 1 : 1 + model.nq]
         return go
 
@@ -152,19 +154,22 @@ def bench(
         rec = _ControlRecorder(forces=True)
         rows = perturbed.run(genomes, trials=trials, listener=rec).rows
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
-        controls = np.repeat(np.concatenate([np.stack(rec.ctrl, axis=1), np.stack(rec.xfrc, axis=1)], axis=2), perturbed.substeps, axis=1)
+        controls = np.repeat(np.concatenate([np.stack(rec.ctrl, axis=1), np.stack(rec.xfrc, axis=1)], axis=2),
+                             perturbed.substeps, axis=1)
         d = mujoco.MjData(rec.model)
         ends = np.empty((len(controls), 2))
 
         def go():
             for p in range(len(controls)):
-                state, _ = rollout.rollout(rec.model, d, rec.initial[p : p + 1], controls[p : p + 1], control_spec=spec, nstep=controls.shape[1])
+                state, _ = rollout.rollout(rec.model, d, rec.initial[p : p + 1], controls[p : p + 1], control_spec=spec,
+                                           nstep=controls.shape[1])
                 ends[p] = state[0, -1, 1:3]
             gaps.append(float(np.max(np.abs(ends - rows.end_position))))
         return go
 
-    say(f"{population} walkers x {config.seconds:g} s, {repeats} interleaved repeat(s) of: raw stepping (mujoco.rollout) on 1 and "
-        f"{workers} thread(s), evaluation in this process, process pools of 1 and {workers}, {workers} thread(s) ...")
+    say(f"{population} walkers x {config.seconds:g} s, {repeats} interleaved repeat(s) of: raw stepping "
+        f"(mujoco.rollout) on 1 and {workers} thread(s), evaluation in this process, process pools of 1 and {workers}, "
+        f"{workers} thread(s) ...")
     sizes = sorted({1, workers})
     pools = {n: ProcessPoolEvaluator(config, n) for n in sizes}
     thread_ev = ThreadEvaluator(config, workers)
@@ -218,7 +223,8 @@ def bench(
         "scaling_pool": median[f"pool {workers}"] / pool_1,
         "presentations": presentations,
         "presentation_cost": median["eval"] / median[f"eval x{presentations}"] if presentations > 1 else None,
-        "efficiency_presentations": median[f"eval x{presentations}"] / median[f"raw x{presentations}"] if presentations > 1 else None,
+        "efficiency_presentations": median[f"eval x{presentations}"] / median[f"raw x{presentations}"]
+            if presentations > 1 else None,
         "replay_end_position_gap_m": end_gap,
         "replay_presentations_gap_m": max(gaps) if gaps else None,
         "wall_seconds": walls,
@@ -230,8 +236,8 @@ def format_bench(r: dict) -> str:
     sim = r["simulated_seconds_each"]
     spread = {k: (sim[k] / max(v), sim[k] / min(v)) for k, v in r["wall_seconds"].items()}
     names = {"raw 1": "(a) raw stepping, rollout 1 thread", f"raw {w}": f"(a) raw stepping, rollout {w} threads",
-             "eval": "(b) evaluation, 1 process", "pool 1": "(c) process pool, 1 worker", f"pool {w}": f"(c) process pool, {w} workers",
-             f"threads {w}": f"(d) thread evaluator, {w} threads",
+             "eval": "(b) evaluation, 1 process", "pool 1": "(c) process pool, 1 worker",
+             f"pool {w}": f"(c) process pool, {w} workers", f"threads {w}": f"(d) thread evaluator, {w} threads",
              f"raw x{r['presentations']}": "(a e) raw stepping of (e)'s rows, 1 thread",
              f"eval x{r['presentations']}": f"(e) evaluation, {r['presentations']} presentations"}
     lines = [
@@ -244,12 +250,12 @@ def format_bench(r: dict) -> str:
         if k in m:
             lines.append(f"{names[k]:<40} {m[k]:9.1f}  [{spread[k][0]:.1f}, {spread[k][1]:.1f}]")
     lines += [
-        f"efficiency: 1 core (b)/(a 1) = {r['efficiency_one_core']:.3f}   {w} cores: pool (c {w})/(a {w}) = {r['efficiency_pool']:.3f}, "
-        f"threads (d {w})/(a {w}) = {r['efficiency_threads']:.3f}",
+        f"efficiency: 1 core (b)/(a 1) = {r['efficiency_one_core']:.3f}   {w} cores: pool (c {w})/(a {w}) = "
+        f"{r['efficiency_pool']:.3f}, threads (d {w})/(a {w}) = {r['efficiency_threads']:.3f}",
         f"scaling 1 -> {w}: raw {r['scaling_raw']:.2f}x, pool {r['scaling_pool']:.2f}x",
-        *([f"{r['presentations']} perturbed presentations: cost per simulated second vs one (b)/(e) = {r['presentation_cost']:.3f}; "
-           f"efficiency against the raw stepping of their own physics (e)/(a e) = {r['efficiency_presentations']:.3f} "
-           f"(one presentation: (b)/(a 1) = {r['efficiency_one_core']:.3f})"]
+        *([f"{r['presentations']} perturbed presentations: cost per simulated second vs one (b)/(e) = "
+           f"{r['presentation_cost']:.3f}; efficiency against the raw stepping of their own physics (e)/(a e) = "
+           f"{r['efficiency_presentations']:.3f} (one presentation: (b)/(a 1) = {r['efficiency_one_core']:.3f})"]
           if r["presentations"] > 1 else []),
         f"open-loop replay of (b)'s controls ends within {r['replay_end_position_gap_m']:.2g} m of (b)"
         + (f", of (e)'s within {r['replay_presentations_gap_m']:.2g} m of (e)" if r["presentations"] > 1 else ""),

@@ -36,30 +36,35 @@ def check_commanded(config: EpisodeConfig, what: str) -> None:
     """UserError (one line) unless ``config`` is a commanded walker's."""
     if not is_commanded(config):
         inputs = getattr(config.controller_options, "inputs", None) or ()
-        reads = "reads " + ", ".join(s for s in COMMAND_SENSES if s in inputs) if any(s in inputs for s in COMMAND_SENSES) else "reads no command"
+        reads = "reads " + ", ".join(s for s in COMMAND_SENSES
+                                     if s in inputs) if any(s in inputs for s in COMMAND_SENSES) else "reads no command"
         raise UserError(f"{what} is not a commanded walker (task {config.task!r}, its controller {reads}): "
-                        "it cannot follow --speed/--turning; evobiped gait takes a commanded walker's genome or a map-elites run")
+                        "it cannot follow --speed/--turning; evobiped gait takes a commanded walker's genome or a "
+                        "map-elites run")
 
 
-def plan(config: EpisodeConfig, speeds: list[float], turnings: list[float]) -> tuple[list[float], list[float], list[str]]:
+def plan(config: EpisodeConfig, speeds: list[float],
+         turnings: list[float]) -> tuple[list[float], list[float], list[str]]:
     """The commands (m/s, rad/s) clipped to what the walker of ``config`` was evolved for, and a note per clipped
     value; UserError for a non-finite value or lists of unequal lengths (one of length 1 goes with every stretch)."""
     for name, values in (("--speed", speeds), ("--turning", turnings)):
         if not values or not all(math.isfinite(v) for v in values):
             raise UserError(f"{name}: expected finite numbers, comma-separated, got {values}")
     if len(speeds) > 1 and len(turnings) > 1 and len(speeds) != len(turnings):
-        raise UserError(f"--turning: {len(turnings)} turning rates for {len(speeds)} speeds; give one, or one per speed")
+        raise UserError(
+            f"--turning: {len(turnings)} turning rates for {len(speeds)} speeds; give one, or one per speed")
     n = max(len(speeds), len(turnings))
     speeds, turnings = (v * n if len(v) == 1 else list(v) for v in (speeds, turnings))
     o = config.task_options
     (lo, hi), stops, (wlo, whi) = trained_range(o)
-    met = f"{lo:g}-{hi:g} m/s{' or 0' if stops else ''}, turning {math.degrees(wlo):+.1f} to {math.degrees(whi):+.1f} deg/s"
+    met = (f"{lo:g}-{hi:g} m/s{' or 0' if stops else ''}, turning {math.degrees(wlo):+.1f} to {math.degrees(whi):+.1f} "
+           "deg/s")
     out_s, out_w, notes = [], [], []
     for v, w in zip(speeds, turnings):
         cv, cw = clip_command(o, v, w)
         if (cv, cw) != (v, w):
-            notes.append(f"note: command {v:g} m/s, {math.degrees(w):+.1f} deg/s is beyond what this walker was evolved for "
-                         f"({met}): clipped to {cv:g} m/s, {math.degrees(cw):+.1f} deg/s")
+            notes.append(f"note: command {v:g} m/s, {math.degrees(w):+.1f} deg/s is beyond what this walker was "
+                         f"evolved for ({met}): clipped to {cv:g} m/s, {math.degrees(cw):+.1f} deg/s")
         out_s.append(cv)
         out_w.append(cw)
     return out_s, out_w, notes
@@ -69,7 +74,8 @@ def nominal_plan(config: EpisodeConfig, hold: float) -> tuple[list[float], list[
     """The walker's own nominal schedule as stretches: (start times s, speeds, turnings, episode length s); its last
     value lasts ``hold`` s."""
     s = schedule_of(config.task_options)
-    return [float(t) for t in s.times], [float(v) for v in s.speed], [float(w) for w in s.turning], float(s.times[-1]) + hold
+    return [float(t) for t in s.times], [float(v) for v in s.speed], [float(w)
+                                                                      for w in s.turning], float(s.times[-1]) + hold
 
 
 class _Trace:
@@ -123,7 +129,8 @@ def follow_commands(config: EpisodeConfig, genome: np.ndarray, times: list[float
         walked = float(along[ticks].sum() / span) if span > 0 else None  # None: down before it settled
         turned = float(turn[ticks].sum() / span) if span > 0 else None
         stretches.append({
-            "start": a, "end": b, "measured_from": first, "commanded_speed": v, "commanded_turning": w, "walked_speed": walked,
+            "start": a, "end": b, "measured_from": first, "commanded_speed": v, "commanded_turning": w,
+            "walked_speed": walked,
             "walked_turning": turned, "speed_error_pct": 100 * abs(walked - v) / v if v > 0 and span > 0 else None,
             "turning_error_pct": 100 * abs(turned - w) / abs(w) if w != 0 and span > 0 else None,
             "fell": fell and a < end <= b + 1e-9, "down": fell and end <= a})
@@ -131,8 +138,8 @@ def follow_commands(config: EpisodeConfig, genome: np.ndarray, times: list[float
     return {"stretches": stretches, "fell": fell, "end_time": end, "seconds": float(seconds),
             "trace": {"time": t[:-1].tolist(), "commanded_speed": np.asarray(speeds)[np.maximum(k, 0)].tolist(),
                       "commanded_turning": np.asarray(turnings)[np.maximum(k, 0)].tolist(),
-                      "walked_speed": (along / np.maximum(dt, 1e-12)).tolist(), "walked_turning": (turn / np.maximum(dt, 1e-12)).tolist(),
-                      "both_down": trace.both}}
+                      "walked_speed": (along / np.maximum(dt, 1e-12)).tolist(),
+                      "walked_turning": (turn / np.maximum(dt, 1e-12)).tolist(), "both_down": trace.both}}
 
 
 def stretch_line(s: dict) -> str:
@@ -143,16 +150,20 @@ def stretch_line(s: dict) -> str:
         return head + "down (fell before this stretch)"
     if s["walked_speed"] is None:
         return head + "not measured (fell before it settled)" + (", FELL" if s["fell"] else "")
-    err = [f"speed {s['speed_error_pct']:.1f} % off" if s["speed_error_pct"] is not None else f"speed {abs(s['walked_speed']):.3f} m/s off 0",
+    err = [f"speed {s['speed_error_pct']:.1f} % off" if s["speed_error_pct"] is not None
+           else f"speed {abs(s['walked_speed']):.3f} m/s off 0",
            f"turning {s['turning_error_pct']:.1f} % off" if s["turning_error_pct"] is not None
            else f"turning {abs(math.degrees(s['walked_turning'])):.1f} deg/s off 0"]
-    return (head + f"walked {s['walked_speed']:.3f} m/s, {math.degrees(s['walked_turning']):+6.1f} deg/s ({', '.join(err)})"
+    return (head + f"walked {s['walked_speed']:.3f} m/s, {math.degrees(s['walked_turning']):+6.1f} deg/s "
+                   f"({', '.join(err)})"
             + (", FELL" if s["fell"] else ""))
 
 
 def nominal_words(config: EpisodeConfig) -> str:
     """One line: the commands a commanded walker's replay follows (its nominal schedule) and how to give others."""
     s = schedule_of(config.task_options)
-    steps = ", ".join(f"{v:g} m/s {math.degrees(w):+.0f} deg/s from {t:g} s" for t, v, w in zip(s.times, s.speed, s.turning))
-    kind = "the fixed tour of its drawn range" if config.task_options.schedule == "drawn" else f"its {config.task_options.schedule} schedule"
+    steps = ", ".join(f"{v:g} m/s {math.degrees(w):+.0f} deg/s from {t:g} s" for t, v,
+                      w in zip(s.times, s.speed, s.turning))
+    kind = ("the fixed tour of its drawn range" if config.task_options.schedule == "drawn"
+            else f"its {config.task_options.schedule} schedule")
     return f"commands: {kind} ({steps}); evobiped gait SOURCE --speed ... --turning ... follows others"

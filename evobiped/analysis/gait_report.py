@@ -71,11 +71,13 @@ class FootRecorder:
         return {k: np.array(v) for k, v in self.samples.items()}
 
 
-def gait_report(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 20.0, up_for: float | None = None) -> dict:
+def gait_report(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 20.0,
+                up_for: float | None = None) -> dict:
     """One genome ``(G,)`` alone in ``config``'s nominal episode, its gait measured over the first ``seconds`` s (or
     until it falls), then, with ``up_for``, left to walk on until ``up_for`` s: a dict with
-    ``up`` (no fall in ``up_for`` s, else in ``seconds``), ``time_up`` (s, in the measured ``seconds``), ``forward`` (m along the initial facing), ``speed`` (m/s), ``heading_deg``
-    (direction of its displacement from the initial facing; None: it did not move), every measure of
+    ``up`` (no fall in ``up_for`` s, else in ``seconds``), ``time_up`` (s, in the measured ``seconds``), ``forward`` (m
+    along the initial facing), ``speed`` (m/s), ``heading_deg`` (direction of its displacement from the initial facing;
+    None: it did not move), every measure of
     :mod:`evobiped.physics.gait_lab` (``duty_<foot>`` per foot), ``feet``, ``stance`` (per foot the debounced stance
     episodes as ``[start s, end s]``), ``walks`` and ``failed`` (:func:`failed_criteria`)."""
     if not (isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0):
@@ -91,10 +93,12 @@ def gait_report(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 2
     episode.advance(state, seconds, listener=recorder)
     end = body.planar_position(state.sims)[:1].copy()
     report = measured(recorder, episode, start=state.start_position[:1], end=end, facing=state.start_facing[:1],
-                      time_up=min(float(state.end_time[0]), float(seconds)), seconds=seconds, up=not bool(state.fell[0]))
+                      time_up=min(float(state.end_time[0]), float(seconds)), seconds=seconds,
+                      up=not bool(state.fell[0]))
     if up_for is not None and up_for > seconds:
         episode.advance(state, up_for - seconds)
-        report["up"], report["up_for"], report["end_time"] = not bool(state.fell[0]), float(up_for), float(state.end_time[0])
+        report["up"], report["up_for"], report["end_time"] = not bool(state.fell[0]), float(up_for), float(
+            state.end_time[0])
     report["failed"] = (["up"] if not report["up"] else []) + failed_criteria(report)
     report["walks"] = not report["failed"]
     return report
@@ -103,7 +107,8 @@ def gait_report(config: EpisodeConfig, genome: np.ndarray, *, seconds: float = 2
 def measured(recorder: FootRecorder, episode, *, start: np.ndarray, end: np.ndarray, facing: np.ndarray, time_up: float,
              seconds: float, up: bool) -> dict:
     """The report of the walker ``recorder`` listened to (see :func:`gait_report`): it started at ``start`` ``(1, 2)``
-    m facing ``facing`` ``(1, 2)``, is at ``end`` ``(1, 2)`` m, stayed up ``time_up`` of ``seconds`` s (``up``: no fall)."""
+    m facing ``facing`` ``(1, 2)``, is at ``end`` ``(1, 2)`` m, stayed up ``time_up`` of ``seconds`` s (``up``: no
+    fall)."""
     from ..physics.gait_lab import SHUFFLE, stance_episodes
     from ..tasks.walk import displacement_heading
 
@@ -115,11 +120,13 @@ def measured(recorder: FootRecorder, episode, *, start: np.ndarray, end: np.ndar
     series = recorder.series()
     dt = episode.control_dt / episode.substeps  # s per sample: one per physics step
     report = {"up": up, "time_up": time_up, "end_time": time_up, "seconds": float(seconds), "forward": forward,
-              "speed": forward / time_up if time_up > 0 else 0.0, "heading_deg": heading if np.isfinite(heading) else None,
+              "speed": forward / time_up if time_up > 0 else 0.0, "heading_deg": heading if np.isfinite(heading)
+                  else None,
               "displacement": [float(v) for v in (end - start)[0]], "mass": mass, "leg_length": leg,
               "control_dt": episode.control_dt, "sample_dt": dt, "sampling": "physics_step", "feet": list(feet)}
     report.update(measure_one(series, dt, forward=forward, mass=mass, leg_length=leg, feet=feet, min_gap=MIN_GAP))
-    report["stance"] = {f: [[a * dt, b * dt] for a, b in stance_episodes(series["contact"][:, i], dt, MIN_CONTACT, MIN_GAP)]
+    report["stance"] = {f: [[a * dt, b * dt] for a,
+                            b in stance_episodes(series["contact"][:, i], dt, MIN_CONTACT, MIN_GAP)]
                         for i, f in enumerate(feet)}
     report["shuffle"] = bool(report["step_similar"] < SHUFFLE)
     report["failed"] = (["up"] if not up else []) + failed_criteria(report)
@@ -161,4 +168,5 @@ def gait_line(report: dict) -> str:
             f"CoT {report['cost_of_transport']:.2f}")
 
 
-__all__ = ["MEASURES", "WALKING", "STEP_CRITERIA", "criteria_for", "FootRecorder", "gait_report", "failed_criteria", "criteria_words", "gait_line"]
+__all__ = ["MEASURES", "WALKING", "STEP_CRITERIA", "criteria_for", "FootRecorder", "gait_report", "failed_criteria",
+           "criteria_words", "gait_line"]

@@ -81,7 +81,8 @@ def parse_success(text: str, terms: tuple[str, ...]) -> Success:
 def check_measure(name: str, terms: tuple[str, ...], flag: str = "--measure") -> str:
     """``name`` if it is ``fitness`` or one of the task's ``terms``; UserError otherwise."""
     if name != "fitness" and name not in terms:
-        raise UserError(f"{flag}: {name!r} is not fitness nor a term of the task (its terms: {', '.join(terms) or 'none'})")
+        raise UserError(f"{flag}: {name!r} is not fitness nor a term of the task (its terms: "
+                        f"{', '.join(terms) or 'none'})")
     return name
 
 
@@ -94,7 +95,8 @@ def fresh_noise(table: dict | None, trials: int) -> PerturbationOptions:
     return PerturbationOptions.from_dict({**table, "presentations": int(trials)})
 
 
-def retest(config: EpisodeConfig, genome, *, seed: int, noise: PerturbationOptions, measure: str, success: Success) -> dict:
+def retest(config: EpisodeConfig, genome, *, seed: int, noise: PerturbationOptions, measure: str,
+           success: Success) -> dict:
     """``genome`` ``(G,)`` of the episode ``config`` (its generation file's: the normaliser frozen as it was) on the
     test presentations of run seed ``seed``: ``measure`` and ``passed`` (lists, one per presentation), the run's
     ``value`` (their median) and ``success`` (every presentation passed)."""
@@ -128,7 +130,8 @@ def check_walker_test(config: EpisodeConfig, success: Success) -> None:
 
 
 class _Rows:
-    """An episode listener filling one gait recorder per simulation row (the feet read once a physics step for all rows)."""
+    """An episode listener filling one gait recorder per simulation row (the feet read once a physics step for all
+    rows)."""
 
     def __init__(self, recorders):
         self.recorders = recorders

@@ -54,14 +54,15 @@ from ..core.progress import Progress
 PUSH_FORCES = (5.0, 10.0, 15.0, 20.0)  # N
 PUSH_DURATION = 0.1  # s
 #: direction name -> angle (rad) from the initial facing towards the left; a push or a slope's rise goes that way
-DIRECTIONS = {"forward": 0.0, "forward-left": np.pi / 4, "left": np.pi / 2, "backward-left": 3 * np.pi / 4, "backward": np.pi,
-              "backward-right": -3 * np.pi / 4, "right": -np.pi / 2, "forward-right": -np.pi / 4}
+DIRECTIONS = {"forward": 0.0, "forward-left": np.pi / 4, "left": np.pi / 2, "backward-left": 3 * np.pi / 4,
+              "backward": np.pi, "backward-right": -3 * np.pi / 4, "right": -np.pi / 2, "forward-right": -np.pi / 4}
 PHASES = 4
 OFFSETS = (0.05, 0.1)  # rad
 FRICTIONS = (0.5, 0.75, 1.25, 1.5)
 SLOPES = (0.03, 0.05)  # grade
 #: where a battery slope rises -> its label
-SLOPE_DIRECTIONS = {"forward": "uphill", "backward": "downhill", "left": "rising to the left", "right": "rising to the right"}
+SLOPE_DIRECTIONS = {"forward": "uphill", "backward": "downhill", "left": "rising to the left",
+                    "right": "rising to the right"}
 GENE_NOISE = 0.01  # of each gene's range
 GENE_NOISE_DRAWS = 8
 GENE_NOISE_SEED = 1
@@ -129,8 +130,8 @@ def stride(episode: Episode, genome: np.ndarray, seconds: float, after: float) -
 
 
 def push_phases(n: int, phase_seed: int | None) -> np.ndarray:
-    """The phases (fractions of the stride) of ``n`` push trials in battery order: the fixed i/4, cycled, when ``phase_seed``
-    is None; else ``n`` uniform draws in [0, 1) from (``phase_seed``, 0x9A5E)."""
+    """The phases (fractions of the stride) of ``n`` push trials in battery order: the fixed i/4, cycled, when
+    ``phase_seed`` is None; else ``n`` uniform draws in [0, 1) from (``phase_seed``, 0x9A5E)."""
     if phase_seed is None:
         return np.arange(n) % PHASES / PHASES
     return np.random.default_rng([int(phase_seed), 0x9A5E]).uniform(0.0, 1.0, n)
@@ -143,10 +144,11 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     ``progress`` (optional) hears the simulated seconds of its batches."""
     body = episode.body
     if body.contact_sensor is None or "left" not in body.contact_sensor[1]:
-        raise UserError(f"the robustness battery needs a body that declares its left foot's contact sensor; {body.name!r} does not")
+        raise UserError("the robustness battery needs a body that declares its left foot's contact sensor; "
+                        f"{body.name!r} does not")
     if episode.task.presentations != 1:
-        raise UserError(f"the robustness battery runs one presentation per trial; this {episode.task.name!r} episode has "
-                        f"{episode.task.presentations} (give a steering walker one source)")
+        raise UserError(f"the robustness battery runs one presentation per trial; this {episode.task.name!r} episode "
+                        f"has {episode.task.presentations} (give a steering walker one source)")
     if not push_after < seconds:
         raise UserError(f"the battery pushes after {push_after:g} s: trials must be longer (got {seconds:g} s)")
     hips = _hip_columns(episode)
@@ -155,7 +157,8 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
     t0, period = stride(episode, genome, seconds, push_after)
     labels: list[tuple[str, str]] = []
     starts, forces, offsets = [], [], []
-    if phase_seed is not None and (isinstance(phase_seed, bool) or not isinstance(phase_seed, (int, np.integer)) or phase_seed < 0):
+    if phase_seed is not None and (isinstance(phase_seed, bool) or not isinstance(phase_seed, (int, np.integer))
+                                   or phase_seed < 0):
         raise UserError(f"the battery's phase seed must be an integer >= 0, got {phase_seed!r}")
     directions = {d: unit(d) for d in DIRECTIONS if not (body.sagittal and unit(d)[1])}
     phases = iter(push_phases(len(PUSH_FORCES) * len(directions) * PHASES, phase_seed))
@@ -163,7 +166,8 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
         for d, (ux, uy) in directions.items():
             for i in range(PHASES):
                 p = next(phases)
-                labels.append((f"push {f:g} N", f"{d}, phase {i}/{PHASES}" if phase_seed is None else f"{d}, phase {p:.2f}"))
+                labels.append((f"push {f:g} N", f"{d}, phase {i}/{PHASES}" if phase_seed is None
+                               else f"{d}, phase {p:.2f}"))
                 starts.append([t0 + period * p])
                 forces.append([[f * ux, f * uy, 0.0]])
                 offsets.append(np.zeros(n_act))
@@ -196,7 +200,8 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
                  for s in SLOPES for d, name in SLOPE_DIRECTIONS.items()]
     out = []
     n_trials = sum(len(names) for names, _ in runs)
-    if progress is not None:  # trial-seconds: each trial's own simulated time, a fallen trial's rest counted at its batch's end
+    # trial-seconds: each trial's own simulated time, a fallen trial's rest counted at its batch's end
+    if progress is not None:
         progress.total, progress.unit = float(seconds * n_trials), f"trial-s of {n_trials} trials of {seconds:g} s"
     offset = 0.0
     for k, (names, trials) in enumerate(runs):
@@ -208,7 +213,8 @@ def battery(episode: Episode, genome: np.ndarray, *, seconds: float = 30.0, push
         disp = r.end_position - r.start_position
         fwd = disp[:, 0]  # the Reil walker faces +x at the start
         for j, (family, label) in enumerate(names):
-            out.append(Trial(family, label, bool(not r.fell[j]), float(r.end_time[j]), float(fwd[j]), float(np.hypot(*disp[j]))))
+            out.append(Trial(family, label, bool(not r.fell[j]), float(r.end_time[j]), float(fwd[j]),
+                             float(np.hypot(*disp[j]))))
     return out
 
 
@@ -241,5 +247,6 @@ def table(rows: list[dict]) -> str:
     lines = [f"{head[0]:<16}{head[1]:>9}{head[2]:>5}{head[3]:>10}{head[4]:>18}{head[5]:>36}"]
     for r in rows:
         fall = "-" if r["median_fall_s"] is None else f"{r['median_fall_s']:.2f}"
-        lines.append(f"{r['family']:<16}{r['survived']:>9}{r['trials']:>5}{100 * r['survival']:>9.0f}%{r['forward_m']:>18.2f}{fall:>36}")
+        lines.append(f"{r['family']:<16}{r['survived']:>9}{r['trials']:>5}{100 * r['survival']:>9.0f}%"
+                     f"{r['forward_m']:>18.2f}{fall:>36}")
     return "\n".join(lines)

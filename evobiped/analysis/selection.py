@@ -36,7 +36,8 @@ def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndar
     ``walking``, also ``walks`` and ``failed``: the walking criteria over its first 50 s (:func:`forward_walker`'s
     window), for a candidate up through the episode."""
     if isinstance(config, list):
-        return [try_candidates(c, np.asarray(g)[None], long_seconds, walking=walking)[0] for c, g in zip(config, genomes)]
+        return [try_candidates(c, np.asarray(g)[None], long_seconds, walking=walking)[0] for c,
+                g in zip(config, genomes)]
     episode = config.nominal().build()
     short = episode.run(genomes)
     rows = []
@@ -53,7 +54,8 @@ def try_candidates(config: EpisodeConfig | list[EpisodeConfig], genomes: np.ndar
         from .gait_report import gait_report
 
         for i, r in enumerate(rows):
-            report = gait_report(config, genomes[i], seconds=50.0) if not r["fell"] else {"walks": False, "failed": ["up"]}
+            report = gait_report(config, genomes[i],
+                                 seconds=50.0) if not r["fell"] else {"walks": False, "failed": ["up"]}
             r["walks"], r["failed"] = bool(report["walks"] and r.get("up_long", True)), report["failed"]
     return rows
 
@@ -63,8 +65,8 @@ def rank_key(row: dict, heading_limit: float) -> tuple:
     for the walking criteria ranks a walk first)."""
     h = row.get("heading_deg")
     h = 180.0 if h is None or not np.isfinite(h) else float(h)
-    return (bool(row.get("walks", False)), bool(row.get("up_long", False)), not row["fell"], abs(h) <= heading_limit, row["distance"] * np.cos(np.radians(h)),
-            row["end_time"])
+    return (bool(row.get("walks", False)), bool(row.get("up_long", False)), not row["fell"], abs(h) <= heading_limit,
+            row["distance"] * np.cos(np.radians(h)), row["end_time"])
 
 
 def best_candidate(rows: list[dict], heading_limit: float = 30.0) -> int:

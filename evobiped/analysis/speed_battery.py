@@ -65,7 +65,8 @@ def speed_battery(config: EpisodeConfig, genome: np.ndarray, *, n: int = SCHEDUL
     """The commanded walker ``genome`` ``(G,)`` of ``config`` through ``n`` random schedules (module docstring): a dict
     with ``schedules`` (per schedule its speeds, per stretch the walked speed, error % and whether it is within the
     tolerance, the window errors, fell, passed) and ``summary`` (schedules without a fall and passed, stretches within
-    the tolerance, the stretch and window errors' median, 90th percentile and maximum).  ``progress(i, n)`` after each."""
+    the tolerance, the stretch and window errors' median, 90th percentile and maximum).  ``progress(i, n)`` after
+    each."""
     if not (stretch > settle + window and 0 < tolerance < 1 and window > 0):
         raise UserError(f"a stretch ({stretch:g} s) must be longer than the settling time ({settle:g} s) and a window "
                         f"({window:g} s), and the tolerance a fraction in (0, 1) (got {tolerance:g})")
@@ -83,12 +84,13 @@ def speed_battery(config: EpisodeConfig, genome: np.ndarray, *, n: int = SCHEDUL
                         "error_pct": err, "within": err is not None and err <= 100 * tolerance and not s["fell"],
                         "windows_pct": _windows(r["trace"], s["measured_from"], s["end"], s["commanded_speed"], window)
                         if measured else [], "fell": s["fell"]})
-        rows.append({"speeds": [float(v) for v in schedule], "stretches": out, "fell": r["fell"], "end_time": r["end_time"],
-                     "passed": not r["fell"] and all(s["within"] for s in out)})
+        rows.append({"speeds": [float(v) for v in schedule], "stretches": out, "fell": r["fell"],
+                     "end_time": r["end_time"], "passed": not r["fell"] and all(s["within"] for s in out)})
         if progress is not None:
             progress(i + 1, n)
     return {"n": n, "stretches": stretches, "stretch": stretch, "low": low, "high": high, "seed": seed,
-            "tolerance": tolerance, "window": window, "settle": settle, "schedules": rows, "summary": battery_summary(rows)}
+            "tolerance": tolerance, "window": window, "settle": settle, "schedules": rows,
+            "summary": battery_summary(rows)}
 
 
 def _spread(values: list[float]) -> dict:
@@ -101,13 +103,15 @@ def _spread(values: list[float]) -> dict:
 def battery_summary(rows: list[dict]) -> dict:
     """The battery's counts and error spreads over the schedules ``rows`` of :func:`speed_battery`."""
     stretches = [s for r in rows for s in r["stretches"]]
-    return {"schedules": len(rows), "no_fall": sum(not r["fell"] for r in rows), "passed": sum(r["passed"] for r in rows),
+    return {"schedules": len(rows), "no_fall": sum(not r["fell"] for r in rows),
+            "passed": sum(r["passed"] for r in rows),
             "stretches": len(stretches), "within": sum(s["within"] for s in stretches),
             "stretch_error_pct": _spread([s["error_pct"] for s in stretches if s["error_pct"] is not None]),
             "window_error_pct": _spread([w for s in stretches for w in s["windows_pct"]])}
 
 
-def gait_at_speeds(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, seconds: float = 30.0) -> list[dict]:
+def gait_at_speeds(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *,
+                   seconds: float = 30.0) -> list[dict]:
     """The gait lab's report (:func:`~evobiped.analysis.gait_report.gait_report`, its first ``seconds`` s, less the
     stance episodes) of the commanded walker under each constant speed command (m/s, straight ahead), with
     ``commanded``."""
@@ -124,8 +128,8 @@ def gait_at_speeds(config: EpisodeConfig, genome: np.ndarray, speeds: list[float
 STOPPED = 0.05
 
 
-def stop_and_go(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, walk: float = 10.0, stop: float = 20.0,
-                window: float = WINDOW) -> list[dict]:
+def stop_and_go(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], *, walk: float = 10.0,
+                stop: float = 20.0, window: float = WINDOW) -> list[dict]:
     """Per speed v (m/s): ``walk`` s at v, a stop (speed 0) for ``stop`` s, ``walk`` s at v again, straight ahead.  Each
     dict: ``time_to_stop`` (s from the stop command to the start of the first ``window`` s window from which every
     window's mean speed is within :data:`STOPPED` of 0; None: it never stopped), ``stop_speed`` (mean speed over the
@@ -134,7 +138,8 @@ def stop_and_go(config: EpisodeConfig, genome: np.ndarray, speeds: list[float], 
     in the last stretch, measured as :func:`~evobiped.analysis.commanded.follow_commands` measures), ``fell``."""
     out = []
     for v in speeds:
-        r = follow_commands(config, genome, [0.0, walk, walk + stop], [float(v), 0.0, float(v)], [0.0] * 3, 2 * walk + stop)
+        r = follow_commands(config, genome, [0.0, walk, walk + stop], [float(v), 0.0, float(v)], [0.0] * 3, 2 * walk
+                            + stop)
         tr = r["trace"]
         t, w, both = np.asarray(tr["time"]), np.asarray(tr["walked_speed"]), np.asarray(tr["both_down"], bool)
         dt = _tick_lengths(t)
@@ -172,7 +177,8 @@ def calibrate_speed(config: EpisodeConfig, genome: np.ndarray, speeds: list[floa
     for v in speeds:
         r = follow_commands(config, genome, [0.0], [float(v)], [0.0], seconds)
         if r["fell"]:
-            raise UserError(f"the walker fell at {r['end_time']:.1f} s under a constant {v:g} m/s command: not calibrated")
+            raise UserError(f"the walker fell at {r['end_time']:.1f} s under a constant {v:g} m/s command: not "
+                            "calibrated")
         walked.append(r["stretches"][0]["walked_speed"])
     b, a = np.polyfit(np.asarray(speeds, float), np.asarray(walked, float), 1)
     if not b > 0:

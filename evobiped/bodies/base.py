@@ -80,7 +80,8 @@ class Body(ABC):
 
     def build_model(self) -> mujoco.MjModel:
         """A model of this body, the timestep this body's: the MJCF compiled once per body (so once per process and
-        body options, :mod:`evobiped.episode.parts`), each caller given its own copy (an episode's, which it may change)."""
+        body options, :mod:`evobiped.episode.parts`), each caller given its own copy (an episode's, which it may
+        change)."""
         model = self.__dict__.get("_model")
         if model is None:
             model = load_model(self.model_file)

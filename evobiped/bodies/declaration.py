@@ -119,7 +119,8 @@ def read_declaration(spec: str) -> Declaration:
     legs = {}
     raw = t.get("legs")
     if not isinstance(raw, dict) or sorted(raw) != sorted(LEGS):
-        problems.append(f"legs must be the tables [legs.left] and [legs.right], got {sorted(raw) if isinstance(raw, dict) else raw!r}")
+        problems.append("legs must be the tables [legs.left] and [legs.right], got "
+                        f"{sorted(raw) if isinstance(raw, dict) else raw!r}")
     else:
         for side in LEGS:
             leg = raw[side]
@@ -128,7 +129,8 @@ def read_declaration(spec: str) -> Declaration:
             if not isinstance(leg, dict) or set(leg) - {"actuators", "foot"}:
                 problems.append(f"legs.{side} must hold actuators and foot only")
             if not (isinstance(acts, list) and all(isinstance(a, str) for a in acts) and len(acts) == len(joints)):
-                problems.append(f"legs.{side}.actuators must name {len(joints)} actuators (one per joint role), got {acts!r}")
+                problems.append(f"legs.{side}.actuators must name {len(joints)} actuators (one per joint role), got "
+                                f"{acts!r}")
                 acts = []
             if not isinstance(foot, str) or not foot:
                 problems.append(f"legs.{side}.foot must name the foot's geom, got {foot!r}")
@@ -177,7 +179,8 @@ def check_model(d: Declaration, m: mujoco.MjModel) -> tuple[str, list[str]]:
             i = find(mujoco.mjtObj.mjOBJ_ACTUATOR, a, f"legs.{side}.actuators")
             if i < 0:
                 continue
-            if m.actuator_trntype[i] != mujoco.mjtTrn.mjTRN_JOINT or m.jnt_type[m.actuator_trnid[i, 0]] != mujoco.mjtJoint.mjJNT_HINGE:
+            if m.actuator_trntype[i] != mujoco.mjtTrn.mjTRN_JOINT or m.jnt_type[m.actuator_trnid[
+                i, 0]] != mujoco.mjtJoint.mjJNT_HINGE:
                 problems.append(f"legs.{side}.actuators: {a!r} does not drive one hinge joint")
             if not m.actuator_ctrllimited[i]:
                 problems.append(f"legs.{side}.actuators: {a!r} has no ctrlrange (its bounds are the actions')")

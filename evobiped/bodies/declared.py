@@ -109,16 +109,19 @@ def _make_class(spec: str, d: Declaration, model: mujoco.MjModel, kind: str) -> 
     mirror = {"joint_angles": (swap, signs), "joint_velocities": (swap, signs), "foot_contact": ((1, 0), (1, 1)),
               "pelvis_tilt": ((0, 1), (1, -1)), "pelvis_tilt_rate": ((0, 1), (1, -1)),
               "com_from_feet": ((2, 3, 0, 1), (1, -1, 1, -1)), "com_velocity": ((0, 1), (1, -1)), **gait.MIRROR}
-    fall_height = d.fall_height if d.fall_height is not None else 0.55 * float(data.subtree_com[model.body(d.pelvis).id, 2])
+    fall_height = d.fall_height if d.fall_height is not None else 0.55 * float(data.subtree_com[model.body(
+        d.pelvis).id, 2])
     order = ", ".join(f"{a.leg} {a.joint}" for a in actuators)
     text = {"joint_angles": f"joint angles (rad) in action order: {order}",
             "joint_velocities": "their rates (rad/s), same order",
             "foot_contact": "foot contacts: left, right (0 or 1; the foot's lowest point at or below the floor)",
             "pelvis_tilt": "pelvis tilt: pitch (+ nose down), roll (+ left side up) (rad)",
             "pelvis_tilt_rate": "their rates (rad/s)",
-            "com_from_feet": "centre of mass minus the left foot (forward, left), minus the right foot (m, heading frame)",
+            "com_from_feet": "centre of mass minus the left foot (forward, left), minus the right foot (m, heading "
+                             "frame)",
             "com_velocity": "centre-of-mass velocity: forward, left (m/s, heading frame)", **gait.TEXT}
-    attrs = dict(name=f"mjcf:{spec}", sensor_text=text, model_name=d.model.stem, action_kind=kind, trunk=d.pelvis, floor_geom=d.floor,
+    attrs = dict(name=f"mjcf:{spec}", sensor_text=text, model_name=d.model.stem, action_kind=kind, trunk=d.pelvis,
+                 floor_geom=d.floor,
                  contact_sensor=("foot_contact", LEGS), actuators=actuators, sensor_widths=widths, sensor_norms=norms,
                  mirror=mirror, actuator_mirror=(swap, signs), Options=DeclaredOptions, declaration=d,
                  fall_default=fall_height, timestep_default=float(model.opt.timestep),
@@ -158,7 +161,8 @@ class DeclaredBiped(Body):
         self.options = constructor_options(self.Options, options, given, f"{self.name} body_options")
         self.model_file = self.options.model_file or str(self.declaration.model)
         self.timestep = float(self.options.timestep if self.options.timestep is not None else self.timestep_default)
-        self.fall_height = float(self.options.fall_height if self.options.fall_height is not None else self.fall_default)
+        self.fall_height = float(self.options.fall_height if self.options.fall_height is not None
+                                 else self.fall_default)
 
     def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.bounds[0].copy(), self.bounds[1].copy()

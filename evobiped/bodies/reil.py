@@ -80,10 +80,10 @@ class ReilOptions:
     kp: float = option(50.0, "PD stiffness (the module docstring says why not the paper's 5)", unit="N m/rad", above=0)
     kv: float = option(2.0, "PD damping", unit="N m s/rad", low=0)
     fall_height: float = option(0.5, "centre-of-mass height below which the walker has fallen", unit="m", above=0)
-    fall_tilt: float = option(float(np.pi / 2), "pelvis tilt beyond which the walker has fallen (on its side, upside down)",
-                              unit="rad", above=0, high=float(np.pi))
-    inertia: str = option("geoms", "link inertias: from the geoms, or MathEngine's default 0.4 kg m^2 per body (`karma`)",
-                          choices=("geoms", "karma"))
+    fall_tilt: float = option(float(np.pi / 2), "pelvis tilt beyond which the walker has fallen (on its side, upside "
+                                                "down)", unit="rad", above=0, high=float(np.pi))
+    inertia: str = option("geoms", "link inertias: from the geoms, or MathEngine's default 0.4 kg m^2 per body "
+                                   "(`karma`)", choices=("geoms", "karma"))
     model_file: str | None = model_file_option("reil_biped")
 
 
@@ -96,7 +96,8 @@ class ReilBiped(Body):
     trunk: ClassVar[str] = "pelvis"
     floor_geom: ClassVar[str | None] = "floor"
     contact_sensor: ClassVar[tuple[str, tuple[str, ...]]] = ("foot_contact", ("left", "right"))
-    actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, a.split("_", 1)[0], a.split("_", 1)[1]) for a in ACTUATORS)
+    actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, a.split("_", 1)[0], a.split("_", 1)[1])
+                                                      for a in ACTUATORS)
     #: see :meth:`sensors`
     sensor_widths: ClassVar[dict[str, int]] = {
         "joint_angles": 6,
@@ -176,7 +177,8 @@ class ReilBiped(Body):
             for b in range(1, m.nbody):
                 part = m.body(b).name.split("_")[-1]
                 if part not in KARMA_INERTIA:
-                    raise UserError(f"reil body: inertia 'karma' knows the links {sorted(KARMA_INERTIA)}, not {m.body(b).name!r}")
+                    raise UserError(f"reil body: inertia 'karma' knows the links {sorted(KARMA_INERTIA)}, not "
+                                    f"{m.body(b).name!r}")
                 m.body_inertia[b] = KARMA_INERTIA[part]
         self._pelvis = m.body("pelvis").id
         self._feet = np.array([m.site("left_foot").id, m.site("right_foot").id])
@@ -224,7 +226,8 @@ class ReilBiped(Body):
         * ``pelvis_tilt_rate`` ``(P, 2)``: their rates (rad/s);
         * ``com_from_feet`` ``(P, 4)``: centre of mass minus left foot (forward, left), minus right foot (m);
         * ``com_velocity`` ``(P, 2)``: centre-of-mass velocity (forward, left) (m/s);
-        * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.physics.gait`; left = +1).
+        * ``stance_leg``, ``since_touchdown`` ``(P, 1)``: the gait's structure (:mod:`evobiped.physics.gait`; left =
+          +1).
 
         Only ``names`` are computed (default all), in the order above.
         """
@@ -241,7 +244,8 @@ class ReilBiped(Body):
             out["pelvis_tilt"] = np.arcsin(np.clip(sims.xmat[:, self._pelvis, 6:8], -1, 1)) * _TILT_SIGNS
         if "pelvis_tilt_rate" in want or "com_from_feet" in want or "com_velocity" in want:
             fwd = self.heading(sims)
-            frame = (fwd[:, _FRAME_COLUMNS] * _FRAME_SIGNS).reshape(-1, 2, 2)  # (P, 2, 2): rows forward, left = (-f_y, f_x)
+            # (P, 2, 2): rows forward, left = (-f_y, f_x)
+            frame = (fwd[:, _FRAME_COLUMNS] * _FRAME_SIGNS).reshape(-1, 2, 2)
             if "pelvis_tilt_rate" in want:  # pitch is a rotation about the left axis, roll about the forward axis
                 out["pelvis_tilt_rate"] = np.einsum("pij,pj->pi", frame, sims.cvel[:, self._pelvis, :2])[:, ::-1]
             if "com_from_feet" in want:

@@ -52,9 +52,13 @@ def _per_simulation(low: float, strict: bool):
     """A check: one number, or a list of them (one per simulation), each > low (strict) or >= low."""
 
     def check(v) -> None:
-        a = np.asarray(v, float) if isinstance(v, (int, float, list, tuple, np.ndarray)) and not isinstance(v, bool) else None
-        if a is None or a.ndim > 1 or a.size == 0 or not np.isfinite(a).all() or not (np.all(a > low) if strict else np.all(a >= low)):
-            raise ConfigError(f"must be a number {'>' if strict else '>='} {low:g} (or a list, one per simulation), got {v!r}")
+        a = np.asarray(v, float) if isinstance(v,
+                                               (int, float, list, tuple,
+                                                np.ndarray)) and not isinstance(v, bool) else None
+        if a is None or a.ndim > 1 or a.size == 0 or not np.isfinite(a).all() or not (np.all(
+            a > low) if strict else np.all(a >= low)):
+            raise ConfigError(f"must be a number {'>' if strict else '>='} {low:g} (or a list, one per simulation), "
+                              f"got {v!r}")
 
     return check
 
@@ -63,15 +67,18 @@ def _per_simulation(low: float, strict: bool):
 class TagaOptions:
     """Options of the taga body."""
 
-    timestep: float = option(0.0005, "physics step (the forces are explicit: keep it small)", unit="s", low=1e-5, high=0.005)
-    kg: float = option(APPENDIX_D["kg"], "ground stiffness k_g (Appendix D)", unit="N/m", check=_per_simulation(0.0, True),
-                       span="> 0, or one per simulation")
-    bg: float = option(APPENDIX_D["bg"], "ground damping b_g (Appendix D)", unit="N s/m", check=_per_simulation(0.0, False),
-                       span=">= 0, or one per simulation")
-    slope: float = option(0.0, "terrain slope beyond `slope_start`, rise over run (0.02 = 2 %, uphill)", low=-0.5, high=0.5)
+    timestep: float = option(0.0005, "physics step (the forces are explicit: keep it small)", unit="s", low=1e-5,
+                             high=0.005)
+    kg: float = option(APPENDIX_D["kg"], "ground stiffness k_g (Appendix D)", unit="N/m",
+                       check=_per_simulation(0.0, True), span="> 0, or one per simulation")
+    bg: float = option(APPENDIX_D["bg"], "ground damping b_g (Appendix D)", unit="N s/m",
+                       check=_per_simulation(0.0, False), span=">= 0, or one per simulation")
+    slope: float = option(0.0, "terrain slope beyond `slope_start`, rise over run (0.02 = 2 %, uphill)", low=-0.5,
+                          high=0.5)
     slope_start: float = option(0.0, "where the slope begins, along x", unit="m")
     max_torque: float = option(2000.0, "joint torque bound (never reached by Taga's generator)", unit="N m", above=0)
-    fall_height: float = option(0.7, "hip height above the terrain below which the walker has fallen", unit="m", above=0)
+    fall_height: float = option(0.7, "hip height above the terrain below which the walker has fallen", unit="m",
+                                above=0)
     model_file: str | None = model_file_option("taga_biped")
 
 
@@ -94,7 +101,8 @@ class TagaBiped(Body):
     sagittal: ClassVar[bool] = True
     actuators: ClassVar[tuple[Actuator, ...]] = tuple(Actuator(a, *a.split("_")) for a in ACTUATORS)
     #: see :meth:`sensors`
-    sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2, "ground_force": 4}
+    sensor_widths: ClassVar[dict[str, int]] = {"link_angles": 4, "link_velocities": 4, "ground_contact": 2,
+                                               "ground_force": 4}
     sensor_text: ClassVar[dict[str, str]] = {
         "link_angles": "inertial angles of right thigh, right shank, left thigh, left shank (rad from the horizontal)",
         "link_velocities": "their rates (rad/s), same order", "ground_contact": "ground contacts: right, left (0 or 1)",
@@ -104,8 +112,10 @@ class TagaBiped(Body):
     #: standing values and scales for a controller that normalises its inputs: about the mean and standard deviation
     #: of each reading over seconds 2-10 of the Appendix D walker's gait (the same for both legs)
     sensor_norms: ClassVar[dict] = {
-        "link_angles": ((1.39, 1.72, 1.39, 1.72), (0.3, 0.35, 0.3, 0.35)), "link_velocities": ((0.0,) * 4, (2.2, 2.8, 2.2, 2.8)),
-        "ground_contact": ((0.5, 0.5), (0.5, 0.5)), "ground_force": ((0.0, 335.0, 0.0, 335.0), (120.0, 345.0, 120.0, 345.0))}
+        "link_angles": ((1.39, 1.72, 1.39, 1.72), (0.3, 0.35, 0.3, 0.35)),
+        "link_velocities": ((0.0,) * 4, (2.2, 2.8, 2.2, 2.8)),
+        "ground_contact": ((0.5, 0.5), (0.5, 0.5)),
+        "ground_force": ((0.0, 335.0, 0.0, 335.0), (120.0, 345.0, 120.0, 345.0))}
     #: left/right mirror: a sagittal body's legs swap and nothing changes sign
     mirror: ClassVar[dict] = {"link_angles": ((2, 3, 0, 1), (1,) * 4), "link_velocities": ((2, 3, 0, 1), (1,) * 4),
                               "ground_contact": ((1, 0), (1, 1)), "ground_force": ((2, 3, 0, 1), (1,) * 4)}
@@ -170,7 +180,9 @@ class TagaBiped(Body):
         sims.reset(ids)
         q = sims.qpos
         q[rows, self._qadr[0]], q[rows, self._qadr[1]] = INITIAL_HIP
-        q[rows, self._qadr[2]], q[rows, self._qadr[4]] = INITIAL_ANGLES["right"] - np.pi / 2, INITIAL_ANGLES["left"] - np.pi / 2
+        q[rows, self._qadr[2]], q[rows,
+                                  self._qadr[4]] = INITIAL_ANGLES["right"] - np.pi / 2, INITIAL_ANGLES[
+                                      "left"] - np.pi / 2
         q[rows, self._qadr[3]] = q[rows, self._qadr[5]] = 0.0
         sims.qvel[rows] = sims.qfrc_applied[rows] = 0.0
         for a in self._ground(sims).values():
@@ -199,7 +211,8 @@ class TagaBiped(Body):
         dt_ = _last_axis(-sin_t, -cos_t) * dthigh[..., None]
         ds_ = _last_axis(-sin_s, -cos_s) * dshank[..., None]
         dankle = dhip[:, None, :] + l1 * dt_ + l2 * ds_
-        return dict(hip=hip, dhip=dhip, thigh=thigh, shank=shank, dthigh=dthigh, dshank=dshank, knee=knee, ankle=ankle, dankle=dankle)
+        return dict(hip=hip, dhip=dhip, thigh=thigh, shank=shank, dthigh=dthigh, dshank=dshank, knee=knee, ankle=ankle,
+                    dankle=dankle)
 
     # ------------------------------------------------------------ forces
     def apply(self, sims: Sims, ids: np.ndarray, action: np.ndarray) -> None:
@@ -246,8 +259,10 @@ class TagaBiped(Body):
         the ankle's speed along the ground, power each joint torque times its rate (the ankle's only in contact)."""
         k, st = self.links(sims), self._ground(sims)
         on, T, knee_rate = st["force"][:, [1, 3]] > 0, st["torque"], sims.qvel[:, self._dadr[[3, 5]]]
-        power = np.concatenate([T[:, [0, 3]] * k["dthigh"], -T[:, [1, 4]] * knee_rate, -T[:, [2, 5]] * on * k["dshank"]], axis=1)
-        return FootSample(contact=on, slip=np.abs(k["dankle"][..., 0]), height=k["ankle"][..., 1] - self.terrain(k["ankle"][..., 0]),
+        power = np.concatenate([T[:, [0, 3]] * k["dthigh"], -T[:, [1, 4]] * knee_rate,
+                                -T[:, [2, 5]] * on * k["dshank"]], axis=1)
+        return FootSample(contact=on, slip=np.abs(k["dankle"][..., 0]), height=k["ankle"][..., 1]
+                          - self.terrain(k["ankle"][..., 0]),
                           knee=sims.qpos[:, self._qadr[[3, 5]]], power=power,
                           torque=np.concatenate([T[:, [0, 3]], T[:, [1, 4]], T[:, [2, 5]] * on], axis=1))
 

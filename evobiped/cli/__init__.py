@@ -3,10 +3,10 @@
 One module per subcommand, ``<name>_cmd.py``, with ``add_<name>(subparsers)`` (its parser and flags),
 ``run_<name>_cmd(args)`` (the handler) and ``SUBCOMMANDS`` (the ``add_`` functions it registers): the
 core's in this package's folders by what they are about (:data:`CORE`: ``evolving/``, evolving and what a run holds;
-``walkers/``, one walker's episode and analysis; ``gaits/``, a MAP-Elites archive used as gaits), and each experiment's own, which it registers by providing
-``evobiped/experiments/<experiment>/<name>_cmd.py`` (found by :func:`experiment_commands`).  What
-the commands share is :mod:`evobiped.flags`.  A :class:`~evobiped.core.errors.UserError` (or a bad
-argument) becomes one line on stderr and exit status 2.
+``walkers/``, one walker's episode and analysis; ``gaits/``, a MAP-Elites archive used as gaits), and each experiment's
+own, which it registers by providing ``evobiped/experiments/<experiment>/<name>_cmd.py`` (found by
+:func:`experiment_commands`).  What the commands share is :mod:`evobiped.flags`.  A
+:class:`~evobiped.core.errors.UserError` (or a bad argument) becomes one line on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -27,10 +27,12 @@ from ..core.errors import STOP_SIGNALS, UserError, exit_status, keep_stderr, las
 
 #: how every refusal begins, a bad argument's and a UserError's alike
 ERROR = "evobiped: error: "
-#: the core's subcommand modules (``<folder>.<name>_cmd``), in the order ``evobiped --help`` lists them (the experiments' follow)
-CORE = ("walkers.episode_cmd", "evolving.evolve_cmd", "evolving.compare_cmd", "evolving.presets_cmd", "walkers.robustness_cmd", "walkers.bench_cmd",
-        "evolving.replay_cmd", "walkers.distill_cmd", "evolving.genome_cmd", "evolving.select_cmd", "gaits.repertoire_cmd", "gaits.adapt_cmd",
-        "gaits.gait_cmd", "walkers.gait_report_cmd")
+# : the core's subcommand modules (``<folder>.<name>_cmd``), in the order ``evobiped --help`` lists them (the
+# experiments' follow)
+CORE = ("walkers.episode_cmd", "evolving.evolve_cmd", "evolving.compare_cmd", "evolving.presets_cmd",
+        "walkers.robustness_cmd", "walkers.bench_cmd",
+        "evolving.replay_cmd", "walkers.distill_cmd", "evolving.genome_cmd", "evolving.select_cmd",
+        "gaits.repertoire_cmd", "gaits.adapt_cmd", "gaits.gait_cmd", "walkers.gait_report_cmd")
 
 
 #: what argparse reads as a negative number, a value and not a flag: -1, -.5, -1e308, -1.5E-3, -inf, -nan
@@ -46,8 +48,10 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{ERROR}{message}\n")
 
     def _get_values(self, action, arg_strings):  # every flag's and argument's value, in groups too
-        if "" in arg_strings and action.nargs not in (argparse.PARSER, argparse.REMAINDER):  # an empty path or name: not "not given"
-            self.error(f"argument {'/'.join(action.option_strings) or action.metavar or action.dest}: must not be empty")
+        # an empty path or name: not "not given"
+        if "" in arg_strings and action.nargs not in (argparse.PARSER, argparse.REMAINDER):
+            self.error(
+                f"argument {'/'.join(action.option_strings) or action.metavar or action.dest}: must not be empty")
         return super()._get_values(action, arg_strings)
 
 
@@ -124,12 +128,14 @@ def main(argv: list[str] | None = None) -> int:
     restore = lambda: None  # noqa: E731
     try:
         args = build_parser().parse_args(argv)  # Ctrl-C while it imports the subcommands: evobiped's first handler
-        starting = getattr(signal.getsignal(signal.SIGINT), "__qualname__", None) == "_interrupted_while_starting"  # evobiped's
+        # evobiped's
+        starting = getattr(signal.getsignal(signal.SIGINT), "__qualname__", None) == "_interrupted_while_starting"
         if starting and threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, signal.default_int_handler)  # from here on: the "interrupted" line below
         if argv is None:
             sys.unraisablehook = quiet_interrupts
-            for stream in (sys.stdout, sys.stderr):  # a path's bytes that are not UTF-8 are printed as they are, as ls does
+            # a path's bytes that are not UTF-8 are printed as they are, as ls does
+            for stream in (sys.stdout, sys.stderr):
                 if hasattr(stream, "reconfigure"):
                     stream.reconfigure(errors="surrogateescape")
         keep_stderr()  # the last line reaches the user whatever a pool's thread does with descriptor 2 at that instant
@@ -153,14 +159,16 @@ def main(argv: list[str] | None = None) -> int:
         from pathlib import Path
 
         where = Path(exc.filename)
-        if where.name.startswith(".") and where.name.endswith(".tmp"):  # an atomic write's temporary file: name its folder
+        # an atomic write's temporary file: name its folder
+        if where.name.startswith(".") and where.name.endswith(".tmp"):
             where = where.parent
         last_line(f"{ERROR}cannot access {where}: {exc.strerror or exc}")
         return 2
     except KeyboardInterrupt as exc:
         last_line("evobiped: interrupted")
         return exit_status(exc)
-    except ImportError as exc:  # Ctrl-C inside an extension module's import (NumPy's, MuJoCo's) arrives as an ImportError
+    # Ctrl-C inside an extension module's import (NumPy's, MuJoCo's) arrives as an ImportError
+    except ImportError as exc:
         if not _interrupted(exc):
             if line := out_of_address_space(exc):
                 last_line(f"{ERROR}{line}")

@@ -8,7 +8,8 @@ from .matsuoka import Matsuoka
 from .open_loop import OpenLoop
 from .simbicon import Simbicon
 
-#: name -> Controller class; constructed as cls(options, n_outputs=..., inputs={sensor: width}, actuators=body.actuators)
+# : name -> Controller class; constructed as cls(options, n_outputs=..., inputs={sensor: width},
+# actuators=body.actuators)
 #: after the episode checks its Needs against the body and task (evobiped.interface.contract)
 CONTROLLERS: dict[str, type[Controller]] = {
     CTRNN.name: CTRNN,

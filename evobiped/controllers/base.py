@@ -30,10 +30,13 @@ def _norm_table(v) -> None:
     if ok:
         m, s = v["mean"], v["std"]
         ok = isinstance(m, list) and isinstance(s, list) and len(m) == len(s) and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in m + s) and all(x > 0 for x in s)
-        ok = ok and (isinstance(v.get("count", 0), (int, float)) and not isinstance(v.get("count", 0), bool) and v.get("count", 0) >= 0)
+            isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in m
+                + s) and all(x > 0 for x in s)
+        ok = ok and (isinstance(v.get("count", 0), (int, float)) and not isinstance(v.get("count", 0), bool)
+                     and v.get("count", 0) >= 0)
     if not ok:
-        raise ConfigError("must be a table {mean = [...], std = [...], count = n} with one finite mean and one std > 0 per input")
+        raise ConfigError("must be a table {mean = [...], std = [...], count = n} with one finite mean and one std > 0 "
+                          "per input")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -43,14 +46,14 @@ class ControllerOptions:
 
     inputs: list | None = option(None, "sensor names to feed, replacing the controller's default choice")
     genes: dict = option({}, "gene-block overrides (bounds, initialisation, mutation; see GenomeLayout.with_overrides)")
-    latency: int = option(0, "control ticks by which its actions reach the body late (the first action is held meanwhile)",
-                          unit="control ticks", low=0, high=MAX_LATENCY, integer=True)
-    frame: str = option("body", "`body`: senses and actions as the body gives them; `stance`: mirrored so the stance leg "
-                        "is always the first (one set of weights serves both legs; the body must declare its mirror)",
-                        choices=FRAMES)
-    input_norm: dict | None = option(None, "the observation normaliser the genome was evolved with, {mean = [...], std = [...], "
-                                     "count = n} over its inputs (written by a run that normalises; replaces the declared "
-                                     "standing values and scales)", check=_norm_table)
+    latency: int = option(0, "control ticks by which its actions reach the body late (the first action is held "
+                             "meanwhile)", unit="control ticks", low=0, high=MAX_LATENCY, integer=True)
+    frame: str = option("body", "`body`: senses and actions as the body gives them; `stance`: mirrored so the stance "
+                                "leg is always the first (one set of weights serves both legs; the body must declare "
+                                "its mirror)", choices=FRAMES)
+    input_norm: dict | None = option(None, "the observation normaliser the genome was evolved with, {mean = [...], std "
+                                           "= [...], count = n} over its inputs (written by a run that normalises; "
+                                           "replaces the declared standing values and scales)", check=_norm_table)
 
 
 #: the options of :class:`ControllerOptions`, every controller's (the README's tables list each controller's own)
@@ -77,13 +80,15 @@ class Controller(ABC):
     #: ``(centre (k,), scale (k,))`` set by the episode; None: raw readings
     normalises_inputs: bool = False
     input_norm: tuple | None = None
-    #: the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.interface.frame`; None: the body's)
+    # : the stance frame the episode reads its senses and writes its actions in (:mod:`evobiped.interface.frame`; None:
+    # the body's)
     frame: Any = None
 
     #: the width of the input vector it reads (set by its constructor), whose senses a run's running normaliser
     #: learns (``EpisodeResult.senses``); None: it reads no such vector
     n_inputs: int | None = None
-    #: the controller's options (a subclass of :class:`ControllerOptions` adding its own :func:`evobiped.core.options.option` fields)
+    # : the controller's options (a subclass of :class:`ControllerOptions` adding its own
+    # :func:`evobiped.core.options.option` fields)
     Options: ClassVar[type] = ControllerOptions
 
     @classmethod

@@ -134,22 +134,30 @@ class CTRNNOptions(ControllerOptions):
     dt: float = option(0.02, "control period (forward Euler step)", unit="s", low=1e-4, high=1.0)
     motor: str = option("range", "motor map: `range` (the paper's: o in [0, 1] spans the joint's range) or `centred` "
                         "(o = 0.5 stands straight)", choices=tuple(MOTOR_MAPS))
-    time_constants: tuple = option((TAU["low"], TAU["high"]), "range of the time-constant genes, [low, high] with low > dt / 2",
+    time_constants: tuple = option((TAU["low"], TAU["high"]), "range of the time-constant genes, [low, high] with low "
+                                                              "> dt / 2",
                                    unit="s", check=_pair, span="0 < dt / 2 < low < high")
     tau_scale: str = option("linear", "time-constant genes: tau itself (`linear`, the paper's) or ln tau (`log`)",
                             choices=("linear", "log"))
     outputs: str = option("before", "motor outputs read `before` the Euler step (the paper's: one tick of latency) "
                           "or `after` it", choices=("before", "after"))
-    normalise_inputs: bool = option(False, "feed (reading - standing value) / scale, as the body declares, not raw readings")
-    input_weights: tuple | None = option(None, "range of the input-weight genes, [low, high] (default: the weights' [-16, 16])",
+    normalise_inputs: bool = option(False, "feed (reading - standing value) / scale, as the body declares, not raw "
+                                           "readings")
+    input_weights: tuple | None = option(None, "range of the input-weight genes, [low, high] (default: the weights' "
+                                               "[-16, 16])",
                                          check=lambda v: _range(v, "input weights"), span="low < high")
-    input_sigma: float | None = option(None, "initial and mutation sigma of the input weights (default: the weights' 8)", above=0)
-    centre_crossing: bool = option(False, "biases alpha_j = gene + sum_i w_ij / 2: a network of zero bias genes sits mid-sigmoid")
-    direct: bool = option(False, "a linear path from the inputs to the motor outputs beside the network (o = O + g (c + D s))")
+    input_sigma: float | None = option(None,
+                                       "initial and mutation sigma of the input weights (default: the weights' 8)",
+                                       above=0)
+    centre_crossing: bool = option(False, "biases alpha_j = gene + sum_i w_ij / 2: a network of zero bias genes sits "
+                                          "mid-sigmoid")
+    direct: bool = option(False, "a linear path from the inputs to the motor outputs beside the network (o = O + g (c "
+                                 "+ D s))")
     direct_scale: float = option(1.0, "g: the direct path's gain, in motor output per unit of its genes", above=0)
     integration: str = option("euler", "`euler`: one forward Euler step per control period (the paper's; unstable for "
-                              "strong self-inhibition at tau near dt); `exponential`: substeps of the exact leak step, as "
-                              "many as each network's weights and time constants need to be stable", choices=("euler", "exponential"))
+                              "strong self-inhibition at tau near dt); `exponential`: substeps of the exact leak step, "
+                              "as many as each network's weights and time constants need to be stable",
+                              choices=("euler", "exponential"))
 
     def __post_init__(self):
         _tau_block(self.time_constants, self.dt, self.tau_scale)
@@ -169,7 +177,8 @@ class CTRNN(Controller):
         normalised if ``normalise_inputs``."""
         return Needs(task_sensors=True, max_actuators=options.n_neurons, normalised=options.normalise_inputs)
 
-    def __init__(self, options: CTRNNOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
+    def __init__(self, options: CTRNNOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None,
+                 actuators=None, **given):
         o = self.options = self.own_options(options, given)
         n_neurons, dt, motor, time_constants = o.n_neurons, o.dt, o.motor, o.time_constants
         inputs = dict(inputs or {})
@@ -200,8 +209,10 @@ class CTRNN(Controller):
         if self.direct:
             lo, hi = o.input_weights if o.input_weights is not None else (WEIGHT["low"], WEIGHT["high"])
             sigma = o.input_sigma if o.input_sigma is not None else WEIGHT["init_sigma"]
-            same = dict(low=float(lo), high=float(hi), init_mean=0.5 * (lo + hi), init_sigma=float(sigma), mutation_sigma=float(sigma))
-            blocks += [GeneBlock(name="direct_biases", size=n_outputs, **same), GeneBlock(name="direct_weights", size=k * n_outputs, **same)]
+            same = dict(low=float(lo), high=float(hi), init_mean=0.5 * (lo + hi), init_sigma=float(sigma),
+                        mutation_sigma=float(sigma))
+            blocks += [GeneBlock(name="direct_biases", size=n_outputs, **same),
+                       GeneBlock(name="direct_weights", size=k * n_outputs, **same)]
         self._layout = GenomeLayout(tuple(blocks))
 
     @property
@@ -221,7 +232,8 @@ class CTRNN(Controller):
         out["V"] = p["input_weights"].reshape(P, self.n_inputs, n) if self.n_inputs else np.zeros((P, 0, n))
         if self.direct:
             g = self.direct_scale
-            out["c"], out["D"] = g * p["direct_biases"], g * p["direct_weights"].reshape(P, self.n_inputs, self.n_outputs)
+            out["c"], out["D"] = g * p["direct_biases"], g * p["direct_weights"].reshape(
+                P, self.n_inputs, self.n_outputs)
         return out
 
     def initial_state(self, params: dict[str, np.ndarray]) -> np.ndarray:
@@ -260,7 +272,8 @@ class CTRNN(Controller):
 
     def _exponential(self, params, A, external):
         """A after one control period of ``substeps`` exact leak steps each (``external``: the inputs' sum, held over
-        the period); a network that needs fewer substeps than another in the batch stops early (rows stay independent)."""
+        the period); a network that needs fewer substeps than another in the batch stops early (rows stay
+        independent)."""
         k, alpha, W = params["substeps"], params["alpha"], params["W"]
         decay = np.exp(-(self.dt / k)[:, None] / params["tau"])
         every = int(k.min())  # substeps every row takes: no row to hold back

@@ -101,7 +101,8 @@ class G3Controller(Controller):
             return Needs(task_sensors=True, normalised=True)
         return Needs(deaf=True)
 
-    def __init__(self, options: G3Options | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators=None, **given):
+    def __init__(self, options: G3Options | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None,
+                 actuators=None, **given):
         o = self.options = self.own_options(options, given)
         dt, go, lag, time_scale, max_step, preset = o.dt, o.go, o.lag, o.time_scale, o.max_step, o.preset
         inputs = dict(inputs or {})
@@ -131,7 +132,8 @@ class G3Controller(Controller):
                 GeneBlock(name="gain", size=n, **GAIN),
                 GeneBlock(name="offset", size=n, **OFFSET),
             )
-            + ((GeneBlock(name="sense_gain", size=n * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses" else ())
+            + ((GeneBlock(name="sense_gain", size=n * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses"
+               else ())
         )
 
     @property

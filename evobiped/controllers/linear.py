@@ -39,8 +39,8 @@ class LinearOptions(ControllerOptions):
     """Options of the linear controller."""
 
     dt: float = option(0.02, "control period", unit="s", low=1e-4, high=1.0)
-    output: str = option("angle", "`angle`: PD targets in rad (zero = standing); `signed`: torques in N m or squashed targets",
-                         choices=tuple(OUTPUT_KINDS))
+    output: str = option("angle", "`angle`: PD targets in rad (zero = standing); `signed`: torques in N m or squashed "
+                                  "targets", choices=tuple(OUTPUT_KINDS))
     weight_range: float = option(10.0, "bound of every weight and bias gene, +-", above=0)
     init_sigma: float = option(0.0, "initial spread of the genes (0: every policy starts standing)", low=0)
     mutation_sigma: float = option(0.1, "the GA's mutation sigma of every gene", above=0)

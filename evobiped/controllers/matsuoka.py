@@ -31,8 +31,8 @@ exactly symmetric state settles to its fixed point instead of oscillating).
 Genome blocks (Taga's Appendix D values: :mod:`evobiped.experiments.taga.parameters`): per-oscillator
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
 ``w_hka``; with Taga's feedback, ``feedback`` = a_1..a_8; with the senses', ``sense_gain`` = K row-major
-(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about.  The tonic input u_0 is a
-structure option (the experiments' control parameter), not a gene.
+(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about.  The
+tonic input u_0 is a structure option (the experiments' control parameter), not a gene.
 """
 
 from __future__ import annotations
@@ -132,8 +132,8 @@ class Matsuoka(Controller):
             return Needs(task_sensors=True, paired_legs=True, normalised=True)
         return Needs(paired_legs=True, optional=taga if options.feedback == "auto" else None)
 
-    def __init__(self, options: MatsuokaOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] | None = None,
-                 **given):
+    def __init__(self, options: MatsuokaOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None,
+                 actuators: tuple[Actuator, ...] | None = None, **given):
         o = self.options = self.own_options(options, given)
         inputs = dict(inputs or {})
         # the episode checked needs(): two legs, and Taga's legs and sensors where the feedback is "taga"; "auto"
@@ -246,7 +246,8 @@ class Matsuoka(Controller):
 
     def step(self, params, state, inputs):
         if self.period is None:
-            raise ConfigError("matsuoka: the control period is unknown (step the controller bound(dt) returns, or give dt)")
+            raise ConfigError("matsuoka: the control period is unknown (step the controller bound(dt) returns, or give "
+                              "dt)")
         u, v = state["u"], state["v"]
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)

@@ -85,7 +85,8 @@ class OpenLoop(Controller):
         """No sensors; the sine form needs two legs of hip pitch, hip roll and knee."""
         return Needs(deaf=True, joints=JOINTS if options.form == "sine" else None)
 
-    def __init__(self, options: OpenLoopOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **given):
+    def __init__(self, options: OpenLoopOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None,
+                 actuators: tuple[Actuator, ...] = (), **given):
         self.options = self.own_options(options, given)
         self.form, self.dt, self.input_names = self.options.form, float(self.options.dt), ()
         self.n_outputs = n = int(n_outputs)
@@ -113,14 +114,17 @@ class OpenLoop(Controller):
         w = 2 * np.pi * params["frequency"][:, 0] * state  # (P,) rad
         if self.form == "fourier":
             g, w = params, w[:, None]
-            u = g["offset"] + g["sin1"] * np.sin(w) + g["cos1"] * np.cos(w) + g["sin2"] * np.sin(2 * w) + g["cos2"] * np.cos(2 * w)
+            u = g["offset"] + g["sin1"] * np.sin(w) + g["cos1"] * np.cos(w) + g["sin2"] * np.sin(2 * w) + g[
+                "cos2"] * np.cos(2 * w)
             return np.clip(0.5 + 0.5 * u, 0.0, 1.0)
         g = {k: v[:, 0] for k, v in params.items()}
         out = np.empty((len(state), self.n_outputs))
         for leg, s in enumerate((0.0, np.pi)):
             out[:, self._cols["hip_pitch"][leg]] = g["hip_offset"] + g["hip_amplitude"] * np.sin(w + s)
-            out[:, self._cols["knee"][leg]] = np.minimum(0.0, g["knee_offset"] + g["knee_amplitude"] * np.sin(w + s + g["knee_phase"]))
-            out[:, self._cols["hip_roll"][leg]] = g["roll_offset"] + g["roll_amplitude"] * np.sin(w + s + g["roll_phase"])
+            out[:, self._cols["knee"][leg]] = np.minimum(0.0, g["knee_offset"]
+                                                         + g["knee_amplitude"] * np.sin(w + s + g["knee_phase"]))
+            out[:,
+                self._cols["hip_roll"][leg]] = g["roll_offset"] + g["roll_amplitude"] * np.sin(w + s + g["roll_phase"])
         return out
 
     def step(self, params, state, inputs):

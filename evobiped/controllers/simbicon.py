@@ -82,13 +82,15 @@ RANGES = {
     "pelvis_damping": (0.0, 0.16),  # rad/(rad/s)
 }
 GENES = tuple(
-    GeneBlock(name=k, size=1, low=lo, high=hi, init_mean=0.5 * (lo + hi), init_sigma=(hi - lo) / 4, mutation_sigma=(hi - lo) / 10)
+    GeneBlock(name=k, size=1, low=lo, high=hi, init_mean=0.5 * (lo + hi), init_sigma=(hi - lo) / 4,
+              mutation_sigma=(hi - lo) / 10)
     for k, (lo, hi) in RANGES.items()
 )
 #: hearing (when the task offers the ``sound`` sensor s in [-1, 1], + source on the left):
 #: name: (low, high), initial mean 0 (deaf), sigma = range / 4, mutation sigma = range / 10
 SOUND_RANGES = {
-    "sound_forward": (-0.4, 0.4),  # rad per unit s, added to the right swing hip's forward target, taken from the left's
+    # rad per unit s, added to the right swing hip's forward target, taken from the left's
+    "sound_forward": (-0.4, 0.4),
     "sound_lateral": (-0.3, 0.3),  # rad per unit s, moves each swing foot to the left (+) or right (-)
 }
 SOUND_GENES = tuple(
@@ -120,14 +122,16 @@ class Simbicon(Controller):
         """Two legs of hip pitch, hip roll and knee; the balance sensors; the task's (``sound``: hearing)."""
         return Needs(sensors=SENSORS, task_sensors=True, joints=JOINTS)
 
-    def __init__(self, options: SimbiconOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None, actuators: tuple[Actuator, ...] = (), **given):
+    def __init__(self, options: SimbiconOptions | None = None, *, n_outputs: int, inputs: dict[str, int] | None = None,
+                 actuators: tuple[Actuator, ...] = (), **given):
         self.options = self.own_options(options, given)
         inputs = dict(inputs or {})
         self.n_outputs = len(actuators)
         self.dt = float(self.options.dt)
         self.sound_limit = float(self.options.sound_limit)
         # actuator columns per leg (left = 0, right = 1)
-        self._pitch, self._roll, self._knee = (np.array([index(actuators, leg, j) for leg in ("left", "right")]) for j in JOINTS)
+        self._pitch, self._roll, self._knee = (np.array([index(actuators, leg, j) for leg in ("left", "right")])
+                                               for j in JOINTS)
         self.input_names = tuple(inputs)
         start = np.cumsum([0, *inputs.values()])
         self._at = {k: slice(start[i], start[i + 1]) for i, k in enumerate(inputs)}

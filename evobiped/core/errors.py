@@ -112,7 +112,8 @@ def signals_deferred():
         return
     raising = {signal.SIGINT: signal.default_int_handler, **{s: raise_interrupted for s in STOP_SIGNALS}}
     caught = []
-    old = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s, h in raising.items() if signal.getsignal(s) is h}
+    old = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s, h in raising.items()
+           if signal.getsignal(s) is h}
     try:
         yield
     finally:

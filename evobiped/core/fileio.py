@@ -142,7 +142,8 @@ def what_is_there(path: str | Path) -> str:
     return "is a regular file" if kind is None else f"is {kind}, not a file"
 
 
-def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, error: type[UserError] = UserError) -> Any:
+def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str,
+                error: type[UserError] = UserError) -> Any:
     """``loads(text)`` of the file at ``path``; a missing, oversized, malformed or too deeply nested file is one
     line naming ``what`` (every file a command reads comes through here)."""
     path = Path(path)
@@ -152,16 +153,19 @@ def _parse_file(path: str | Path, what: str, loads, errors: tuple, form: str, er
     try:
         size = path.stat().st_size
         if size > MAX_BYTES:
-            raise error(f"{what} {path} is {size / 2**20:.0f} MiB; evobiped reads files of at most {MAX_BYTES // 2**20} MiB")
+            raise error(f"{what} {path} is {size / 2**20:.0f} MiB; evobiped reads files of at most "
+                        f"{MAX_BYTES // 2**20} MiB")
         obj = loads(path.read_text(encoding="utf-8-sig"))  # UTF-8, with or without a byte-order mark (Windows editors)
     except (*errors, UnicodeDecodeError) as exc:
-        raise error(f"{what} {path} is not valid {form} ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+        raise error(f"{what} {path} is not valid {form} "
+                    f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
     except RecursionError:
         raise error(f"{what} {path} is not valid {form} (tables and lists nested more than {MAX_DEPTH} deep)") from None
     except OSError as exc:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
     except ValueError:  # Python's limit on the digits of a whole number read from text
-        raise error(f"{what} {path} is not valid {form} (a whole number of more than {sys.get_int_max_str_digits()} digits)") from None
+        raise error(f"{what} {path} is not valid {form} (a whole number of more than {sys.get_int_max_str_digits()} "
+                    "digits)") from None
     deep = depth_error(obj)
     if deep:
         raise error(f"{what} {path} is not valid {form} ({deep})")
@@ -189,14 +193,16 @@ def packed_floats(a: np.ndarray) -> dict:
     bit for bit.  A large state (a map-elites archive of network genomes: millions of numbers) written as JSON
     numbers costs about 0.4 us a number at every commit; this costs a twentieth of that, and two thirds of the bytes."""
     a = np.asarray(a, float)
-    return {"dtype": "<f8", "shape": list(a.shape), "b64": base64.b64encode(np.ascontiguousarray(a, "<f8").tobytes()).decode("ascii")}
+    return {"dtype": "<f8", "shape": list(a.shape),
+            "b64": base64.b64encode(np.ascontiguousarray(a, "<f8").tobytes()).decode("ascii")}
 
 
 def unpacked_floats(value: Any, what: str) -> np.ndarray:
     """The array :func:`packed_floats` wrote; UserError (one line naming ``what``) for anything else."""
     shape = value.get("shape") if isinstance(value, dict) else None
     if not (isinstance(value, dict) and set(value) == {"dtype", "shape", "b64"} and value["dtype"] == "<f8"
-            and isinstance(shape, list) and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)):
+            and isinstance(shape, list) and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0
+                                                for n in shape)):
         raise UserError(f"{what} must be a list of numbers or {{dtype: \"<f8\", shape, b64}}")
     try:
         raw = base64.b64decode(value["b64"], validate=True)

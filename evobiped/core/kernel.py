@@ -17,6 +17,8 @@ missing), ``auto`` (compiled where available, else numpy: the default, as both g
 
 from __future__ import annotations
 
+import importlib
+
 import ctypes
 import functools
 
@@ -86,7 +88,7 @@ def unavailable() -> str | None:
     """Why the compiled kernel cannot run here (one line), or None where it can."""
     try:
         with signals_deferred():  # a Ctrl-C inside LLVM's start-up can crash the process on its way out: after it
-            import numba  # noqa: F401
+            importlib.import_module("numba")
     except ImportError:
         return "the compiled kernel needs numba (pip install numba, a dependency of evobiped)"
     for f in (np.exp, np.arcsin):

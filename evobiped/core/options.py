@@ -37,8 +37,8 @@ def option(default: Any, doc: str, *, unit: str = "", low: float | None = None, 
     (:class:`~evobiped.core.schedule.Schedule`: a table whose ``start`` and ``end`` are each checked as a plain value);
     read it with :func:`scheduled`.
     """
-    meta = dict(doc=doc, unit=unit, low=low, high=high, above=above, below=below, integer=integer, choices=choices, check=check, span=span,
-                schedule=schedule)
+    meta = dict(doc=doc, unit=unit, low=low, high=high, above=above, below=below, integer=integer, choices=choices,
+                check=check, span=span, schedule=schedule)
     if isinstance(default, (list, dict)):
         return field(default_factory=lambda: type(default)(default), metadata=meta)
     return field(default=default, metadata=meta)
@@ -71,10 +71,12 @@ def _check_value(f: dataclasses.Field, value: Any, path: str) -> None:
             raise ConfigError(f"{path}: must be true or false, got {value!r}")
     elif m.get("choices") is not None:
         if value not in m["choices"]:
-            raise ConfigError(f"{path}: must be one of {', '.join(repr(c) if c == '' else str(c) for c in m['choices'])}, got {value!r}")
+            raise ConfigError(f"{path}: must be one of "
+                              f"{', '.join(repr(c) if c == '' else str(c) for c in m['choices'])}, got {value!r}")
     elif any(m.get(k) is not None for k in ("low", "high", "above", "below")) or m.get("integer") or (
             isinstance(default, (int, float)) and m.get("check") is None):
-        number(value, f"{path}:", low=m["low"], high=m["high"], above=m["above"], below=m["below"], integer=m["integer"], unit=m["unit"])
+        number(value, f"{path}:", low=m["low"], high=m["high"], above=m["above"], below=m["below"],
+               integer=m["integer"], unit=m["unit"])
     if m.get("check") is not None:
         try:
             m["check"](value)
@@ -92,7 +94,8 @@ def refuse_unknown(cls: type, values: Any, where: str, *, skip: tuple[str, ...] 
     if not isinstance(values, dict):
         raise ConfigError(f"{where or 'settings'}: must be a table of options, got {values!r}")
     inherited = {f.name for base in cls.__mro__[1:] if dataclasses.is_dataclass(base) for f in fields(base)}
-    known = [f.name for f in fields(cls) if f.name not in inherited] + [f.name for f in fields(cls) if f.name in inherited]
+    known = [f.name for f in fields(cls) if f.name not in inherited] + [f.name for f in fields(cls)
+                                                                        if f.name in inherited]
     for name in values:
         if name not in known and name not in skip:
             raise ConfigError(f"{join(where, name)}: unknown option (choose from {', '.join([*known, *skip])})")
@@ -100,7 +103,8 @@ def refuse_unknown(cls: type, values: Any, where: str, *, skip: tuple[str, ...] 
 
 
 def check_fields(obj: Any, where: str) -> None:
-    """Check every declared field of the dataclass ``obj`` (a ``__post_init__`` calls it); ConfigError naming its path."""
+    """Check every declared field of the dataclass ``obj`` (a ``__post_init__`` calls it); ConfigError naming its
+    path."""
     for f in fields(obj):
         if f.metadata:
             _check(f, getattr(obj, f.name), join(where, f.name))
@@ -200,5 +204,6 @@ def markdown_table(cls: type, *, skip: tuple[str, ...] = ()) -> str:
             continue
         m = f.metadata
         default = f.default if f.default is not MISSING else f.default_factory()
-        rows.append(f"| `{f.name}` | `{_shown(default)}` | {m.get('unit', '')} | {_span(m, default)} | {m.get('doc', '')} |")
+        rows.append(f"| `{f.name}` | `{_shown(default)}` | {m.get('unit', '')} | {_span(m, default)} | "
+                    f"{m.get('doc', '')} |")
     return "\n".join(rows) + "\n"

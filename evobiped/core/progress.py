@@ -4,7 +4,8 @@ Every command that can run longer than a few seconds reports through one
 :class:`Progress`, in one shape::
 
     taga:  45% (9 of 20 s simulated)  elapsed 0:00:18  left ~0:00:22
-    evolve:   4% (6 of 150 generations; best 21.01 (up), this generation's 6.06 (fell), ...)  elapsed 0:01:02  left ~0:12:40
+    evolve:   4% (6 of 150 generations; best 21.01 (up), this generation's 6.06 (fell), ...)  elapsed 0:01:02  left
+    ~0:12:40
 
 a line on stderr at most every :data:`INTERVAL` seconds (and one at the end),
 nothing with ``quiet``.  By default the time left assumes the rest goes at the
@@ -119,7 +120,8 @@ def line_text(what: str | None, done: float, total: float, unit: str, note: str,
     so the time left is a bound: ``left at most 0:06:20``."""
     frac = done / total if total > 0 else 1.0
     amount = f"{done:.4g} of {total:.4g}{' ' + unit if unit else ''}"
-    line = f"{100 * frac:3.0f}% ({amount}{'; ' + note if note else ''})  elapsed {hms(elapsed)}  left {'at most ' if at_most else '~'}{hms(left)}"
+    line = (f"{100 * frac:3.0f}% ({amount}{'; ' + note if note else ''})  elapsed {hms(elapsed)}  left "
+            f"{'at most ' if at_most else '~'}{hms(left)}")
     return line if what is None else f"{what}: {line}"
 
 
@@ -129,7 +131,8 @@ def generation_note(*, best: float, best_fell: bool, this: float, this_fell: boo
     worst, the evaluation rate, the simulated seconds and the longest episode."""
     up = lambda fell: "(fell)" if fell else "(up)"  # noqa: E731
     return (f"best {best:.3f} {up(best_fell)}, this generation's {this:.3f} {up(this_fell)}, mean {mean:.3f}, "
-            f"worst {worst:.3f}; {evals_per_second:.1f} eval/s, {simulated:.0f} s simulated, longest episode {longest:.1f} s")
+            f"worst {worst:.3f}; {evals_per_second:.1f} eval/s, {simulated:.0f} s simulated, longest episode "
+            f"{longest:.1f} s")
 
 
 class Progress:
@@ -203,7 +206,8 @@ class Progress:
         self.say(line_text(None, self.done, self.total, self.unit, note, elapsed=elapsed, left=left,
                            at_most=self.at_most and self.done < self.total))
 
-    def listener(self, offset: float = 0.0, rows: bool = False, bound: float = 0.0, later: Sequence[tuple[int, float]] = ()):
+    def listener(self, offset: float = 0.0, rows: bool = False, bound: float = 0.0,
+                 later: Sequence[tuple[int, float]] = ()):
         """An episode listener (:class:`evobiped.episode.Listener`) reporting ``offset`` + simulated seconds;
         ``rows``: + the simulated seconds of every row still running (trial-seconds), and at the episode's end
         ``offset`` + ``bound`` (the trial-seconds the batch would take if no row stopped early).  With ``rows`` the

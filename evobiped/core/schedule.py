@@ -52,7 +52,8 @@ class Schedule:
             raise ConfigError(f"{where}a schedule takes {', '.join(KEYS)}; unknown key {unknown[0]!r}")
         for k in ("start", "end", "generations"):
             if k not in value:
-                raise ConfigError(f"{where}a schedule needs start, end and generations (after is optional); {k} is missing")
+                raise ConfigError(f"{where}a schedule needs start, end and generations (after is optional); {k} is "
+                                  "missing")
         dot = f"{path}." if path else ""
         gens = value["generations"]
         after = value.get("after", 0)
@@ -66,7 +67,8 @@ class Schedule:
         start, end = value["start"], value["end"]
         if isinstance(start, (list, tuple)) != isinstance(end, (list, tuple)) or (
                 isinstance(start, (list, tuple)) and len(start) != len(end)):
-            raise ConfigError(f"{where}start and end must be alike (two numbers, or two lists of one length), got {start!r} and {end!r}")
+            raise ConfigError(f"{where}start and end must be alike (two numbers, or two lists of one length), got "
+                              f"{start!r} and {end!r}")
         if check is not None:
             check(start, f"{dot}start")
             check(end, f"{dot}end")

@@ -15,7 +15,8 @@ from .errors import ConfigError
 def number(value: Any, name: str, *, low: float | None = None, high: float | None = None, above: float | None = None,
            below: float | None = None, integer: bool = False, unit: str = "") -> float | int:
     """``value`` if it is a finite number (a whole one with ``integer``) with ``low <= value <= high``,
-    ``value > above`` and ``value < below``; otherwise a ConfigError naming ``name`` (e.g. "episode.seconds:") and the value."""
+    ``value > above`` and ``value < below``; otherwise a ConfigError naming ``name`` (e.g. "episode.seconds:") and the
+    value."""
     kind = "a whole number" if integer else "a number"
     ok = isinstance(value, int) if integer else isinstance(value, (int, float))
     if isinstance(value, bool) or not ok:
@@ -28,6 +29,7 @@ def number(value: Any, name: str, *, low: float | None = None, high: float | Non
     if below is not None and not value < below:
         raise ConfigError(f"{name} must be < {below:g}{u}, got {value!r}")
     if (low is not None and value < low) or (high is not None and value > high):
-        span = f"in [{low:g}, {high:g}]" if low is not None and high is not None else f">= {low:g}" if low is not None else f"<= {high:g}"
+        span = (f"in [{low:g}, {high:g}]" if low is not None and high is not None else f">= {low:g}" if low is not None
+                else f"<= {high:g}")
         raise ConfigError(f"{name} must be {span}{u}, got {value!r}")
     return value

@@ -13,12 +13,13 @@ would do there, add those to a growing data set, refit, repeat.  Here:
   ticks before.
 - **Fitting** by backpropagation through time (JAX's ``lax.scan`` over the CTRNN's Euler steps, optax's Adam)
   on windows of the recorded rollouts: each window starts from rest, and the first ``burn_in`` ticks are not
-  scored unless the window starts with its episode (where the network too starts from rest); the loss is the mean squared error of the student's PD targets (after its motor map), in rad^2.
-  Genes are kept inside their bounds after every step.  JAX is an optional dependency
-  (``pip install 'evobiped[distill]'``): it differentiates the network's recurrence exactly, fast on a CPU.
+  scored unless the window starts with its episode (where the network too starts from rest); the loss is the mean
+  squared error of the student's PD targets (after its motor map), in rad^2. Genes are kept inside their bounds after
+  every step.  JAX is an optional dependency (``pip install 'evobiped[distill]'``): it differentiates the network's
+  recurrence exactly, fast on a CPU.
 - **Selection.**  Each iteration's student is a candidate (later ones imitate better, but an imitation can
-  settle into a gait that drifts or falls late); :func:`evobiped.analysis.selection.best_candidate` keeps the one that is up
-  through ``select_seconds`` alone, then walks within ``heading_limit`` of its initial facing, then farthest
+  settle into a gait that drifts or falls late); :func:`evobiped.analysis.selection.best_candidate` keeps the one that
+  is up through ``select_seconds`` alone, then walks within ``heading_limit`` of its initial facing, then farthest
   along it.  ``select_seconds = 0`` keeps the last iteration's.
 
 The student is the ``ctrnn`` controller with the options of a network fit for senses (:data:`STUDENT`; any of
@@ -34,5 +35,5 @@ from .fit import Fitter, random_start
 from .settings import STUDENT, DistillOptions, parse_options, student_config
 from .rollouts import Blend, Rollouts, collect
 
-__all__ = ["STUDENT", "Blend", "DistillOptions", "DistillReport", "Fitter", "Rollouts", "collect", "distill", "parse_options",
-           "random_start", "select", "student_config"]
+__all__ = ["STUDENT", "Blend", "DistillOptions", "DistillReport", "Fitter", "Rollouts", "collect", "distill",
+           "parse_options", "random_start", "select", "student_config"]

@@ -45,13 +45,14 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
                             key=(seed, i)))
         ticks = int(sum(d.alive.sum() for d in data))
         rmse = fitter.fit(data, progress=lambda s, e: (done(i * options.steps + s),
-                                                       say(f"iteration {i + 1}/{options.iterations}: step {s}/{options.steps}, "
-                                                           f"window RMS error {e:.4f} rad")))
+                                                       say(f"iteration {i + 1}/{options.iterations}: step "
+                                                           f"{s}/{options.steps}, window RMS error {e:.4f} rad")))
         students.append(fitter.student_genome.copy())
         alone = episode.run(students[-1])
         walk = alone.walk()
         row = dict(iteration=i + 1, teacher_share=beta, ticks=ticks, rms_error=round(rmse, 5), fell=bool(alone.fell[0]),
-                   end_time=float(alone.end_time[0]), distance=round(walk["distance"], 3), heading_deg=walk["heading_deg"])
+                   end_time=float(alone.end_time[0]), distance=round(walk["distance"], 3),
+                   heading_deg=walk["heading_deg"])
         rows.append(row)
         say(f"iteration {i + 1}/{options.iterations}: teacher share {beta:g}, {ticks} ticks, RMS error {rmse:.4f} rad; "
             f"student alone: {'fell at %.1f s' % row['end_time'] if row['fell'] else 'up %g s' % row['end_time']}, "
@@ -62,8 +63,8 @@ def distill(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, *, student: 
 
 def select(student: EpisodeConfig, genomes: list[np.ndarray], rows: list[dict], options: DistillOptions,
            say: Callable[[str], None]) -> int:
-    """The index of the best student (:func:`evobiped.analysis.selection.best_candidate` over their runs alone); adds ``up_long``
-    (bool: up through ``select_seconds``) to the row of every student."""
+    """The index of the best student (:func:`evobiped.analysis.selection.best_candidate` over their runs alone); adds
+    ``up_long`` (bool: up through ``select_seconds``) to the row of every student."""
     if options.select_seconds <= 0:
         return len(genomes) - 1
     trials = try_candidates(student, np.array(genomes), options.select_seconds)

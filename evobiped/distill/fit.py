@@ -18,7 +18,8 @@ def _jax():
         import jax
         import optax
     except ImportError:
-        raise UserError("distillation fits the network with JAX: pip install 'evobiped[distill]' (jax, optax)") from None
+        raise UserError(
+            "distillation fits the network with JAX: pip install 'evobiped[distill]' (jax, optax)") from None
     jax.config.update("jax_enable_x64", True)
     return jax, optax
 
@@ -32,7 +33,8 @@ class Fitter:
 
         body, ctrl, _ = student_cfg.parts()
         o = ctrl.options
-        if not (ctrl.name == "ctrnn" and o.outputs == "after" and o.tau_scale == "log" and o.centre_crossing and o.motor == "full"):
+        if not (ctrl.name == "ctrnn" and o.outputs == "after" and o.tau_scale == "log" and o.centre_crossing
+                and o.motor == "full"):
             raise ConfigError("distillation fits a ctrnn student with outputs = \"after\", tau_scale = \"log\", "
                               "centre_crossing = true and motor = \"full\" (the defaults of evobiped distill)")
         self.options, self.layout = options, ctrl.layout
@@ -97,7 +99,8 @@ class Fitter:
             wb[rows[:, 2] > 0, : o.burn_in] = 0.0
             return xb, yb, wb
 
-        starts = index[index[:, 2] == 0]  # the episode's first ticks, where the walker sets off: a quarter of each batch
+        # the episode's first ticks, where the walker sets off: a quarter of each batch
+        starts = index[index[:, 2] == 0]
         for s in range(o.steps):
             rows = index[self.rng.integers(len(index), size=o.batch)]
             if len(starts):

@@ -44,8 +44,12 @@ class Blend(Controller):
         for name in self.input_names:
             cols[name] = np.arange(at, at + widths[name])
             at += widths[name]
-        self._t_cols = np.concatenate([cols[n] for n in self.teacher.input_names]) if self.teacher.input_names else np.zeros(0, int)
-        self._s_cols = np.concatenate([cols[n] for n in self.student.input_names]) if self.student.input_names else np.zeros(0, int)
+        self._t_cols = np.concatenate([cols[n]
+                                       for n in self.teacher.input_names]) if self.teacher.input_names else np.zeros(
+                                           0, int)
+        self._s_cols = np.concatenate([cols[n]
+                                       for n in self.student.input_names]) if self.student.input_names else np.zeros(
+                                           0, int)
 
     @property
     def layout(self):
@@ -100,8 +104,8 @@ class Rollouts:
         return np.array(out, int).reshape(-1, 2)
 
 
-def collect(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, student_cfg: EpisodeConfig, student_genome: np.ndarray,
-            *, beta: float, options: DistillOptions, key: tuple[int, int]) -> Rollouts:
+def collect(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, student_cfg: EpisodeConfig,
+            student_genome: np.ndarray, *, beta: float, options: DistillOptions, key: tuple[int, int]) -> Rollouts:
     """``options.rollouts`` rollouts of ``options.seconds`` executing ``beta`` teacher + ``(1 - beta)`` student,
     under target and pose noise drawn from ``key`` = (seed, iteration)."""
     t_body, teacher, task = teacher_cfg.parts()
@@ -113,7 +117,8 @@ def collect(teacher_cfg: EpisodeConfig, teacher_genome: np.ndarray, student_cfg:
     blend.wire({**t_body.sensor_widths, **task.sensor_widths()})
     # the student's episode (the teacher's body and task), ``seconds`` long, ending at a fall, driven by the blend
     ep = dataclasses.replace(student_cfg, seconds=options.seconds, stop_on_fall=True).build(controller=blend)
-    pert = PerturbationOptions(presentations=options.rollouts, target_noise=options.target_noise, pose_noise=options.pose_noise)
+    pert = PerturbationOptions(presentations=options.rollouts, target_noise=options.target_noise,
+                               pose_noise=options.pose_noise)
     trials = pert.draw(key, seconds=options.seconds, n_actuators=len(t_body.actuators))
     alive_log: list[np.ndarray] = []
 

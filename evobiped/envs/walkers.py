@@ -42,12 +42,14 @@ class EnvOptions:
                                       "declares for its environment, docs/gym.md); a multiple of the body's physics "
                                       "step",
                                       unit="s", above=0)
-    reset_noise_scale: float = option(0.01, "each hinge angle starts U(-s, s) off the body's initial pose", unit="rad", low=0)
+    reset_noise_scale: float = option(0.01, "each hinge angle starts U(-s, s) off the body's initial pose", unit="rad",
+                                      low=0)
     task: str = option("walk", "the task whose fitness increments are the reward (its terms are in `info`)",
                        choices=TASKS)  # the registry itself: a task registered later counts
     task_options: Any = option(None, "the task's options (its table); none: its defaults, but the walk task's "
                                "`forward` fitness (forward progress per step; at a fall, the survival credit lost)")
-    render_mode: str | None = option(None, "none, or `rgb_array` (needs an OpenGL context)", choices=(None, "rgb_array"))
+    render_mode: str | None = option(None, "none, or `rgb_array` (needs an OpenGL context)",
+                                     choices=(None, "rgb_array"))
     width: int = option(480, "rendered image width", unit="pixels", low=1, integer=True)
     height: int = option(480, "rendered image height", unit="pixels", low=1, integer=True)
 
@@ -80,7 +82,8 @@ def env_config(body: str, default_control_dt: float, kwargs: dict, where: str) -
     names = EnvOptions.__dataclass_fields__
     options = parsed(EnvOptions, {k: v for k, v in kwargs.items() if k in names}, where)
     config = EpisodeConfig(body=body, controller=None, task=options.task, seconds=options.seconds,
-                           body_options={k: v for k, v in kwargs.items() if k not in names}, task_options=options.task_options,
+                           body_options={k: v for k, v in kwargs.items() if k not in names},
+                           task_options=options.task_options,
                            control_dt=default_control_dt if options.control_dt is None else options.control_dt)
     config.check()
     return config, options
@@ -181,8 +184,8 @@ class Walkers:
         left out), where the walker is ``(n, 2)`` m, whether it blew up."""
         st, ep = self.state.episode, self.episode
         terms = {k: v for k, v in ep.task.terms(st.task).items() if not np.isnan(v).all()}
-        return {"fitness": self.state.fitness.copy(), **terms, "position": ep.task.end_position(ep.body, st.sims, st.task).copy(),
-                "unstable": st.unstable.copy()}
+        return {"fitness": self.state.fitness.copy(), **terms,
+                "position": ep.task.end_position(ep.body, st.sims, st.task).copy(), "unstable": st.unstable.copy()}
 
     def observe(self) -> np.ndarray:
         """``(n, obs_size)``: the body's sensors and the task's, in :attr:`sensor_widths` order (blown-up rows: 0)."""

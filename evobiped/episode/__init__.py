@@ -21,5 +21,5 @@ from .loop import Episode
 from .state import Context, EpisodeState, Pose, sense_sums
 from .timing import MAX_STEPS, MAX_TICKS, check_timing
 
-__all__ = ["MAX_STEPS", "MAX_TICKS", "Context", "Episode", "EpisodeConfig", "EpisodeState", "Listener", "Listeners", "Pose",
-           "build_episode", "check_timing", "sense_sums"]
+__all__ = ["MAX_STEPS", "MAX_TICKS", "Context", "Episode", "EpisodeConfig", "EpisodeState", "Listener", "Listeners",
+           "Pose", "build_episode", "check_timing", "sense_sums"]

@@ -146,8 +146,8 @@ class EpisodeConfig:
             for name in ("target_offset", "target_noise"):
                 s = scheduled(self.perturbations, name)
                 if s.start or s.end:
-                    raise ConfigError(f"episode.perturbations.{name}: disturbs PD targets (rad); body {self.body!r} is driven "
-                                      f"by {body.action_kind}s and has none")
+                    raise ConfigError(f"episode.perturbations.{name}: disturbs PD targets (rad); body {self.body!r} is "
+                                      f"driven by {body.action_kind}s and has none")
         return body, controller, task
 
     def check(self) -> None:
@@ -171,7 +171,8 @@ class EpisodeConfig:
 
         body, own, task = self.parts()
         return Episode(body, own if controller is None else controller, task, seconds=float(self.seconds),
-                       stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations if self.perturbations.active else None,
+                       stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations
+                           if self.perturbations.active else None,
                        latency=self.latency if controller is None else 0, control_dt=self.control_dt,
                        kernel=self.kernel)
 

@@ -15,9 +15,9 @@ from .state import Disturbances
 
 def draw_trials(perturbations: PerturbationOptions | None, task: Task, key: tuple[int, int] | None, *, seconds: float,
                 n_actuators: int, n_genes: int | None) -> Trials | None:
-    """The perturbed presentations of generation key = (run seed, generation) (None: nominal) of an episode of ``seconds``
-    s under ``perturbations``, with the task's random sources of that generation (the steer task's sources, the command
-    task's drawn commands; shared by every genome); ``n_genes`` None: no controller (no gene noise)."""
+    """The perturbed presentations of generation key = (run seed, generation) (None: nominal) of an episode of
+    ``seconds`` s under ``perturbations``, with the task's random sources of that generation (the steer task's sources,
+    the command task's drawn commands; shared by every genome); ``n_genes`` None: no controller (no gene noise)."""
     drawn = task.draw_sources(key) if key is not None else None
     if key is None or (perturbations is None and drawn is None):
         return None
@@ -54,7 +54,8 @@ def assisted_physics(body: Body, sims: Sims, ids: np.ndarray, trunk: int, subste
     bool mask of blow-ups."""
     bad = np.zeros(len(ids), bool)
     for _ in range(substeps):
-        sims.xfrc_applied[ids, trunk, 3:] = assist_torque(stiffness, damping, sims.xmat[ids, trunk], sims.cvel[ids, trunk, :3])
+        sims.xfrc_applied[ids, trunk, 3:] = assist_torque(stiffness, damping, sims.xmat[ids, trunk],
+                                                          sims.cvel[ids, trunk, :3])
         bad |= body.advance(sims, ids, 1, each)
     return bad
 

@@ -40,6 +40,7 @@ class Grounds:
         if slope:  # an inclined plane: gravity tilted down the slope, away from where the floor rises
             g = float(np.linalg.norm(self.model.opt.gravity))
             a = np.arctan(slope)
-            c, s = (0.0 if abs(v) < 1e-12 else float(v) for v in (np.cos(slope_direction), np.sin(slope_direction)))  # exact on the axes
+            # exact on the axes
+            c, s = (0.0 if abs(v) < 1e-12 else float(v) for v in (np.cos(slope_direction), np.sin(slope_direction)))
             model.opt.gravity[:] = (-g * np.sin(a) * c, -g * np.sin(a) * s if s else 0.0, -g * np.cos(a))
         return model

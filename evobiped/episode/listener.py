@@ -30,10 +30,12 @@ class Watched(Protocol):
 
 class Listener(Protocol):
     """Watches an episode (recording, figures); never changes it.  A listener with ``reads_feet_steps = True`` reads
-    the gait lab's samples after every physics step of each tick (``Body.tick_feet``), which the episode then collects."""
+    the gait lab's samples after every physics step of each tick (``Body.tick_feet``), which the episode then
+    collects."""
 
     def start(self, episode: Watched, sims: Sims) -> None: ...
-    def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray, task_state: TaskState) -> None: ...
+    def tick(self, t: float, sims: Sims, ids: np.ndarray, neurons: np.ndarray, action: np.ndarray,
+             task_state: TaskState) -> None: ...
     def end(self, result: EpisodeResult) -> None: ...
 
 

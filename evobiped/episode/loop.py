@@ -27,7 +27,8 @@ from .timing import check_timing
 class Episode:
     """A body, a controller and a task with the model compiled once; run many times."""
 
-    def __init__(self, body: Body, controller: Controller | None, task: Task, *, seconds: float, stop_on_fall: bool = True,
+    def __init__(self, body: Body, controller: Controller | None, task: Task, *, seconds: float,
+                 stop_on_fall: bool = True,
                  perturbations: PerturbationOptions | None = None, latency: int = 0, control_dt: float | None = None,
                  kernel: str = "auto"):
         """``controller`` None: the actions come from outside (:meth:`step`, the Gymnasium environments), one
@@ -70,8 +71,10 @@ class Episode:
         return self.grounds.sims(n, friction=friction, slope=slope, slope_direction=slope_direction)
 
     def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
-        """The perturbed presentations of generation key = (run seed, generation); None: nominal (:func:`draw_trials`)."""
-        return draw_trials(self.perturbations, self.task, key, seconds=self.seconds, n_actuators=len(self.body.actuator_names),
+        """The perturbed presentations of generation key = (run seed, generation); None: nominal
+        (:func:`draw_trials`)."""
+        return draw_trials(self.perturbations, self.task, key, seconds=self.seconds,
+                           n_actuators=len(self.body.actuator_names),
                            n_genes=None if self.controller is None else self.controller.layout.size)
 
     def run(self, genomes: np.ndarray, *, seconds: float | None = None, listener: Listener | None = None,
@@ -111,7 +114,9 @@ class Episode:
             P = int(genomes)
         elif trials is not None and trials.gene_noise is not None:  # every row its own genome: its trial's gene noise
             rows = np.repeat(np.atleast_2d(self.controller.layout.validate(genomes)), S * R, axis=0)
-            params = self.controller.decode(self.controller.layout.jitter(rows, trials.gene_noise[np.arange(len(rows)) // S % R]))
+            params = self.controller.decode(self.controller.layout.jitter(rows,
+                                                                          trials.gene_noise[np.arange(len(
+                                                                              rows)) // S % R]))
             P = len(rows)
         else:
             params = self.controller.decode(genomes)
@@ -183,7 +188,8 @@ class Episode:
         for _ in range(n):
             if not alive.any():
                 break
-            neurons = ctrl.neuron_outputs(params, st.controller) if listener is not None or self._task_reads_neurons else None
+            neurons = ctrl.neuron_outputs(params,
+                                          st.controller) if listener is not None or self._task_reads_neurons else None
             inputs, flip = self._inputs(st, P)
             st.controller, out = ctrl.step(params, st.controller, inputs)
             action = to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out)
@@ -217,7 +223,8 @@ class Episode:
         if d is None or d.assist is None:
             bad = self.body.advance(sims, ids, self.substeps, each)
         else:  # the pelvis assistance (N m/rad) on the trunk
-            bad = assisted_physics(body, sims, ids, self._trunk, self.substeps, d.assist[ids], d.trials.assist_damping, each)
+            bad = assisted_physics(body, sims, ids, self._trunk, self.substeps, d.assist[ids], d.trials.assist_damping,
+                                   each)
         if samples is not None:
             sims.readings["feet_steps"] = stacked(samples)  # what Body.tick_feet hands on until the state changes
         st.ticks = k + 1

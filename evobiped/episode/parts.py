@@ -105,9 +105,10 @@ def controller_part(name: str, options: Any, body: Body, task: Task, keys: tuple
 def _wired(name: str, opts: Any, body: Body, task: Task) -> Controller:
     cls = CONTROLLERS[name]
     added = task.sensor_widths()
-    offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added), {**body.sensor_norms, **task.sensor_norms()},
-                  named_only=gait.ON_REQUEST)
-    inputs = wire(cls.needs(opts), offer, chosen=opts.inputs, what=f"controller {name!r} (body {body.name!r}, task {task.name!r})")
+    offer = Offer(body.actuators, {**body.sensor_widths, **added}, tuple(added),
+                  {**body.sensor_norms, **task.sensor_norms()}, named_only=gait.ON_REQUEST)
+    inputs = wire(cls.needs(opts), offer, chosen=opts.inputs, what=f"controller {name!r} (body {body.name!r}, task "
+                                                                   f"{task.name!r})")
     ctrl = cls(opts, n_outputs=len(body.actuators), inputs=inputs, actuators=body.actuators)
     where = "episode.controller_options"
     if ctrl.normalises_inputs:
@@ -115,16 +116,18 @@ def _wired(name: str, opts: Any, body: Body, task: Task) -> Controller:
     if opts.input_norm is not None:
         width = sum(inputs.values())
         if not ctrl.normalises_inputs:
-            raise ConfigError(f"{where}.input_norm: controller {name!r} reads raw senses here (it does not normalise its inputs)")
+            raise ConfigError(f"{where}.input_norm: controller {name!r} reads raw senses here (it does not normalise "
+                              "its inputs)")
         if len(opts.input_norm["mean"]) != width:
-            raise ConfigError(f"{where}.input_norm: normalises {len(opts.input_norm['mean'])} inputs; the controller reads "
-                              f"{width} ({', '.join(f'{n} {w}' for n, w in inputs.items())})")
+            raise ConfigError(f"{where}.input_norm: normalises {len(opts.input_norm['mean'])} inputs; the controller "
+                              f"reads {width} ({', '.join(f'{n} {w}' for n, w in inputs.items())})")
         ctrl.input_norm = (np.array(opts.input_norm["mean"], float), np.array(opts.input_norm["std"], float))
     if opts.frame == "stance":
         if body.actuator_mirror is None or body.contact_sensor is None:
             raise ConfigError(f"{where}.frame: 'stance' needs a bilateral body with foot contacts; body {body.name!r} "
                               "declares no left/right mirror")
-        ctrl.frame = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror, what=f"{where}.frame")
+        ctrl.frame = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror,
+                                 what=f"{where}.frame")
     if "genes" in given(opts):
         try:
             ctrl.override_genes(opts.genes)

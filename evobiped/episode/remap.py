@@ -92,4 +92,5 @@ def remap_norm(norm: dict, old, new, extra: dict | None = None) -> dict:
             out_mean += list(declared[0][at:at + w])
             out_std += list(declared[1][at:at + w])
         at += w
-    return {"mean": [float(v) for v in out_mean], "std": [float(v) for v in out_std], "count": float(norm.get("count", 0.0))}
+    return {"mean": [float(v) for v in out_mean], "std": [float(v) for v in out_std],
+            "count": float(norm.get("count", 0.0))}

@@ -13,7 +13,8 @@ import numpy as np
 
 @dataclass
 class EpisodeResult:
-    """Per-individual outcome, every array ``(P,)`` (positions and facings ``(P, 2)``, or ``(P, S, 2)`` for S presentations)."""
+    """Per-individual outcome, every array ``(P,)`` (positions and facings ``(P, 2)``, or ``(P, S, 2)`` for S
+    presentations)."""
 
     fitness: np.ndarray
     fell: np.ndarray

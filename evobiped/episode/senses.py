@@ -27,9 +27,9 @@ class SensePlan:
         self.frame = getattr(controller, "frame", None)
 
     def read(self, st: EpisodeState, P: int) -> tuple[np.ndarray, np.ndarray | None]:
-        """The inputs ``(P, k)`` of the ``P`` rows of ``st`` now (in the controller's frame, normalised if it normalises)
-        and the rows whose senses and actions its stance frame mirrors (None: no frame).  Adds the senses of rows that
-        are up to ``st.senses`` when a run collects them."""
+        """The inputs ``(P, k)`` of the ``P`` rows of ``st`` now (in the controller's frame, normalised if it
+        normalises) and the rows whose senses and actions its stance frame mirrors (None: no frame).  Adds the senses of
+        rows that are up to ``st.senses`` when a run collects them."""
         body, sims = self.body, st.sims
         flip = None if self.frame is None else gait.second_stands(body.contacts(sims), sims)
         if not self.names:

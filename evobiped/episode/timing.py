@@ -28,7 +28,8 @@ def check_timing(body: Body, controller: Controller | None, seconds: float, *,
     else:
         if (controller.output_kind, body.action_kind) not in MAPS:
             raise ConfigError(
-                f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} cannot take as {body.action_kind}s"
+                f"controller {controller.name!r} gives {controller.output_kind} outputs, which body {body.name!r} "
+                f"cannot take as {body.action_kind}s"
             )
         dt = controller.dt if controller.dt is not None else body.timestep
     ratio = dt / body.timestep

@@ -18,7 +18,8 @@ from .threads import ThreadEvaluator
 BACKENDS = ("serial", "process", "thread", "ray")
 
 
-def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: int | None = None, address: str | None = None,
+def make_evaluator(episode: EpisodeConfig, backend: str = "process", workers: int | None = None,
+                   address: str | None = None,
                    on_retry: Callable[[int, int], None] | None = None, fault: FaultHook | None = None) -> Evaluator:
     """The evaluator for a backend name; ``workers`` defaults to all cores; ``on_retry(n, limit)``: a batch of the
     process pool or of the threads is evaluated again after its worker died; ``fault``: the workers' testing hook

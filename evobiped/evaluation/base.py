@@ -34,7 +34,8 @@ def evaluate_batch(episode: Episode, genomes: np.ndarray, key: tuple[int, int] |
 
 
 def concat(parts: list[EpisodeResult]) -> EpisodeResult:
-    """The results of consecutive batches as one, every field joined along its first axis (genomes, or simulation rows)."""
+    """The results of consecutive batches as one, every field joined along its first axis (genomes, or simulation
+    rows)."""
     def join(values: list):
         first = values[0]
         if first is None:
@@ -47,7 +48,8 @@ def concat(parts: list[EpisodeResult]) -> EpisodeResult:
 
     if len(parts) == 1:
         return parts[0]
-    return EpisodeResult(**{f.name: join([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(EpisodeResult)})
+    return EpisodeResult(**{f.name: join([getattr(p, f.name) for p in parts])
+                            for f in dataclasses.fields(EpisodeResult)})
 
 
 def chunks(n: int, size: int | None, workers: int = 1) -> list[slice]:
@@ -69,7 +71,8 @@ class Evaluator(ABC):
         self.config = episode
 
     @abstractmethod
-    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None, context: Context | None = None) -> EpisodeResult:
+    def evaluate(self, genomes: np.ndarray, key: tuple[int, int] | None = None,
+                 context: Context | None = None) -> EpisodeResult:
         """The episode results of ``genomes`` (fitness and outcome, ``(N,)`` each); ``key`` = (run seed, generation)
         draws the episode's perturbations; ``context``: what the run sets for this generation."""
 
@@ -118,7 +121,8 @@ class RetryingEvaluator(Evaluator):
             losses += 1
             self._recover()
             if losses > MAX_RETRIES:
-                raise UserError(self.lost.format(n=losses) + "; the last checkpoint is kept: resume the run with evobiped evolve --resume")
+                raise UserError(self.lost.format(n=losses) + "; the last checkpoint is kept: resume the run with "
+                                                             "evobiped evolve --resume")
             if self.on_retry is not None:
                 self.on_retry(losses, MAX_RETRIES)
         return concat(parts)

@@ -49,7 +49,8 @@ def silenced_stderr():
     finally:
         try:
             sys.stderr.flush()
-        finally:  # a stop signal raised in the flush must not leave fd 2 on /dev/null (the "interrupted" line would vanish)
+        # a stop signal raised in the flush must not leave fd 2 on /dev/null (the "interrupted" line would vanish)
+        finally:
             os.dup2(saved, 2)
             os.close(saved)
 

@@ -82,7 +82,8 @@ class ProcessPoolEvaluator(RetryingEvaluator):
             raise BrokenProcessPool(f"the pool broke while starting its workers ({exc})") from None
 
     def _recover(self) -> None:
-        """Stop the broken pool (its survivors included) and start a fresh one (its workers start at the next submit)."""
+        """Stop the broken pool (its survivors included) and start a fresh one (its workers start at the next
+        submit)."""
         stop_pool(self.pool)
         self.pool = self._new_pool()
 

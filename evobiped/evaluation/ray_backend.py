@@ -60,8 +60,10 @@ def init_ray(address: str | None, workers: int | None):
         where = f" at {address}" if address else ""
         hint = ""
         if address and os.environ.get("RAY_AUTH_MODE") != "token":
-            hint = " (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and its token: see `ray get-auth-token`)"
-        raise UserError(f"cannot start or reach a Ray cluster{where}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
+            hint = (" (a cluster with token authentication, the default since Ray 2.59, needs RAY_AUTH_MODE=token and "
+                    "its token: see `ray get-auth-token`)")
+        raise UserError(f"cannot start or reach a Ray cluster{where}: "
+                        f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}{hint}") from None
     if threading.current_thread() is threading.main_thread():
         for s, h in handlers.items():  # ray.init puts its own in place (SIGTERM: exit status 15, no checkpoint line)
             if h is not None:
@@ -128,8 +130,8 @@ class RayEvaluator(Evaluator):
     ``fault``: the actors' testing hook (:class:`~.faults.FaultHook`; None: the one the environment names).
     """
 
-    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None, chunk: int | None = None,
-                 fault: FaultHook | None = None):
+    def __init__(self, episode: EpisodeConfig, workers: int | None = None, address: str | None = None,
+                 chunk: int | None = None, fault: FaultHook | None = None):
         super().__init__(episode)
         fault = FaultHook.from_environment() if fault is None else fault
         ray, self._owns = init_ray(address, workers)
@@ -163,8 +165,9 @@ class RayEvaluator(Evaluator):
         """UserError if a node that runs one of the actors has died."""
         alive = {n["NodeID"] for n in self.ray.nodes() if n["Alive"]}
         if not self.nodes <= alive:
-            raise UserError(f"a Ray node running this run's workers died ({len(self.nodes - alive)} of {len(self.nodes)} nodes lost); "
-                            "the last checkpoint is kept: resume the run with evobiped evolve --resume")
+            raise UserError(f"a Ray node running this run's workers died ({len(self.nodes - alive)} of "
+                            f"{len(self.nodes)} nodes lost); the last checkpoint is kept: resume the run with evobiped "
+                            "evolve --resume")
 
     def evaluate(self, genomes, key=None, context=None):
         genomes = np.asarray(genomes, float)
@@ -184,8 +187,9 @@ class RayEvaluator(Evaluator):
             if isinstance(exc, self.ray.exceptions.RayTaskError):
                 raise  # an error in evobiped's own code, not a lost worker
             # a worker beyond its restarts, or one on a node that died: the generation is lost, not the run
-            raise UserError(f"Ray lost a worker ({type(exc).__name__}: a node died, or a worker died {MAX_RETRIES + 1} times); "
-                            "the last checkpoint is kept: resume the run with evobiped evolve --resume") from None
+            raise UserError(f"Ray lost a worker ({type(exc).__name__}: a node died, or a worker died {MAX_RETRIES + 1} "
+                            "times); the last checkpoint is kept: resume the run with evobiped evolve "
+                            "--resume") from None
 
     def close(self):
         for a in self.actors:

@@ -72,7 +72,8 @@ def rewired(walker: str | Path, drop: list[str], add: list[str]) -> tuple[np.nda
     new = dataclasses.replace(old, controller_options={**bare, "inputs": new_inputs})
     norm = table.get("input_norm")
     if norm is not None:
-        new = dataclasses.replace(new, controller_options={**bare, "inputs": new_inputs, "input_norm": remap_norm(norm, old, new)})
+        new = dataclasses.replace(new, controller_options={**bare, "inputs": new_inputs,
+                                                           "input_norm": remap_norm(norm, old, new)})
     return _remapped(walker, genome, old, new), new
 
 
@@ -128,7 +129,8 @@ def command_genome(walker: str | Path, speed_gain: float = 0.0, reference_speed:
     if not speed_gain:
         return _onto_preset(walker, genome, old, "walker-command-tune")
     if reference_speed is None or not (np.isfinite(reference_speed) and reference_speed > 0):
-        raise UserError(f"--reference-speed must be a finite speed above 0 m/s with --speed-gain, got {reference_speed!r}")
+        raise UserError("--reference-speed must be a finite speed above 0 m/s with --speed-gain, got "
+                        f"{reference_speed!r}")
     if "com_velocity" not in (old.controller_options.inputs or ()) or old.controller_options.input_norm is None:
         raise UserError(f"{walker}: the walker does not read com_velocity through a frozen input_norm; "
                         "a speed command cannot move its velocity sense")
@@ -151,16 +153,19 @@ def _onto_preset(walker, genome: np.ndarray, old: EpisodeConfig, preset: str, *,
                  copy: dict | None = None) -> tuple[np.ndarray, EpisodeConfig]:
     """``genome`` of episode ``old`` moved onto the episode of the preset named ``preset``, its frozen input
     normalisation with it (a new input: ``extra[name]`` = (means, stds), else its declared centre and scale).  A walker
-    integrated otherwise than the preset's network (``integration``) is refused in one line: its network would change."""
+    integrated otherwise than the preset's network (``integration``) is refused in one line: its network would
+    change."""
     new = _preset_episode(preset)
     was, now = (getattr(e.controller_options, "integration", None) for e in (old, new))
     if was != now and old.controller == new.controller:
-        others = [name for name in start_presets(new.task) if _preset_episode(name).controller_options.integration == was]
+        others = [name for name in start_presets(new.task)
+                  if _preset_episode(name).controller_options.integration == was]
         raise UserError(f"{walker}: the walker's network is integrated by {was!r}, --preset {preset}'s by {now!r}"
                         + (f" (take --preset {' or '.join(others)})" if others else ""))
     norm = old.controller_options.input_norm
     if norm is not None:
-        new = dataclasses.replace(new, controller_options={**given(new.controller_options), "input_norm": remap_norm(norm, old, new, extra)})
+        new = dataclasses.replace(new, controller_options={**given(new.controller_options),
+                                                           "input_norm": remap_norm(norm, old, new, extra)})
     return _remapped(walker, genome, old, new, copy), new
 
 
@@ -180,8 +185,10 @@ def start_presets(task: str) -> list[str]:
     return out
 
 
-def _remapped(walker, genome: np.ndarray, old: EpisodeConfig, new: EpisodeConfig, copy: dict | None = None) -> np.ndarray:
-    """:func:`~evobiped.episode.remap.remap_inputs`, its ValueError (controllers that differ) one line naming ``walker``."""
+def _remapped(walker, genome: np.ndarray, old: EpisodeConfig, new: EpisodeConfig,
+              copy: dict | None = None) -> np.ndarray:
+    """:func:`~evobiped.episode.remap.remap_inputs`, its ValueError (controllers that differ) one line naming
+    ``walker``."""
     try:
         return remap_inputs(genome, old, new, copy=copy)
     except ValueError as e:

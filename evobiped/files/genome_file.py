@@ -58,7 +58,8 @@ def load_genome(path: str | Path) -> tuple[np.ndarray, EpisodeConfig, dict]:
     obj = read_json(path, what="genome file", file_format=FORMAT)
     if not isinstance(obj, dict) or "genome" not in obj or "episode" not in obj:
         raise UserError(f"{path} is not an evobiped genome file (needs 'genome' and 'episode')")
-    if not isinstance(obj["genome"], list) or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in obj["genome"]):
+    if not isinstance(obj["genome"], list) or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                      for x in obj["genome"]):
         raise UserError(f"{path}: 'genome' must be a list of numbers")
     if not isinstance(obj["episode"], dict):
         raise UserError(f"{path}: 'episode' must be a table")
@@ -84,8 +85,8 @@ def _check_outcome(stored: Any, path) -> None:
 
     rows = stored.get("rows") if isinstance(stored, dict) else None
     if not (row_ok(stored) and (rows is None or (isinstance(rows, list) and all(map(row_ok, rows))))):
-        raise UserError(f"{path}: 'outcome' must be a table of fell (true/false), end_time (s) and rows, each a table of "
-                        "fell, end_time, distance, heading_deg and to_target (numbers)")
+        raise UserError(f"{path}: 'outcome' must be a table of fell (true/false), end_time (s) and rows, each a table "
+                        "of fell, end_time, distance, heading_deg and to_target (numbers)")
 
 
 def _plain(v: Any) -> Any:

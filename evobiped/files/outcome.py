@@ -62,8 +62,9 @@ def outcome(result: EpisodeResult, targets: np.ndarray | None = None) -> dict:
 def compare(stored: dict, replayed: dict, tolerance: Tolerance = TOLERANCE) -> tuple[list[str], list[str]]:
     """Compare a stored outcome with a replayed :func:`outcome`.  ``stored`` may hold any part of one: ``fell`` and
     ``end_time`` of the genome, and ``rows`` with any of ``fell``, ``end_time``, ``distance``, ``heading_deg``,
-    ``to_target`` (for the first ``len(rows)`` presentations).  Returns ``(drift, failures)``: a phrase per compared quantity saying how far the replay
-    drifted, and one per quantity outside ``tolerance`` (empty: the outcome holds)."""
+    ``to_target`` (for the first ``len(rows)`` presentations).  Returns ``(drift, failures)``: a phrase per compared
+    quantity saying how far the replay drifted, and one per quantity outside ``tolerance`` (empty: the outcome
+    holds)."""
     drift: list[str] = []
     failures: list[str] = []
     _survival(stored, replayed, "", drift, failures)
@@ -82,7 +83,8 @@ def compare(stored: dict, replayed: dict, tolerance: Tolerance = TOLERANCE) -> t
             allowed = max(tolerance.distance_m, tolerance.distance_rel * old["distance"])
             drift.append(at + f"distance {new['distance']:.2f} m (stored {old['distance']:.2f} m, {d:+.4f} m)")
             if abs(d) > allowed:
-                failures.append(at + f"distance {new['distance']:.2f} m, stored {old['distance']:.2f} m (allowed +-{allowed:.2f} m)")
+                failures.append(at + f"distance {new['distance']:.2f} m, stored {old['distance']:.2f} m (allowed "
+                                     f"+-{allowed:.2f} m)")
         if old.get("heading_deg") is not None and new["heading_deg"] is not None:
             d = (new["heading_deg"] - old["heading_deg"] + 180.0) % 360.0 - 180.0
             drift.append(at + f"heading {new['heading_deg']:+.1f} deg (stored {old['heading_deg']:+.1f} deg, {d:+.2f})")
@@ -107,5 +109,6 @@ def _survival(old: dict, new: dict, at: str, drift: list[str], failures: list[st
     elif not new["fell"] and old.get("end_time") is not None and old["end_time"] != new["end_time"]:
         failures.append(at + f"ended at {new['end_time']:g} s, stored {old['end_time']:g} s")
     else:
-        drift.append(at + (f"fell at {new['end_time']:.2f} s (stored: fell at {old.get('end_time', float('nan')):.2f} s)"
+        drift.append(at + (f"fell at {new['end_time']:.2f} s (stored: fell at {old.get('end_time', float('nan')):.2f} "
+                           "s)"
                            if new["fell"] else f"up {new['end_time']:g} s (as stored)"))

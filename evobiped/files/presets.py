@@ -25,7 +25,8 @@ def names() -> list[str]:
 def path(name: str) -> Path:
     """The preset's file (UserError naming the choices for an unknown name)."""
     if name not in names():
-        raise UserError(f"unknown preset {name!r} (choose from {', '.join(names())}; `evobiped presets` describes them)")
+        raise UserError(
+            f"unknown preset {name!r} (choose from {', '.join(names())}; `evobiped presets` describes them)")
     return DIRECTORY / f"{name}.toml"
 
 

@@ -99,21 +99,25 @@ def problem(needs: Needs, offer: Offer) -> str | None:
     shown = "; ".join(f"{leg}: {', '.join(j)}" for leg, j in by_leg.items()) or "none"
     if needs.max_actuators is not None and len(acts) > needs.max_actuators:
         return f"drives at most {needs.max_actuators} actuators, the body has {len(acts)}"
-    if needs.joints is not None and (set(by_leg) != {"left", "right"} or any(sorted(j) != sorted(needs.joints) for j in by_leg.values())):
+    if needs.joints is not None and (set(by_leg) != {"left", "right"}
+                                     or any(sorted(j) != sorted(needs.joints) for j in by_leg.values())):
         return f"needs a left and a right leg with the joints {', '.join(needs.joints)}, the body has {shown}"
     if needs.paired_legs:
         half = len(acts) // 2
         first, second = acts[:half], acts[half:]
         same = len(acts) >= 2 and len(acts) % 2 == 0 and [a.joint for a in first] == [a.joint for a in second]
-        if not (same and len({a.leg for a in first}) == 1 and len({a.leg for a in second}) == 1 and first[0].leg != second[0].leg
+        if not (same and len({a.leg for a in first}) == 1 and len({a.leg for a in second}) == 1
+                and first[0].leg != second[0].leg
                 and first[0].joint.startswith("hip")):
             return f"needs two legs with the same joints, each starting at its hip, the body has {shown}"
     if needs.deaf and offer.task_sensors:
         return f"reads no sensors; the task adds {', '.join(offer.task_sensors)}"
     missing = [n for n in needs.sensors if n not in offer.sensors]
     if missing:
-        return f"needs the sensors {', '.join(missing)}, not offered (offered: {', '.join(sorted(offer.sensors)) or 'none'})"
-    wrong = [f"{n} ({w} wide, offered {offer.sensors[n]})" for n, w in needs.sensors.items() if w is not None and offer.sensors[n] != w]
+        return (f"needs the sensors {', '.join(missing)}, not offered (offered: "
+                f"{', '.join(sorted(offer.sensors)) or 'none'})")
+    wrong = [f"{n} ({w} wide, offered {offer.sensors[n]})" for n, w in needs.sensors.items() if w is not None
+             and offer.sensors[n] != w]
     if wrong:
         return f"needs the sensors {', '.join(wrong)}"
     return None
@@ -141,7 +145,8 @@ def wire(needs: Needs, offer: Offer, *, chosen: list[str] | None = None, what: s
             raise ConfigError(f"{what} inputs must be a list of sensor names, got {chosen!r}")
         unknown = [n for n in chosen if n not in offer.sensors]
         if unknown:
-            raise ConfigError(f"{what} inputs {unknown} are not sensors of the body or task (have {sorted(offer.sensors)})")
+            raise ConfigError(f"{what} inputs {unknown} are not sensors of the body or task (have "
+                              f"{sorted(offer.sensors)})")
         left_out = [n for n in needs.sensors if n not in chosen]
         if left_out:
             raise ConfigError(f"{what} needs the sensors {', '.join(left_out)}; its inputs leave them out")

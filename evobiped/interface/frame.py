@@ -41,14 +41,16 @@ def check_mirror(name: str, width: int, mirror: Mirror) -> None:
     if p.shape != (width,) or s.shape != (width,) or sorted(p.tolist()) != list(range(width)):
         raise ConfigError(f"mirror of {name!r}: needs a permutation and a sign for each of its {width} columns")
     if not np.all(np.abs(s) == 1) or not np.array_equal(p[p], np.arange(width)) or not np.all(s * s[p] == 1):
-        raise ConfigError(f"mirror of {name!r}: mirroring twice must give the reading back (an involution with signs +-1)")
+        raise ConfigError(f"mirror of {name!r}: mirroring twice must give the reading back (an involution with signs "
+                          "+-1)")
 
 
 class StanceFrame:
     """The stance frame for one wiring: ``inputs`` ``{sensor: width}`` in input order, their declared mirrors,
     and the actions' mirror (permutation and signs over the action vector)."""
 
-    def __init__(self, inputs: Mapping[str, int], mirrors: Mapping[str, Mirror], actions: Mirror, *, what: str = "controller"):
+    def __init__(self, inputs: Mapping[str, int], mirrors: Mapping[str, Mirror], actions: Mirror, *,
+                 what: str = "controller"):
         missing = [n for n in inputs if n not in mirrors]
         if missing:
             raise ConfigError(f"{what}: frame 'stance' needs a left/right mirror of every input; none is declared for "
@@ -73,7 +75,8 @@ class StanceFrame:
 
 
 def _mirrored(a: np.ndarray, flip: np.ndarray, perm: np.ndarray, sign: np.ndarray) -> np.ndarray:
-    """``a`` ``(P, k)`` with rows ``flip`` replaced by their mirror ``sign * a[:, perm]`` (``a`` itself if none flips)."""
+    """``a`` ``(P, k)`` with rows ``flip`` replaced by their mirror ``sign * a[:, perm]`` (``a`` itself if none
+    flips)."""
     if not flip.any():
         return a
     return np.where(flip[:, None], a[:, perm] * sign, a)

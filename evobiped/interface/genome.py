@@ -91,7 +91,8 @@ class GenomeLayout:
         return np.clip(rng.normal(self.init_mean, self.init_sigma, size), self.low, self.high)
 
     def jitter(self, genomes: np.ndarray, noise: np.ndarray) -> np.ndarray:
-        """``genomes`` ``(n, G)`` moved by ``noise`` ``(n, G)`` in units of each gene's range (high - low), clipped to the bounds."""
+        """``genomes`` ``(n, G)`` moved by ``noise`` ``(n, G)`` in units of each gene's range (high - low), clipped to
+        the bounds."""
         return np.clip(genomes + noise * (self.high - self.low), self.low, self.high)
 
     def with_overrides(self, genes: dict[str, dict[str, float]]) -> "GenomeLayout":

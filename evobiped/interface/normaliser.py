@@ -38,7 +38,8 @@ class SenseSums:
 
 @dataclass(frozen=True)
 class Normaliser:
-    """Running statistics of k inputs: ``count`` ticks, ``mean`` ``(k,)``, ``m2`` ``(k,)`` (sum of squared deviations)."""
+    """Running statistics of k inputs: ``count`` ticks, ``mean`` ``(k,)``, ``m2`` ``(k,)`` (sum of squared
+    deviations)."""
 
     count: float
     mean: np.ndarray
@@ -80,7 +81,8 @@ class Normaliser:
             mean, m2 = np.array(table["mean"], float), np.array(table["m2"], float)
         except (TypeError, KeyError, ValueError):
             raise UserError(f"{where}: must be a table of count, mean and m2") from None
-        if mean.shape != (k,) or m2.shape != (k,) or not (np.isfinite(mean).all() and np.isfinite(m2).all() and count >= 0) \
+        if mean.shape != (k,) or m2.shape != (k,) or not (np.isfinite(mean).all() and np.isfinite(m2).all()
+                                                          and count >= 0) \
                 or (m2 < 0).any():
             raise UserError(f"{where}: needs {k} finite means and non-negative m2 values and a count >= 0")
         return cls(count, mean, m2)

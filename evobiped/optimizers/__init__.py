@@ -14,7 +14,8 @@ OPTIMIZERS: dict[str, type[Optimizer]] = {cls.name: cls for cls in (GA, CMAES, E
 
 
 def described(quote: str = "`") -> str:
-    """Every registered optimizer with what it is: "`ga` (Reil & Husbands' GA), `cma` (CMA-ES), ... or `map-elites` (...)"."""
+    """Every registered optimizer with what it is: "`ga` (Reil & Husbands' GA), `cma` (CMA-ES), ... or `map-elites`
+    (...)"."""
     items = [f"{quote}{name}{quote} ({cls.about})" for name, cls in OPTIMIZERS.items()]
     return ", ".join(items[:-1]) + " or " + items[-1] if len(items) > 1 else items[0]
 

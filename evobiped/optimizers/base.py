@@ -64,8 +64,8 @@ class OptimizerState:
 
     @staticmethod
     def written_by(table: Any) -> str:
-        """The optimizer that wrote a checkpoint's table (``name``; a checkpoint of before the state had a name: ``optimizer``,
-        and one older still none: the GA)."""
+        """The optimizer that wrote a checkpoint's table (``name``; a checkpoint of before the state had a name:
+        ``optimizer``, and one older still none: the GA)."""
         if not isinstance(table, dict):
             raise UserError(f"checkpoint: the optimizer's state must be a table, got {type(table).__name__}")
         return table.get("name", table.get("optimizer", "ga"))
@@ -81,22 +81,26 @@ class OptimizerState:
     def numbers_of(cls, table: dict, key: str, *, null: float | None = None, rows: int | None = None,
                    length: int | None = None, minus_infinity: bool = False, non_empty: bool = False) -> np.ndarray:
         """``table[key]`` of a checkpoint as an array: a list of finite numbers ``(n,)`` (``null``: the value a null
-        reads as, e.g. NaN for a value not yet known; None: no nulls), of ``length`` entries when given, or with ``rows``
-        = W a list of rows of W finite numbers ``(n, W)``; ``minus_infinity``: -Infinity (an unstable row) is a number
-        too; ``non_empty``: at least one entry.  UserError, one line naming ``<optimizer>.<key>``, for anything else."""
+        reads as, e.g. NaN for a value not yet known; None: no nulls), of ``length`` entries when given, or with
+        ``rows`` = W a list of rows of W finite numbers ``(n, W)``; ``minus_infinity``: -Infinity (an unstable row) is a
+        number too; ``non_empty``: at least one entry.  UserError, one line naming ``<optimizer>.<key>``, for anything
+        else."""
         vals = table.get(key)
 
         def number(x) -> bool:
             if x is None:
                 return null is not None
-            return isinstance(x, (int, float)) and not isinstance(x, bool) and (math.isfinite(x) or (minus_infinity and x == -math.inf))
+            return isinstance(x, (int, float)) and not isinstance(x, bool) and (math.isfinite(x)
+                                                                                or (minus_infinity and x == -math.inf))
 
-        wanted = ("finite numbers" + (", -Infinity" if minus_infinity else "") + (" or nulls" if null is not None else "")
+        wanted = ("finite numbers" + (", -Infinity" if minus_infinity else "")
+                  + (" or nulls" if null is not None else "")
                   if rows is None else f"rows of {rows} finite numbers")
         if rows is None:
             ok = isinstance(vals, list) and all(map(number, vals))
         else:
-            ok = isinstance(vals, list) and all(isinstance(r, list) and len(r) == rows and all(map(number, r)) for r in vals)
+            ok = isinstance(vals, list) and all(isinstance(r, list) and len(r) == rows and all(map(number, r))
+                                                for r in vals)
         ok = ok and (length is None or len(vals) == length) and (not non_empty or len(vals) > 0)
         if not ok:
             raise UserError(f"checkpoint: {cls.name}.{key} must be a {'non-empty ' if non_empty else ''}list of "
@@ -134,8 +138,8 @@ class Optimizer:
 
     def __init__(self, layout: GenomeLayout, config: Any, *, seed: int, initial: np.ndarray | None = None,
                  mutable: np.ndarray | None = None):
-        """``layout``: the genomes' layout (G genes); ``config``: its ``Options``; ``seed``: the run seed; ``initial``: a
-        start genome ``(G,)`` or rows of them ``(n, G)`` (None: the layout's initial distribution or mean);
+        """``layout``: the genomes' layout (G genes); ``config``: its ``Options``; ``seed``: the run seed; ``initial``:
+        a start genome ``(G,)`` or rows of them ``(n, G)`` (None: the layout's initial distribution or mean);
         ``mutable`` ``(G,)`` bool: the genes it may change (None: all).  ConfigError for a mask that changes nothing
         or does not fit, UserError for a start genome that does not fit the layout."""
         self.layout, self.config, self.seed = layout, config, int(seed)
@@ -151,9 +155,10 @@ class Optimizer:
         return generation_rng(self.seed, generation)
 
     def start_point(self) -> np.ndarray:
-        """One point ``(G,)`` to start a search from: the first start genome, else the layout's ``init_mean``, within the
-        genes' bounds."""
-        return np.clip(self.layout.init_mean if self.initial is None else self.initial[0], self.low, self.high).astype(float)
+        """One point ``(G,)`` to start a search from: the first start genome, else the layout's ``init_mean``, within
+        the genes' bounds."""
+        return np.clip(self.layout.init_mean if self.initial is None else self.initial[0], self.low,
+                       self.high).astype(float)
 
     # ---- what the run asks of the registered class before it makes one
     @classmethod
@@ -182,8 +187,8 @@ class Optimizer:
         return self.population, np.isnan(self.fitness)
 
     def tell(self, result) -> None:
-        """The results of the unknown individuals, in order: an EpisodeResult (fitness and outcome, ``(n_unknown,)`` each)
-        or their fitness alone ``(n_unknown,)``."""
+        """The results of the unknown individuals, in order: an EpisodeResult (fitness and outcome, ``(n_unknown,)``
+        each) or their fitness alone ``(n_unknown,)``."""
         unknown = np.isnan(self.fitness)
         fitness = np.asarray(getattr(result, "fitness", result), float)
         if fitness.shape != (int(unknown.sum()),):
@@ -210,7 +215,8 @@ class Optimizer:
         optimizer, as the checkpoint calls it) when the counts differ."""
         self._sample()
         if len(fitness) != len(self.population):
-            raise UserError(f"checkpoint: the {what} state's fitness must have {len(self.population)} values (finite or null)")
+            raise UserError(f"checkpoint: the {what} state's fitness must have {len(self.population)} values (finite "
+                            "or null)")
         self.fitness = np.array(fitness, float)
 
     def state_from(self, table: Any) -> OptimizerState:
@@ -218,13 +224,15 @@ class Optimizer:
         another optimizer wrote it)."""
         got = OptimizerState.written_by(table)
         if got != self.name:
-            raise UserError(f"the checkpoint was written by the {got!r} optimizer; this run's config uses {self.name!r}")
+            raise UserError(
+                f"the checkpoint was written by the {got!r} optimizer; this run's config uses {self.name!r}")
         return self._state_from(table)
 
     def _state_from(self, table: dict) -> OptimizerState:
         raise NotImplementedError
 
-    #: the optimizer keeps an archive of elites (:meth:`archive_contents`), which the run directory keeps as archive.json
+    # : the optimizer keeps an archive of elites (:meth:`archive_contents`), which the run directory keeps as
+    # archive.json
     keeps_archive = False
 
     def archive_contents(self) -> Any:

@@ -49,12 +49,12 @@ def _population(p) -> None:
 class CMAOptions:
     """CMA-ES settings."""
 
-    population: int = option(0, "lambda, offspring per generation; 0: pycma's default 4 + floor(3 ln G)", check=_population,
-                             span=f"0, or 2 to {MAX_POPULATION:.0e}")
+    population: int = option(0, "lambda, offspring per generation; 0: pycma's default 4 + floor(3 ln G)",
+                             check=_population, span=f"0, or 2 to {MAX_POPULATION:.0e}")
     sigma0: float = option(0.1, "initial step size, a fraction of every gene's range", above=0, high=1)
     restarts: int = option(0, "IPOP restarts allowed (the population doubles at each)", low=0, high=10, integer=True)
-    diagonal: bool = option(False, "separable CMA-ES: a diagonal covariance (linear cost per gene: for thousands of genes, "
-                            "e.g. tuning a distilled network)")
+    diagonal: bool = option(False, "separable CMA-ES: a diagonal covariance (linear cost per gene: for thousands of "
+                                   "genes, e.g. tuning a distilled network)")
 
     def __post_init__(self):
         check_fields(self, "cma")
@@ -82,8 +82,8 @@ class CMAState(OptimizerState):
 
     def to_dict(self) -> dict:
         plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
-        return {"name": self.name, "generation": self.generation, "restart": self.restart, "fitness": plain(self.fitness),
-                "strategy": self.strategy}
+        return {"name": self.name, "generation": self.generation, "restart": self.restart,
+                "fitness": plain(self.fitness), "strategy": self.strategy}
 
 
 class GenerationNormal:
@@ -186,7 +186,8 @@ class CMAES(Optimizer):
         self._sample()
 
     def stop(self) -> list[str]:
-        """The names of pycma's stopping rules that fired (e.g. ``tolfun``) with no restart left; empty while it goes on."""
+        """The names of pycma's stopping rules that fired (e.g. ``tolfun``) with no restart left; empty while it goes
+        on."""
         return sorted(self.es.stop())
 
     # ---- its state as a value
@@ -202,24 +203,28 @@ class CMAES(Optimizer):
             self._replay(state.told)
         else:
             if state.restart > self.config.restarts:
-                raise UserError(f"checkpoint: CMA-ES restart {state.restart} is beyond this run's {self.config.restarts} restarts")
+                raise UserError(f"checkpoint: CMA-ES restart {state.restart} is beyond this run's "
+                                f"{self.config.restarts} restarts")
             self.generation, self.restart = 0, state.restart
             self._start(self.restart)
             self._asked = cma_state.restore(self.es, state.strategy)
             if len(self._asked) != self.es.popsize:
-                raise UserError(f"checkpoint: the CMA-ES strategy asked {len(self._asked)} solutions, its population is {self.es.popsize}")
+                raise UserError(f"checkpoint: the CMA-ES strategy asked {len(self._asked)} solutions, its population "
+                                f"is {self.es.popsize}")
             self.generation = state.generation
             self.population = self._genes(np.array(self._asked))
         # a restart may have happened after the last generation told: the population matches the state
         if len(state.fitness) != len(self.population):
-            raise UserError(f"checkpoint: CMA-ES fitness must be a list of {len(self.population)} finite numbers or nulls")
+            raise UserError(f"checkpoint: CMA-ES fitness must be a list of {len(self.population)} finite numbers or "
+                            "nulls")
         self.fitness = np.array(state.fitness, float)
 
     def _replay(self, told) -> None:
         self._rewind()
         for g, f in enumerate(told):
             if len(f) != len(self.population):
-                raise UserError(f"checkpoint: CMA-ES told[{g}] must be a list of {len(self.population)} finite numbers or nulls")
+                raise UserError(f"checkpoint: CMA-ES told[{g}] must be a list of {len(self.population)} finite numbers "
+                                "or nulls")
             self._advance(np.array(f, float))
 
     def _state_from(self, table: dict) -> CMAState:
@@ -234,8 +239,10 @@ class CMAES(Optimizer):
                             strategy=table["strategy"], restart=restart)
         told = table.get("told")
         if not (isinstance(told, list) and generation == len(told)):
-            raise UserError("checkpoint: the CMA-ES state needs 'strategy' (or, from an older checkpoint, 'told': one list per generation)")
+            raise UserError("checkpoint: the CMA-ES state needs 'strategy' (or, from an older checkpoint, 'told': one "
+                            "list per generation)")
         # a null told: an unstable individual (-inf); a null fitness: not yet evaluated
-        return CMAState(generation=generation, told=tuple(CMAState.numbers_of({f"told[{g}]": f}, f"told[{g}]", null=-np.inf)
+        return CMAState(generation=generation, told=tuple(CMAState.numbers_of({f"told[{g}]": f}, f"told[{g}]",
+                                                                              null=-np.inf)
                                                           for g, f in enumerate(told)),
                         fitness=CMAState.numbers_of(table, "fitness", null=np.nan))

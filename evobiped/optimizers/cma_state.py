@@ -1,4 +1,5 @@
-"""pycma's strategy as plain JSON data, restored into a freshly made strategy: a resume costs the same at any generation.
+"""pycma's strategy as plain JSON data, restored into a freshly made strategy: a resume costs the same at any
+generation.
 
 A pickle would be shorter, but loading one runs whatever the file says.  Here
 the checkpoint holds data only: numbers, strings, lists, tables, numpy arrays
@@ -43,7 +44,8 @@ class _Encoder:
             return v
         if isinstance(v, float):
             return v if np.isfinite(v) else {"~": "float", "v": repr(v)}
-        if isinstance(v, (types.FunctionType, types.BuiltinFunctionType, types.MethodType, type, types.ModuleType)) or callable(v) and not hasattr(v, "__dict__"):
+        if isinstance(v, (types.FunctionType, types.BuiltinFunctionType, types.MethodType, type,
+                          types.ModuleType)) or callable(v) and not hasattr(v, "__dict__"):
             return _KEEP
         if isinstance(v, np.generic):
             return {"~": "scalar", "dtype": v.dtype.str, "b64": base64.b64encode(v.tobytes()).decode()}
@@ -101,7 +103,8 @@ class _Decoder:
         self.made: dict[int, Any] = {}
 
     def __call__(self, d: Any, fresh: Any = None, depth: int = 0) -> Any:
-        """The value ``d`` encodes, written into ``fresh`` (the fresh strategy's value at the same place) where it can."""
+        """The value ``d`` encodes, written into ``fresh`` (the fresh strategy's value at the same place) where it
+        can."""
         if depth > MAX_DEPTH:
             raise ValueError("nested deeper than a strategy")
         if d is None or isinstance(d, (bool, int, float, str)):
@@ -125,7 +128,8 @@ class _Decoder:
             if kind == "scalar":
                 return np.frombuffer(raw, dtype)[0]
             shape = tuple(d["shape"])
-            if not all(isinstance(s, int) and s >= 0 for s in shape) or int(np.prod(shape)) * dtype.itemsize != len(raw):
+            if not all(isinstance(s, int) and s >= 0
+                       for s in shape) or int(np.prod(shape)) * dtype.itemsize != len(raw):
                 raise ValueError("array bytes do not fit its shape")
             order = d.get("order", "C")
             if order not in ("C", "F"):
@@ -155,7 +159,8 @@ class _Decoder:
             out.clear()
             for k, x in d["items"]:
                 key = self(k, None, depth + 1)
-                out[key] = self(x, old.get(key) if isinstance(key, (str, int, float, tuple, type(None))) else None, depth + 1)
+                out[key] = self(x, old.get(key) if isinstance(key, (str, int, float, tuple, type(None))) else None,
+                                depth + 1)
             self._attrs(out, d.get("attrs", {}), depth)
             return out
         if kind == "object":
@@ -190,11 +195,13 @@ def restore(es: Any, data: Any) -> list:
         dec = _Decoder()
         dec(data["es"], es)
         asked = dec(data["asked"])
-        if not (isinstance(asked, list) and all(isinstance(a, np.ndarray) and a.shape == (len(es.mean),) for a in asked)):
+        if not (isinstance(asked, list) and all(isinstance(a, np.ndarray) and a.shape == (len(es.mean),)
+                                                for a in asked)):
             raise ValueError("the asked solutions must be arrays of the strategy's dimension")
         return asked
     except UserError:
         raise
     except (ValueError, TypeError, KeyError, AttributeError, IndexError, RecursionError, ImportError, OverflowError,
             base64.binascii.Error) as exc:
-        raise UserError(f"checkpoint: the CMA-ES strategy cannot be restored ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+        raise UserError("checkpoint: the CMA-ES strategy cannot be restored "
+                        f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None

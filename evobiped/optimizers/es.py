@@ -69,24 +69,26 @@ class ESOptions:
 
     method: str = option("openai", "`openai`: OpenAI-ES (centred ranks, Adam); `ars`: ARS V2-t (top directions, SGD)",
                          choices=("openai", "ars"))
-    pairs: int = option(16, "N, mirrored pairs theta +- sigma eps per generation", low=1, high=MAX_POPULATION // 2, integer=True)
-    evaluation_rows: int = option(1, "rows of theta itself per generation (its walkers report the run; each meets every presentation)",
-                                  low=1, high=64, integer=True)
+    pairs: int = option(16, "N, mirrored pairs theta +- sigma eps per generation", low=1, high=MAX_POPULATION // 2,
+                        integer=True)
+    evaluation_rows: int = option(1, "rows of theta itself per generation (its walkers report the run; each meets "
+                                     "every presentation)", low=1, high=64, integer=True)
     sigma: float = option(0.05, "sampling step", unit="gene units", above=0)
     sigma_decay: float = option(1.0, "sigma times this each generation", above=0, high=1)
     sigma_min: float = option(0.0, "sigma never decays below this", unit="gene units", low=0)
     learning_rate: float = option(0.02, "Adam's (openai) or the step's (ars) learning rate", unit="gene units", above=0)
     weight_decay: float = option(0.005, "L2 pull of theta towards `weight_decay_to` (openai)", low=0)
     top: int = option(0, "ARS: directions kept (0: all)", low=0, integer=True)
-    weight_decay_to: str = option("centre", "where weight decay pulls: `centre`: each gene block's centre (low + high) / 2, "
-                                  "blocks without a neutral value (a CTRNN's time constants) not at all; `zero`: every gene "
-                                  "towards 0 (as first shipped)", choices=("centre", "zero"))
-    credit: str = option("evaluated", "what a sample's fitness is credited to: `evaluated`: the perturbation its clipped row "
-                         "made (no momentum out of a bound theta sits on); `drawn`: the unclipped sigma eps (as first shipped)",
-                         choices=("evaluated", "drawn"))
-    ties: str = option("average", "openai's ranks of tied fitness values: `average`: their mean rank (a tied pair gives no "
-                       "step); `order`: in order of appearance (as first shipped: a tied pair steps along -eps)",
-                       choices=("average", "order"))
+    weight_decay_to: str = option("centre", "where weight decay pulls: `centre`: each gene block's centre (low + high) "
+                                            "/ 2, blocks without a neutral value (a CTRNN's time constants) not at "
+                                            "all; `zero`: every gene towards 0 (as first shipped)",
+                                  choices=("centre", "zero"))
+    credit: str = option("evaluated", "what a sample's fitness is credited to: `evaluated`: the perturbation its "
+                                      "clipped row made (no momentum out of a bound theta sits on); `drawn`: the "
+                                      "unclipped sigma eps (as first shipped)", choices=("evaluated", "drawn"))
+    ties: str = option("average", "openai's ranks of tied fitness values: `average`: their mean rank (a tied pair "
+                                  "gives no step); `order`: in order of appearance (as first shipped: a tied pair "
+                                  "steps along -eps)", choices=("average", "order"))
 
     def __post_init__(self):
         check_fields(self, "es")
@@ -112,7 +114,8 @@ class ESState(OptimizerState):
     def to_dict(self) -> dict:
         plain = lambda a: [float(x) if np.isfinite(x) else None for x in a]  # noqa: E731
         return {"name": self.name, "generation": self.generation, "theta": plain(self.theta), "m": plain(self.m),
-                "v": plain(self.v), "fitness": plain(self.fitness), **({"started": self.started} if self.started else {})}
+                "v": plain(self.v), "fitness": plain(self.fitness),
+                **({"started": self.started} if self.started else {})}
 
 
 def centred_ranks(f: np.ndarray, ties: str = "average") -> np.ndarray:
@@ -128,8 +131,8 @@ def centred_ranks(f: np.ndarray, ties: str = "average") -> np.ndarray:
 
 
 class EvolutionStrategy(Optimizer):
-    """Ask/tell ES over a :class:`GenomeLayout` (:class:`~.base.Optimizer`): rows ``[theta + sigma eps (N), theta - sigma eps
-    (N), theta (evaluation_rows)]``."""
+    """Ask/tell ES over a :class:`GenomeLayout` (:class:`~.base.Optimizer`): rows ``[theta + sigma eps (N), theta -
+    sigma eps (N), theta (evaluation_rows)]``."""
 
     name, Options, table, about = "es", ESOptions, "es", "evolution strategies"
     reports_evaluation_rows = True
@@ -159,7 +162,8 @@ class EvolutionStrategy(Optimizer):
     def sigma(self) -> float:
         """The sampling step of this generation (gene units)."""
         c = self.config
-        return max(c.sigma * c.sigma_decay ** (self.generation - self.started), c.sigma_min) if c.sigma_decay < 1 else c.sigma
+        return max(c.sigma * c.sigma_decay ** (self.generation - self.started),
+                   c.sigma_min) if c.sigma_decay < 1 else c.sigma
 
     def _noise(self) -> np.ndarray:
         eps = self.rng(self.generation).standard_normal((self.config.pairs, self.layout.size))
@@ -167,7 +171,8 @@ class EvolutionStrategy(Optimizer):
 
     def _sample(self) -> None:
         eps, s = self._noise(), self.sigma
-        rows = np.concatenate([self.theta + s * eps, self.theta - s * eps, np.tile(self.theta, (self.config.evaluation_rows, 1))])
+        rows = np.concatenate([self.theta + s * eps, self.theta - s * eps,
+                               np.tile(self.theta, (self.config.evaluation_rows, 1))])
         self.population = np.clip(rows, self.low, self.high)
         self.fitness = np.full(len(self.population), np.nan)
 
@@ -204,7 +209,8 @@ class EvolutionStrategy(Optimizer):
         eps = self._noise()
         dp, dm = self._evaluated(eps)
         if c.method == "ars":
-            f = np.where(finite, f, f[finite].min() if finite.any() else 0.0)  # unstable: the generation's worst finite one
+            # unstable: the generation's worst finite one
+            f = np.where(finite, f, f[finite].min() if finite.any() else 0.0)
             plus, minus = f[:N], f[N:]
             keep = np.argsort(-np.maximum(plus, minus), kind="stable")[: c.top or N]
             kept = np.concatenate([plus[keep], minus[keep]])
@@ -227,7 +233,8 @@ class EvolutionStrategy(Optimizer):
             self.theta = self.theta + a * self.m / (np.sqrt(self.v) + EPS)
         self.theta = np.clip(self.theta, self.low, self.high)
         if c.credit == "evaluated":  # no momentum out of a bound theta sits on
-            self.m = np.where(((self.theta >= self.high) & (self.m > 0)) | ((self.theta <= self.low) & (self.m < 0)), 0.0, self.m)
+            self.m = np.where(((self.theta >= self.high) & (self.m > 0)) | ((self.theta <= self.low) & (self.m < 0)),
+                              0.0, self.m)
         self.generation += 1
         self._sample()
         return np.full(len(self.population), -1)
@@ -255,7 +262,8 @@ class EvolutionStrategy(Optimizer):
 
     def _state_from(self, table: dict) -> ESState:
         gen = ESState.generation_of(table)
-        out = {k: ESState.numbers_of(table, k, null=np.nan if k == "fitness" else None) for k in ("theta", "m", "v", "fitness")}
+        out = {k: ESState.numbers_of(table, k, null=np.nan if k == "fitness" else None)
+               for k in ("theta", "m", "v", "fitness")}
         if (out["v"] < 0).any():
             raise UserError("checkpoint: es.v must be >= 0")
         started = table.get("started", 0)

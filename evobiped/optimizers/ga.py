@@ -38,11 +38,13 @@ class GAOptions:
 
     population: int = option(50, "individuals per generation", low=2, high=MAX_POPULATION, integer=True)
     fittest_fraction: float = option(0.5, "truncation: the fraction that survives unchanged", above=0, below=1)
-    mutations_per_genome: float = option(1.0, "mean mutations per genome (per-locus rate = this / genome length)", above=0)
+    mutations_per_genome: float = option(1.0, "mean mutations per genome (per-locus rate = this / genome length)",
+                                         above=0)
     reevaluate_survivors: bool | None = option(
-        None, "evaluate the survivors again every generation; none: exactly when the run scores each generation differently "
-        "(a running normaliser, a curriculum, disturbances or sources drawn per generation), so that survivors are not compared "
-        "by a fitness scored under an earlier generation's context", check=_bool_or_none, span="`true`, `false`, none")
+        None, "evaluate the survivors again every generation; none: exactly when the run scores each generation "
+              "differently (a running normaliser, a curriculum, disturbances or sources drawn per generation), so that "
+              "survivors are not compared by a fitness scored under an earlier generation's context",
+        check=_bool_or_none, span="`true`, `false`, none")
 
     def __post_init__(self):
         check_fields(self, "ga")
@@ -161,11 +163,14 @@ class GA(Optimizer):
             raise ConfigError(f"checkpoint population has shape {pop.shape}, the config needs {self.population.shape}")
         if not np.isfinite(pop).all() or (pop < self.low).any() or (pop > self.high).any():
             i, j = np.argwhere(~(np.isfinite(pop) & (pop >= self.low) & (pop <= self.high)))[0]
-            raise UserError(f"checkpoint: ga.population[{i}][{j}] = {pop[i, j]!r} is outside the gene's bounds [{self.low[j]:g}, {self.high[j]:g}]")
-        self.population, self.fitness, self.generation = pop.copy(), np.array(state.fitness, float), int(state.generation)
+            raise UserError(f"checkpoint: ga.population[{i}][{j}] = {pop[i, j]!r} is outside the gene's bounds "
+                            f"[{self.low[j]:g}, {self.high[j]:g}]")
+        self.population, self.fitness, self.generation = pop.copy(), np.array(state.fitness,
+                                                                              float), int(state.generation)
 
     def _state_from(self, table: dict) -> GAState:
         gen = GAState.generation_of(table)
         pop = GAState.numbers_of(table, "population", rows=self.layout.size, non_empty=True)
-        fitness = GAState.numbers_of(table, "fitness", null=np.nan, length=len(pop), minus_infinity=True)  # null: unknown
+        # null: unknown
+        fitness = GAState.numbers_of(table, "fitness", null=np.nan, length=len(pop), minus_infinity=True)
         return GAState(generation=gen, population=pop, fitness=fitness)

@@ -9,11 +9,11 @@ saturates (the time up of a walker that never falls) keeps a cell's first surviv
 e.g. ``{distance = 0.05}`` keeps the one that went furthest.  Each elite keeps its task fitness beside
 (``task_fitness``, what archive.json calls its ``objective`` and a replay compares).  The QD score is
 the sum over the elites of (objective - ``qd_offset``) (pyribs' ``qd_score_offset``): it grows with
-every cell filled or improved only if ``qd_offset`` is at or below every objective the task can give.  Each generation asks ``batch`` new genomes: a uniformly drawn elite plus
-Gaussian noise of ``sigma`` times each gene's range (``parents = "up"``: an elite that did not fall), and with ``line_sigma`` > 0 a step along the
-line to a second drawn elite (Vassiliades & Mouret 2018's iso+line variation), clipped to the
-genes' bounds.  The first batch, while the archive is empty, is the start genome (``--from``: it
-and its mutants) or the layout's initial distribution.
+every cell filled or improved only if ``qd_offset`` is at or below every objective the task can give.  Each generation
+asks ``batch`` new genomes: a uniformly drawn elite plus Gaussian noise of ``sigma`` times each gene's range (``parents
+= "up"``: an elite that did not fall), and with ``line_sigma`` > 0 a step along the line to a second drawn elite
+(Vassiliades & Mouret 2018's iso+line variation), clipped to the genes' bounds.  The first batch, while the archive is
+empty, is the start genome (``--from``: it and its mutants) or the layout's initial distribution.
 
 Why not pyribs' emitters: they draw parents from the archive's private random generator, whose
 state the public API cannot give a checkpoint; here parents and noise come from (run seed,
@@ -51,7 +51,8 @@ def _resolution(v) -> None:
 
 
 def _bounds(v) -> None:
-    if not (isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+    if not (isinstance(v, list) and len(v) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
                                                        for x in v)):
         raise ConfigError(f"must be two finite numbers, got {v!r}")
 
@@ -68,19 +69,23 @@ class MapElitesOptions:
 
     measures: list = option(["speed", "turning"], "the two task terms each cell is measured by (walk task with "
                             "gait_measures: speed m/s, turning deg/s)", check=_names, span="two term names")
-    resolution: list = option([30, 30], "cells along each measure", check=_resolution, span="two whole numbers, 1 to 1000")
-    low: list = option([0.0, -30.0], "each measure's lower bound, in its term's unit", check=_bounds, span="two numbers")
-    high: list = option([1.0, 30.0], "each measure's upper bound, in its term's unit", check=_bounds, span="two numbers")
+    resolution: list = option([30, 30], "cells along each measure", check=_resolution,
+                              span="two whole numbers, 1 to 1000")
+    low: list = option([0.0, -30.0], "each measure's lower bound, in its term's unit", check=_bounds,
+                       span="two numbers")
+    high: list = option([1.0, 30.0], "each measure's upper bound, in its term's unit", check=_bounds,
+                        span="two numbers")
     batch: int = option(32, "genomes asked per generation", low=1, high=MAX_POPULATION, integer=True)
     sigma: float = option(0.02, "Gaussian step, a fraction of each gene's range", above=0, high=1)
     line_sigma: float = option(0.0, "step along the line to a second elite (0: Gaussian only)", low=0, high=2)
-    parents: str = option("all", "`all`: parents drawn among every elite (Mouret & Clune); `up`: among the elites that did not "
-                          "fall, while any did not", choices=("all", "up"))
-    qd_offset: float = option(0.0, "the QD score sums each elite's objective minus this (at or below every objective the task "
-                              "gives, the score only grows)", unit="objective units")
-    objective_terms: dict = option({}, "task terms added, weighted, to the fitness as a cell's objective, {term = weight} "
-                                   "(e.g. {distance = 0.05}: where the fitness saturates, the walker that went furthest keeps "
-                                   "the cell; {}: the fitness alone)", check=_weights, span="a table of weights")
+    parents: str = option("all", "`all`: parents drawn among every elite (Mouret & Clune); `up`: among the elites that "
+                                 "did not fall, while any did not", choices=("all", "up"))
+    qd_offset: float = option(0.0, "the QD score sums each elite's objective minus this (at or below every objective "
+                                   "the task gives, the score only grows)", unit="objective units")
+    objective_terms: dict = option({}, "task terms added, weighted, to the fitness as a cell's objective, {term = "
+                                       "weight} (e.g. {distance = 0.05}: where the fitness saturates, the walker that "
+                                       "went furthest keeps the cell; {}: the fitness alone)", check=_weights,
+                                   span="a table of weights")
 
     def __post_init__(self):
         check_fields(self, "map_elites")
@@ -101,9 +106,10 @@ class MapElitesOptions:
 class MapElitesState(OptimizerState):
     """MAP-Elites between generations: the elites in cell order (``index`` ``(E,)`` cell numbers, ``genome`` ``(E, G)``,
     ``objective`` ``(E,)``, ``measures`` ``(E, 2)``, ``fell`` ``(E,)`` 0/1, ``end_time`` ``(E,)`` s), the evaluations so
-    far, ``progress`` ``(generations, 3)``: after each generation the evaluations so far, cells filled and QD score (the sum of
-    the elites' objectives less ``qd_offset``); and the current batch's fitness (NaN: not yet evaluated).  ``task_fitness``
-    ``(E,)``: each elite's fitness (its objective but the ``objective_terms``; checkpoints written before it: the objective)."""
+    far, ``progress`` ``(generations, 3)``: after each generation the evaluations so far, cells filled and QD score (the
+    sum of the elites' objectives less ``qd_offset``); and the current batch's fitness (NaN: not yet evaluated).
+    ``task_fitness`` ``(E,)``: each elite's fitness (its objective but the ``objective_terms``; checkpoints written
+    before it: the objective)."""
 
     name = "map-elites"
     index: np.ndarray
@@ -116,14 +122,16 @@ class MapElitesState(OptimizerState):
     progress: np.ndarray
 
     def __post_init__(self):
-        for k in ("index", "genome", "objective", "measures", "fell", "end_time", "task_fitness", "progress", "fitness"):
+        for k in ("index", "genome", "objective", "measures", "fell", "end_time", "task_fitness", "progress",
+                  "fitness"):
             object.__setattr__(self, k, frozen_array(getattr(self, k)))
 
     def to_dict(self) -> dict:
         plain = lambda a: np.where(np.isfinite(a), a, None).tolist() if a.size else a.tolist()  # noqa: E731
         return {"name": self.name, "generation": self.generation, "fitness": plain(self.fitness),
                 "index": [int(i) for i in self.index], "genome": packed_floats(self.genome),
-                **{k: getattr(self, k).tolist() for k in ("objective", "measures", "fell", "end_time", "task_fitness", "progress")}}
+                **{k: getattr(self, k).tolist()
+                   for k in ("objective", "measures", "fell", "end_time", "task_fitness", "progress")}}
 
 
 def ribs_archives():
@@ -148,8 +156,8 @@ class MapElites(Optimizer):
         super().__init__(layout, config, **start)
         c = config
         self.archive = ribs_archives().GridArchive(
-            solution_dim=layout.size, dims=c.resolution, ranges=list(zip(c.low, c.high)), seed=self.seed, qd_score_offset=c.qd_offset,
-            extra_fields={k: ((), np.float64) for k in OUTCOME})
+            solution_dim=layout.size, dims=c.resolution, ranges=list(zip(c.low, c.high)), seed=self.seed,
+            qd_score_offset=c.qd_offset, extra_fields={k: ((), np.float64) for k in OUTCOME})
         self.generation, self.evaluations, self.progress = 0, 0, []
         self._sample()
 
@@ -173,8 +181,8 @@ class MapElites(Optimizer):
         ``(E, 2)``, ``fell``, ``end_time``, ``task_fitness``."""
         d = self.archive.data()
         order = np.argsort(d["index"], kind="stable")
-        out = {"index": d["index"][order].astype(int), "genome": d["solution"][order], "objective": d["objective"][order],
-               "measures": d["measures"][order]}
+        out = {"index": d["index"][order].astype(int), "genome": d["solution"][order],
+               "objective": d["objective"][order], "measures": d["measures"][order]}
         return {**out, **{k: d[k][order] for k in OUTCOME}}
 
     def cells(self, index: np.ndarray) -> np.ndarray:
@@ -211,15 +219,16 @@ class MapElites(Optimizer):
         terms = getattr(result, "terms", {})
         missing = [m for m in (*self.config.measures, *self.config.objective_terms) if m not in terms]
         if missing:
-            raise UserError(f"map-elites: the episodes give no term {', '.join(missing)} (a measure or objective term names no "
-                            "term of the task)")
+            raise UserError(f"map-elites: the episodes give no term {', '.join(missing)} (a measure or objective term "
+                            "names no term of the task)")
         per_genome = lambda a: np.asarray(a, float).reshape(len(self.fitness[unknown]), -1).mean(axis=1)  # noqa: E731
         measures = np.stack([per_genome(terms[m]) for m in self.config.measures], axis=1)
         f = self.fitness[unknown]
         objective = f + sum(w * per_genome(terms[t]) for t, w in self.config.objective_terms.items())
         ok = np.isfinite(objective) & np.isfinite(measures).all(axis=1)
         if ok.any():
-            self.archive.add(self.population[unknown][ok], objective[ok], measures[ok], fell=np.asarray(result.fell, float)[ok],
+            self.archive.add(self.population[unknown][ok], objective[ok], measures[ok],
+                             fell=np.asarray(result.fell, float)[ok],
                              end_time=np.asarray(result.end_time, float)[ok], task_fitness=f[ok])
         self.evaluations += int(unknown.sum())
         objective = self.elites()["objective"]
@@ -243,8 +252,8 @@ class MapElites(Optimizer):
         return ArchiveContents(c.measures, c.low, c.high, c.resolution, self.cells(e["index"]), e, self.progress)
 
     def series(self) -> dict[str, np.ndarray]:
-        """The archive's growth per generation: evaluations so far, cells filled, coverage (fraction of the grid's cells)
-        and QD score (the sum of the elites' objectives less ``qd_offset``)."""
+        """The archive's growth per generation: evaluations so far, cells filled, coverage (fraction of the grid's
+        cells) and QD score (the sum of the elites' objectives less ``qd_offset``)."""
         p = np.array(self.progress, float).reshape(-1, 3)
         return {"evaluations": p[:, 0], "cells": p[:, 1], "coverage": p[:, 1] / np.prod(self.config.resolution),
                 "qd_score": p[:, 2]}
@@ -252,15 +261,16 @@ class MapElites(Optimizer):
     # ---- its state as a value
     def state(self) -> MapElitesState:
         e = self.elites()
-        return MapElitesState(generation=self.generation, fitness=self.fitness, progress=np.array(self.progress, float).reshape(-1, 3),
-                              **e)
+        return MapElitesState(generation=self.generation, fitness=self.fitness,
+                              progress=np.array(self.progress, float).reshape(-1, 3), **e)
 
     def restore(self, state: MapElitesState) -> None:
         G, cells = self.layout.size, int(np.prod(self.config.resolution))
         E = len(state.index)
         if state.genome.shape != (E, G) or state.measures.shape != (E, 2) or any(len(getattr(state, k)) != E for k in
                                                                                 ("objective", *OUTCOME)):
-            raise UserError(f"checkpoint: the map-elites state's elites must each have {G} genes, 2 measures, an objective and outcome")
+            raise UserError(f"checkpoint: the map-elites state's elites must each have {G} genes, 2 measures, an "
+                            "objective and outcome")
         if E and (state.index.min() < 0 or state.index.max() >= cells or len(np.unique(state.index)) != E):
             raise UserError(f"checkpoint: map-elites.index must be different cells 0 to {cells - 1}")
         if len(state.progress) != state.generation:

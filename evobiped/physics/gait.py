@@ -80,7 +80,8 @@ def read(contact: np.ndarray, sims: Sims, names=NAMES) -> dict[str, np.ndarray]:
     """The senses ``names`` (default all) of every row, each ``(n, 1)``; ``contact`` ``(n, 2)`` bool, the body's
     contact sensor now (the tracker starts from it on first use)."""
     table = tracker(contact, sims)
-    leg = np.where(table["stance"] == 0, 1.0, -1.0)[:, None] if "stance_leg" in names or "stance_side" in names else None
+    leg = np.where(table["stance"] == 0, 1.0, -1.0)[:,
+                                                    None] if "stance_leg" in names or "stance_side" in names else None
     out = {"stance_leg": leg} if "stance_leg" in names else {}
     if "since_touchdown" in names:
         out["since_touchdown"] = np.minimum(sims.time - table["touchdown"], CAP)[:, None]
@@ -105,7 +106,9 @@ def update(contact: np.ndarray, sims: Sims, ids: np.ndarray) -> None:
     t = sims.time[rows]
     lifted, stance = table["lifted"][rows], table["stance"][rows]
     first = stance == 0  # the other foot is the second
-    landed = np.where(first, contact[:, 1], contact[:, 0]) & (t - np.where(first, lifted[:, 1], lifted[:, 0]) >= MIN_AIRBORNE)
+    landed = np.where(first, contact[:, 1], contact[:, 0]) & (t
+                                                              - np.where(first, lifted[:, 1],
+                                                                         lifted[:, 0]) >= MIN_AIRBORNE)
     table["stance"][rows] = np.where(landed, 1 - stance, stance)
     table["touchdown"][rows] = np.where(landed, t, table["touchdown"][rows])
     # a foot on the ground: inf; a foot that just left it: now; a foot in the air keeps its lift-off time

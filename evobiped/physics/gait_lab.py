@@ -194,7 +194,8 @@ def measure_one(sample: dict[str, np.ndarray], dt: float, *, forward: float, mas
         airborne=float((n_standing == 0).mean()), double_support=float((n_standing >= 2).mean()),
         steps_per_s=steps / up, step_length=forward / steps if steps else 0.0,
         slip=float(np.median(slips)) if len(slips) else np.nan, sliding=float(slips.sum() / T),
-        clearance=float(np.mean(clear)) if clear else 0.0, lift=float(np.mean(np.minimum(clear, LIFT_CAP))) if clear else 0.0,
+        clearance=float(np.mean(clear)) if clear else 0.0, lift=float(np.mean(np.minimum(clear, LIFT_CAP))) if clear
+            else 0.0,
         knee_swing=float(np.mean(knee)) if knee else 0.0,
         power=float(positive), positive_work=float(positive * up),
         cost_of_transport=float(positive / (G * speed)) if speed > 1e-3 else np.inf,

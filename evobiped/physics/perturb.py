@@ -72,7 +72,8 @@ STRENGTHS = ("push_force", "target_offset", "target_noise", "pose_noise", "slope
 
 def _friction(v) -> None:
     fr = tuple(v) if isinstance(v, (list, tuple)) else None
-    if fr is None or len(fr) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool) or not math.isfinite(x) or x <= 0
+    if fr is None or len(fr) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool)
+                                                  or not math.isfinite(x) or x <= 0
                                                   for x in fr) or (fr and fr[0] > fr[1]):
         raise ConfigError(f"must be [] or [low, high] with 0 < low <= high, got {v!r}")
 
@@ -87,40 +88,46 @@ def _levels(v) -> None:
 class PerturbationOptions:
     """How an evolutionary run draws each generation's perturbed presentations."""
 
-    presentations: int = option(1, "R, presentations per genome (each with its own draws)", low=1, high=64, integer=True)
+    presentations: int = option(1, "R, presentations per genome (each with its own draws)", low=1, high=64,
+                                integer=True)
     pushes: int = option(0, "pushes per presentation, each at a uniform random time in [push_after, T - push_duration]",
                          low=0, integer=True)
-    push_force: float = option(10.0, "magnitude of each push (horizontal, uniform random direction)", unit="N", low=0, schedule=True)
+    push_force: float = option(10.0, "magnitude of each push (horizontal, uniform random direction)", unit="N", low=0,
+                               schedule=True)
     push_duration: float = option(0.1, "duration of each push", unit="s", above=0)
     push_after: float = option(2.0, "no push before this time", unit="s", low=0)
-    target_offset: float = option(0.0, "standard deviation of a constant offset on each PD target, one per presentation",
+    target_offset: float = option(0.0,
+                                  "standard deviation of a constant offset on each PD target, one per presentation",
                                   unit="rad", low=0, schedule=True)
-    target_noise: float = option(0.0, "standard deviation of the noise on each PD target at every control tick", unit="rad", low=0,
-                                 schedule=True)
-    pose_noise: float = option(0.0, "standard deviation of the noise on each actuated joint's initial angle", unit="rad", low=0,
-                               schedule=True)
-    friction: tuple[float, ...] = option((), "floor friction [low, high], one uniform draw per generation; [] keeps the model's",
+    target_noise: float = option(0.0, "standard deviation of the noise on each PD target at every control tick",
+                                 unit="rad", low=0, schedule=True)
+    pose_noise: float = option(0.0, "standard deviation of the noise on each actuated joint's initial angle",
+                               unit="rad", low=0, schedule=True)
+    friction: tuple[float, ...] = option((), "floor friction [low, high], one uniform draw per generation; [] keeps "
+                                             "the model's",
                                          check=_friction, span="[], or 0 < low <= high", schedule=True)
-    slope: float = option(0.0, "largest grade of the floor (rise over run), one draw per generation: a grade uniform in "
-                               "[0, slope] rising towards a uniform random direction of the initial facing's frame",
+    slope: float = option(0.0, "largest grade of the floor (rise over run), one draw per generation: a grade uniform "
+                               "in [0, slope] rising towards a uniform random direction of the initial facing's frame",
                           low=0, high=0.5, schedule=True)
-    gene_noise: float = option(0.0, "standard deviation of the noise on every gene, in units of that gene's range, one draw per "
-                                    "presentation, the same for every genome of a generation", low=0, below=1, schedule=True)
+    gene_noise: float = option(0.0, "standard deviation of the noise on every gene, in units of that gene's range, one "
+                                    "draw per presentation, the same for every genome of a generation", low=0, below=1,
+                               schedule=True)
     aggregate: str = option("mean", "how presentations combine into a genome's fitness", choices=tuple(AGGREGATES))
-    quantile: float = option(0.25, "q of aggregate `quantile`: the fitness below which a fraction q of the presentations fall",
-                             above=0, below=1, schedule=True)
-    aggregate_later: str | None = option(None, "the aggregate from generation `aggregate_from` on (none: `aggregate` throughout)",
-                                         choices=tuple(AGGREGATES))
+    quantile: float = option(0.25, "q of aggregate `quantile`: the fitness below which a fraction q of the "
+                                   "presentations fall", above=0, below=1, schedule=True)
+    aggregate_later: str | None = option(None, "the aggregate from generation `aggregate_from` on (none: `aggregate` "
+                                               "throughout)", choices=tuple(AGGREGATES))
     aggregate_from: int = option(0, "the first generation of `aggregate_later`", low=0, integer=True)
-    assist: float = option(0.0, "pelvis assistance at the start: roll/pitch stiffness holding the trunk upright, faded to 0",
-                           unit="N m/rad", low=0)
-    assist_generations: int = option(0, "steps of the assistance clock over which it fades linearly to zero (>= 1 with assist)",
-                                     low=0, integer=True)
-    assist_gate: float = option(0.0, "fitness a generation's best must reach for the clock to advance (0: the clock is the generation)",
-                                low=0)
-    assist_levels: tuple[float, ...] = option((1.0,), "fractions of the current assistance, presentation r at levels[r mod L]",
-                                              check=_levels, span="[f, ...], 0 <= f <= 1")
-    assist_damping: float = option(0.05, "assistance damping per unit stiffness (c = assist_damping k)", unit="s", low=0, high=1)
+    assist: float = option(0.0, "pelvis assistance at the start: roll/pitch stiffness holding the trunk upright, faded "
+                                "to 0", unit="N m/rad", low=0)
+    assist_generations: int = option(0, "steps of the assistance clock over which it fades linearly to zero (>= 1 with "
+                                        "assist)", low=0, integer=True)
+    assist_gate: float = option(0.0, "fitness a generation's best must reach for the clock to advance (0: the clock is "
+                                     "the generation)", low=0)
+    assist_levels: tuple[float, ...] = option((1.0,), "fractions of the current assistance, presentation r at levels[r "
+                                                      "mod L]", check=_levels, span="[f, ...], 0 <= f <= 1")
+    assist_damping: float = option(0.05, "assistance damping per unit stiffness (c = assist_damping k)", unit="s",
+                                   low=0, high=1)
 
     def __post_init__(self):
         check_fields(self, "episode.perturbations")
@@ -128,7 +135,8 @@ class PerturbationOptions:
             object.__setattr__(self, "friction", tuple(float(v) for v in self.friction))
         object.__setattr__(self, "assist_levels", tuple(float(v) for v in self.assist_levels))
         if self.assist > 0 and self.assist_generations < 1:
-            raise ConfigError(f"assist_generations: the assistance must fade to zero over >= 1 generations, got {self.assist_generations}")
+            raise ConfigError("assist_generations: the assistance must fade to zero over >= 1 generations, got "
+                              f"{self.assist_generations}")
         if self.assist > 0 and len(self.assist_levels) > self.presentations:
             raise ConfigError(f"assist_levels: {len(self.assist_levels)} levels need as many presentations "
                               f"(presentations = {self.presentations})")
@@ -158,7 +166,8 @@ class PerturbationOptions:
 
     def aggregate_at(self, generation: int) -> str:
         """The aggregate of ``generation``."""
-        return self.aggregate_later if self.aggregate_later is not None and generation >= self.aggregate_from else self.aggregate
+        return (self.aggregate_later if self.aggregate_later is not None and generation >= self.aggregate_from
+                else self.aggregate)
 
     def assist_clock(self, generation: int, best: list[float]) -> int:
         """The assistance clock at ``generation``: the generation itself, or (gated) how many of the earlier
@@ -180,7 +189,8 @@ class PerturbationOptions:
         return generation < self.comparable_from or self.assist_at(self.assist_clock(generation, best)) > 0
 
     def assist_at(self, clock: int) -> float:
-        """The assistance stiffness (N m/rad) at this clock: ``assist`` faded linearly to 0 over ``assist_generations``."""
+        """The assistance stiffness (N m/rad) at this clock: ``assist`` faded linearly to 0 over
+        ``assist_generations``."""
         if self.assist <= 0:
             return 0.0
         return self.assist * max(0.0, 1.0 - clock / self.assist_generations)
@@ -200,10 +210,12 @@ class PerturbationOptions:
             push_start=rng.uniform(self.push_after, last, (R, k)),
             push_force=force,
             push_duration=self.push_duration,
-            target_offset=rng.normal(0.0, v["target_offset"], (R, n_actuators)) if v["target_offset"] else np.zeros((R, n_actuators)),
+            target_offset=rng.normal(0.0, v["target_offset"], (R, n_actuators)) if v["target_offset"]
+                else np.zeros((R, n_actuators)),
             target_noise=v["target_noise"],
             noise_seed=int(rng.integers(2**63)),
-            pose_offset=rng.normal(0.0, v["pose_noise"], (R, n_actuators)) if v["pose_noise"] else np.zeros((R, n_actuators)),
+            pose_offset=rng.normal(0.0, v["pose_noise"], (R, n_actuators)) if v["pose_noise"]
+                else np.zeros((R, n_actuators)),
             friction=float(rng.uniform(*v["friction"])) if v["friction"] else None,
             aggregate=self.aggregate_at(int(key[1])),
             quantile=float(v["quantile"]),
@@ -213,7 +225,8 @@ class PerturbationOptions:
             trials.slope, trials.slope_direction = float(v["slope"] * rng.uniform()), float(rng.uniform(-np.pi, np.pi))
         if v["gene_noise"]:
             if n_genes is None:
-                raise ConfigError("episode.perturbations.gene_noise: these trials are drawn without a genome (no controller)")
+                raise ConfigError("episode.perturbations.gene_noise: these trials are drawn without a genome (no "
+                                  "controller)")
             trials.gene_noise = rng.normal(0.0, v["gene_noise"], (R, n_genes))
         trials.assist = self._assist_rows(int(key[2]) if len(key) > 2 else int(key[1]))
         trials.assist_damping = self.assist_damping
@@ -270,7 +283,8 @@ class Trials:
     @classmethod
     def nominal(cls, R: int, n_actuators: int, **kw) -> "Trials":
         """R undisturbed presentations; keywords set the fields to change."""
-        base = dict(push_start=np.zeros((R, 0)), push_force=np.zeros((R, 0, 3)), push_duration=0.1, target_offset=np.zeros((R, n_actuators)))
+        base = dict(push_start=np.zeros((R, 0)), push_force=np.zeros((R, 0, 3)), push_duration=0.1,
+                    target_offset=np.zeros((R, n_actuators)))
         return cls(**{**base, **kw})
 
     def noise(self) -> "TargetNoise":

@@ -67,7 +67,8 @@ class Sims:
         return arr
 
     def kept(self, name: str, read: Callable[["Sims"], np.ndarray]) -> np.ndarray:
-        """``read(self)`` of the current state, read once until the state changes; read-only, as every reader shares it."""
+        """``read(self)`` of the current state, read once until the state changes; read-only, as every reader shares
+        it."""
         got = self.readings.get(name)
         if got is None:
             got = self.readings[name] = read(self)

@@ -96,7 +96,8 @@ def shapes(model: mujoco.MjModel) -> list[Shape]:
 
 
 def quat_to_mat(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` of unit quaternions ``(..., 4)`` wxyz (MuJoCo's ``mju_quat2Mat`` per quaternion)."""
+    """Rotation matrices ``(..., 3, 3)`` of unit quaternions ``(..., 4)`` wxyz (MuJoCo's ``mju_quat2Mat`` per
+    quaternion)."""
     q = np.asarray(q, float)
     flat = q.reshape(-1, 4)
     out = np.empty((len(flat), 9))

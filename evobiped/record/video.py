@@ -82,9 +82,10 @@ def check_frames(seconds: float, fps: float, frame_bytes: int) -> int:
     n = np.floor(seconds * fps + 1e-9) + 1
     room = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 4
     if n * max(frame_bytes, 8) > room:
-        raise UserError(f"--video-fps {fps:g}: {n:.3g} frames over {seconds:g} s would take {n * max(frame_bytes, 8) / 2**30:.3g} GiB, "
-                        f"more than this machine can hold ({room / 2**30:.3g} GiB): a lower --video-fps, a shorter "
-                        f"--video-window or a smaller --video-size")
+        raise UserError(f"--video-fps {fps:g}: {n:.3g} frames over {seconds:g} s would take "
+                        f"{n * max(frame_bytes, 8) / 2**30:.3g} GiB, more than this machine can hold "
+                        f"({room / 2**30:.3g} GiB): a lower --video-fps, a shorter --video-window or a smaller "
+                        "--video-size")
     return int(n)
 
 
@@ -138,8 +139,9 @@ def render_frames(trajs: list[Trajectory], names: list[str], *, fps: float = FPS
                   renderer: FrameRenderer | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Frames of the trajectories side by side -> ``(frames (F, H, W, 3) uint8, times (F,) s)``, each panel
     ``size`` = (width, height) pixels, at most :data:`COLUMNS` panels per row (empty panels grey).
-    ``progress`` (optional, a :class:`~evobiped.core.progress.Progress`) hears the frames done (restarted here with their number);
-    ``renderer`` (optional, of that size): one opened earlier (the caller closes it), else one opened and closed here."""
+    ``progress`` (optional, a :class:`~evobiped.core.progress.Progress`) hears the frames done (restarted here with
+    their number); ``renderer`` (optional, of that size): one opened earlier (the caller closes it), else one opened and
+    closed here."""
     width, height = size
     cols = min(COLUMNS, len(trajs))
     rows = -(-len(trajs) // cols)
@@ -216,7 +218,8 @@ def _draw_path(scene, traj: Trajectory, row: int) -> None:
             continue
         g = scene.geoms[scene.ngeom]
         mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.zeros(9), _PATH_RGBA)
-        mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, 0.015, np.array([a[0], a[1], z]), np.array([b[0], b[1], z]))
+        mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, 0.015, np.array([a[0], a[1], z]),
+                             np.array([b[0], b[1], z]))
         scene.ngeom += 1
     for s in [] if traj.sources is None else traj.sources:
         if scene.ngeom >= scene.maxgeom:
@@ -240,5 +243,6 @@ def _caption(image: np.ndarray, lines: list[str]) -> np.ndarray:
     im = Image.fromarray(image)
     draw = ImageDraw.Draw(im)
     for i, line in enumerate(lines):
-        draw.text((6, 4 + i * (size + 4)), line, fill=(255, 255, 255), font=font, stroke_width=2, stroke_fill=(20, 20, 20))
+        draw.text((6, 4 + i * (size + 4)), line, fill=(255, 255, 255), font=font, stroke_width=2,
+                  stroke_fill=(20, 20, 20))
     return np.asarray(im)

@@ -1,4 +1,5 @@
-"""A repertoire adapting to damage: trials of its walking elites on the damaged body, chosen by intelligent trial and error."""
+"""A repertoire adapting to damage: trials of its walking elites on the damaged body, chosen by intelligent trial and
+error."""
 
 from __future__ import annotations
 

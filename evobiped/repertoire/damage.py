@@ -50,9 +50,11 @@ def parse_damage(text: str, episode: EpisodeConfig) -> Damage:
     if kind == "short":
         legs = sorted({a.leg for a in body.actuators})
         if parts[1] not in legs:
-            raise UserError(f"--damage {text!r}: the {body.name} body has no leg {parts[1]!r} (its legs: {', '.join(legs)})")
+            raise UserError(f"--damage {text!r}: the {body.name} body has no leg {parts[1]!r} (its legs: "
+                            f"{', '.join(legs)})")
     elif parts[1] not in body.actuator_names:
-        raise UserError(f"--damage {text!r}: the {body.name} body has no joint {parts[1]!r} (its joints: {', '.join(body.actuator_names)})")
+        raise UserError(f"--damage {text!r}: the {body.name} body has no joint {parts[1]!r} (its joints: "
+                        f"{', '.join(body.actuator_names)})")
     amount = 0.0
     if kind != "locked":
         try:
@@ -61,7 +63,8 @@ def parse_damage(text: str, episode: EpisodeConfig) -> Damage:
             amount = float("nan")
         ok = 0 <= amount <= 1 if kind == "weak" else 0 < amount < 0.5
         if not ok:
-            raise UserError(f"--damage {text!r}: " + ("F must be a fraction 0 to 1" if kind == "weak" else "D must be 0 to 0.5 m"))
+            raise UserError(f"--damage {text!r}: "
+                            + ("F must be a fraction 0 to 1" if kind == "weak" else "D must be 0 to 0.5 m"))
     return Damage(kind, parts[1], amount)
 
 
@@ -78,7 +81,8 @@ def damaged_episode(episode: EpisodeConfig, damage: Damage | None):
             shank, foot = (m.geom(n).id for n in names)
             site = m.site(f"{leg}_foot").id
         except KeyError:
-            raise UserError(f"--damage {damage}: the {ep.body.name} body has no {leg}_shank and {leg}_foot to shorten") from None
+            raise UserError(
+                f"--damage {damage}: the {ep.body.name} body has no {leg}_shank and {leg}_foot to shorten") from None
         d = damage.amount
         axis = m.geom_pos[foot] - m.geom_pos[shank]  # from the shank's centre to the foot (unit below)
         axis = axis / np.linalg.norm(axis)

@@ -37,11 +37,13 @@ class Repertoire:
     def measure(self, name: str) -> np.ndarray:
         """Every elite's value of measure ``name`` ``(E,)`` (UserError when the archive has no such measure)."""
         if name not in self.archive.measures:
-            raise UserError(f"{self.archive.path}: the archive measures {' and '.join(self.archive.measures)}, not {name}")
+            raise UserError(f"{self.archive.path}: the archive measures {' and '.join(self.archive.measures)}, not "
+                            f"{name}")
         return self.archive.values[:, self.archive.measures.index(name)]
 
     def walking(self) -> np.ndarray:
-        """Bool ``(E,)``: the elite stayed up its whole episode and (with a ``speed`` measure) walked >= WALK_SPEED m/s."""
+        """Bool ``(E,)``: the elite stayed up its whole episode and (with a ``speed`` measure) walked >= WALK_SPEED
+        m/s."""
         a = self.archive
         ok = ~a.fell & (a.end_time >= self.episode.seconds - 1e-9)
         return ok & (self.measure("speed") >= WALK_SPEED) if "speed" in a.measures else ok
@@ -65,17 +67,18 @@ class Repertoire:
         return Source(genome=a.genome[k].copy(), config=self.episode, meta=meta, genome_path=path, run_dir=self.outputs)
 
     def nearest(self, speed: float, turning: float = 0.0, like: int | None = None) -> int:
-        """The walking elite whose (speed, turning) is nearest the commanded one, in cell widths; with ``like`` (an elite's
-        row), among the walking elites within SPEED_TOLERANCE and TURNING_TOLERANCE of the command the one whose genome
-        is nearest that elite's (the sum of gene differences over the archive's span of each gene: the gait most like the
-        current one).  UserError naming the range the walking elites cover when the command is outside it."""
+        """The walking elite whose (speed, turning) is nearest the commanded one, in cell widths; with ``like`` (an
+        elite's row), among the walking elites within SPEED_TOLERANCE and TURNING_TOLERANCE of the command the one whose
+        genome is nearest that elite's (the sum of gene differences over the archive's span of each gene: the gait most
+        like the current one).  UserError naming the range the walking elites cover when the command is outside it."""
         walk = np.flatnonzero(self.walking())
         if not len(walk):
             raise UserError(f"{self.archive.path}: no elite walks yet")
         v, w = self.measure("speed")[walk], self.measure("turning")[walk]
         for name, x, have, unit in (("speed", speed, v, "m/s"), ("turning rate", turning, w, "deg/s")):
             if not have.min() <= x <= have.max():
-                raise UserError(f"{name} {x:g} {unit} is outside the archive's walking gaits ({have.min():.3g} to {have.max():.3g} {unit})")
+                raise UserError(f"{name} {x:g} {unit} is outside the archive's walking gaits ({have.min():.3g} to "
+                                f"{have.max():.3g} {unit})")
         near = (np.abs(v - speed) <= SPEED_TOLERANCE * speed) & (np.abs(w - turning) <= TURNING_TOLERANCE)
         if like is not None and near.any():
             g = self.archive.genome
@@ -95,7 +98,8 @@ def load_repertoire(run_dir: str | Path) -> Repertoire:
     if not (path / rundir.BEST).is_file():
         raise UserError(f"{path}: no {rundir.BEST}, so the episode its genomes walk is unknown")
     _, episode, meta = load_genome(path / rundir.BEST)
-    return Repertoire(path, archive, episode, meta.get("environment") if isinstance(meta.get("environment"), dict) else None)
+    return Repertoire(path, archive, episode, meta.get("environment") if isinstance(meta.get("environment"), dict)
+                      else None)
 
 
 def parse_cell(text: str) -> tuple[int, int]:

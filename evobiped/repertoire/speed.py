@@ -1,4 +1,5 @@
-"""A speed knob: the walking elite nearest a commanded speed, and a speed schedule followed by switching elites on the fly.
+"""A speed knob: the walking elite nearest a commanded speed, and a speed schedule followed by switching elites on the
+fly.
 
 Each stretch of the schedule holds one commanded speed v (m/s) for ``hold`` s.  Every ``step`` s the knob
 chooses the speed it wants and moves towards it by at most ``ramp`` m/s per s when speeding up and
@@ -85,7 +86,8 @@ def follow(rep: Repertoire, speeds: list[float], hold: float, turning: float = 0
                 deficit = v * k * dt - (path() - start)  # m behind the command so far in this stretch
                 want = float(np.clip(v + deficit / correction, v * (1 - overshoot), v * (1 + overshoot)))
                 want = float(np.clip(want, slowest, fastest))
-            knob = float(np.clip(want, knob - ramp_down * dt if ramp_down else -np.inf, knob + ramp * dt if ramp else np.inf))
+            knob = float(np.clip(want, knob - ramp_down * dt if ramp_down else -np.inf, knob + ramp * dt if ramp
+                                 else np.inf))
             elite = rep.nearest(knob, turning, like=elite)
             state.params = ep.controller.decode(genome[elite][None])
             ep.advance(state, dt)

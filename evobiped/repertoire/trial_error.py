@@ -56,7 +56,8 @@ def matern52(a: np.ndarray, b: np.ndarray, rho: float) -> np.ndarray:
     return (1 + np.sqrt(5) * r + 5 / 3 * r**2) * np.exp(-np.sqrt(5) * r)
 
 
-def posterior(x: np.ndarray, prior: np.ndarray, tried: list[int], y: np.ndarray, *, rho: float, noise: float) -> tuple[np.ndarray, np.ndarray]:
+def posterior(x: np.ndarray, prior: np.ndarray, tried: list[int], y: np.ndarray, *, rho: float,
+              noise: float) -> tuple[np.ndarray, np.ndarray]:
     """The GP's mean and standard deviation ``(E,)`` at every candidate ``x`` ``(E, d)`` after observing ``y`` at rows
     ``tried`` (prior mean ``prior`` ``(E,)``; all in units of the best prior)."""
     if not tried:
@@ -93,8 +94,8 @@ class TrialAndError:
             acceptable: Callable[[Attempt], bool] = lambda attempt: True) -> list[Attempt]:
         """Search the candidates at ``x`` ``(E, d)`` (scaled measures) with prior performances ``prior_m`` ``(E,)`` m;
         ``trial(row) -> (distance m, fell, end_time s, seconds s)`` runs one elite on the damaged body.  Returns the
-        trials in order; the last one met the stopping rule unless ``trials`` ran out.  ``acceptable(attempt)``: whether a
-        trial may end the search."""
+        trials in order; the last one met the stopping rule unless ``trials`` ran out.  ``acceptable(attempt)``: whether
+        a trial may end the search."""
         scale = float(prior_m.max())
         prior = prior_m / scale
         tried: list[int] = []
@@ -114,7 +115,8 @@ class TrialAndError:
             out.append(Attempt(k, float(mean[k] * scale), float(perf), float(distance), bool(fell), float(end_time)))
         return out
 
-    def _next(self, mean: np.ndarray, sd: np.ndarray, prior: np.ndarray, tried: list[int], shuffled: np.ndarray | None) -> int:
+    def _next(self, mean: np.ndarray, sd: np.ndarray, prior: np.ndarray, tried: list[int],
+              shuffled: np.ndarray | None) -> int:
         """The next elite to try (an index of the candidates) by ``order``."""
         if shuffled is not None:
             return int(shuffled[len(tried)])

@@ -36,7 +36,8 @@ def load(directory: Path) -> dict:
     the :class:`~.run.Run` constructor's arguments and ``started_in`` (the numerical environment config.json
     records, or None).  A run killed before its first commit starts over."""
     if not (directory / rundir.CONFIG).exists() and rundir.is_unused(directory):
-        raise UserError(f"{directory} holds no run yet (stopped before its config was written): start it again with evobiped evolve --out {directory}")
+        raise UserError(f"{directory} holds no run yet (stopped before its config was written): start it again with "
+                        f"evobiped evolve --out {directory}")
     cfg = read_json(directory / rundir.CONFIG, what="run config")
     if not isinstance(cfg, dict):
         raise UserError(f"run config {directory / rundir.CONFIG} is not a table of settings")
@@ -52,7 +53,8 @@ def load(directory: Path) -> dict:
     if ck is None:
         committed = committed_files(directory)
         if committed:
-            raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be resumed; start a new run")
+            raise UserError(f"{path} is missing but the run has committed generations ({committed[0]}): it cannot be "
+                            "resumed; start a new run")
         # killed before its first commit: start over (the normaliser from the start genome's file again)
         start = kept_start(directory, config, None)
         record = rundir.RunRecord(settings, _listed(start))
@@ -99,7 +101,8 @@ def committed_files(directory: Path) -> list[str]:
     hist = directory / rundir.HISTORY
     if hist.is_file() and hist.read_bytes().count(b"\n") > 1:
         found.append(rundir.HISTORY)
-    found += [f"{rundir.GENERATIONS}/{p.name}" for p in rundir.generation_files(directory) if rundir.generation_of(p) != 0]
+    found += [f"{rundir.GENERATIONS}/{p.name}" for p in rundir.generation_files(directory)
+              if rundir.generation_of(p) != 0]
     return found
 
 

@@ -48,7 +48,8 @@ def _bounds(v) -> None:
 
 
 def _lengths(v) -> None:
-    if not (isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) and 0 < x <= 1e5 for x in v)):
+    if not (isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) and 0 < x <= 1e5
+                                        for x in v)):
         raise ConfigError(f"must be a list of episode lengths in s, each > 0, got {v!r}")
 
 
@@ -56,8 +57,8 @@ def _lengths(v) -> None:
 class CurriculumOptions:
     """Fitness phases (``[curriculum]`` in a config; none by default)."""
 
-    phases: list = option([], "the fitness weights of each phase, e.g. [{time_up = 2, steps = 0.5}, {forward = 10, time_up = 5}]",
-                          check=_phases)
+    phases: list = option([], "the fitness weights of each phase, e.g. [{time_up = 2, steps = 0.5}, {forward = 10, "
+                              "time_up = 5}]", check=_phases)
     advance: str = option("up", "when to move on: `up` (every evaluation walker up its whole episode) or a term's name")
     advance_above: float = option(0.0, "with a term: the evaluation walkers' mean it must reach")
     advance_for: int = option(2, "generations running the condition must hold", low=1, integer=True)
@@ -93,8 +94,8 @@ class Curriculum:
         for i, t in enumerate(o.phases):
             unknown = [k for k in t if k not in terms]
             if unknown:
-                raise ConfigError(f"curriculum.phases[{i}]: names no term of the {task.name} task: {', '.join(unknown)} "
-                                  f"(terms: {', '.join(terms)})")
+                raise ConfigError(f"curriculum.phases[{i}]: names no term of the {task.name} task: "
+                                  f"{', '.join(unknown)} (terms: {', '.join(terms)})")
         if o.advance != "up" and o.advance not in terms:
             raise ConfigError(f"curriculum.advance: {o.advance!r} is neither 'up' nor a term of the {task.name} task "
                               f"({', '.join(terms)})")
@@ -138,8 +139,10 @@ class Curriculum:
 
     def restore(self, table) -> None:
         """Read :meth:`to_dict` back (UserError, one line, when it does not fit these phases)."""
-        ok = isinstance(table, dict) and all(isinstance(table.get(k), int) and not isinstance(table.get(k), bool) and table[k] >= 0
+        ok = isinstance(table, dict) and all(isinstance(table.get(k), int) and not isinstance(table.get(k), bool)
+                                             and table[k] >= 0
                                              for k in ("phase", "streak"))
         if not ok or table["phase"] >= max(len(self.options.phases), 1):
-            raise UserError(f"checkpoint: curriculum must be {{phase, streak}} with a phase below {len(self.options.phases)}, got {table!r}")
+            raise UserError(f"checkpoint: curriculum must be {{phase, streak}} with a phase below "
+                            f"{len(self.options.phases)}, got {table!r}")
         self.phase, self.streak = table["phase"], table["streak"]

@@ -5,8 +5,8 @@ the run was made with (``settings``: config.json's, less where the episodes
 run, which no result depends on) and the numerical environment config.json
 said it started in (``environment``: a resume elsewhere is noted, an edited
 record refused).  A resume compares the two and refuses any difference by name
-(``seed 5 → 6``): a resumed run never silently mixes two experiments.  Both sides are read through :meth:`RunConfig.from_dict` first, so a
-setting added to evobiped since the run began (its default on both sides) is
+(``seed 5 → 6``): a resumed run never silently mixes two experiments.  Both sides are read through
+:meth:`RunConfig.from_dict` first, so a setting added to evobiped since the run began (its default on both sides) is
 no difference.
 """
 
@@ -65,9 +65,10 @@ def changes(recorded: Any, config: RunConfig, environment: Any = None) -> list[s
 
 
 def check(recorded: Any, config: RunConfig, environment: Any, config_path) -> None:
-    """UserError (one line naming what changed) unless ``config`` and config.json's ``environment`` are the ``recorded`` ones."""
+    """UserError (one line naming what changed) unless ``config`` and config.json's ``environment`` are the ``recorded``
+    ones."""
     diff = changes(recorded, config, environment)
     if diff:
         more = f" (and {len(diff) - 3} more)" if len(diff) > 3 else ""
-        raise UserError(f"{config_path} differs from the one this checkpoint was made with: {'; '.join(diff[:3])}{more}; "
-                        "restore it, or start a new run with the new settings")
+        raise UserError(f"{config_path} differs from the one this checkpoint was made with: "
+                        f"{'; '.join(diff[:3])}{more}; restore it, or start a new run with the new settings")

@@ -40,7 +40,8 @@ class Individuals:
     parents: np.ndarray | None = None
 
     def told(self, unknown: np.ndarray, result) -> None:
-        """The :class:`~evobiped.episode.result.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in order."""
+        """The :class:`~evobiped.episode.result.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in
+        order."""
         n = len(unknown)
         rows = np.flatnonzero(unknown)
         displacement, heading = result.displacements()
@@ -82,8 +83,8 @@ class Individuals:
         for i in range(len(fitness)):
             known = bool(self.known[i]) if len(self.known) else False
             parent = row(self.parents, i)
-            out.append({"generation": generation, "row": i, "evaluated": bool(evaluated[i]), "previous": row(self.previous, i),
-                        "parents": None if parent is None else [parent],
+            out.append({"generation": generation, "row": i, "evaluated": bool(evaluated[i]),
+                        "previous": row(self.previous, i), "parents": None if parent is None else [parent],
                         "fitness": None if np.isnan(fitness[i]) else float(fitness[i]),
                         **{k: (v[i].item() if known and not (v.dtype.kind == "f" and np.isnan(v[i])) else None)
                            for k, v in self.outcome.items()},

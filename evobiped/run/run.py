@@ -38,8 +38,10 @@ def _check_unused(directory: Path) -> None:
     if rundir.is_unused(directory):
         return
     if (directory / rundir.CONFIG).is_file():
-        raise UserError(f"run directory {directory} already holds a run (continue it with --resume {directory}, or give another --out)")
-    raise UserError(f"run directory {directory} exists and holds other files, not a run: give a new or empty directory as --out")
+        raise UserError(f"run directory {directory} already holds a run (continue it with --resume {directory}, or "
+                        "give another --out)")
+    raise UserError(f"run directory {directory} exists and holds other files, not a run: give a new or empty directory "
+                    "as --out")
 
 
 class Run:
@@ -119,7 +121,8 @@ class Run:
             if start is not None:  # before the config: a run whose config names a start genome has it
                 keep_start(directory, start, config)
             environment = provenance.current()
-            write_json(directory / rundir.CONFIG, {"evobiped": __version__, **config.to_dict(), "environment": environment})
+            write_json(directory / rundir.CONFIG,
+                       {"evobiped": __version__, **config.to_dict(), "environment": environment})
             record = rundir.RunRecord(fingerprint.settings(config, environment),
                                       None if start is None else [float(x) for x in start])
             run = cls(directory, config, opt, record, context=RunContext(config, start_episode(directory, config)),
@@ -154,7 +157,8 @@ class Run:
         """Every generation evolved, the episodes evaluated reached the config's budget (if any), or the stopping rule
         held (:mod:`.stopping`)."""
         budget = self.config.budget
-        return (self.optimizer.generation >= self.config.generations or (budget is not None and self.episodes() >= budget)
+        return (self.optimizer.generation >= self.config.generations
+                or (budget is not None and self.episodes() >= budget)
                 or self.context.stopped())
 
     def episodes(self) -> int:

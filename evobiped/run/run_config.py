@@ -45,26 +45,29 @@ class RunConfig:
     stop: StopOptions = field(default_factory=StopOptions)
     restart: RestartOptions = field(default_factory=RestartOptions)
     generations: int = option(120, "generations to evolve", low=1, high=10**6, integer=True)
-    budget: int | None = option(None, "episodes to evaluate: the run stops at the first generation boundary where the episodes "
-                                "it evaluated (genomes x presentations each, episodes_per_genome) reach this (none: every generation)",
-                                low=1, integer=True)
+    budget: int | None = option(None, "episodes to evaluate: the run stops at the first generation boundary where the "
+                                      "episodes it evaluated (genomes x presentations each, episodes_per_genome) reach "
+                                      "this (none: every generation)", low=1, integer=True)
     seed: int = option(0, "run seed: every random draw of the run comes from it", low=0, integer=True)
     backend: str = option("process", "where episodes run", choices=tuple(BACKENDS))
     workers: int | None = option(None, "parallel workers (none: one per core)", low=1, integer=True)
     address: str | None = option(None, "an existing Ray cluster, HOST:PORT (backend ray)", check=_text)
-    initial: str | None = option(None, "genome file or run directory whose best genome seeds the population (clones)", check=_text)
-    frozen_blocks: tuple[str, ...] = option((), "gene blocks kept fixed (e.g. CPG weights when evolving only sensor weights)",
-                                            check=_names)
+    initial: str | None = option(None, "genome file or run directory whose best genome seeds the population (clones)",
+                                 check=_text)
+    frozen_blocks: tuple[str, ...] = option((), "gene blocks kept fixed (e.g. CPG weights when evolving only sensor "
+                                                "weights)", check=_names)
 
     def __post_init__(self):
         given = self.optimizer_options
         unknown = [n for n in given if n not in OPTIMIZERS] if isinstance(given, dict) else [given]
         if unknown:
-            raise ConfigError(f"optimizer_options: {unknown[0]!r} is no optimizer (choose from {', '.join(OPTIMIZERS)})")
+            raise ConfigError(
+                f"optimizer_options: {unknown[0]!r} is no optimizer (choose from {', '.join(OPTIMIZERS)})")
         object.__setattr__(self, "optimizer_options", {name: parse(cls.Options, given.get(name, {}), cls.table)
                                                        for name, cls in OPTIMIZERS.items()})
         check_fields(self, "")
-        if self.normalise.running and not self.episode.parts()[1].normalises_inputs:  # (parts built only when asked for)
+        # (parts built only when asked for)
+        if self.normalise.running and not self.episode.parts()[1].normalises_inputs:
             raise ConfigError(f"normalise.running: controller {self.episode.controller!r} reads raw senses here "
                               "(it does not normalise its inputs)")
         OPTIMIZERS[self.optimizer].check_episode(self.options, self.episode)
@@ -124,7 +127,8 @@ class RunConfig:
 
 
 def _floors(v) -> None:
-    if not (isinstance(v, dict) and all(isinstance(k, str) and isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
+    if not (isinstance(v, dict) and all(isinstance(k, str) and isinstance(x, (int, float)) and not isinstance(x, bool)
+                                        and x > 0
                                         for k, x in v.items())):
         raise ConfigError(f"must be a table of positive floors by sensor name, got {v!r}")
 
@@ -133,11 +137,12 @@ def _floors(v) -> None:
 class NormaliseOptions:
     """The running observation normaliser (``[normalise]``; :mod:`evobiped.interface.normaliser`)."""
 
-    running: bool = option(False, "normalise the controller's inputs by the running mean and std of the senses the run's "
-                           "walkers visited: ES's evaluation rows (theta); for the GA, CMA-ES and MAP-Elites every row "
-                           "evaluated (frozen into every genome file)")
+    running: bool = option(False, "normalise the controller's inputs by the running mean and std of the senses the "
+                                  "run's walkers visited: ES's evaluation rows (theta); for the GA, CMA-ES and "
+                                  "MAP-Elites every row evaluated (frozen into every genome file)")
     floor: float = option(0.2, "each input's std at least this fraction of its declared scale", above=0)
-    floors: dict = option({"foot_contact": 0.5}, "absolute std floors by sensor name, in the sensor's units", check=_floors)
+    floors: dict = option({"foot_contact": 0.5}, "absolute std floors by sensor name, in the sensor's units",
+                          check=_floors)
 
     def __post_init__(self):
         check_fields(self, "normalise")
@@ -188,19 +193,20 @@ WALKER_BYTES = 256 * 1024
 
 
 def check_memory(population: int, genes: int) -> None:
-    """ConfigError unless a population of ``genes``-gene genomes and their simulations fit in half this machine's memory."""
+    """ConfigError unless a population of ``genes``-gene genomes and their simulations fit in half this machine's
+    memory."""
     need = population * (genes * 8 * 8 + WALKER_BYTES)
     have = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     if need > have / 2:
         fits = int(have / 2 // (genes * 8 * 8 + WALKER_BYTES))
-        raise ConfigError(f"population {population} needs about {need / 2**30:.3g} GiB for its genomes and simulations; "
-                          f"this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
+        raise ConfigError(f"population {population} needs about {need / 2**30:.3g} GiB for its genomes and "
+                          f"simulations; this machine has {have / 2**30:.3g} GiB (at most {fits} walkers fit)")
 
 
 def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimizer:
-    """Build the run's optimizer (the one registered under ``config.optimizer``) for the episode's genome layout, known from the declarations
-    (nothing compiled); fails before any file is written.  ``start``: the start genome ``(G,)`` when the run has
-    one (:func:`start_genome`; None: read from ``config.initial``, as a new run does)."""
+    """Build the run's optimizer (the one registered under ``config.optimizer``) for the episode's genome layout, known
+    from the declarations (nothing compiled); fails before any file is written.  ``start``: the start genome ``(G,)``
+    when the run has one (:func:`start_genome`; None: read from ``config.initial``, as a new run does)."""
     layout = config.episode.layout()
     check_memory(population_of(config), layout.size)
     initial = None
@@ -211,7 +217,8 @@ def make_optimizer(config: RunConfig, start: np.ndarray | None = None) -> Optimi
         slices = layout.slices()
         unknown = [b for b in config.frozen_blocks if b not in slices]
         if unknown:
-            raise ConfigError(f"frozen_blocks {unknown} are not gene blocks of {config.episode.controller} (have {list(slices)})")
+            raise ConfigError(f"frozen_blocks {unknown} are not gene blocks of {config.episode.controller} (have "
+                              f"{list(slices)})")
         mutable = np.ones(layout.size, bool)
         for b in config.frozen_blocks:
             mutable[slices[b]] = False
@@ -228,7 +235,8 @@ def changing_context(config: RunConfig) -> str | None:
     strong = any(s.start > 0 or s.end > 0 for s in (scheduled(p, n) for n in STRENGTHS if n != "push_force"))
     friction = scheduled(p, "friction")
     task = config.episode.parts()[2]
-    for what, changes in (("normalise.running", config.normalise.running), ("curriculum", bool(config.curriculum.phases)),
+    for what, changes in (("normalise.running", config.normalise.running),
+                          ("curriculum", bool(config.curriculum.phases)),
                           ("episode.perturbations", p.pushes > 0 or strong or bool(friction.start) or bool(friction.end)
                            or p.assist > 0 or p.comparable_from > 0),
                           ("random sources", task.draw_sources((config.seed, 0)) is not None)):
@@ -259,7 +267,8 @@ def episodes_per_genome(config: RunConfig) -> int:
 
 def start_genome(config: RunConfig) -> np.ndarray | None:
     """The genome ``(G,)`` that ``config.initial`` names (None: the run has none).  Read once, when the run is
-    created: the run directory keeps it (:data:`evobiped.files.rundir.START`), and a resume never reads the source again."""
+    created: the run directory keeps it (:data:`evobiped.files.rundir.START`), and a resume never reads the source
+    again."""
     if not config.initial:
         return None
     return initial_genome(config.initial, config.episode, config.episode.layout())
@@ -274,8 +283,10 @@ def initial_genome(source: str, episode: EpisodeConfig, layout) -> np.ndarray:
     found = rundir.resolve_genome(source)
     genome, cfg, path = found.genome, found.config, found.genome_path
     if cfg.body != episode.body or cfg.controller != episode.controller:
-        raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs {episode.body}/{episode.controller}")
-    same = dataclasses.replace(cfg.controller_options, inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
+        raise UserError(f"{path} is a {cfg.body}/{cfg.controller} genome; this run needs "
+                        f"{episode.body}/{episode.controller}")
+    same = dataclasses.replace(cfg.controller_options,
+                               inputs=None) == dataclasses.replace(episode.controller_options, inputs=None)
     if len(genome) < layout.size and same:
         genome = np.concatenate([genome, np.zeros(layout.size - len(genome))])
     return layout.validate(genome, what=f"genome in {path}")[0]

@@ -58,7 +58,8 @@ class RunContext:
         if self.running and start is not None:
             self.stats = _seed_stats(start, config.episode, self.declared, self.stats)
         self.start_stats = self.stats  # what a restart begins from again
-        #: the lost-run rule's record (:mod:`.stopping`; None: the run has no such rule), and whether the optimizer is to
+        # : the lost-run rule's record (:mod:`.stopping`; None: the run has no such rule), and whether the optimizer is
+        # to
         #: start over after this generation
         self.attempts = Attempts() if config.restart.active else None
         self.restart_due = False
@@ -74,7 +75,8 @@ class RunContext:
                 or self.config.stop.active or self.attempts is not None)
 
     def stopped(self) -> bool:
-        """The stopping rule (:mod:`.stopping`) held for its generations running, or the lost-run rule stopped the run."""
+        """The stopping rule (:mod:`.stopping`) held for its generations running, or the lost-run rule stopped the
+        run."""
         return (self.config.stop.active and streak(self.history) >= self.config.stop.generations) or self.lost_stop()
 
     def lost_stop(self) -> bool:
@@ -84,7 +86,8 @@ class RunContext:
     def _floors(self, controller) -> np.ndarray:
         o = self.config.normalise
         widths = [(n, w) for n, w in zip(controller.input_names, input_widths(self.config.episode))]
-        absolute = np.concatenate([np.full(w, float(o.floors.get(n, 0.0))) for n, w in widths]) if widths else np.zeros(0)
+        absolute = np.concatenate([np.full(w, float(o.floors.get(n, 0.0))) for n,
+                                   w in widths]) if widths else np.zeros(0)
         return np.maximum(o.floor * self.declared[1], absolute)
 
     def now(self) -> Context:
@@ -109,21 +112,25 @@ class RunContext:
     def best_episode(self) -> EpisodeConfig:
         return self.episode(self.best)
 
-    def after(self, result: EpisodeResult, unknown: np.ndarray, evaluation_rows: np.ndarray | None, fitness: np.ndarray) -> None:
+    def after(self, result: EpisodeResult, unknown: np.ndarray, evaluation_rows: np.ndarray | None,
+              fitness: np.ndarray) -> None:
         """Learn from a generation: ``result`` over the evaluated rows (``unknown`` of the population), the optimizer's
         evaluation rows (None: the fittest evaluated row) and the population's ``fitness``."""
         if not self.active:
             return
         position = np.cumsum(unknown) - 1
         evaluated = np.flatnonzero(unknown)
-        chosen = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.ravel(evaluation_rows)
+        chosen = evaluated[np.argmax(fitness[evaluated])][None] if evaluation_rows is None else np.ravel(
+            evaluation_rows)
         chosen = chosen[unknown[chosen]]
         rows = position[chosen]
         phase = self.curriculum.phase
         if self.running and len(rows):
-            self.stats = self.stats.add(sense_sums(result, rows if evaluation_rows is not None else np.arange(len(evaluated))))
+            self.stats = self.stats.add(sense_sums(result, rows if evaluation_rows is not None
+                                                   else np.arange(len(evaluated))))
         up = float(np.mean(~_row_fell(result, rows))) if len(rows) else float("nan")
-        forward = float(np.mean(np.asarray(result.terms["forward"])[rows])) if "forward" in result.terms and len(rows) else float("nan")
+        forward = float(np.mean(np.asarray(result.terms["forward"])[rows])) if "forward" in result.terms and len(
+            rows) else float("nan")
         if len(rows):
             self.curriculum.after(result, rows)
         self._lost(phase, len(rows) > 0 and up == 0.0)
@@ -134,7 +141,8 @@ class RunContext:
             last_phase = not self.curriculum.active or phase == len(self.curriculum.options.phases) - 1
             # each presentation of each evaluation walker (a term is (genomes,) or (genomes, presentations))
             terms = {k: np.asarray(v)[rows].reshape(-1) for k, v in result.terms.items()}
-            self.history[-1][STOP_COLUMN] = int(last_phase and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
+            self.history[-1][STOP_COLUMN] = int(last_phase
+                                                and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
 
     def _lost(self, phase: int, fell: bool) -> None:
         """The lost-run rule after this generation (scored in ``phase``; ``fell``: every evaluation walker fell): a
@@ -142,7 +150,8 @@ class RunContext:
         start its optimizer over."""
         if self.attempts is None:
             return
-        action = self.attempts.check(self.config.restart, len(self.history), phase, self.curriculum.phase != phase, fell)
+        action = self.attempts.check(self.config.restart, len(self.history), phase, self.curriculum.phase != phase,
+                                     fell)
         self.restart_due = action == "restart"
         if self.restart_due:
             self.curriculum.phase = self.curriculum.streak = 0
@@ -174,7 +183,8 @@ class RunContext:
         extra = ck.get("history_extra", [])
         if not isinstance(extra, list) or not all(isinstance(t, dict) for t in extra):
             raise UserError("checkpoint: history_extra must be a list of tables")
-        self.history = [{**t, STOP_COLUMN: int(t[STOP_COLUMN])} if isinstance(t.get(STOP_COLUMN), bool) else t for t in extra]
+        self.history = [{**t, STOP_COLUMN: int(t[STOP_COLUMN])} if isinstance(t.get(STOP_COLUMN), bool) else t
+                        for t in extra]
         if "curriculum" in ck:
             self.curriculum.restore(ck["curriculum"])
         if self.running and "normaliser" in ck:
@@ -185,10 +195,11 @@ class RunContext:
             self.attempts = Attempts.from_dict(ck.get("restarts"))
 
 
-def _seed_stats(cfg: EpisodeConfig, episode: EpisodeConfig, declared: tuple[np.ndarray, np.ndarray], empty: Normaliser) -> Normaliser:
-    """The running statistics a run --from a genome file of episode config ``cfg`` starts from: its ``input_norm`` mapped
-    input by input (by name and width) onto this run's inputs, the declared centre and scale for the others; ``empty``
-    when the file froze none (or shares no input)."""
+def _seed_stats(cfg: EpisodeConfig, episode: EpisodeConfig, declared: tuple[np.ndarray, np.ndarray],
+                empty: Normaliser) -> Normaliser:
+    """The running statistics a run --from a genome file of episode config ``cfg`` starts from: its ``input_norm``
+    mapped input by input (by name and width) onto this run's inputs, the declared centre and scale for the others;
+    ``empty`` when the file froze none (or shares no input)."""
     norm = cfg.controller_options.input_norm
     if norm is None or cfg.controller != episode.controller:
         return empty

@@ -20,7 +20,8 @@ from .run_config import RunConfig
 
 def keep_start(directory: Path, start: np.ndarray, config: RunConfig) -> None:
     """Write the run's start genome ``(G,)`` as ``directory/start.json``, with where it came from, in its source's
-    episode config when that fits the genome (so what the source froze, e.g. its normaliser, is kept), else the run's."""
+    episode config when that fits the genome (so what the source froze, e.g. its normaliser, is kept), else the
+    run's."""
     episode = config.episode
     try:
         source = rundir.resolve_genome(config.initial).config
@@ -28,7 +29,8 @@ def keep_start(directory: Path, start: np.ndarray, config: RunConfig) -> None:
             episode = source
     except UserError:
         pass
-    save_genome(directory / rundir.START, start, episode, source=config.initial, source_path=str(Path(config.initial).resolve()))
+    save_genome(directory / rundir.START, start, episode, source=config.initial,
+                source_path=str(Path(config.initial).resolve()))
 
 
 def start_episode(directory: Path, config: RunConfig):
@@ -46,8 +48,8 @@ def kept_start(directory: Path, config: RunConfig, record: dict | None) -> np.nd
     stored = record.get(rundir.START_KEY) if isinstance(record, dict) else None
     if not config.initial:
         if stored is not None or (record is None and file.exists()):
-            raise UserError(f"{directory / rundir.CONFIG} names no start genome (initial) but the run was created with one; "
-                            "restore it, or start a new run")
+            raise UserError(f"{directory / rundir.CONFIG} names no start genome (initial) but the run was created with "
+                            "one; restore it, or start a new run")
         return None
     if stored is not None:
         try:

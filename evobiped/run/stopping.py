@@ -44,7 +44,8 @@ class StopOptions:
     """The stopping rule (``[stop]``)."""
 
     when: str = option("", "stop early: `walking` (the evaluation walkers meet the walking criteria), `fitness` (their "
-                       "mean fitness reaches `above`), or empty (run every generation)", choices=("", "walking", "fitness"))
+                       "mean fitness reaches `above`), or empty (run every generation)",
+                       choices=("", "walking", "fitness"))
     above: float = option(0.0, "with when = fitness: the fitness to reach")
     generations: int = option(3, "generations running the condition must hold", low=1, high=10**6, integer=True)
 
@@ -63,8 +64,8 @@ class StopOptions:
             needed = WALKING_TERMS + (STEP_TERMS if _sampling(task) == "physics_step" else ())
             missing = [t for t in needed if t not in task.term_names]
             if missing:
-                raise ConfigError(f"stop.when = 'walking' needs the walk task's gait terms (task_options gait_terms = true "
-                                  f"and fitness = 'weighted'); task {task.name!r} lacks {', '.join(missing)}")
+                raise ConfigError("stop.when = 'walking' needs the walk task's gait terms (task_options gait_terms = "
+                                  f"true and fitness = 'weighted'); task {task.name!r} lacks {', '.join(missing)}")
 
     def met(self, terms: dict, fell: np.ndarray, fitness: np.ndarray) -> bool:
         """Whether the evaluation walkers meet the condition this generation: ``terms`` (each ``(n,)``) and ``fell``
@@ -150,7 +151,8 @@ class Attempts:
     lost: list = field(default_factory=list)
     fallen: int = 0
 
-    def check(self, options: RestartOptions, generation: int, phase: int, moved_on: bool, fell: bool = False) -> str | None:
+    def check(self, options: RestartOptions, generation: int, phase: int, moved_on: bool,
+              fell: bool = False) -> str | None:
         """After generation ``generation`` (scored in ``phase``; ``moved_on``: the curriculum advanced after it;
         ``fell``: its evaluation walkers fell): what the rule does now, ``restart``, ``stop``, ``warn`` or None (not
         lost), recorded."""
@@ -177,7 +179,8 @@ class Attempts:
         return bool(self.lost) and self.lost[-1]["action"] == "stop"
 
     def to_dict(self) -> dict:
-        return {"attempt": self.attempt, "phase_since": self.phase_since, "lost": list(self.lost), "fallen": self.fallen}
+        return {"attempt": self.attempt, "phase_since": self.phase_since, "lost": list(self.lost),
+                "fallen": self.fallen}
 
     @classmethod
     def from_dict(cls, table) -> "Attempts":

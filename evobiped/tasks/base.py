@@ -104,8 +104,8 @@ class Task:
         return {}
 
     def sensor_mirror(self) -> dict[str, tuple[tuple[int, ...], tuple[float, ...]]]:
-        """How each sensor the task adds reads on the left/right mirrored body (:mod:`evobiped.interface.frame`): name ->
-        (column permutation, sign per column); default none."""
+        """How each sensor the task adds reads on the left/right mirrored body (:mod:`evobiped.interface.frame`): name
+        -> (column permutation, sign per column); default none."""
         return {}
 
     def start(self, body: Body, sims: Sims) -> TaskState:
@@ -149,7 +149,8 @@ class Task:
         """Named sensor arrays ``(P, k)`` for the controller."""
         return {}
 
-    def on_tick(self, body: Body, sims: Sims, state: TaskState, ids: np.ndarray, healthy: np.ndarray, neurons: np.ndarray) -> None:
+    def on_tick(self, body: Body, sims: Sims, state: TaskState, ids: np.ndarray, healthy: np.ndarray,
+                neurons: np.ndarray) -> None:
         """After a control tick; ``ids`` were stepped, ``healthy`` (over ids) are finite."""
 
     def fitness(self, state: TaskState) -> np.ndarray:

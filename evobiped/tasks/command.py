@@ -2,11 +2,12 @@
 
 Senses.  The task adds ``command_speed`` (m/s) and ``command_turning`` (rad/s, + left), the commands of the tick's
 time under the task's schedule (:mod:`evobiped.tasks.command_schedule`: ``constant``, ``piecewise`` or ``drawn``
-per generation), and ``command_stop`` (1 at a zero speed command, else 0: a stop told apart from a slow walk).  Under the stance frame's left/right mirror the speed keeps its sign and the turning rate changes
-sign.  With ``heading_sense`` the walk task's ``heading_error`` is the angle of the facing from the *commanded*
-facing (the initial facing turned by the integral of the commanded turning rate, + when turned left of it), held
-within +-pi/2 (:data:`HEADING_LEASH`: a walker that lags further behind a commanded turn is told "turn left" or
-"turn right", never the opposite after a wrap); at a zero turning command it is the walk task's heading error.
+per generation), and ``command_stop`` (1 at a zero speed command, else 0: a stop told apart from a slow walk).  Under
+the stance frame's left/right mirror the speed keeps its sign and the turning rate changes sign.  With ``heading_sense``
+the walk task's ``heading_error`` is the angle of the facing from the *commanded* facing (the initial facing turned by
+the integral of the commanded turning rate, + when turned left of it), held within +-pi/2 (:data:`HEADING_LEASH`: a
+walker that lags further behind a commanded turn is told "turn left" or "turn right", never the opposite after a wrap);
+at a zero turning command it is the walk task's heading error.
 
 Tracking fitness (as legged locomotion scores a velocity command).  Every tick a row is up, with v the pelvis's
 forward velocity in its heading frame (m/s: its planar displacement over the tick along the facing at the tick's
@@ -94,16 +95,17 @@ class CommandOptions:
     speed_high: float = option(0.8, "drawn: the fastest speed drawn", unit="m/s", low=0)
     p_stop: float = option(0.2, "drawn: the probability that a stretch is a stop (speed 0)", low=0, high=1)
     turning_max: float = option(0.35, "drawn: turning rates uniform in +-turning_max", unit="rad/s", low=0)
-    sigma_speed: float = option(0.25, "sigma_v of the speed tracking term exp(-(v - v*)^2 / sigma_v^2)", unit="m/s", above=0)
-    sigma_turning: float = option(0.35, "sigma_w of the turning tracking term exp(-(w - w*)^2 / sigma_w^2)", unit="rad/s",
-                                  above=0)
+    sigma_speed: float = option(0.25, "sigma_v of the speed tracking term exp(-(v - v*)^2 / sigma_v^2)", unit="m/s",
+                                above=0)
+    sigma_turning: float = option(0.35, "sigma_w of the turning tracking term exp(-(w - w*)^2 / sigma_w^2)",
+                                  unit="rad/s", above=0)
     average: str = option("time_up", "the tracking terms per second of the time up (`time_up`) or of the episode "
                           "(`episode`: time lost to a fall scores 0)", choices=("time_up", "episode"))
     smoothing: float = option(0.0, "time constant of a low-pass on the measured speed and turning rate (0: none)",
                               unit="s", low=0)
     weights: dict = option({"track_speed": 10.0, "track_turning": 5.0, "stand": 5.0, "time_up": 1.0},
-                           "the weight of each term (track_speed, track_turning, stand, and the walk task's: time_up s, "
-                           "steps, pace m, the gait lab's)", check=_weights)
+                           "the weight of each term (track_speed, track_turning, stand, and the walk task's: time_up "
+                           "s, steps, pace m, the gait lab's)", check=_weights)
     heading_sense: bool = option(False, "add the sensor heading_error: the facing's angle from the commanded facing "
                                  "(rad, + left, within +-pi/2)")
     pace_cap: float = option(0.6, "the term pace: the displacement forward, counted up to this speed times the time up",
@@ -113,13 +115,16 @@ class CommandOptions:
 
     def __post_init__(self):
         check_sampled(self.weights, self.gait_sampling, "weights")
-        if self.schedule == "constant" and (isinstance(self.speed, (list, tuple)) or isinstance(self.turning, (list, tuple))):
-            raise ConfigError("a constant schedule takes one speed and one turning rate; lists need schedule = 'piecewise'")
+        if self.schedule == "constant" and (isinstance(self.speed, (list, tuple))
+                                            or isinstance(self.turning, (list, tuple))):
+            raise ConfigError("a constant schedule takes one speed and one turning rate; lists need schedule = "
+                              "'piecewise'")
         if self.schedule == "piecewise":
             check_times(self.times, self.speed if isinstance(self.speed, (list, tuple)) else [self.speed],
                         self.turning if isinstance(self.turning, (list, tuple)) else [self.turning])
         if self.speed_low > self.speed_high:
-            raise ConfigError(f"speed_low ({self.speed_low:g} m/s) must not exceed speed_high ({self.speed_high:g} m/s)")
+            raise ConfigError(
+                f"speed_low ({self.speed_low:g} m/s) must not exceed speed_high ({self.speed_high:g} m/s)")
 
 
 class CommandTask(WalkTask):
@@ -173,7 +178,8 @@ class CommandTask(WalkTask):
             raise ConfigError(f"body {body.name!r} walks in its sagittal plane: it cannot follow a turning command")
         f = body.heading(sims)
         n = sims.n
-        return CommandState(**vars(walk), commands=self.nominal, t0=np.array(sims.time, float), clock=np.array(sims.time, float),
+        return CommandState(**vars(walk), commands=self.nominal, t0=np.array(sims.time, float),
+                            clock=np.array(sims.time, float),
                             up=np.zeros(n), last_facing=f.copy(), yaw_cmd=np.arctan2(f[:, 1], f[:, 0]),
                             measured=np.zeros((n, 3)), sums=np.zeros((n, 3)), first=np.ones(n, bool))
 
@@ -203,7 +209,8 @@ class CommandTask(WalkTask):
         sv2, sw2 = o.sigma_speed ** 2, o.sigma_turning ** 2
         both = body.contacts(sims)[ok].all(axis=1)
         still = (v_cmd == 0) * both * np.exp(-speed ** 2 / sv2) * np.exp(-w ** 2 / sw2)
-        state.sums[ok] += dt[:, None] * np.stack([np.exp(-(v - v_cmd) ** 2 / sv2), np.exp(-(w - w_cmd) ** 2 / sw2), still], axis=1)
+        state.sums[ok] += dt[:, None] * np.stack([np.exp(-(v - v_cmd) ** 2 / sv2), np.exp(-(w - w_cmd) ** 2 / sw2),
+                                                  still], axis=1)
         state.up[ok] += dt
         yaw = np.arctan2(f1[:, 1], f1[:, 0])  # the commanded facing turns on, held within the leash of the facing
         cmd = state.yaw_cmd[ok] + w_cmd * dt

@@ -40,7 +40,8 @@ def check_times(times, speed, turning) -> tuple[np.ndarray, np.ndarray, np.ndarr
     arrays = []
     for name, v in (("times", times), ("speed", speed), ("turning", turning)):
         items = list(v) if isinstance(v, (list, tuple, np.ndarray)) else None
-        if not items or any(isinstance(x, bool) or not isinstance(x, (int, float, np.floating, np.integer)) for x in items):
+        if not items or any(isinstance(x, bool) or not isinstance(x, (int, float, np.floating, np.integer))
+                            for x in items):
             raise ConfigError(f"{name}: a piecewise schedule needs a non-empty list of numbers, got {v!r}")
         a = np.asarray(items, float)
         if not np.isfinite(a).all():
@@ -117,7 +118,8 @@ class DrawnCommands:
         """The draw over ``seconds`` s as an explicit piecewise schedule."""
         n = max(1, math.ceil(seconds / self.stretch - CLOCK_TOLERANCE))
         values = [self.stretch_commands(i) for i in range(n)]
-        return CommandSchedule(np.arange(n) * self.stretch, np.array([v[0] for v in values]), np.array([v[1] for v in values]))
+        return CommandSchedule(np.arange(n) * self.stretch, np.array([v[0] for v in values]),
+                               np.array([v[1] for v in values]))
 
 
 def nominal_drawn(o) -> CommandSchedule:
@@ -153,7 +155,8 @@ def trained_range(o) -> tuple[tuple[float, float], bool, tuple[float, float]]:
     if o.schedule == "drawn":
         return (o.speed_low, o.speed_high), o.p_stop > 0, (-o.turning_max, o.turning_max)
     s = schedule_of(o)
-    return (float(s.speed.min()), float(s.speed.max())), bool((s.speed == 0).any()), (float(s.turning.min()), float(s.turning.max()))
+    return (float(s.speed.min()),
+            float(s.speed.max())), bool((s.speed == 0).any()), (float(s.turning.min()), float(s.turning.max()))
 
 
 def clip_command(o, speed: float, turning: float) -> tuple[float, float]:

@@ -55,8 +55,8 @@ def parse_sources(sources) -> np.ndarray:
     far = np.hypot(arr[:, 0], arr[:, 1]) > MAX_SOURCE_DISTANCE
     if far.any():  # the ears' inverse squares underflow there: the sense would be 0/0
         x, y = arr[np.argmax(far)]
-        raise ConfigError(f"the source ({x:g}, {y:g}) is farther than {MAX_SOURCE_DISTANCE:g} m from the walker's start: "
-                          "its sound could not be told apart by the two ears")
+        raise ConfigError(f"the source ({x:g}, {y:g}) is farther than {MAX_SOURCE_DISTANCE:g} m from the walker's "
+                          "start: its sound could not be told apart by the two ears")
     return arr
 
 
@@ -72,17 +72,19 @@ def with_sources(config, sources):
     if sources is None:
         return config
     if config.task not in ("steer", "command", "steer-command"):
-        raise UserError(f"--source applies to the steer task (--task steer) and to a commanded walker (--task command); "
-                        f"this episode's task is {config.task!r}")
+        raise UserError("--source applies to the steer task (--task steer) and to a commanded walker (--task "
+                        f"command); this episode's task is {config.task!r}")
     options = {**given(config.task_options), "sources": [list(map(float, s)) for s in sources]}
     options.pop("random_sources", None)  # these sources, fixed, replace a distribution drawn per generation
     # a commanded walker hears them through the steering rule's commands (evobiped.tasks.steer_command)
-    return dataclasses.replace(config, task_options=options, task="steer" if config.task == "steer" else "steer-command")
+    return dataclasses.replace(config, task_options=options, task="steer" if config.task == "steer"
+                               else "steer-command")
 
 
 def check_range(v) -> None:
     r = tuple(v) if isinstance(v, (list, tuple)) else None
-    if r is None or len(r) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool) or not np.isfinite(x)
+    if r is None or len(r) not in (0, 2) or any(not isinstance(x, (int, float)) or isinstance(x, bool)
+                                                or not np.isfinite(x)
                                                  for x in r) or (r and r[0] > r[1]):
         raise ConfigError(f"must be [] or [low, high] with low <= high (an empty range draws nothing), got {v!r}")
 

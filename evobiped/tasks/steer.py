@@ -89,11 +89,13 @@ from .walk import LAB_TERMS
 
 #: fitness name -> what it pays (see the module docstring)
 FITNESS = {"distance": "the paper's: minus the distance to the source when the episode ends, fall or not (m)",
-           "arrive": "minus the distance to the source at the end, minus fall_penalty + fall_time_cost (T - t) per fall (m)"}
+           "arrive": "minus the distance to the source at the end, minus fall_penalty + fall_time_cost (T - t) per "
+                     "fall (m)"}
 
 
 def _gait_weights(v) -> None:
-    if not isinstance(v, dict) or not all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in v.values()):
+    if not isinstance(v, dict) or not all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w)
+                                          for w in v.values()):
         raise ConfigError(f"must be a table of finite weights by gait term, got {v!r}")
     unknown = [k for k in v if k not in LAB_TERMS]
     if unknown:
@@ -106,9 +108,9 @@ class SteerOptions:
 
     sources: tuple = option(DEFAULT_SOURCES, "sound sources on the ground plane, one presentation each", unit="m",
                             check=parse_sources, span="[[x, y], ...], none at the start")
-    fitness: str = option("distance", "`distance`: the paper's, minus the distance to the source when the episode ends, "
-                          "fall or not; `arrive`: the same, minus fall_penalty + fall_time_cost (T - t_fall) for every "
-                          "presentation that falls", choices=tuple(FITNESS))
+    fitness: str = option("distance", "`distance`: the paper's, minus the distance to the source when the episode "
+                                      "ends, fall or not; `arrive`: the same, minus fall_penalty + fall_time_cost (T - "
+                                      "t_fall) for every presentation that falls", choices=tuple(FITNESS))
     fall_penalty: float = option(100.0, "under the arrive fitness: what a fall costs, and the cap on each final "
                                  "distance (so any fall scores below any walker that stays up)", unit="m", above=0)
     fall_time_cost: float = option(1.0, "under the arrive fitness: what a fall costs per second of the episode it "
@@ -116,19 +118,22 @@ class SteerOptions:
     sound_limit: float = option(1.0, "the sense sound is s clipped to +-sound_limit (1: as heard); keeps the side "
                                 "heard and caps the loudness of a near source", above=0, high=1)
     random_sources: int = option(0, "S sources drawn anew each generation of a run from source_distance and "
-                                 "source_bearing (0: the fixed sources); sources must then hold S", low=0, high=64, integer=True)
+                                 "source_bearing (0: the fixed sources); sources must then hold S", low=0, high=64,
+                                 integer=True)
     source_distance: tuple = option((), "[low, high]: the distances of random sources", unit="m", check=check_range,
                                     span="[] or [low, high], 0.5 <= low <= high")
-    source_bearing: tuple = option((-60.0, 60.0), "[low, high]: the bearings of random sources from the initial facing, "
-                                   "left positive", unit="deg", check=check_range, span="[low, high] within [-180, 180]")
-    reach: float = option(0.0, "under the arrive fitness: within this distance of its source a walker up earns reach_bonus",
-                          unit="m", low=0)
-    reach_bonus: float = option(0.0, "under the arrive fitness: paid times the fraction of the episode spent within reach, up",
-                                unit="m", low=0)
-    loudness: bool = option(False, "offer the distance cue `loudness` = min(1, 1 m^2 / D^2), D the ears' distance (m) to the source")
-    gait_weights: dict = option({}, "the gait lab's terms (airborne, sliding, duty_asymmetry, steps_per_s, ...), weighted and "
-                                "added to each presentation's fitness, e.g. {airborne = -100, sliding = -200}: pays a walk on the "
-                                "way; the terms join history.csv", check=_gait_weights)
+    source_bearing: tuple = option((-60.0, 60.0), "[low, high]: the bearings of random sources from the initial "
+                                                  "facing, left positive", unit="deg", check=check_range,
+                                   span="[low, high] within [-180, 180]")
+    reach: float = option(0.0, "under the arrive fitness: within this distance of its source a walker up earns "
+                               "reach_bonus", unit="m", low=0)
+    reach_bonus: float = option(0.0, "under the arrive fitness: paid times the fraction of the episode spent within "
+                                     "reach, up", unit="m", low=0)
+    loudness: bool = option(False, "offer the distance cue `loudness` = min(1, 1 m^2 / D^2), D the ears' distance (m) "
+                                   "to the source")
+    gait_weights: dict = option({}, "the gait lab's terms (airborne, sliding, duty_asymmetry, steps_per_s, ...), "
+                                    "weighted and added to each presentation's fitness, e.g. {airborne = -100, sliding "
+                                    "= -200}: pays a walk on the way; the terms join history.csv", check=_gait_weights)
     gait_sampling: str = option("control_tick", SAMPLING_HELP, choices=("physics_step", "control_tick"))
 
     def __post_init__(self):
@@ -138,14 +143,16 @@ class SteerOptions:
         check_sampled(self.gait_weights, self.gait_sampling, "gait_weights")
         if self.random_sources:
             if not self.source_distance:
-                raise ConfigError("source_distance: random_sources need a range of distances [low, high] m; the distribution is empty")
+                raise ConfigError("source_distance: random_sources need a range of distances [low, high] m; the "
+                                  "distribution is empty")
             lo, hi = self.source_distance
             if lo < MIN_SOURCE_DISTANCE:
                 raise ConfigError(f"source_distance: a source {lo:g} m away is inside the walker's start (nearer than "
                                   f"{MIN_SOURCE_DISTANCE:g} m); give low >= {MIN_SOURCE_DISTANCE:g}")
             if len(parse_sources(self.sources)) != self.random_sources:
-                raise ConfigError(f"sources: with random_sources = {self.random_sources}, the nominal sources (what a replay "
-                                  f"presents) must be {self.random_sources} too, got {len(parse_sources(self.sources))}")
+                raise ConfigError(f"sources: with random_sources = {self.random_sources}, the nominal sources (what a "
+                                  f"replay presents) must be {self.random_sources} too, got "
+                                  f"{len(parse_sources(self.sources))}")
         lo, hi = self.source_bearing
         if lo < -180 or hi > 180:
             raise ConfigError(f"source_bearing: a bearing range is at most [-180, 180] deg, got [{lo:g}, {hi:g}]")
@@ -187,7 +194,8 @@ class SteerTask(Task):
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        state = SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)], near=np.zeros(sims.n))
+        state = SteerState(start=p0, position=p0.copy(), source=self.sources[self.presentation_of(sims.n)],
+                           near=np.zeros(sims.n))
         if self.gait_weights:
             state.gait_lab = self.gait_meter(body, sims, self.options.gait_sampling)
         return state
@@ -203,9 +211,11 @@ class SteerTask(Task):
     def sensors(self, body, sims, state):
         left, right = (sims.site_xpos[:, i, :2] for i in self._ears)
         s = ear_signal(left, right, state.source)[:, None]
-        out = {"sound": s if self.options.sound_limit >= 1 else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
+        out = {"sound": s if self.options.sound_limit >= 1
+               else np.clip(s, -self.options.sound_limit, self.options.sound_limit)}
         if self.options.loudness:
-            out["loudness"] = np.minimum((intensity(left, state.source) + intensity(right, state.source)) / 2, 1.0)[:, None]
+            out["loudness"] = np.minimum((intensity(left, state.source) + intensity(right, state.source)) / 2,
+                                         1.0)[:, None]
         return out
 
     def on_tick(self, body, sims, state, ids, healthy, neurons):
@@ -255,11 +265,13 @@ class SteerTask(Task):
         return self.sources
 
     def fitness_label(self):
-        return self._label() + "".join(f" {'+' if w >= 0 else '-'} {abs(w):g} × {k}" for k, w in self.gait_weights.items())
+        return self._label() + "".join(f" {'+' if w >= 0 else '-'} {abs(w):g} × {k}" for k,
+                                       w in self.gait_weights.items())
 
     def _label(self):
         if self.fitness_name == "arrive":
-            return f"fitness (m): -distance to the source - ({self.options.fall_penalty:g} m + {self.options.fall_time_cost:g} m/s × time lost) per fall"
+            return (f"fitness (m): -distance to the source - ({self.options.fall_penalty:g} m + "
+                    f"{self.options.fall_time_cost:g} m/s × time lost) per fall")
         return "fitness: -distance to the source (m)"
 
     def combine(self, fitness: np.ndarray) -> np.ndarray:

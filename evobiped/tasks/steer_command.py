@@ -11,15 +11,16 @@ behind is heard as its mirror image in front, on the same side, so the walker tu
 
 A source behind is told from one in front by the loudness over time: while the heard distance D, low-passed over
 ``RECEDE_TAU`` s, grows faster than ``RECEDING`` m/s, the source is behind and the rule turns round at
-``turning_max`` towards the side s points to, at ``speed_min``.  And a stop (speed 0, turning 0) from the moment D falls within ``reach`` until it rises past ``resume`` (a walker that
-marks time on the spot drifts a little; it walks back when it has drifted out).  The rule is a documented mapping,
-not evolved; the walker's network follows the commands as it follows any (:mod:`evobiped.tasks.command`).
+``turning_max`` towards the side s points to, at ``speed_min``.  And a stop (speed 0, turning 0) from the moment D falls
+within ``reach`` until it rises past ``resume`` (a walker that marks time on the spot drifts a little; it walks back
+when it has drifted out).  The rule is a documented mapping, not evolved; the walker's network follows the commands as
+it follows any (:mod:`evobiped.tasks.command`).
 
 The task (``steer-command``, :class:`SteerCommandTask`): the command task whose commands are the rule's, one
 presentation per source (the steer task's ``sources``).  Its fitness is minus the final distance to the source (m);
 its terms add ``distance_to_source`` (m, at the end), ``arrival_time`` (s: the first time within ``reach``, NaN if
-never) and ``stood`` (1 when it ends up and stopped: it came within ``reach`` and has not drifted past ``resume``).  ``evobiped episode --genome W
---source X Y`` runs a commanded walker W on it.
+never) and ``stood`` (1 when it ends up and stopped: it came within ``reach`` and has not drifted past ``resume``).
+``evobiped episode --genome W --source X Y`` runs a commanded walker W on it.
 """
 
 from __future__ import annotations
@@ -47,9 +48,9 @@ def steering_command(sound, loudness, *, ear: float, gain: float = 1.0, turning_
     arrays alike; ``ear`` the half distance between the ears (m), ``gain`` rad/s per rad of bearing (module docstring;
     the stop inside ``reach`` is the task's, which remembers it).  ConfigError for bounds out of order."""
     if not (gain > 0 and turning_max > 0 and 0 < speed_min <= speed_max and 0 < reach < slow_from and ear > 0):
-        raise ConfigError(f"the steering rule needs gain, turning_max, ear > 0, 0 < speed_min <= speed_max and 0 < reach < "
-                          f"slow_from, got gain {gain:g}, turning_max {turning_max:g}, speed {speed_min:g}-{speed_max:g}, "
-                          f"reach {reach:g}, slow_from {slow_from:g}, ear {ear:g}")
+        raise ConfigError("the steering rule needs gain, turning_max, ear > 0, 0 < speed_min <= speed_max and 0 < "
+                          f"reach < slow_from, got gain {gain:g}, turning_max {turning_max:g}, speed "
+                          f"{speed_min:g}-{speed_max:g}, reach {reach:g}, slow_from {slow_from:g}, ear {ear:g}")
     s, L = np.asarray(sound, float), np.maximum(np.asarray(loudness, float), 1e-12)
     D = 1.0 / np.sqrt(L)
     theta = np.arcsin(np.clip(s * (D ** 2 + ear ** 2) / (2 * D * ear), -1.0, 1.0))
@@ -73,8 +74,8 @@ class SteerCommandOptions(CommandOptions):
     def __post_init__(self):
         super().__post_init__()
         if not (self.speed_min <= self.speed_max and self.reach < self.slow_from and self.reach <= self.resume):
-            raise ConfigError(f"steer-command: needs speed_min <= speed_max, reach < slow_from and reach <= resume, got "
-                              f"speed {self.speed_min:g}-{self.speed_max:g} m/s, reach {self.reach:g} m, slow_from "
+            raise ConfigError("steer-command: needs speed_min <= speed_max, reach < slow_from and reach <= resume, "
+                              f"got speed {self.speed_min:g}-{self.speed_max:g} m/s, reach {self.reach:g} m, slow_from "
                               f"{self.slow_from:g} m, resume {self.resume:g} m")
 
 
@@ -102,7 +103,8 @@ class SteerCommandTask(CommandTask):
     def start(self, body, sims):
         state = super().start(body, sims)
         n = sims.n
-        state = SteerCommandState(**vars(state), source=self.sources[self.presentation_of(n)], stopped=np.zeros(n, bool),
+        state = SteerCommandState(**vars(state), source=self.sources[self.presentation_of(n)],
+                                  stopped=np.zeros(n, bool),
                                   current=np.zeros((n, 2)), arrival=np.full(n, np.nan), heard=np.full((n, 3), np.nan))
         self._hear(sims, state)
         return state

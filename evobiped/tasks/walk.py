@@ -90,7 +90,8 @@ def direction_words(heading_deg: float) -> str:
 
 
 #: fitness name -> what it pays (see the module docstring)
-FITNESS = {"distance": "eq. 4: planar distance from the start (m)", "forward": "(displacement forward + survival_credit) * time up / T",
+FITNESS = {"distance": "eq. 4: planar distance from the start (m)",
+           "forward": "(displacement forward + survival_credit) * time up / T",
            "weighted": "sum of weights[term] * term"}
 #: the walk task's terms beside the gait lab's, in the order it reports them (:data:`WALK_TERMS`)
 TERMS = tuple(name for g in WALK_TERMS if g.terms is not LAB for name in g.all_names)
@@ -136,13 +137,15 @@ class WalkOptions:
     cyclic_weight: float = option(0.0, "weight of the cyclic-activity criterion (0: the paper's plain eq. 4)", low=0)
     cyclic_cycles: int = option(25, "cycles per motor neuron that earn the full criterion", low=1, integer=True)
     cyclic_band: float = option(0.05, "hysteresis band of a cycle, in unit motor output", above=0)
-    weights: dict = option({"forward": 10.0, "time_up": 5.0, "steps": 0.1}, "the weighted fitness's weight of each term "
+    weights: dict = option({"forward": 10.0, "time_up": 5.0, "steps": 0.1},
+                           "the weighted fitness's weight of each term "
                            "(forward m, time_up s, steps, distance m)", check=_weights)
     gait_measures: bool = option(False, "add the terms speed (mean forward speed, m/s) and turning (mean turning rate, "
                                  "deg/s, + left)")
-    heading_sense: bool = option(False, "add the sensor heading_error: the facing's angle from the initial facing (rad, + left)")
-    pace_cap: float = option(0.6, "the weighted fitness's term pace: the displacement forward, counted up to this speed "
-                             "times the time up (a walk is paid, a faster run is not)", unit="m/s", above=0)
+    heading_sense: bool = option(False, "add the sensor heading_error: the facing's angle from the initial facing "
+                                        "(rad, + left)")
+    pace_cap: float = option(0.6, "the weighted fitness's term pace: the displacement forward, counted up to this "
+                                  "speed times the time up (a walk is paid, a faster run is not)", unit="m/s", above=0)
     gait_terms: bool = option(False, "add the gait lab's terms (duty factors, airborne, slip, power, ...; also on when "
                               "the weights name one)")
     gait_sampling: str = option("control_tick", gait_lab.SAMPLING_HELP, choices=tuple(gait_lab.SAMPLINGS))
@@ -201,11 +204,13 @@ class WalkTask(Task):
         if not self.heading_sense:
             return {}
         f0, f = state.facing, body.heading(sims)
-        return {"heading_error": np.arctan2(f0[:, 0] * f[:, 1] - f0[:, 1] * f[:, 0], np.einsum("pi,pi->p", f0, f))[:, None]}
+        return {"heading_error": np.arctan2(f0[:, 0] * f[:, 1] - f0[:, 1] * f[:, 0],
+                                            np.einsum("pi,pi->p", f0, f))[:, None]}
 
     def start(self, body, sims):
         p0 = body.planar_position(sims).copy()
-        state = WalkState(start=p0, position=p0.copy(), facing=body.heading(sims).copy(), n_motor=len(body.actuator_names))
+        state = WalkState(start=p0, position=p0.copy(), facing=body.heading(sims).copy(),
+                          n_motor=len(body.actuator_names))
         if self.cyclic_weight:
             state.motor, state.ticks = [], np.zeros(sims.n, int)
         for g in self.term_groups:  # what each group of terms keeps from tick to tick
@@ -237,7 +242,8 @@ class WalkTask(Task):
         done = state.cyclicity
         if done is None or done[0] != len(state.motor):
             n = count_cycles(np.stack(state.motor), state.ticks, self.cyclic_band)
-            done = state.cyclicity = (len(state.motor), (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1))
+            done = state.cyclicity = (len(state.motor),
+                                      (np.minimum(n, self.cyclic_cycles) / self.cyclic_cycles).mean(axis=1))
         return done[1]
 
     def terms(self, state):

@@ -53,11 +53,11 @@ def _n(x: float, digits: int = 3) -> str:
 def criterion_text(success: str) -> str:
     """The success criterion in words."""
     if success == "walker":
-        return (f"the walker test (no fall in {WALKER['seconds']:g} s; a walk by the gait lab's criteria over the first "
-                f"{WALKER['window']:g} s)")
+        return (f"the walker test (no fall in {WALKER['seconds']:g} s; a walk by the gait lab's criteria over the "
+                f"first {WALKER['window']:g} s)")
     if success == "forward":
-        return (f"the forward-walker test (no fall in {WALKER['seconds']:g} s, at least {WALKER['min_distance']:g} m in the "
-                f"first {WALKER['window']:g} s within {WALKER['heading_limit']:g} deg of the initial facing)")
+        return (f"the forward-walker test (no fall in {WALKER['seconds']:g} s, at least {WALKER['min_distance']:g} m "
+                f"in the first {WALKER['window']:g} s within {WALKER['heading_limit']:g} deg of the initial facing)")
     return success
 
 
@@ -66,15 +66,15 @@ def markdown(results: dict) -> str:
     r = results
     table = DEFAULT_NOISE if r["noise"] is None else r["noise"]
     noise = ", ".join(f"{k} = {v}" for k, v in table.items()) or "none"
-    lines = [f"Budget {r['budget']} episodes per run; seeds {r['seeds'][0]}..{r['seeds'][-1]}; each run's final policy on "
-             f"{r['trials']} fresh presentations (noise: {noise}); success: {criterion_text(r['success'])} in every presentation; "
-             f"measure: {r['measure']} (the median over a run's presentations).", "",
+    lines = [f"Budget {r['budget']} episodes per run; seeds {r['seeds'][0]}..{r['seeds'][-1]}; each run's final policy "
+             f"on {r['trials']} fresh presentations (noise: {noise}); success: {criterion_text(r['success'])} in every "
+             f"presentation; measure: {r['measure']} (the median over a run's presentations).", "",
              f"| configuration | runs | successes | success rate | Wilson 95 % | median {r['measure']} | IQR |",
              "|---|---|---|---|---|---|---|"]
     for c in r["configurations"]:
         lo, hi = c["wilson"]
-        lines.append(f"| {c['name']} | {c['runs']} | {c['successes']} | {_n(c['success_rate'], 2)} | {_n(lo, 2)}–{_n(hi, 2)} | "
-                     f"{_n(c['median'])} | {_n(c['q25'])}–{_n(c['q75'])} |")
+        lines.append(f"| {c['name']} | {c['runs']} | {c['successes']} | {_n(c['success_rate'], 2)} | "
+                     f"{_n(lo, 2)}–{_n(hi, 2)} | {_n(c['median'])} | {_n(c['q25'])}–{_n(c['q75'])} |")
     if r["pairs"]:
         lines += ["", f"| pair | Vargha–Delaney A ({r['measure']}) | Mann–Whitney p (two-sided) |", "|---|---|---|"]
         lines += [f"| {p['a']} vs {p['b']} | {_n(p['A'], 2)} | {_n(p['p'], 3)} |" for p in r["pairs"]]

@@ -106,7 +106,8 @@ class Comparison:
             return cls(names=tuple(c["name"] for c in cs),
                        configs=tuple(RunConfig.from_dict(c["config"], where=where) for c in cs),
                        seeds=tuple(int(s) for s in d["seeds"]), budget=int(d["budget"]), trials=int(d["trials"]),
-                       checkpoints=int(d["checkpoints"]), noise=d["noise"], measure=str(d["measure"]), success=str(d["success"]))
+                       checkpoints=int(d["checkpoints"]), noise=d["noise"], measure=str(d["measure"]),
+                       success=str(d["success"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise UserError(f"{where} is not a comparison ({type(exc).__name__}: {exc})") from None
 
@@ -114,7 +115,8 @@ class Comparison:
         """One job per run, configuration by configuration, seed by seed: :func:`run_and_retest`'s arguments."""
         test = {"trials": self.trials, "checkpoints": self.checkpoints, "noise": self.noise, "measure": self.measure,
                 "success": self.success, "budget": self.budget}
-        return [(str(run_path(directory, n, s)), self.run_config(i, s).to_dict(), str(retest_path(directory, n, s)), n, test)
+        return [(str(run_path(directory, n, s)), self.run_config(i, s).to_dict(), str(retest_path(directory, n, s)), n,
+                 test)
                 for i, n in enumerate(self.names) for s in self.seeds]
 
 
@@ -140,19 +142,20 @@ def open_comparison(comparison: Comparison | None, *, out: str | Path | None = N
             raise UserError(f"{d / FILE} is not a comparison")
         old = Comparison.from_dict(stored, str(d / FILE))
         if old.to_dict()["fingerprint"] != stored.get("fingerprint"):
-            raise UserError(f"{d / FILE} was edited (its fingerprint does not match its settings); restore it or start a "
-                            "new comparison")
+            raise UserError(f"{d / FILE} was edited (its fingerprint does not match its settings); restore it or start "
+                            "a new comparison")
         new = dataclasses.replace(old, **(given or {}))
         if new.to_dict()["fingerprint"] != stored["fingerprint"]:
             changed = [k for k, v in new.to_dict().items() if k != "fingerprint" and stored.get(k) != v]
-            raise UserError(f"{d} was made with other {' and '.join(changed)}: a resumed comparison must be the same one "
-                            f"(restore them, or compare into another --out)")
+            raise UserError(f"{d} was made with other {' and '.join(changed)}: a resumed comparison must be the same "
+                            f"one (restore them, or compare into another --out)")
         old.check()
         return d, old
     d = Path(out)
     comparison.check()
     if d.exists() and (not d.is_dir() or any(d.iterdir())):
-        raise UserError(f"{d} exists and is not empty; give another --out (or --resume {d} to continue the comparison in it)")
+        raise UserError(f"{d} exists and is not empty; give another --out (or --resume {d} to continue the comparison "
+                        "in it)")
     d.mkdir(parents=True, exist_ok=True)
     write_json(d / FILE, {"evobiped": __version__, **comparison.to_dict()})
     return d, comparison
@@ -203,8 +206,9 @@ def compare_configurations(comparison: Comparison | None = None, *, out: str | P
             rundir.check_at_rest(Path(j[0]), how="wait for the comparison running there to finish")
     todo = [j for j in jobs if not Path(j[2]).is_file()]
     if say:
-        say(f"{len(c.names)} configurations x {len(c.seeds)} seeds at {c.budget} episodes each, {len(jobs) - len(todo)} runs "
-            f"already done; each policy re-evaluated on {c.trials} fresh presentations -> {d}")
+        say(f"{len(c.names)} configurations x {len(c.seeds)} seeds at {c.budget} episodes each, "
+            f"{len(jobs) - len(todo)} runs already done; each policy re-evaluated on {c.trials} fresh presentations -> "
+            f"{d}")
     if on_run:
         on_run(0, len(todo), None)
     if todo:

@@ -80,7 +80,8 @@ def start_evaluator(opened: OpenRun, on_retry: Callable[[int, int], None] | None
     """Start the evaluator of an opened run (``on_retry(n, limit)``: a dead worker's batch is evaluated again).  When
     it cannot start, the run's lock is released, and a new run's directory is removed again (nothing half-made)."""
     try:
-        return evaluate.make_evaluator(opened.run.config.episode, opened.backend, opened.workers, opened.address, on_retry=on_retry)
+        return evaluate.make_evaluator(opened.run.config.episode, opened.backend, opened.workers, opened.address,
+                                       on_retry=on_retry)
     except BaseException:
         if opened.resumed:
             opened.run.close()
@@ -107,12 +108,13 @@ def stop_report(run: Run) -> str:
         return (f"evobiped: interrupted before its first generation was committed (no checkpoint yet); "
                 f"evobiped evolve --resume {run.dir} starts it from the beginning")
     if not run.done:
-        return (f"evobiped: interrupted after generation {g - 1} (numbered from 0, as in {rundir.HISTORY}); checkpoint saved; "
-                f"continue with: evobiped evolve --resume {run.dir}")
+        return (f"evobiped: interrupted after generation {g - 1} (numbered from 0, as in {rundir.HISTORY}); checkpoint "
+                f"saved; continue with: evobiped evolve --resume {run.dir}")
     if (run.dir / rundir.SUMMARY).is_file():
-        return f"evobiped: interrupted after the run completed: all {g} generations and {rundir.SUMMARY} are written in {run.dir}"
-    return (f"evobiped: interrupted after the last of {g} generations was committed, before {rundir.SUMMARY} was written; "
-            f"the run is complete once evobiped evolve --resume {run.dir} writes it")
+        return (f"evobiped: interrupted after the run completed: all {g} generations and {rundir.SUMMARY} are written "
+                f"in {run.dir}")
+    return (f"evobiped: interrupted after the last of {g} generations was committed, before {rundir.SUMMARY} was "
+            f"written; the run is complete once evobiped evolve --resume {run.dir} writes it")
 
 
 class _Watched:
@@ -122,7 +124,8 @@ class _Watched:
         self.evaluator, self.on_evaluated = evaluator, on_evaluated
 
     def evaluate(self, genomes, key=None, **context):
-        result = self.evaluator.evaluate(genomes, key=key, **context)  # the run's context, if any (normaliser, phase weights)
+        # the run's context, if any (normaliser, phase weights)
+        result = self.evaluator.evaluate(genomes, key=key, **context)
         self.on_evaluated(result.rows if result.rows is not None else result)
         return result
 
@@ -158,11 +161,13 @@ def evolve(config: RunConfig | str | Path, *, out: str | Path | None = None, bac
             with evaluator:
                 if on_started is not None:
                     on_started(run, opened.backend)
-                summary = run.evolve(evaluator if on_evaluated is None else _Watched(evaluator, on_evaluated), on_generation)
+                summary = run.evolve(evaluator if on_evaluated is None else _Watched(evaluator, on_evaluated),
+                                     on_generation)
             if on_done is not None:
                 on_done(run, summary)
             return summary
-        except KeyboardInterrupt:  # Ctrl-C, SIGTERM, SIGHUP, at any moment (closing the workers, the caller's last line)
+        # Ctrl-C, SIGTERM, SIGHUP, at any moment (closing the workers, the caller's last line)
+        except KeyboardInterrupt:
             if on_stop is not None:
                 on_stop(stop_report(run))
             raise

@@ -44,10 +44,12 @@ class ReplayReport:
     trajectory: Trajectory
     #: what the walker did (:func:`evobiped.files.outcome.outcome`)
     outcome: dict
-    #: how this process's numerical environment differs from the recorded one (:func:`evobiped.core.provenance.differences`);
+    # : how this process's numerical environment differs from the recorded one
+    # (:func:`evobiped.core.provenance.differences`);
     #: empty: the replay must be bit-identical
     environment_differences: list[str]
-    #: how far the outcome drifted from the stored one, and what lies outside the tolerance (:func:`evobiped.files.outcome.compare`)
+    # : how far the outcome drifted from the stored one, and what lies outside the tolerance
+    # (:func:`evobiped.files.outcome.compare`)
     drift: list[str]
     outcome_failures: list[str]
     video: Path | None = None
@@ -116,13 +118,13 @@ def replay(
     video_options: dict | None = None,
     note=None,
 ) -> ReplayReport:
-    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`, ``_video`` with ``video``) or a viewer (``spawn``/``connect``).
-    ``listener`` (optional) also watches the episode, e.g. :meth:`evobiped.core.progress.Progress.listener`;
-    ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering walker's sound sources;
-    ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the recording
-    (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``, ``progress``).
-    The recording, video and figures are one set (:func:`~evobiped.files.rundir.output_set.output_set`): ``note(line)``
-    hears that the previous replay there was cut short."""
+    """Re-simulate ``source``; record to ``out`` (default :func:`default_out`, ``_video`` with ``video``) or a viewer
+    (``spawn``/``connect``). ``listener`` (optional) also watches the episode, e.g.
+    :meth:`evobiped.core.progress.Progress.listener`; ``sources`` (``[[x, y], ...]`` m, optional) replaces a steering
+    walker's sound sources; ``video`` (optional, ``.mp4`` or ``.gif``) also renders the episode there and into the
+    recording (``video_options``: :func:`~evobiped.record.video.render_frames`'s ``fps``, ``size``, ``window``,
+    ``progress``). The recording, video and figures are one set (:func:`~evobiped.files.rundir.output_set.output_set`):
+    ``note(line)`` hears that the previous replay there was cut short."""
     from ..record.recordings.viewer import require_display
 
     if spawn:
@@ -143,28 +145,33 @@ def replay(
 
         opts["renderer"] = FrameRenderer(episode.model, *opts.get("size", SIZE))
     streaming = spawn or connect is not None
-    target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
+    target = None if streaming and out is None else Path(out) if out is not None else default_out(
+        source, video is not None)
     owned = [Path(figures_dir)] if figures_dir is not None and Path(figures_dir).name.startswith("figures_") else []
     try:  # one set: the previous replay's outputs go first, a cut-short one is said (``note``)
         with output_set("replay", [p for p in (target, video) if p is not None], owned, say=note):
-            return _replay(source, cfg, episode, history, out=out, spawn=spawn, connect=connect, figures_dir=figures_dir,
-                           listener=listener, video=video, video_options=opts,
+            return _replay(source, cfg, episode, history, out=out, spawn=spawn, connect=connect,
+                           figures_dir=figures_dir, listener=listener, video=video, video_options=opts,
                            not_compared=_not_compared(source, cfg, seconds is not None, bool(sources)))
     finally:
         if video is not None:
             opts["renderer"].close()
 
 
-def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options, not_compared):
+def _replay(source, cfg, episode, history, *, out, spawn, connect, figures_dir, listener, video, video_options,
+            not_compared):
     from ..analysis.gait_report import FootRecorder, has_feet
     from ..record.recordings.replay_recording import ReplayRecording
 
     streaming = spawn or connect is not None
-    target = None if streaming and out is None else Path(out) if out is not None else default_out(source, video is not None)
-    recording = ReplayRecording(target, spawn=spawn, connect=connect, name=f"{cfg.body}/{cfg.controller}: {source.genome_path}")
+    target = None if streaming and out is None else Path(out) if out is not None else default_out(
+        source, video is not None)
+    recording = ReplayRecording(target, spawn=spawn, connect=connect,
+                                name=f"{cfg.body}/{cfg.controller}: {source.genome_path}")
     recorder = recording.recorder
     # one walker per presentation when the task names each one's target (a steering walker's sound sources)
-    others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)] if episode.task.targets() is not None else []
+    steering = episode.task.targets() is not None
+    others = [TrajectoryRecorder(j) for j in range(1, episode.task.presentations)] if steering else []
     feet = FootRecorder() if has_feet(episode.body) else None
     watchers = [recorder, *others] + ([feet] if feet is not None else []) + ([listener] if listener is not None else [])
     try:
@@ -238,11 +245,13 @@ def _recorded(source, cfg, episode, history, recording, recorder, others, feet, 
 
 def _not_compared(source: Source, cfg, seconds_given: bool, sources_given: bool) -> str | None:
     """Why the stored fitness of ``source`` cannot be compared with a replay of episode ``cfg`` (None: it can)."""
-    if cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options and not source.config.perturbed:
+    if (cfg.seconds == source.config.seconds and cfg.task_options == source.config.task_options
+            and not source.config.perturbed):
         return None
     if source.config.perturbed:
         return "it is the aggregate over the perturbed presentations the run evolved on; the replay is nominal"
-    return "--source changed the sources" if sources_given and not seconds_given else "--seconds changed the episode length"
+    return ("--source changed the sources" if sources_given and not seconds_given
+            else "--seconds changed the episode length")
 
 
 def _history(source: Source):

@@ -24,8 +24,8 @@ SELECTED, CANDIDATES = "selected.json", "selected_candidates.json"
 
 @dataclass
 class Selection:
-    """What :func:`select_walker` found: one label and row (:func:`~evobiped.analysis.selection.try_candidates`) per candidate,
-    the chosen one's index, and the file it was written to."""
+    """What :func:`select_walker` found: one label and row (:func:`~evobiped.analysis.selection.try_candidates`) per
+    candidate, the chosen one's index, and the file it was written to."""
 
     labels: list[str]
     rows: list[dict]
@@ -43,7 +43,8 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     chosen from (:data:`~evobiped.files.rundir.FROM_CHECKPOINT`), so a later read of a run that went on is refused."""
     d = Path(run_dir)
     if not (d / rundir.CONFIG).is_file() or not (d / rundir.HISTORY).is_file():
-        raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or {rundir.HISTORY})")
+        raise UserError(f"{d} is not a run directory with completed generations (no {rundir.CONFIG} or "
+                        f"{rundir.HISTORY})")
     live = rundir.check_at_rest(d, allow_unfinished)
     if live is not None and note is not None:
         note(f"{d} is being written by process {live['writer']}: chosen from its first {live['generations']} "
@@ -59,7 +60,8 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     cfg = read_json(d / rundir.CONFIG, what="run config")
     if not isinstance(cfg, dict):
         raise UserError(f"run config {d / rundir.CONFIG} is not a table of settings")
-    run = RunConfig.from_dict({k: v for k, v in cfg.items() if k not in ("evobiped", "environment")}, where=str(d / rundir.CONFIG))
+    run = RunConfig.from_dict({k: v for k, v in cfg.items() if k not in ("evobiped", "environment")},
+                              where=str(d / rundir.CONFIG))
     try:  # the long episode within what any episode may take (10^7 ticks), before any is simulated
         dataclasses.replace(run.episode, seconds=seconds).check()
     except UserError as exc:
@@ -68,7 +70,8 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     for p, (_, ep, _) in zip(paths, candidates):  # one experiment's walkers (what a generation froze in aside)
         if _experiment(ep, run) != _experiment(run.episode, run):
             raise UserError(f"{p} holds a {ep.body}/{ep.controller} genome of another episode than the run's "
-                            f"({run.episode.body}/{run.episode.controller} in {rundir.CONFIG}): the run directory is mixed")
+                            f"({run.episode.body}/{run.episode.controller} in {rundir.CONFIG}): the run directory is "
+                            "mixed")
     labels = [f"generation {g}" for g in chosen_generations]
     if run.initial:  # first: kept unless a tuned genome beats it
         candidates.insert(0, _start(d, run))
@@ -82,8 +85,11 @@ def select_walker(run_dir: str | Path, *, top: int = 8, seconds: float = 200.0, 
     genome, episode_config, meta = candidates[k]
     episode = episode_config.nominal().build()
     done = episode.run(genome)
-    with output_set("select", [out, d / CANDIDATES], say=note):  # one set: never a new selected.json beside old candidates
-        save_genome(out, genome, episode_config, **{**meta, "selected_from": labels[k], "up_long_seconds": seconds if rows[k].get("up_long") else None,
+    # one set: never a new selected.json beside old candidates
+    with output_set("select", [out, d / CANDIDATES], say=note):
+        save_genome(out, genome, episode_config,
+                    **{**meta, "selected_from": labels[k], "up_long_seconds": seconds if rows[k].get("up_long")
+                       else None,
                                                    "outcome": outcome(done, episode.task.targets()),
                                                    rundir.FROM_CHECKPOINT: mark})
         write_json(d / CANDIDATES, {"seconds": seconds, "heading_limit": heading_limit, rundir.FROM_CHECKPOINT: mark,

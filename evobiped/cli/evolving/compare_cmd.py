@@ -15,27 +15,33 @@ SETTINGS = ("seeds", "budget", "trials", "checkpoints", "noise", "measure", "suc
 
 
 def add_compare(sub) -> None:
-    what = "compare run configurations over N seeds at one budget of evaluated episodes: success rates, effect sizes, tests"
-    p = sub.add_parser("compare", help=what, description=what + "; each run's final policy is re-evaluated on fresh noise")
-    p.add_argument("configs", nargs="*", metavar="CONFIG", help=f"a preset ({choices_text('preset')}) or a settings file (TOML, "
-                   "as evolve --config takes)")
+    what = ("compare run configurations over N seeds at one budget of evaluated episodes: success rates, effect sizes, "
+            "tests")
+    p = sub.add_parser("compare", help=what, description=what + "; each run's final policy is re-evaluated on fresh "
+                                                                "noise")
+    p.add_argument("configs", nargs="*", metavar="CONFIG", help=f"a preset ({choices_text('preset')}) or a settings "
+                                                                "file (TOML, as evolve --config takes)")
     p.add_argument("--seeds", type=positive_int, metavar="N", help="runs per configuration, seeds FIRST..FIRST+N-1")
     p.add_argument("--first-seed", type=seed, default=None, metavar="FIRST", help="the first seed (default 0)")
-    p.add_argument("--budget", type=positive_int, metavar="EVALS", help="episodes each run evaluates: it stops at the first "
+    p.add_argument("--budget", type=positive_int, metavar="EVALS",
+                   help="episodes each run evaluates: it stops at the first "
                    "generation boundary where it has evaluated this many (genomes x presentations each)")
-    p.add_argument("--trials", type=positive_int, metavar="K", help="fresh presentations per re-evaluated policy (default 8)")
-    p.add_argument("--checkpoints", type=positive_int, metavar="C", help="points of the success curve: each run's policy "
+    p.add_argument("--trials", type=positive_int, metavar="K", help="fresh presentations per re-evaluated policy "
+                                                                    "(default 8)")
+    p.add_argument("--checkpoints", type=positive_int, metavar="C",
+                   help="points of the success curve: each run's policy "
                    "re-evaluated where it reached budget x i / C episodes (default 4; the last is the final policy)")
     p.add_argument("--noise", metavar="FILE.toml", help="the fresh presentations' perturbations: the file's "
                    "[episode.perturbations] table (default: initial-pose noise of 0.02 rad)")
     p.add_argument("--measure", metavar="TERM", help="fitness (default) or a term of the task, e.g. distance")
-    p.add_argument("--success", metavar="CRITERION", help="walker (default: up 200 s and a walk by the gait lab's criteria "
-                   "over the first 50 s, under the fresh noise), forward (up 200 s, 20 m in the first 50 s within 30 deg) "
-                   "or TERM>=X (also >, <=, <), e.g. distance>=5")
+    p.add_argument("--success", metavar="CRITERION", help="walker (default: up 200 s and a walk by the gait lab's "
+                                                          "criteria over the first 50 s, under the fresh noise), "
+                                                          "forward (up 200 s, 20 m in the first 50 s within 30 deg) or "
+                                                          "TERM>=X (also >, <=, <), e.g. distance>=5")
     p.add_argument("--workers", type=positive_int, help="runs at once, each in its own process (default: all cores)")
     p.add_argument("--out", metavar="DIR", help="comparison directory (default runs/compare_<names>)")
-    p.add_argument("--resume", metavar="DIR", help="continue the comparison in DIR (its configurations and settings; any "
-                   "given again must be the same)")
+    p.add_argument("--resume", metavar="DIR", help="continue the comparison in DIR (its configurations and settings; "
+                                                   "any given again must be the same)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_compare_cmd)
 
@@ -86,7 +92,8 @@ def run_compare_cmd(args) -> int:
     from ...core.progress import Progress
     from ...usecases.comparing import Comparison, compare_configurations
 
-    given = {"seeds": None if args.seeds is None else tuple(range(args.first_seed or 0, (args.first_seed or 0) + args.seeds)),
+    given = {"seeds": None if args.seeds is None
+             else tuple(range(args.first_seed or 0, (args.first_seed or 0) + args.seeds)),
              "budget": args.budget, "trials": args.trials, "checkpoints": args.checkpoints, "noise": _noise(args.noise),
              "measure": args.measure, "success": args.success}
     if args.first_seed is not None and args.seeds is None:
@@ -113,8 +120,9 @@ def run_compare_cmd(args) -> int:
             line.restart(max(total, 1))
             return
         final = r["checkpoints"][-1]
-        line.report(done, f"{r['name']} seed {r['seed']}: {r['episodes']} episodes in {r['generations']} generations, final "
-                          f"{final['value']:.3f}, {sum(final['passed'])} of {len(final['passed'])} fresh presentations passed")
+        line.report(done, f"{r['name']} seed {r['seed']}: {r['episodes']} episodes in {r['generations']} generations, "
+                          f"final {final['value']:.3f}, {sum(final['passed'])} of {len(final['passed'])} fresh "
+                          "presentations passed")
 
     results_dir = args.resume or args.out or default_compare_dir(names)
     kwargs = {"resume": args.resume} if args.resume else {"out": results_dir}
@@ -133,7 +141,8 @@ def run_compare_cmd(args) -> int:
     from ...usecases.compare_report import markdown
 
     print(markdown(results), end="")
-    print(f"results in {results_dir} (results.md, results.json, success.png)", file=sys.stderr if args.quiet else sys.stdout)
+    print(f"results in {results_dir} (results.md, results.json, success.png)", file=sys.stderr if args.quiet
+          else sys.stdout)
     return 0
 
 

@@ -1,4 +1,5 @@
-"""``evobiped evolve``: a new run from a preset, a settings file and flags, or a resumed one; progress lines and the summary."""
+"""``evobiped evolve``: a new run from a preset, a settings file and flags, or a resumed one; progress lines and the
+summary."""
 
 from __future__ import annotations
 
@@ -6,35 +7,40 @@ import contextlib
 import sys
 
 from ...core.errors import UserError, exit_status, last_line
-from ...flags import RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config, walk_line
+from ...flags import (RUN_FLAGS, add_source_flag, check_workers, choices_text, positive_float, positive_int, run_config,
+                      walk_line)
 from ...core.progress import Progress, hms
 
 
 def add_evolve(sub) -> None:
     from ...optimizers import OPTIMIZERS, described
 
-    what = "evolve controllers with Reil & Husbands' GA (the default, with the paper's settings), CMA-ES, evolution strategies or MAP-Elites (--optimizer)"
+    what = ("evolve controllers with Reil & Husbands' GA (the default, with the paper's settings), CMA-ES, evolution "
+            "strategies or MAP-Elites (--optimizer)")
     p = sub.add_parser("evolve", help=what, description=what + "; --preset picks named settings (`evobiped presets`)")
     p.add_argument("--preset", metavar="NAME", help=f"named settings shipped with evobiped: {choices_text('preset')} "
                    "(`evobiped presets` describes them); --config and flags override it")
     p.add_argument("--config", metavar="FILE.toml", help="settings file; flags given here override it")
     p.add_argument("--optimizer", choices=tuple(OPTIMIZERS), help=f"{described(quote='')}; default ga")
-    p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: docs/own_robot.md; default reil)")
+    p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: "
+                                  "docs/own_robot.md; default reil)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")
     add_source_flag(p)
-    p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes; ES: "
-                   "twice its mirrored pairs)")
+    p.add_argument("--population", type=positive_int, help="population size (default: GA 50, CMA-ES 4 + 3 ln genes; "
+                                                           "ES: twice its mirrored pairs)")
     p.add_argument("--generations", type=positive_int, help="generations (default 120)")
     p.add_argument("--seconds", "--episode-seconds", dest="episode_seconds", type=positive_float,
                    help="episode length in s (default 50; --episode-seconds: the same, its older name)")
-    p.add_argument("--cyclic", action="store_true", default=None, help="reward cyclic motor-neuron activity (Sect. III-A): the task's cyclic criterion")
+    p.add_argument("--cyclic", action="store_true", default=None,
+                   help="reward cyclic motor-neuron activity (Sect. III-A): the task's cyclic criterion")
     p.add_argument("--seed", type=int, help="run seed (default 0)")
     p.add_argument("--backend", help=f"backend: {choices_text('backend')} (default process)")
     p.add_argument("--workers", type=positive_int, help="worker processes / threads / Ray actors (default: all cores; "
                    "more than the cores earns a warning; not with the serial backend)")
     p.add_argument("--address", help="Ray cluster address (only with --backend ray; default: start a local Ray)")
-    p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME", help="start from this genome (the GA: a population of its clones; CMA-ES: the initial mean; "
+    p.add_argument("--from", dest="initial", metavar="RUN_OR_GENOME",
+                   help="start from this genome (the GA: a population of its clones; CMA-ES: the initial mean; "
                    "MAP-Elites: the first batch, it and its mutants)")
     p.add_argument("--freeze", metavar="BLOCKS", help="gene blocks the optimizer must not change, comma-separated "
                    "(e.g. weights,time_constants,biases: evolve only a CTRNN's input weights)")
@@ -57,7 +63,8 @@ def run_evolve_cmd(args) -> int:
             require_display()
         else:
             require_viewer(connect_url(args.rerun))
-    on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",  # noqa: E731
+    on_retry = lambda n, limit: print(f"evobiped: a worker died; evaluating its batch again (retry {n} of {limit})",
+                                      # noqa: E731
                                       file=sys.stderr, flush=True)
     if args.resume:
         if any(getattr(args, f) is not None for f in (*RUN_FLAGS, "out") if f not in ("backend", "workers", "address")):
@@ -68,7 +75,8 @@ def run_evolve_cmd(args) -> int:
     shown = _Shown(args)
     try:
         with shown.viewer:
-            evolve(**where, check=check_workers, on_opened=shown.opened, on_started=shown.started, on_evaluated=shown.evaluated,
+            evolve(**where, check=check_workers, on_opened=shown.opened, on_started=shown.started,
+                   on_evaluated=shown.evaluated,
                    on_generation=shown.generation, on_retry=on_retry, on_done=shown.done, on_stop=shown.stopped)
     except KeyboardInterrupt as exc:
         if not shown.stop_said:  # before the evaluator started: the command's own "interrupted" line
@@ -92,8 +100,9 @@ class _Shown:
         for repair in run.repairs:
             print(f"evobiped: repaired: {repair}", file=sys.stderr)
         if run.environment_differences:
-            print(f"evobiped: note: this run started in another numerical environment ({'; '.join(run.environment_differences)}):"
-                  " from here on it is not bit-identical to an uninterrupted run there", file=sys.stderr)
+            print("evobiped: note: this run started in another numerical environment "
+                  f"({'; '.join(run.environment_differences)}): from here on it is not bit-identical to an "
+                  "uninterrupted run there", file=sys.stderr)
         if run.done:
             print(f"run {self.args.resume} is already complete ({run.optimizer.generation} generations)")
 
@@ -102,13 +111,16 @@ class _Shown:
 
         c = run.config
         population = len(run.optimizer.ask()[0])
-        until = f" (or fewer: it stops once its walker {'walks' if c.stop.when == 'walking' else 'is fit enough'})" if c.stop.active else ""
-        self.say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, population {population}, "
-                 f"{c.generations} generations{until}, {c.episode.seconds:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
+        until = (f" (or fewer: it stops once its walker {'walks' if c.stop.when == 'walking' else 'is fit enough'})"
+                 if c.stop.active else "")
+        self.say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, "
+                 f"population {population}, {c.generations} generations{until}, {c.episode.seconds:g} s episodes, seed "
+                 f"{c.seed}, backend {backend} -> {run.dir}")
         if self.args.rerun is not None:
             self.log = self.viewer.enter_context(_viewer_log(run, self.args.rerun))
         self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet, at_most=c.stop.active)
-        self.clock = GenerationClock(c.generations, c.episode.seconds)  # every walker's episode, generation by generation
+        # every walker's episode, generation by generation
+        self.clock = GenerationClock(c.generations, c.episode.seconds)
 
     def evaluated(self, rows) -> None:
         self.clock.episodes(rows.end_time)
@@ -118,11 +130,13 @@ class _Shown:
 
         if self.log is not None:
             self.log.log_generation(s.generation, best=s.best, mean=s.mean, worst=s.worst, median=s.median,
-                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable, wall_seconds=s.wall_seconds)
+                                    evaluations=s.evaluations, falls=s.falls, unstable=s.unstable,
+                                    wall_seconds=s.wall_seconds)
         self.clock.generation(s.wall_seconds)
         best = self.run.record.best or {"fitness": s.best, "fell": s.best_fell}
         self.line.report(s.generation + 1, generation_note(
-            best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean, worst=s.worst,
+            best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean,
+            worst=s.worst,
             evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds)
             + phase_note(self.run), left=self.clock.left(s.generation + 1))
         lost = lost_line(self.run, s.generation)
@@ -136,11 +150,14 @@ class _Shown:
         # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
         earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if self.args.resume else ""
         if run.context.lost_stop():
-            print(f"stopped after generation {summary['generations'] - 1}: lost ({lost_words(run.context.attempts.lost[-1], run)})")
+            print(f"stopped after generation {summary['generations'] - 1}: lost "
+                  f"({lost_words(run.context.attempts.lost[-1], run)})")
         if summary.get("stopped_early"):
             rule = run.config.stop
-            what = "its evaluation walkers met the walking criteria" if rule.when == "walking" else f"its evaluation walkers' fitness reached {rule.above:g}"
-            print(f"stopped after generation {summary['generations'] - 1}: {what} for {rule.generations} generations running ([stop])")
+            what = ("its evaluation walkers met the walking criteria" if rule.when == "walking"
+                    else f"its evaluation walkers' fitness reached {rule.above:g}")
+            print(f"stopped after generation {summary['generations'] - 1}: {what} for {rule.generations} generations "
+                  "running ([stop])")
         print(f"done: best fitness {best['fitness']:.3f} (generation {best['generation']}, {state}{walk}); "
               f"{summary['evaluations']} evaluations, elapsed {hms(self.line.elapsed)}{earlier}; results in {run.dir}")
 
@@ -165,8 +182,8 @@ SUBCOMMANDS = (add_evolve,)
 
 
 def phase_note(run) -> str:
-    """The curriculum's phase for evolve's line ("; phase 2 of 2, its 37th generation"), and the attempt after a restart;
-    empty for a run without either."""
+    """The curriculum's phase for evolve's line ("; phase 2 of 2, its 37th generation"), and the attempt after a
+    restart; empty for a run without either."""
     c, attempts = run.context.curriculum, run.context.attempts
     out = ""
     if c.active:
@@ -196,7 +213,8 @@ def lost_line(run, generation: int) -> str | None:
     if attempts is None or not attempts.lost or attempts.lost[-1]["generation"] != generation:
         return None
     event, o = attempts.lost[-1], run.config.restart
-    then = {"restart": f"starting over at generation {generation + 1} (restart {attempts.attempt} of at most {o.max_restarts})",
+    then = {"restart": f"starting over at generation {generation + 1} (restart {attempts.attempt} of at most "
+                       f"{o.max_restarts})",
             "stop": "stopping" + (f" (all {o.max_restarts} restarts spent)" if o.action == "restart" else ""),
             "warn": "going on (restart.action = 'warn')"}[event["action"]]
     return f"evolve: lost: {lost_words(event, run)}; {then}"

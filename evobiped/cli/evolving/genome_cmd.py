@@ -1,6 +1,7 @@
 """``evobiped genome``: a genome file made from a walker's (other gene ranges, senses rewired, a preset's start).
 
-Five actions over :mod:`evobiped.files.genome_edit` (``command-calibrate`` over :mod:`evobiped.analysis.speed_battery`); each writes only the OUT it is given and prints it.
+Five actions over :mod:`evobiped.files.genome_edit` (``command-calibrate`` over :mod:`evobiped.analysis.speed_battery`);
+each writes only the OUT it is given and prints it.
 """
 
 from __future__ import annotations
@@ -17,12 +18,15 @@ WALKING_WALKER = "docs/walkers/ctrnn_walk_seed1.json"
 
 
 def add_genome(sub) -> None:
-    p = sub.add_parser("genome", help="write a genome file made from a walker's: other gene ranges, senses rewired, a preset's start genome",
+    p = sub.add_parser("genome", help="write a genome file made from a walker's: other gene ranges, senses rewired, a "
+                                      "preset's start genome",
                        description="Write a genome file made from a walker's genome file; nothing but OUT is written.")
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    r = actions.add_parser("ranges", help="the same walker with other declared ranges for gene blocks (another yardstick for the battery's gene noise)",
-                           description="Write IN as OUT with the ranges of the named gene blocks declared otherwise; every gene and "
-                           "the rest of the file kept. A gene outside its new range is refused (it would be clipped: another walker).")
+    r = actions.add_parser("ranges", help="the same walker with other declared ranges for gene blocks (another "
+                                          "yardstick for the battery's gene noise)",
+                           description="Write IN as OUT with the ranges of the named gene blocks declared otherwise; "
+                                       "every gene and the rest of the file kept. A gene outside its new range is "
+                                       "refused (it would be clipped: another walker).")
     r.add_argument("genome", metavar="IN", help="a genome JSON file")
     r.add_argument("out", metavar="OUT", help="the genome file to write")
     r.add_argument("--block", nargs=3, action="append", required=True, metavar=("NAME", "LOW", "HIGH"),
@@ -30,39 +34,41 @@ def add_genome(sub) -> None:
     r.set_defaults(func=run_genome_ranges)
     h = _from_walker(actions, "hearing-start", SCRATCH_WALKER, run_genome_hearing,
                      "the start genome of --preset steer-es: the walker's heading sense replaced by the ear signal",
-                     "Write the start genome of --preset steer-es: the walker's heading_error rows become the ear signal's, negated "
-                     "and scaled so that it turns towards a source --reference-distance m away as it turned back to its first "
-                     "facing; every other gene and input normalisation kept.")
+                     "Write the start genome of --preset steer-es: the walker's heading_error rows become the ear "
+                     "signal's, negated and scaled so that it turns towards a source --reference-distance m away as it "
+                     "turned back to its first facing; every other gene and input normalisation kept.")
     h.add_argument("--reference-distance", type=positive_float, default=4.0, metavar="M",
                    help="the source distance in m at which it turns as it held its heading (default 4)")
     h.add_argument("--preset", default="steer-es", metavar="NAME",
-                   help="the steering preset it starts (default steer-es; steer-walk for a walker whose network is integrated "
-                   "exactly, as the walking route's are)")
+                   help="the steering preset it starts (default steer-es; steer-walk for a walker whose network is "
+                        "integrated exactly, as the walking route's are)")
     h.add_argument("--neurons-only", action="store_true",
-                   help="the ear signal into the neurons only, not on the direct input-to-motor path (the walker then hardly turns)")
+                   help="the ear signal into the neurons only, not on the direct input-to-motor path (the walker then "
+                        "hardly turns)")
     w = _from_walker(actions, "rewire", SCRATCH_WALKER, run_genome_rewire,
                      "the walker reading other senses: some dropped, others added with zero weights",
-                     "Write the walker rewired onto other senses: each kept input keeps its weights and frozen normalisation, an "
-                     "added one starts with zero weights and its declared centre and scale. Prints the inputs and input_norm "
-                     "lines of the controller's table a run's config needs.")
+                     "Write the walker rewired onto other senses: each kept input keeps its weights and frozen "
+                     "normalisation, an added one starts with zero weights and its declared centre and scale. Prints "
+                     "the inputs and input_norm lines of the controller's table a run's config needs.")
     w.add_argument("--drop", action="append", metavar="SENSE", help="an input to drop (repeat; default: heading_error)")
     w.add_argument("--add", action="append", metavar="SENSE", help="an input to add (repeat; default: stance_side)")
     c = _from_walker(actions, "command-start", WALKING_WALKER, run_genome_command,
                      "the start genome of --preset walker-command-tune: the command senses added",
-                     "Write the start genome of --preset walker-command-tune: the walker with command_speed and command_turning "
-                     "added at zero weight (they change nothing until the search moves them), or with --speed-gain K the speed "
-                     "command moving the frame its velocity sense reads: it feels K (v* - V) m/s slower than it walks, "
-                     "V the --reference-speed.")
+                     "Write the start genome of --preset walker-command-tune: the walker with command_speed and "
+                     "command_turning added at zero weight (they change nothing until the search moves them), or with "
+                     "--speed-gain K the speed command moving the frame its velocity sense reads: it feels K (v* - V) "
+                     "m/s slower than it walks, V the --reference-speed.")
     c.add_argument("--speed-gain", type=finite_float, default=0.0, metavar="K",
                    help="the velocity sense's frame moves at K (v* - V) m/s (default 0: command_speed at zero weight)")
     c.add_argument("--stop-speed", type=finite_float, default=0.0, metavar="V0",
-                   help="with --speed-gain: at a stop (command_stop) the frame of a V0 m/s command, where the walker marks "
-                   "time (default 0: command_stop at zero weight)")
+                   help="with --speed-gain: at a stop (command_stop) the frame of a V0 m/s command, where the walker "
+                        "marks time (default 0: command_stop at zero weight)")
     k = actions.add_parser("command-calibrate", help="a commanded walker with its command_speed sense rescaled so that "
                            "it walks at the speed it is told",
-                           description="Write IN as OUT with its command_speed input normalisation rescaled: IN follows each "
-                           "--speeds command for 20 s, its walked speed w is fitted as a + b v, and OUT reads a command v as "
-                           "IN read (v - a) / b. The genes stay; a command_stop row keeps its frame at a stop.")
+                           description="Write IN as OUT with its command_speed input normalisation rescaled: IN "
+                                       "follows each --speeds command for 20 s, its walked speed w is fitted as a + b "
+                                       "v, and OUT reads a command v as IN read (v - a) / b. The genes stay; a "
+                                       "command_stop row keeps its frame at a stop.")
     k.add_argument("genome", metavar="IN", help="a commanded walker's genome file or run directory")
     k.add_argument("out", metavar="OUT", help="the genome file to write")
     k.add_argument("--speeds", default="0.3,0.45,0.6,0.75", metavar="V,V[,...]",
@@ -102,14 +108,16 @@ def _walker(args) -> str:
     from pathlib import Path
 
     if args.walker in (SCRATCH_WALKER, WALKING_WALKER) and not Path(args.walker).is_file():
-        raise UserError(f"--walker: the default {args.walker} is a path from the repository's root; run there or give --walker FILE")
+        raise UserError(f"--walker: the default {args.walker} is a path from the repository's root; run there or give "
+                        "--walker FILE")
     return args.walker
 
 
 def run_genome_hearing(args) -> int:
     from ...files.genome_edit import hearing_genome
 
-    _save(args, *hearing_genome(_walker(args), args.reference_distance, not args.neurons_only, _steering_preset(args.preset)))
+    _save(args, *hearing_genome(_walker(args), args.reference_distance, not args.neurons_only,
+                                _steering_preset(args.preset)))
     print(args.out)
     return 0
 
@@ -120,7 +128,8 @@ def _steering_preset(name: str) -> str:
 
     steering = start_presets("steer")
     if name not in steering:
-        raise UserError(f"--preset: must be a steering preset of a network that hears ({', '.join(steering)}), got {name!r}")
+        raise UserError(f"--preset: must be a steering preset of a network that hears ({', '.join(steering)}), got "
+                        f"{name!r}")
     return name
 
 
@@ -144,8 +153,8 @@ def run_genome_calibrate(args) -> int:
         raise UserError(f"--speeds: expected two or more speeds above 0 m/s, comma-separated, got {args.speeds!r}")
     source = resolve(args.genome)
     if not is_commanded(source.config):
-        raise UserError(f"{source.genome_path} is not a commanded walker (task {source.config.task!r}): it has no speed "
-                        "command to calibrate")
+        raise UserError(f"{source.genome_path} is not a commanded walker (task {source.config.task!r}): it has no "
+                        "speed command to calibrate")
     cfg, fit = calibrate_speed(source.config, source.genome, speeds)
     meta = source.meta  # the walker it was made from stays its source; each fit is kept
     save_genome(args.out, source.genome, cfg, source=meta.get("source", str(source.genome_path)),

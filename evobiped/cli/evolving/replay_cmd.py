@@ -1,4 +1,5 @@
-"""``evobiped replay``: a stored genome re-simulated into a Rerun recording, figures and a video; the stored outcome checked."""
+"""``evobiped replay``: a stored genome re-simulated into a Rerun recording, figures and a video; the stored outcome
+checked."""
 
 from __future__ import annotations
 
@@ -12,19 +13,25 @@ from ...core.progress import Progress
 def add_replay(sub) -> None:
     p = sub.add_parser("replay", help="re-simulate a stored genome into a Rerun recording (and figures)")
     add_stored_walker(p, generation="replay the best of generation N of a run directory")
-    p.add_argument("--cell", metavar="I,J", help="replay the elite of cell I,J of a map-elites run's archive (evobiped repertoire)")
+    p.add_argument("--cell", metavar="I,J", help="replay the elite of cell I,J of a map-elites run's archive (evobiped "
+                                                 "repertoire)")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="episode length in s (default: the stored one)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, RUN/replay_best_video.rrd with --video; for a genome file in a "
-                       "run directory or under runs/ its folder's replay_<stem>.rrd, else runs/<stem>/replay_<stem>.rrd)")
+    where.add_argument("--out", metavar="FILE.rrd", help="recording file (default RUN/replay_best.rrd, "
+                                                         "RUN/replay_best_video.rrd with --video; for a genome file in "
+                                                         "a run directory or under runs/ its folder's "
+                                                         "replay_<stem>.rrd, else runs/<stem>/replay_<stem>.rrd)")
     where.add_argument("--spawn", action="store_true", help="stream to a newly spawned Rerun viewer instead of a file")
-    where.add_argument("--connect", nargs="?", const="", metavar="ADDR", help="stream to a running viewer (default 127.0.0.1:9876)")
-    p.add_argument("--figures", nargs="?", const="", metavar="DIR", help="also write the figures as PNG (default: beside the recording)")
+    where.add_argument("--connect", nargs="?", const="", metavar="ADDR",
+                       help="stream to a running viewer (default 127.0.0.1:9876)")
+    p.add_argument("--figures", nargs="?", const="", metavar="DIR",
+                   help="also write the figures as PNG (default: beside the recording)")
     p.add_argument("--video", metavar="FILE", help="also render a video, MP4 or GIF by the suffix, without a display "
                    "(MuJoCo's offscreen renderer; MUJOCO_GL unset: a display's GLFW, else EGL, else OSMesa); "
                    "the frames go into the recording too")
     p.add_argument("--video-size", nargs=2, type=positive_int, metavar=("W", "H"), default=[480, 360],
-                   help="size of each panel in pixels, even numbers (default 480 360; a steering walker gets one panel per source)")
+                   help="size of each panel in pixels, even numbers (default 480 360; a steering walker gets one panel "
+                        "per source)")
     p.add_argument("--video-fps", type=positive_float, default=25.0, metavar="FPS",
                    help="frames per simulated second (default 25: real time)")
     p.add_argument("--video-window", nargs=2, type=finite_float, metavar=("T0", "T1"),
@@ -58,14 +65,16 @@ def run_replay_cmd(args) -> int:
         from ...record.video import check_frames
 
         if args.video_window is not None and args.video_window[0] > seconds:
-            refuse("--video-window", f"{args.video_window[0]:g} {args.video_window[1]:g}: the episode ends at {seconds:g} s at the latest")
+            refuse("--video-window", f"{args.video_window[0]:g} {args.video_window[1]:g}: the episode ends at "
+                                     f"{seconds:g} s at the latest")
         span = seconds if args.video_window is None else min(seconds, args.video_window[1]) - args.video_window[0]
         check_frames(span, args.video_fps, args.video_size[0] * args.video_size[1] * 3)
     progress = Progress("replay", seconds, "s simulated", quiet=args.quiet)
     frames = Progress("replay video", 1.0, "frames rendered", quiet=args.quiet)
     r = replay(source, seconds=args.seconds, out=args.out, spawn=args.spawn, connect=args.connect, figures_dir=figures,
                listener=progress.listener(), sources=args.sources, video=args.video,
-               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window, progress=frames),
+               video_options=dict(fps=args.video_fps, size=tuple(args.video_size), window=args.video_window,
+                                  progress=frames),
                note=lambda line: print(f"evobiped: note: {line}", file=sys.stderr))
     progress.finish()
     if args.video:
@@ -81,7 +90,8 @@ def run_replay_cmd(args) -> int:
     if r.gait is not None:
         from ...analysis.gait_report import criteria_words, gait_line
 
-        print(f"gait: {gait_line(r.gait)}; {'walks' if r.gait['walks'] else 'does not walk: ' + criteria_words(r.gait['failed'])}")
+        print(f"gait: {gait_line(r.gait)}; "
+              f"{'walks' if r.gait['walks'] else 'does not walk: ' + criteria_words(r.gait['failed'])}")
     if not r.compared:
         print(f"stored fitness not compared: {r.not_compared}")
     elif r.stored_fitness is None:
@@ -92,7 +102,8 @@ def run_replay_cmd(args) -> int:
     else:
         print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")
         print(f"stored fitness   = {r.stored_fitness!r}: "
-              + ("the replay equals it bit for bit all the same" if r.matches else f"drift {drift_text(r.fitness, r.stored_fitness)}"))
+              + ("the replay equals it bit for bit all the same" if r.matches
+                 else f"drift {drift_text(r.fitness, r.stored_fitness)}"))
     if r.outcome_checked:
         if r.environment_differences and not r.compared:
             print(f"numerical environment differs from the stored one: {'; '.join(r.environment_differences)}")

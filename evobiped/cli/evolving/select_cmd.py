@@ -6,10 +6,11 @@ from ...flags import add_allow_unfinished, note, positive_float, positive_int
 
 
 def add_select(sub) -> None:
-    p = sub.add_parser("select", help="re-simulate a run's fittest generation bests (and its --from genome) for longer; "
-                                      "writes the best as selected.json")
+    p = sub.add_parser("select", help="re-simulate a run's fittest generation bests (and its --from genome) for "
+                                      "longer; writes the best as selected.json")
     p.add_argument("run", metavar="RUN", help="a run directory")
-    p.add_argument("--top", type=positive_int, default=8, metavar="K", help="the generation bests of the K fittest generations (default 8)")
+    p.add_argument("--top", type=positive_int, default=8, metavar="K",
+                   help="the generation bests of the K fittest generations (default 8)")
     p.add_argument("--seconds", type=positive_float, default=200.0, metavar="S",
                    help="each candidate up through its episode runs S s alone (default 200)")
     p.add_argument("--heading-limit", type=positive_float, default=30.0, metavar="DEG",
@@ -23,8 +24,8 @@ def add_select(sub) -> None:
 def run_select_cmd(args) -> int:
     from ...usecases.selecting import select_walker
 
-    s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit, walking=args.walking,
-                      note=note, allow_unfinished=args.allow_unfinished)
+    s = select_walker(args.run, top=args.top, seconds=args.seconds, heading_limit=args.heading_limit,
+                      walking=args.walking, note=note, allow_unfinished=args.allow_unfinished)
     print(f"{'candidate':<40}{'episode':>14}{'distance (m)':>14}{'heading':>9}{f'up {args.seconds:g} s':>10}"
           + ("  walks" if args.walking else ""))
     for i, (label, r) in enumerate(zip(s.labels, s.rows)):

@@ -11,26 +11,29 @@ MAX_STRETCHES = 10**5
 
 
 def add_gait(sub) -> None:
-    p = sub.add_parser("gait", help="walk at a commanded speed (or a schedule of speeds) with the nearest gaits of a map-elites "
-                       "run's archive, or with a commanded walker's genome")
-    p.add_argument("run", metavar="RUN|GENOME", help="a map-elites run directory (its archive.json), or a commanded walker "
-                   "(a genome file or run directory of the command task)")
+    p = sub.add_parser("gait", help="walk at a commanded speed (or a schedule of speeds) with the nearest gaits of a "
+                                    "map-elites run's archive, or with a commanded walker's genome")
+    p.add_argument("run", metavar="RUN|GENOME", help="a map-elites run directory (its archive.json), or a commanded "
+                                                     "walker (a genome file or run directory of the command task)")
     p.add_argument("--speed", metavar="V[,V...]",
                    help="commanded mean forward speed in m/s; several, comma-separated: a schedule, --hold s each (a "
-                   "repertoire: elites switched on the fly; a commanded walker: 0 is a stop; without it, its own nominal schedule)")
-    p.add_argument("--turning", default="0", metavar="W[,W...]", help="commanded turning rate in deg/s, + left (default 0); "
-                   "a commanded walker also takes a list, one per speed")
+                   "repertoire: elites switched on the fly; a commanded walker: 0 is a stop; without it, its own "
+                   "nominal schedule)")
+    p.add_argument("--turning", default="0", metavar="W[,W...]", help="commanded turning rate in deg/s, + left "
+                                                                      "(default 0); a commanded walker also takes a "
+                                                                      "list, one per speed")
     p.add_argument("--hold", "--stretch", dest="hold", type=positive_float, default=10.0, metavar="S",
                    help="seconds each command is held (default 10)")
     p.add_argument("--json", action="store_true", help="a commanded walker: print the report as JSON")
-    p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: the "
-                   "run directory; for a genome file in a run directory or under runs/ its folder, else runs/<stem>/)")
+    p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: "
+                                                "the run directory; for a genome file in a run directory or under "
+                                                "runs/ its folder, else runs/<stem>/)")
     p.add_argument("--battery", type=count(10**4, "schedules of a battery"), default=None, metavar="N",
                    help="a commanded walker: N random schedules of "
-                   "--stretches speeds drawn uniformly in its evolved speed range (or --range), --hold s each, straight "
-                   "ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, falls, its "
-                   "gait at constant commands, and (a walker evolved with stops) a 20 s stop between two walks at its "
-                   "slowest, middle and fastest speed; writes <stem>_speed_battery.json")
+                   "--stretches speeds drawn uniformly in its evolved speed range (or --range), --hold s each, "
+                   "straight ahead; every stretch's speed against its command (within 10 %%), 1 s windows inside them, "
+                   "falls, its gait at constant commands, and (a walker evolved with stops) a 20 s stop between two "
+                   "walks at its slowest, middle and fastest speed; writes <stem>_speed_battery.json")
     p.add_argument("--stretches", type=count(10**4, "stretches of a schedule"), default=6, metavar="K",
                    help="--battery: stretches per schedule (default 6)")
     p.add_argument("--range", dest="speed_range", metavar="LOW,HIGH", help="--battery: the speeds drawn, m/s (default: "
@@ -44,7 +47,8 @@ def add_gait(sub) -> None:
                    "(default 0.2; 0: at once)")
     p.add_argument("--correction", type=finite_float, default=None, metavar="S",
                    help="the knob makes up a shortfall (or excess) in the distance "
-                   "walked so far in a stretch within about S s (default 3; 0: no loop, the knob asks for the command itself)")
+                   "walked so far in a stretch within about S s (default 3; 0: no loop, the knob asks for the command "
+                   "itself)")
     p.add_argument("--overshoot", type=finite_float, default=None, metavar="F",
                    help="the most the knob may ask above or below the command, "
                    "a fraction of it (default 0.2)")
@@ -91,16 +95,17 @@ def _run_repertoire(args, speeds, turnings) -> int:
     a = rep.archive
     t = 0.0
     for s in stretches:
-        print(f"{t:5.1f}-{t + args.hold:5.1f} s: commanded {s.commanded:.3f} m/s -> at its end cell {a.cell[s.elite, 0]},{a.cell[s.elite, 1]} "
-              f"(archive {s.archive_speed:.3f} m/s): walked {s.measured:.3f} m/s ({100 * s.error:.1f} % off)" + ("" if s.up else ", DOWN"))
+        print(f"{t:5.1f}-{t + args.hold:5.1f} s: commanded {s.commanded:.3f} m/s -> at its end cell "
+              f"{a.cell[s.elite, 0]},{a.cell[s.elite, 1]} (archive {s.archive_speed:.3f} m/s): walked {s.measured:.3f} "
+              f"m/s ({100 * s.error:.1f} % off)" + ("" if s.up else ", DOWN"))
         t += args.hold
     error, down = tracking(stretches)
     print(f"mean tracking error {100 * error:.1f} % over {len(stretches)} stretches of {args.hold:g} s; "
           + ("no fall" if not down else f"down in {down} stretch(es)"))
     for v, up, dn in hysteresis(stretches):
         cells = [f"{a.cell[s.elite, 0]},{a.cell[s.elite, 1]}" for s in (up, dn)]
-        print(f"hysteresis at {v:.3f} m/s: rising {up.measured:.3f} m/s (cell {cells[0]}), falling {dn.measured:.3f} m/s "
-              f"(cell {cells[1]})" + ("" if up.up and dn.up else "; down on the way"))
+        print(f"hysteresis at {v:.3f} m/s: rising {up.measured:.3f} m/s (cell {cells[0]}), falling {dn.measured:.3f} "
+              f"m/s (cell {cells[1]})" + ("" if up.up and dn.up else "; down on the way"))
     return 0
 
 
@@ -154,7 +159,8 @@ def _run_commanded(args, speeds, turnings) -> int:
     for s in report["stretches"]:
         print(stretch_line(s))
     done = [s for s in report["stretches"] if s["speed_error_pct"] is not None and not s["down"]]
-    mean = f"mean speed error {sum(s['speed_error_pct'] for s in done) / len(done):.1f} % over {len(done)} walking stretches; " if done else ""
+    mean = (f"mean speed error {sum(s['speed_error_pct'] for s in done) / len(done):.1f} % over {len(done)} walking "
+            "stretches; " if done else "")
     print(mean + ("no fall" if not report["fell"] else f"fell at {report['end_time']:.1f} s"))
     print(f"results: {out / (stem + '.json')}\nfigure: {png}")
     return 0
@@ -164,7 +170,6 @@ def _run_battery(args, source, out) -> int:
     """``--battery N``: the speed battery of :mod:`evobiped.analysis.speed_battery`, a line per schedule, a summary, the
     gait at constant commands, and <stem>_speed_battery.json."""
     import json
-    import math
 
     from ...analysis.gait_report import gait_line
     from ...analysis.speed_battery import gait_at_speeds, speed_battery, stop_and_go
@@ -180,8 +185,8 @@ def _run_battery(args, source, out) -> int:
         if len(pair) != 2 or not 0 < pair[0] <= pair[1]:
             refuse("--range", f"expected LOW,HIGH m/s with 0 < LOW <= HIGH, got {args.speed_range!r}")
         if pair[0] < lo - 1e-9 or pair[1] > hi + 1e-9:
-            print(f"note: --range {pair[0]:g}-{pair[1]:g} m/s is beyond the {lo:g}-{hi:g} m/s this walker was evolved for; "
-                  "the commands are clipped to it")
+            print(f"note: --range {pair[0]:g}-{pair[1]:g} m/s is beyond the {lo:g}-{hi:g} m/s this walker was evolved "
+                  "for; the commands are clipped to it")
         lo, hi = max(pair[0], lo), min(pair[1], hi)
     if not 0 < lo <= hi:
         refuse("--battery", f"the walker was evolved for no walking speed range ({lo:g}-{hi:g} m/s); give --range")
@@ -202,7 +207,8 @@ def _run_battery(args, source, out) -> int:
         print(json.dumps({k: v for k, v in report.items() if k != "schedules"}, default=lambda v: None))
         return 0
     for i, r in enumerate(report["schedules"]):
-        errs = " ".join(f"{s['commanded']:.2f}->{s['walked']:.2f}" if s["walked"] is not None else f"{s['commanded']:.2f}->down"
+        errs = " ".join(f"{s['commanded']:.2f}->{s['walked']:.2f}" if s["walked"] is not None
+                        else f"{s['commanded']:.2f}->down"
                         for s in r["stretches"])
         print(f"schedule {i:2d}: {errs}  " + ("passed" if r["passed"] else f"FELL at {r['end_time']:.1f} s" if r["fell"]
                                               else f"{sum(not s['within'] for s in r['stretches'])} stretch(es) off"))
@@ -216,10 +222,12 @@ def _run_battery(args, source, out) -> int:
         print(f"gait at {g['commanded']:.1f} m/s: {gait_line(g)}; "
               + ("a walk" if g["walks"] else "not a walk: " + ", ".join(g["failed"])))
     for g in report["stop_and_go"]:
-        stopped = f"stopped {g['time_to_stop']:g} s after the command" if g["time_to_stop"] is not None else "never stopped"
+        stopped = f"stopped {g['time_to_stop']:g} s after the command" if g[
+            "time_to_stop"] is not None else "never stopped"
         print(f"stop and go from {g['speed']:.2f} m/s: " + (f"FELL at {g['end_time']:.1f} s" if g["fell"] else
-              f"{stopped}, {g['stop_speed']:+.3f} m/s over the stop's second half (both feet down {100 * g['double_support']:.0f} % "
-              f"of it), drifted {g['drift']:+.2f} m in 20 s, walked off at {g['walk_off']:.2f} m/s"))
+              f"{stopped}, {g['stop_speed']:+.3f} m/s over the stop's second half (both feet down "
+              f"{100 * g['double_support']:.0f} % of it), drifted {g['drift']:+.2f} m in 20 s, walked off at "
+              f"{g['walk_off']:.2f} m/s"))
     print(f"results: {out / (stem + '.json')}")
     return 0
 

@@ -11,16 +11,21 @@ from ...core.progress import Progress
 
 def add_bench(sub) -> None:
     p = sub.add_parser("bench", help="evaluation speed as ratios against raw MuJoCo stepping (same model, dt, cores)")
-    p.add_argument("--preset", metavar="NAME", help="time the episode of this preset (its body, controller, task and options, "
-                   "nominal; with its running normaliser's sense collection) instead of --body/--controller")
-    p.add_argument("--body", default="reil", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: docs/own_robot.md; default reil)")
+    p.add_argument("--preset", metavar="NAME", help="time the episode of this preset (its body, controller, task and "
+                                                    "options, nominal; with its running normaliser's sense collection) "
+                                                    "instead of --body/--controller")
+    p.add_argument("--body", default="reil", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its "
+                                                  "declaration: docs/own_robot.md; default reil)")
     p.add_argument("--controller", default="ctrnn", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--population", type=positive_int, help="walkers (default 50; --quick 16)")
     p.add_argument("--seconds", type=positive_float, help="episode length in s (default 50; --quick 4)")
-    p.add_argument("--workers", type=positive_int, help="threads for raw stepping, workers for the pools (default: all cores)")
-    p.add_argument("--repeats", type=positive_int, help="interleaved repeats of each measurement; the median counts (default 5)")
+    p.add_argument("--workers", type=positive_int, help="threads for raw stepping, workers for the pools (default: all "
+                                                        "cores)")
+    p.add_argument("--repeats", type=positive_int, help="interleaved repeats of each measurement; the median counts "
+                                                        "(default 5)")
     p.add_argument("--presentations", type=positive_int, default=1, metavar="R",
-                   help="also time evaluation on R perturbed presentations per walker, per simulated second (default 1: not measured)")
+                   help="also time evaluation on R perturbed presentations per walker, per simulated second (default "
+                        "1: not measured)")
     p.add_argument("--kernel", default="auto", metavar="K", help="the tick's array work: auto (compiled where numba is "
                    "installed), compiled or numpy (the same numbers; default auto)")
     p.add_argument("--quick", action="store_true", help="a small run (under 30 s): 16 walkers x 4 s, 5 repeats")
@@ -51,8 +56,8 @@ def run_bench_cmd(args) -> int:
     cfg = dataclasses.replace(cfg, kernel=args.kernel)
     check_workers("process", args.workers, None)
     progress = Progress("bench", size["repeats"], "repeats", quiet=args.quiet or args.json)
-    r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"], presentations=args.presentations,
-              progress=progress, context=context)
+    r = bench(cfg, population=size["population"], workers=args.workers, repeats=size["repeats"],
+              presentations=args.presentations, progress=progress, context=context)
     progress.finish()
     print(json.dumps(r, indent=2) if args.json else format_bench(r))
     return 0

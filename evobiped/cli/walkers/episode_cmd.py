@@ -16,10 +16,11 @@ def add_episode(sub) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--genome", metavar="FILE", help="genome JSON file (default: a random genome)")
     src.add_argument("--seed", type=seed, default=0, help="seed of the random genome (default 0)")
-    p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: docs/own_robot.md; default reil; "
-                   "not with --genome, whose file names it)")
+    p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: "
+                                  "docs/own_robot.md; default reil; not with --genome, whose file names it)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn; not with --genome)")
-    p.add_argument("--seconds", type=positive_float, help="episode length in s (default: the genome file's episode, else 50)")
+    p.add_argument("--seconds", type=positive_float, help="episode length in s (default: the genome file's episode, "
+                                                          "else 50)")
     add_source_flag(p)
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=run_episode_cmd)
@@ -55,7 +56,8 @@ def run_episode_cmd(args) -> int:
     targets = ep.task.targets()
     if targets is not None:  # the final distance to each presentation's target (a steering walker's sources)
         rows = r.rows if r.rows is not None else r
-        out["sources"] = [{"source": list(map(float, q)), "final_distance": float(np.linalg.norm(rows.end_position[j] - q)),
+        out["sources"] = [{"source": list(map(float, q)),
+                           "final_distance": float(np.linalg.norm(rows.end_position[j] - q)),
                            "fell": bool(rows.fell[j]), "end_time": float(rows.end_time[j]), **_arrival(rows.terms, j)}
                           for j, q in enumerate(targets)]
         final = [s["final_distance"] for s in out["sources"]]
@@ -68,9 +70,12 @@ def run_episode_cmd(args) -> int:
         print(f"fitness = {out['fitness']:.3f}; {state}; {walk_line(out)}")
         for s in out.get("sources", []):
             how = f"fell at t = {s['end_time']:.2f} s" if s["fell"] else f"up for {s['end_time']:.1f} s"
-            came = "" if "arrival_time" not in s else (f"; arrived at {s['arrival_time']:.1f} s" if s["arrival_time"] is not None
-                                                       else "; never arrived") + ("; stood there at the end" if s["stood"] else "")
-            print(f"source ({s['source'][0]:g}, {s['source'][1]:g}) m: final distance {s['final_distance']:.2f} m ({how}){came}")
+            came = "" if "arrival_time" not in s else (f"; arrived at {s['arrival_time']:.1f} s"
+                                                       if s["arrival_time"] is not None
+                                                       else "; never arrived") + ("; stood there at the end" if s[
+                                                           "stood"] else "")
+            print(f"source ({s['source'][0]:g}, {s['source'][1]:g}) m: final distance {s['final_distance']:.2f} m "
+                  f"({how}){came}")
         if out.get("sources"):
             stood = sum(s.get("stood", False) for s in out["sources"])
             print(f"over {len(out['sources'])} source(s): median final distance {out['median_final_distance']:.2f} m, "

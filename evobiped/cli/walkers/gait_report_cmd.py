@@ -9,17 +9,19 @@ from ...flags import add_stored_walker, check_output_file, note, unfinished_note
 
 
 def add_gait_report(sub) -> None:
-    p = sub.add_parser("gait-report", help="a walker's gait: duty factors, flight, steps, slip, clearance, power, cost of "
-                       "transport, and whether it meets the walking criteria")
+    p = sub.add_parser("gait-report", help="a walker's gait: duty factors, flight, steps, slip, clearance, power, cost "
+                                           "of transport, and whether it meets the walking criteria")
     add_stored_walker(p, metavar="GENOME|RUN", nargs="+", also="; several: one row each (with --table)")
     p.add_argument("--seconds", type=float, default=20.0, metavar="S", help="measure the first S s of the nominal "
                    "episode (default 20)")
-    p.add_argument("--up-for", type=float, metavar="S", help="then let it walk on to S s: 'up' means it stood that long "
-                   "(the walking criteria's 200 s)")
-    p.add_argument("--figure", metavar="PNG", help="also draw its footfall diagram (stance bars per foot over time) here")
+    p.add_argument("--up-for", type=float, metavar="S", help="then let it walk on to S s: 'up' means it stood that "
+                                                             "long (the walking criteria's 200 s)")
+    p.add_argument("--figure", metavar="PNG", help="also draw its footfall diagram (stance bars per foot over time) "
+                                                   "here")
     p.add_argument("--json", action="store_true", help="print the report as JSON (the stance episodes included; a list "
                    "for several sources)")
-    p.add_argument("--table", action="store_true", help="print one Markdown table row per source (the docs' gait table)")
+    p.add_argument("--table", action="store_true",
+                   help="print one Markdown table row per source (the docs' gait table)")
     p.set_defaults(func=run_gait_report_cmd)
 
 
@@ -75,17 +77,20 @@ def run_gait_report_cmd(args) -> int:
             ("direction", "did not move" if report["heading_deg"] is None else f"{report['heading_deg']:+.1f} deg"),
             ("duty factor", " / ".join(f"{f} {report[f'duty_{f}']:.3f}" for f in feet)
              + f" (asymmetry {report['duty_asymmetry']:.3f})"),
-            ("airborne", f"{100 * report['airborne']:.1f} % of the time (double support {100 * report['double_support']:.1f} %)"),
+            ("airborne", f"{100 * report['airborne']:.1f} % of the time (double support "
+                         f"{100 * report['double_support']:.1f} %)"),
             ("steps", f"{report['steps_per_s']:.2f} per s, {report['step_length']:.3f} m each"),
             ("stride", f"steps {report['step_leg']:.2f} leg lengths ({report['leg_length']:.2f} m legs), "
              f"{report['step_similar']:.2f} of the {similar_step(report['speed'], report['leg_length']):.2f} m step "
              f"dynamic similarity predicts{': a shuffle' if report['shuffle'] else ''}"),
             ("stance slip", f"median {report['slip']:.3f} m/s, {100 * report['slip_share']:.1f} % of the speed; 90th "
-             f"percentile {100 * report['slip_p90_share']:.1f} %; {100 * report['slide_per_m']:.1f} cm slid per m walked"),
-            ("swing", f"peak foot clearance {report['clearance']:.3f} m, knee excursion {report['knee_swing']:.2f} rad"),
+             f"percentile {100 * report['slip_p90_share']:.1f} %; {100 * report['slide_per_m']:.1f} cm slid per m "
+             "walked"),
+            ("swing",
+             f"peak foot clearance {report['clearance']:.3f} m, knee excursion {report['knee_swing']:.2f} rad"),
             ("power", f"{report['power']:.1f} W/kg positive, cost of transport {report['cost_of_transport']:.2f}, "
-             f"torque cost {report['torque_cost']:.0f} N^2 m^2/kg ({report['torque_cost'] / max(report['speed'], 1e-3):.0f} "
-             "per m/s)")]
+             f"torque cost {report['torque_cost']:.0f} N^2 m^2/kg "
+             f"({report['torque_cost'] / max(report['speed'], 1e-3):.0f} per m/s)")]
     print(f"gait of {source.genome_path} (first {args.seconds:g} s of its nominal episode, read after every "
           f"{1000 * report['sample_dt']:g} ms physics step)")
     for k, v in rows:
@@ -105,8 +110,8 @@ def table_row(name: str, r: dict) -> str:
     """One walker's gait as a row under :data:`TABLE_HEAD`."""
     duty = " / ".join(f"{r[f'duty_{f}']:.2f}" for f in ("left", "right") if f"duty_{f}" in r)
     verdict = "yes" if r["walks"] else "no: " + ", ".join(r["failed"])
-    return (f"| `{name}` | {r.get('up_for', r['seconds']):g} s {'up' if r['up'] else 'fell'} | {r['speed']:.2f} | {duty} "
-            f"| {100 * r['airborne']:.1f} % | {r['steps_per_s']:.1f} | {r['step_length']:.2f} "
+    return (f"| `{name}` | {r.get('up_for', r['seconds']):g} s {'up' if r['up'] else 'fell'} | {r['speed']:.2f} | "
+            f"{duty} | {100 * r['airborne']:.1f} % | {r['steps_per_s']:.1f} | {r['step_length']:.2f} "
             f"| {r['step_similar']:.2f}{' shuffle' if r['shuffle'] else ''} "
             f"| {100 * r['slip_share']:.0f}; {100 * r['slip_p90_share']:.0f} | {100 * r['slide_per_m']:.1f} "
             f"| {r['clearance']:.3f} | {r['power']:.0f} | {r['cost_of_transport']:.2f} | {verdict} |")

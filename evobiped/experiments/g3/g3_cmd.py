@@ -23,15 +23,18 @@ def add_g3(sub) -> None:
                    help="one run through the levels keeping the state (default: reset to zero per level)")
     p.add_argument("--from-go", type=finite_float, metavar="I0",
                    help="start every run at I0 and switch at --switch-at (Figs. 8B, 10)")
-    p.add_argument("--switch-at", type=positive_float, help="time of the switch from --from-go (default 30; only with --from-go)")
+    p.add_argument("--switch-at", type=positive_float, help="time of the switch from --from-go (default 30; only with "
+                                                            "--from-go)")
     p.add_argument("--t-run", type=positive_float, help="time units per level (default: the preset's, 120)")
     p.add_argument("--dt", type=positive_float, default=0.005, help="RK4 step in model time units (default 0.005)")
-    p.add_argument("--channels", help="channels drawn in the diagrams, names or 0-3 (default all: LF,RF,LH,RH; only with --out)")
+    p.add_argument("--channels", help="channels drawn in the diagrams, names or 0-3 (default all: LF,RF,LH,RH; only "
+                                      "with --out)")
     p.add_argument("--out", metavar="DIR", help="write PNG gait diagrams and the frequency plot here")
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--reproduce", metavar="DIR",
                    help="check the paper claim by claim: write summary.json, one CSV per sweep and "
-                   "the figures into DIR (made if missing) and print the numbers docs/g3.md quotes; no PRESET, only --step and --t-run go with it")
+                   "the figures into DIR (made if missing) and print the numbers docs/g3.md quotes; no PRESET, only "
+                   "--step and --t-run go with it")
     p.add_argument("--step", type=within(1e-3, 1, "", "a sweep of at most some thousand levels"),
                    help="with --reproduce: GO increment of its sweeps (default 0.01, the paper's)")
     p.set_defaults(func=run_g3_cmd)
@@ -49,7 +52,8 @@ def _run_reproduce(args) -> int:
 
     from ...core.errors import UserError
 
-    given = [k for k, v in _DEFAULTS.items() if k not in ("reproduce", "step", "t_run", "func") and getattr(args, k) != v]
+    given = [k for k, v in _DEFAULTS.items() if k not in ("reproduce", "step", "t_run", "func")
+             and getattr(args, k) != v]
     if given:
         refuse("/".join(_FLAG.get(k, "--" + k.replace("_", "-")) for k in given),
                "--reproduce runs the paper's own presets and levels; only --step and --t-run go with it")
@@ -122,8 +126,10 @@ def run_g3_cmd(args) -> int:
     if args.json:
         print(json.dumps({"preset": pre.name, "source": pre.source, "mode": args.mode, "levels": rows, "files": files}))
         return 0
-    print(f"G3 {pre.name}: {pre.source}; {args.mode}" + (f" from I = {args.from_go:g} at t = {switch_at:g}" if args.from_go is not None else ""))
-    print(f"{'I':>6} {'gait':<7} {'seq':<8} {'freq':>7} {'period':>7}  {'phases LF RF LH RH':<23} {'up':>5} {'first':<7} {'settle':>6}")
+    print(f"G3 {pre.name}: {pre.source}; {args.mode}"
+          + (f" from I = {args.from_go:g} at t = {switch_at:g}" if args.from_go is not None else ""))
+    print(f"{'I':>6} {'gait':<7} {'seq':<8} {'freq':>7} {'period':>7}  {'phases LF RF LH RH':<23} {'up':>5} "
+          f"{'first':<7} {'settle':>6}")
     for r in rows:
         ph = " ".join(f"{p:.2f}" if np.isfinite(p) else "  - " for p in r["phases"])
         print(f"{r['go']:6.3f} {r['label']:<7} {r['sequence']:<8} {r['frequency']:7.4f} {r['period']:7.3f}  {ph:<23} "

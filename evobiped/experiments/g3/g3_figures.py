@@ -14,7 +14,8 @@ import numpy as np
 from .gaits import THRESHOLD
 from ...record.png.figures import pyplot, save_figure
 
-GAIT_COLOURS = {"walk": "tab:blue", "trot": "tab:orange", "pace": "tab:green", "gallop": "tab:red", "pronk": "tab:purple", "none": "0.6"}
+GAIT_COLOURS = {"walk": "tab:blue", "trot": "tab:orange", "pace": "tab:green", "gallop": "tab:red",
+                "pronk": "tab:purple", "none": "0.6"}
 
 
 def draw_bars(ax, t: np.ndarray, x: np.ndarray, names, threshold: float = THRESHOLD) -> None:
@@ -28,10 +29,12 @@ def draw_bars(ax, t: np.ndarray, x: np.ndarray, names, threshold: float = THRESH
     ax.tick_params(which="minor", length=0)
 
 
-def run_figure(path: Path, t: np.ndarray, x: np.ndarray, names, *, title: str, threshold: float = THRESHOLD, go: np.ndarray | None = None) -> Path:
+def run_figure(path: Path, t: np.ndarray, x: np.ndarray, names, *, title: str, threshold: float = THRESHOLD,
+               go: np.ndarray | None = None) -> Path:
     """Activities x_k(t) above their thresholded Pearson diagram (Fig. 4A/B, 10A/B)."""
     n = 3 if go is not None else 2
-    fig, axes = pyplot().subplots(n, 1, figsize=(10, 2.2 + 1.6 * n), sharex=True, gridspec_kw={"height_ratios": [2, 1.2, 0.6][:n]})
+    fig, axes = pyplot().subplots(n, 1, figsize=(10, 2.2 + 1.6 * n), sharex=True,
+                                  gridspec_kw={"height_ratios": [2, 1.2, 0.6][:n]})
     for k, name in enumerate(names):
         axes[0].plot(t, x[:, k], lw=1, label=name)
     axes[0].axhline(threshold, color="k", ls=":", lw=0.8, label=f"threshold {threshold:g}")
@@ -48,7 +51,8 @@ def run_figure(path: Path, t: np.ndarray, x: np.ndarray, names, *, title: str, t
     return save_figure(fig, path, dpi=110)
 
 
-def sweep_diagrams(path: Path, t: np.ndarray, xs: list[np.ndarray], labels: list[str], names, *, title: str, threshold: float = THRESHOLD) -> Path:
+def sweep_diagrams(path: Path, t: np.ndarray, xs: list[np.ndarray], labels: list[str], names, *, title: str,
+                   threshold: float = THRESHOLD) -> Path:
     """One Pearson diagram per GO level (Fig. 8A style); ``xs[l]`` ``(T_l, N)`` over ``t``-aligned windows."""
     fig, axes = pyplot().subplots(len(xs), 1, figsize=(10, 0.3 + 1.0 * len(xs)), squeeze=False)
     for ax, x, lab in zip(axes[:, 0], xs, labels):
@@ -63,7 +67,8 @@ def sweep_diagrams(path: Path, t: np.ndarray, xs: list[np.ndarray], labels: list
     return save_figure(fig, path, dpi=110)
 
 
-def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.ndarray, labels: list[str], *, title: str, duty_lines=()) -> Path:
+def frequency_figure(path: Path, levels: np.ndarray, freq: np.ndarray, duty: np.ndarray, labels: list[str], *,
+                     title: str, duty_lines=()) -> Path:
     """Frequency (Figs. 9, 11A) and fraction of cycle above threshold (Fig. 11B) vs GO level."""
     fig, (a1, a2) = pyplot().subplots(1, 2, figsize=(11, 4))
     osc = freq > 0  # levels without a steady oscillation are left out
@@ -92,7 +97,8 @@ def sweep_files(out_dir: Path, stem: str) -> list[Path]:
     return [Path(out_dir) / f"{stem}_{kind}.png" for kind in ("run", "diagrams", "frequency")]
 
 
-def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0, max_diagrams: int = 12) -> list[Path]:
+def sweep_figures(out_dir: Path, stem: str, sweep, channels: list[int], names, *, title: str, span: float = 40.0,
+                  max_diagrams: int = 12) -> list[Path]:
     """The PNGs of a :class:`~evobiped.experiments.g3.simulation.GoSweep`: each level's run (one level) or
     one diagram per level over the last ``span`` time units of its hold (at
     most ``max_diagrams`` evenly spaced levels), plus frequency/duty vs I

@@ -91,10 +91,11 @@ def _claims(out: Path, step: float, t_run: float) -> None:
     p = g3net.preset("fig4")
     tr = g3sim.simulate(p.network, g3sim.go_schedule([0.1]), p.t_run)
     g = gaits.analyse_gait(tr.t, tr.x[0], t_start=0.6 * p.t_run)
-    run_figure(out / "claim1_fig4_walk.png", tr.t, tr.x[0], g3net.LIMBS, title=f"Fig. 4 parameters, I = 0.1: {g.label} ({g.sequence})", go=tr.go[0])
+    run_figure(out / "claim1_fig4_walk.png", tr.t, tr.x[0], g3net.LIMBS,
+               title=f"Fig. 4 parameters, I = 0.1: {g.label} ({g.sequence})", go=tr.go[0])
     summary["claim1"] = g.as_dict()
-    print(f"claim 1: {g.label} {g.sequence}, period {g.period:.3f}, phases {np.round(g.phases, 3)}, duty {np.round(g.duty, 3)}, "
-          f"first cycle {g.transient_label}, settled at t = {g.settle_time:.1f}")
+    print(f"claim 1: {g.label} {g.sequence}, period {g.period:.3f}, phases {np.round(g.phases, 3)}, duty "
+          f"{np.round(g.duty, 3)}, first cycle {g.transient_label}, settled at t = {g.settle_time:.1f}")
 
     # claim 2: Fig. 8A / 9 sweep, reset per I
     s = g3sim.go_sweep(g3net.preset("fig8a"), levels, t_run=t_run)
@@ -102,12 +103,14 @@ def _claims(out: Path, step: float, t_run: float) -> None:
     ok = [g for g in s.gaits if g.oscillating]
     ground = np.array([(1 - np.mean(g.duty)) * g.period for g in ok])
     c2["ground_time_per_cycle_monotone"] = bool(np.all(np.diff(ground) < 0))
-    c2["ground_fraction_by_gait"] = {lab: float(np.mean([1 - np.mean(g.duty) for g in ok if g.label == lab])) for lab in ("walk", "trot", "pace", "gallop")}
+    c2["ground_fraction_by_gait"] = {lab: float(np.mean([1 - np.mean(g.duty) for g in ok if g.label == lab]))
+                                     for lab in ("walk", "trot", "pace", "gallop")}
     summary["claim2"] = c2
     print("claim 2 ranges:", [(a, round(b, 3), round(c, 3)) for a, b, c in c2["ranges"]])
     print(f"  frequency monotone: {c2['frequency_monotone']} ({ok[0].frequency:.4f} .. {ok[-1].frequency:.4f}); "
-          f"ground time per cycle monotone decreasing: {c2['ground_time_per_cycle_monotone']} ({ground[0]:.2f} .. {ground[-1]:.2f}); "
-          f"ground fraction by gait: { {k: round(v, 3) for k, v in c2['ground_fraction_by_gait'].items()} }")
+          f"ground time per cycle monotone decreasing: {c2['ground_time_per_cycle_monotone']} ({ground[0]:.2f} .. "
+          f"{ground[-1]:.2f}); ground fraction by gait: "
+          f"{ {k: round(v, 3) for k, v in c2['ground_fraction_by_gait'].items()} }")
 
     # claim 3: Fig. 8B, walk then pace
     tr = g3sim.simulate(g3net.preset("fig8a").network, g3sim.go_schedule([[0.1, 0.35]], [0.0, 25.0]), 50.0)
@@ -116,10 +119,17 @@ def _claims(out: Path, step: float, t_run: float) -> None:
     after = [i for i in range(len(starts)) if starts[i] >= 25.0]
     first_pace = next(i for i in after if all(labs[j] == "pace" for j in range(i, len(labs))))
     pace_period = float(np.median(np.diff(starts[first_pace:])))
-    onset_before = {k: [float(v) for v in np.round(gaits.upward_crossings(tr.t, tr.x[0, :, i])[gaits.upward_crossings(tr.t, tr.x[0, :, i]) < 25], 2)] for i, k in enumerate(g3net.LIMBS)}
-    summary["claim3"] = {"cycles": [[float(a), lab] for a, lab in zip(starts, labs)], "pace_from": float(starts[first_pace]),
-                         "pace_period": pace_period, "delay_cycles": (float(starts[first_pace]) - 25.0) / pace_period, "onsets_before_switch": onset_before}
-    run_figure(out / "claim3_fig8b_walk_to_pace.png", tr.t, tr.x[0], g3net.LIMBS, title="Fig. 8B: I 0.1 -> 0.35 at t = 25", go=tr.go[0])
+    onset_before = {k: [float(v) for v in np.round(gaits.upward_crossings(tr.t,
+                                                                          tr.x[0, :,
+                                                                               i])[gaits.upward_crossings(tr.t, tr.x[
+                                                                                   0, :, i]) < 25], 2)] for i,
+                    k in enumerate(g3net.LIMBS)}
+    summary["claim3"] = {"cycles": [[float(a), lab] for a, lab in zip(starts, labs)],
+                         "pace_from": float(starts[first_pace]),
+                         "pace_period": pace_period, "delay_cycles": (float(starts[first_pace]) - 25.0) / pace_period,
+                         "onsets_before_switch": onset_before}
+    run_figure(out / "claim3_fig8b_walk_to_pace.png", tr.t, tr.x[0], g3net.LIMBS,
+               title="Fig. 8B: I 0.1 -> 0.35 at t = 25", go=tr.go[0])
     print(f"claim 3: onsets before the switch {onset_before}; steady pace from t = {starts[first_pace]:.2f} "
           f"({summary['claim3']['delay_cycles']:.2f} pace periods of {pace_period:.2f} after the switch)")
 
@@ -129,22 +139,28 @@ def _claims(out: Path, step: float, t_run: float) -> None:
     for name in HUMAN:
         for mode, kw in ((HUMAN_MODES[0], {}), (HUMAN_MODES[1], {"from_go": 0.1, "switch_at": 30.0})):
             s = g3sim.go_sweep(g3net.preset(name), hl, **kw)
-            r = save_sweep(out, f"claim4_{name}_{mode}", s, f"Sect. 6 {name}: " + ("reset per I" if mode == "reset" else "from the walk at I = 0.1, switch at t = 30"))
+            r = save_sweep(out, f"claim4_{name}_{mode}", s, f"Sect. 6 {name}: "
+                           + ("reset per I" if mode == "reset" else "from the walk at I = 0.1, switch at t = 30"))
             walk = [g for g in s.gaits if g.label == "walk" and max(g.duty) < 0.23]
             run = [g for g in s.gaits if g.label == "walk" and min(g.duty) > 0.31]
             r["walk_duty_max"] = max((max(g.duty) for g in walk), default=None)
             r["run_duty_min"] = min((min(g.duty) for g in run), default=None)
-            r["walk_freq"] = [min((g.frequency for g in walk), default=None), max((g.frequency for g in walk), default=None)]
-            r["run_freq"] = [min((g.frequency for g in run), default=None), max((g.frequency for g in run), default=None)]
+            r["walk_freq"] = [min((g.frequency for g in walk), default=None),
+                              max((g.frequency for g in walk), default=None)]
+            r["run_freq"] = [min((g.frequency for g in run), default=None),
+                             max((g.frequency for g in run), default=None)]
             c4[f"{name}/{mode}"] = r
-            print(f"claim 4 {name} {mode}: ranges {[(a, round(b, 3), round(c, 3)) for a, b, c in r['ranges']]}; walk duty max {r['walk_duty_max']}, "
-                  f"run duty min {r['run_duty_min']}; walk freq {r['walk_freq']}, run freq {r['run_freq']}")
+            print(f"claim 4 {name} {mode}: ranges {[(a, round(b, 3), round(c, 3)) for a, b, c in r['ranges']]}; walk "
+                  f"duty max {r['walk_duty_max']}, run duty min {r['run_duty_min']}; walk freq {r['walk_freq']}, run "
+                  f"freq {r['run_freq']}")
     for name in HUMAN:  # Fig. 10: walk 0.1 -> 0.15 at t = 30
         tr = g3sim.simulate(g3net.preset(name).network, g3sim.go_schedule([[0.1, 0.15]], [0.0, 30.0]), 150.0)
         g = gaits.analyse_gait(tr.t, tr.x[0], t_start=90.0)
         c4[f"{name}/fig10"] = g.as_dict()
-        run_figure(out / f"claim4_{name}_fig10.png", tr.t, tr.x[0], g3net.LIMBS, title=f"Fig. 10 ({name}): I 0.1 -> 0.15 at t = 30: {g.label}", go=tr.go[0])
-        print(f"claim 4 {name} Fig. 10 (0.1 -> 0.15 at t = 30): {g.label}, duty {np.round(g.duty, 3)}, period {g.period:.3f}")
+        run_figure(out / f"claim4_{name}_fig10.png", tr.t, tr.x[0], g3net.LIMBS,
+                   title=f"Fig. 10 ({name}): I 0.1 -> 0.15 at t = 30: {g.label}", go=tr.go[0])
+        print(f"claim 4 {name} Fig. 10 (0.1 -> 0.15 at t = 30): {g.label}, duty {np.round(g.duty, 3)}, period "
+              f"{g.period:.3f}")
     summary["claim4"] = c4
 
     # claim 5: Fig. 5A / 5B, symmetric unmodulated
@@ -162,7 +178,8 @@ def _claims(out: Path, step: float, t_run: float) -> None:
             tr = g3sim.simulate(g3net.preset(name).network, g3sim.go_schedule([go]), 120.0, dt=dt, sample_dt=0.01)
             per.append(gaits.analyse_gait(tr.t, tr.x[0], t_start=60.0).period)
         conv[name] = {"dt": [0.01, 0.005, 0.0025], "period": per, "rel_change_halving_0.005": abs(per[2] / per[1] - 1)}
-        print(f"convergence {name} I={go}: periods {per}, halving 0.005 -> 0.0025 changes it by {conv[name]['rel_change_halving_0.005']:.1e}")
+        print(f"convergence {name} I={go}: periods {per}, halving 0.005 -> 0.0025 changes it by "
+              f"{conv[name]['rel_change_halving_0.005']:.1e}")
     summary["convergence"] = conv
     atomic_write(out / "summary.json", json.dumps(summary, indent=1))
     print(f"wrote {out}/summary.json and figures")

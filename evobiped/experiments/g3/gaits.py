@@ -130,7 +130,8 @@ def cycle_phases(t: np.ndarray, x: np.ndarray, threshold: float = THRESHOLD) -> 
     return starts, ph
 
 
-def analyse_gait(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, threshold: float = THRESHOLD, tol: float = 0.1) -> Gait:
+def analyse_gait(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, threshold: float = THRESHOLD,
+                 tol: float = 0.1) -> Gait:
     """Analyse one run: ``t`` ``(T,)``, ``x`` ``(T, N)``; steady window ``t >= t_start``.
 
     t_start defaults to the second half of the run.
@@ -165,7 +166,9 @@ def analyse_gait(t: np.ndarray, x: np.ndarray, *, t_start: float | None = None, 
     # settling: the first time after which every cycle stays within tol of the steady phases
     if np.all(np.isfinite(phases)):
         bad = np.flatnonzero(np.any(~(circ_dist(ph, phases) <= tol), axis=1))
-        settle = float(starts[bad[-1] + 1]) if bad.size and bad[-1] + 1 < starts.size else (float(starts[0]) if starts.size else float("nan"))
+        settle = float(starts[bad[-1]
+                              + 1]) if bad.size and bad[-1] + 1 < starts.size else (float(starts[
+                                  0]) if starts.size else float("nan"))
     else:
         settle = float("nan")
     return Gait(label, seq, True, period, 1.0 / period, phases, duty, steps, int(w.size - 1), first, settle)

@@ -138,14 +138,20 @@ PRESETS: dict[str, Preset] = {
     p.name: p
     for p in (
         Preset(name="fig4", source="Fig. 4: a walk at I = 0.1", network=_FIG4, go=(0.1,), t_max=60.0, t_run=120.0),
-        Preset(name="fig5a", source="Fig. 5A: symmetric, unmodulated; trot, pace, gallop by I", network=_FIG5A, go=(0.1, 0.2, 0.3, 0.4), t_max=60.0, t_run=120.0),
-        Preset(name="fig5b", source="Fig. 5B: Fig. 5A with B = 1.05 (the pace disappears)", network=replace(_FIG5A, cells=CELLS["fig5b"]), go=(0.1, 0.2, 0.3, 0.4), t_max=60.0, t_run=120.0),
-        Preset(name="fig7", source="Fig. 7: Table 1 modulation, input asymmetry delta = 0.001 on LF", network=_FIG7, go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
-        Preset(name="fig8a", source="Fig. 8A/9: Table 1 modulation, cordlag 0.00025, sidelag 0.0001", network=_FIG8A, go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
-        Preset(name="human", source="Sect. 6, Figs. 10-11: Fig. 4 parameters; walk at I = 0.1, run at I = 0.15", network=replace(_FIG4, cells=CELLS["human"]), go=(0.1, 0.15), t_max=60.0, t_run=120.0),
+        Preset(name="fig5a", source="Fig. 5A: symmetric, unmodulated; trot, pace, gallop by I", network=_FIG5A,
+               go=(0.1, 0.2, 0.3, 0.4), t_max=60.0, t_run=120.0),
+        Preset(name="fig5b", source="Fig. 5B: Fig. 5A with B = 1.05 (the pace disappears)",
+               network=replace(_FIG5A, cells=CELLS["fig5b"]), go=(0.1, 0.2, 0.3, 0.4), t_max=60.0, t_run=120.0),
+        Preset(name="fig7", source="Fig. 7: Table 1 modulation, input asymmetry delta = 0.001 on LF", network=_FIG7,
+               go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
+        Preset(name="fig8a", source="Fig. 8A/9: Table 1 modulation, cordlag 0.00025, sidelag 0.0001", network=_FIG8A,
+               go=(0.1, 0.2, 0.3, 0.4), t_max=30.0, t_run=120.0),
+        Preset(name="human", source="Sect. 6, Figs. 10-11: Fig. 4 parameters; walk at I = 0.1, run at I = 0.15",
+               network=replace(_FIG4, cells=CELLS["human"]), go=(0.1, 0.15), t_max=60.0, t_run=120.0),
         Preset(
             name="human-lagged",
-            source="TUNED, not published: Fig. 4 parameters with Fig. 5A's GO lags (cordlag 0.2, sidelag 0.05); the run keeps the walk's phases when entered from the walk",
+            source="TUNED, not published: Fig. 4 parameters with Fig. 5A's GO lags (cordlag 0.2, sidelag 0.05); the "
+                   "run keeps the walk's phases when entered from the walk",
             network=replace(_FIG4, cells=CELLS["human-lagged"], lags=_lags(0.2, 0.05)),
             go=(0.1, 0.2),
             t_max=60.0,

@@ -54,7 +54,8 @@ def go_schedule(levels, times=None) -> tuple[np.ndarray, np.ndarray]:
     return tm, lv
 
 
-def simulate(net: G3Network, schedule, t_end: float, *, dt: float = 0.005, sample_dt: float = 0.025, state=None) -> OscillatorTrace:
+def simulate(net: G3Network, schedule, t_end: float, *, dt: float = 0.005, sample_dt: float = 0.025,
+             state=None) -> OscillatorTrace:
     """Integrate ``net`` from t = 0 to ``t_end`` under a GO ``schedule`` (see :func:`go_schedule`).
 
     state: optional (x, y) ``(B, N)`` initial state (default zeros: the paper's

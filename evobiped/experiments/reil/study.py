@@ -76,11 +76,14 @@ class StudyConfig:
         task = TASKS[self.run.episode.task]
         if not task.criteria or any(t not in task.term_names for t in TERMS):
             raise ConfigError(f"a study compares fitness criteria by the terms {', '.join(TERMS)}; the run's task "
-                              f"{task.name!r} declares criteria {list(task.criteria)} and terms {list(task.term_names)}")
+                              f"{task.name!r} declares criteria {list(task.criteria)} and terms "
+                              f"{list(task.term_names)}")
         unknown = [c for c in self.conditions if c not in task.criteria]
         if unknown or not self.conditions or len(set(self.conditions)) != len(self.conditions):
-            raise ConfigError(f"study conditions must be distinct names from {', '.join(task.criteria)}, got {list(self.conditions)}")
-        for axis, names, registry in (("controllers", self.controllers, CONTROLLERS), ("optimizers", self.optimizers, OPTIMIZERS)):
+            raise ConfigError(f"study conditions must be distinct names from {', '.join(task.criteria)}, got "
+                              f"{list(self.conditions)}")
+        for axis, names, registry in (("controllers", self.controllers, CONTROLLERS),
+                                      ("optimizers", self.optimizers, OPTIMIZERS)):
             if any(n not in registry for n in names) or len(set(names)) != len(names):
                 raise ConfigError(f"study {axis} must be distinct names from {', '.join(registry)}, got {list(names)}")
         if not (isinstance(self.first_seed, int) and self.first_seed >= 0):
@@ -122,8 +125,10 @@ class StudyConfig:
         return d
 
     def to_dict(self) -> dict:
-        return {"run": self.run.to_dict(), "runs": self.runs, "conditions": list(self.conditions), "controllers": list(self.controllers),
-                "optimizers": list(self.optimizers), "first_seed": self.first_seed, "recheck_seconds": self.recheck_seconds}
+        return {"run": self.run.to_dict(), "runs": self.runs, "conditions": list(self.conditions),
+                "controllers": list(self.controllers),
+                "optimizers": list(self.optimizers), "first_seed": self.first_seed,
+                "recheck_seconds": self.recheck_seconds}
 
     @classmethod
     def from_dict(cls, d: dict, *, where: str = "study") -> "StudyConfig":
@@ -170,7 +175,8 @@ def run_one(directory: str, config: dict, condition: str, recheck_seconds: float
         outcome["walks_indefinitely"] = not bool(r.fell[0])
         outcome["recheck_end_time"] = float(r.end_time[0])
     outcome["forward_walker"] = bool(outcome["walks_indefinitely"] and outcome["distance"] >= WALKER_DISTANCE
-                                     and outcome["heading_deg"] is not None and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
+                                     and outcome["heading_deg"] is not None
+                                         and abs(outcome["heading_deg"]) <= WALKER_ANGLE)
     write_json(d / rundir.OUTCOME, outcome)
     return outcome
 
@@ -212,8 +218,8 @@ def run_study(
         for k in range(config.runs)
     ]
     todo = [t for t in tasks if not (Path(t[0]) / rundir.OUTCOME).is_file()]
-    say(f"study {d}: {len(config.condition_names)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already done, "
-        f"{config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
+    say(f"study {d}: {len(config.condition_names)} condition(s) x {config.runs} runs, {len(tasks) - len(todo)} already "
+        f"done, {config.run.generations} generations, {config.run.episode.seconds:g} s episodes")
     line = Progress("study", len(todo), "runs", emit=say)
     done = 0
 
@@ -222,7 +228,8 @@ def run_study(
         done += 1
         state = "stayed up" if not o["fell"] else f"fell at {o['end_time']:.1f} s"
         way = "" if o["heading_deg"] is None else f" at {o['heading_deg']:+.0f} deg"
-        line.report(done, f"last: {o['condition']} seed {o['seed']}, best fitness {o['fitness']:.2f}, {o['distance']:.1f} m{way} ({state})")
+        line.report(done, f"last: {o['condition']} seed {o['seed']}, best fitness {o['fitness']:.2f}, "
+                          f"{o['distance']:.1f} m{way} ({state})")
 
     if todo and backend == "serial":
         for t in todo:

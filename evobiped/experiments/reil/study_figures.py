@@ -18,11 +18,12 @@ def distance_histograms(outcomes: list[dict], conditions, edges: np.ndarray, pat
 
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
-    for ax, stable, title in ((axes[0], False, "(a) unstable: fell within the episode"), (axes[1], True, "(b) stable: did not fall")):
+    for ax, stable, title in ((axes[0], False, "(a) unstable: fell within the episode"),
+                              (axes[1], True, "(b) stable: did not fall")):
         for i, c in enumerate(conditions):
             d = [o["distance"] for o in outcomes if o["condition"] == c and o["fell"] != stable]
-            ax.hist(d, bins=edges, histtype="step", lw=1.5 + 1.2 * (len(conditions) - 1 - i), color=_COLORS.get(c, f"C{i}"),
-                    label=f"{c} ({len(d)} runs)")
+            ax.hist(d, bins=edges, histtype="step", lw=1.5 + 1.2 * (len(conditions) - 1 - i),
+                    color=_COLORS.get(c, f"C{i}"), label=f"{c} ({len(d)} runs)")
         ax.set_title(title, fontsize=10)
         ax.set_xlabel("distance of the best walker from its start (m)")
         ax.set_xlim(edges[0], edges[-1])
@@ -39,7 +40,8 @@ FITNESS_LABELS = {"plain": "fitness (m): distance", "cyclic": "fitness (m): dist
                   "forward": "fitness (m): (forward displacement + survival credit) × time up / T"}
 
 
-def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str | Path, *, seeds: list[int] | None = None) -> Path:
+def fitness_graphs(histories: dict[str, list[dict[str, np.ndarray]]], path: str | Path, *,
+                   seeds: list[int] | None = None) -> Path:
     """Best fitness per generation of every run, one panel per condition (Fig. 6 for all runs at once), one
     colour per run (``seeds``: the run seed of each run, in order; default 0, 1, ...) named in a legend."""
     from matplotlib.ticker import MaxNLocator

@@ -44,8 +44,8 @@ def summarize(outcomes: list[dict], conditions: tuple[str, ...]) -> list[dict]:
     return rows
 
 
-RUN_COLUMNS = ("condition", "seed", "distance", "heading_deg", "fitness", "fell", "end_time", "generation", "wall_seconds",
-               "walks_indefinitely", "recheck_end_time", "forward_walker")
+RUN_COLUMNS = ("condition", "seed", "distance", "heading_deg", "fitness", "fell", "end_time", "generation",
+               "wall_seconds", "walks_indefinitely", "recheck_end_time", "forward_walker")
 
 
 def _csv(rows: list[dict], columns) -> str:
@@ -62,13 +62,16 @@ def _fmt(x: float, spec: str = ".2f") -> str:
 
 def table_markdown(rows: list[dict], recheck_seconds: float) -> str:
     lines = [
-        f"| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | forward walkers | wall time, runs summed (s) |",
+        "| condition | runs | stable (no fall in the episode) | success rate [95 % Wilson CI] | stable: distance (m) "
+        f"mean ± σ | unstable: distance (m) mean ± σ | walks {recheck_seconds:g} s | forward walkers | wall time, runs "
+        "summed (s) |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['condition']} | {r['runs']} | {r['stable']} | {100 * r['success_rate']:.0f} % [{100 * r['ci95_low']:.0f}, {100 * r['ci95_high']:.0f}] | "
-            f"{_fmt(r['stable_mean_m'])} ± {_fmt(r['stable_std_m'])} | {_fmt(r['unstable_mean_m'])} ± {_fmt(r['unstable_std_m'])} | "
+            f"| {r['condition']} | {r['runs']} | {r['stable']} | {100 * r['success_rate']:.0f} % "
+            f"[{100 * r['ci95_low']:.0f}, {100 * r['ci95_high']:.0f}] | {_fmt(r['stable_mean_m'])} ± "
+            f"{_fmt(r['stable_std_m'])} | {_fmt(r['unstable_mean_m'])} ± {_fmt(r['unstable_std_m'])} | "
             f"{r['walks_indefinitely']} | {r['forward_walkers']} | {r['wall_seconds']:.0f} |"
         )
     return "\n".join(lines) + "\n"
@@ -85,8 +88,10 @@ def write_results(directory: str | Path, config: StudyConfig, outcomes: list[dic
     atomic_write(d / "table.md", table_markdown(rows, config.recheck_seconds))
     write_json(d / "table.json", {"evobiped": __version__, "conditions": rows})
     edges = histogram_edges([o["distance"] for o in outcomes])
-    histories = {c: [rundir.read_history(run_dir(d, c, k, config) / rundir.HISTORY) for k in range(config.runs)] for c in config.condition_names}
+    histories = {c: [rundir.read_history(run_dir(d, c, k, config) / rundir.HISTORY) for k in range(config.runs)]
+                 for c in config.condition_names}
     return [d / "runs.csv", d / "table.csv", d / "table.md", d / "table.json",
             distance_histograms(outcomes, config.condition_names, edges, d / "distances.png"),
-            fitness_graphs(histories, d / "fitness_graphs.png", seeds=[config.first_seed + k for k in range(config.runs)])]
+            fitness_graphs(histories, d / "fitness_graphs.png",
+                           seeds=[config.first_seed + k for k in range(config.runs)])]
 

@@ -10,7 +10,8 @@ from .parameters import preset_genome
 from .walking import TagaWalker
 
 
-def isolated_activity(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1, timestep: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
+def isolated_activity(u0: float = 5.5, *, seconds: float = 10.0, initial_u: float = 0.1,
+                      timestep: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
     """Fig. 6B: the rhythm generator alone (Feed = 0): times (T,) s and inner states u (T, 12)."""
     ctrl = Matsuoka(n_outputs=6, u0=u0, feedback="none", initial_u=initial_u).bound(timestep)
     params = ctrl.decode(preset_genome(ctrl)[None])

@@ -86,7 +86,8 @@ def push(
     return w, rows
 
 
-def ground_switch(kg, bg, *, u0: float = 5.5, before: float = 10.0, after: float = 15.0, window: float = 10.0, **options) -> list[dict]:
+def ground_switch(kg, bg, *, u0: float = 5.5, before: float = 10.0, after: float = 15.0, window: float = 10.0,
+                  **options) -> list[dict]:
     """Claim 6, second reading: walk ``before`` s on the nominal ground (Appendix D), then
     switch walker p to ground (kg[p], bg[p]) and walk ``after`` s more; metrics over the last ``window`` s."""
     kg, bg = np.asarray(kg, float), np.asarray(bg, float)

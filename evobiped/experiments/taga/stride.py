@@ -104,7 +104,8 @@ def analyse_strides(
     return StrideMetrics(gait, n, L, D, L / D, ds_frac, fl_frac, with_ds, with_fl, hip_min, hip_max)
 
 
-def per_stride(t: np.ndarray, contact: np.ndarray, foot_x: np.ndarray, *, min_phase: float = 0.01) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def per_stride(t: np.ndarray, contact: np.ndarray, foot_x: np.ndarray, *,
+               min_phase: float = 0.01) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every stride of leg 0: (start times (n,), lengths (n,) m, durations (n,) s)."""
     t = np.asarray(t, float)
     td = contact_onsets(clean(t, contact[:, 0], min_phase))

@@ -29,7 +29,8 @@ def _draw_sticks(ax, tr: dict, p: int, idx: np.ndarray, terrain=None, shift: flo
             if tr["contact"][i, p, leg]:
                 ax.plot(ax_ + dx, ay_, "k.", ms=3)
         ax.plot(hx + dx, hz, "o", color="0.2", ms=2.5)
-    x = np.linspace(tr["ankle"][idx, p, :, 0].min() - 0.3 + 0, tr["ankle"][idx, p, :, 0].max() + 0.3 + shift * len(idx), 200)
+    x = np.linspace(tr["ankle"][idx, p, :, 0].min() - 0.3 + 0, tr["ankle"][idx, p, :, 0].max() + 0.3 + shift * len(idx),
+                    200)
     ax.plot(x, terrain(x) if terrain is not None else 0 * x, color="0.4", lw=1.2)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m): forward, the walker's initial facing")
@@ -39,8 +40,10 @@ def _draw_sticks(ax, tr: dict, p: int, idx: np.ndarray, terrain=None, shift: flo
 def _stick_key(ax, marks: bool = False) -> None:
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=LEG_COLOURS[1], lw=1.5, label="left leg"), Line2D([], [], color=LEG_COLOURS[0], lw=1.5, label="right leg"),
-               Line2D([], [], marker="o", ls="", color="0.2", ms=4, label="hip"), Line2D([], [], marker=".", ls="", color="k", label="foot on the ground")]
+    handles = [Line2D([], [], color=LEG_COLOURS[1], lw=1.5, label="left leg"),
+               Line2D([], [], color=LEG_COLOURS[0], lw=1.5, label="right leg"),
+               Line2D([], [], marker="o", ls="", color="0.2", ms=4, label="hip"),
+               Line2D([], [], marker=".", ls="", color="k", label="foot on the ground")]
     if marks:
         handles.append(Line2D([], [], marker="v", ls="", color="tab:green", label="push"))
     ax.legend(handles=handles, frameon=False, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
@@ -62,7 +65,8 @@ def taga_stick_figure(path: Path, tr: dict, *, p: int = 0, t0: float = 0.0, t1: 
     return _save(fig, path)
 
 
-def cycle_figure(path: Path, tr: dict, start: float, end: float, *, p: int = 0, every: float = 0.02, title: str = "") -> Path:
+def cycle_figure(path: Path, tr: dict, start: float, end: float, *, p: int = 0, every: float = 0.02,
+                 title: str = "") -> Path:
     """Fig. 5B/9B-style: one cycle traced every ``every`` s, split into the phases with
     both feet down / neither down (left panel) and one foot down (right panel)."""
     t = tr["t"]
@@ -100,7 +104,8 @@ def bifurcation_figure(path: Path, up: list[dict], down: list[dict], *, title: s
 
     Squares: walking, diamonds: running (filled: sweep up, open: sweep down); falls
     are omitted."""
-    keys = (("stride_length", "stride length (m)"), ("cycle_duration", "stride cycle duration (s)"), ("speed", "speed (m/s)"))
+    keys = (("stride_length", "stride length (m)"), ("cycle_duration", "stride cycle duration (s)"),
+            ("speed", "speed (m/s)"))
     fig, axes = pyplot().subplots(1, 3, figsize=(14, 4))
     for ax, (k, label) in zip(axes, keys):
         for rows, fill, dname in ((up, True, "up"), (down, False, "down")):

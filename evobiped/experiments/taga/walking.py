@@ -162,9 +162,11 @@ class TagaWalker:
         a = self.trace.arrays()
         out = []
         for p in range(self.P):
-            m: StrideMetrics = analyse_strides(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0], a["hip"][:, p, 1], t_start=t_start, t_end=t_end)
+            m: StrideMetrics = analyse_strides(a["t"], a["contact"][:, p], a["ankle"][:, p, :, 0], a["hip"][:, p, 1],
+                                               t_start=t_start, t_end=t_end)
             fell = bool(not self.alive[p])
-            d = {"u0": float(self.params["u0"][p, 0]), "fell": fell, "fell_at": float(self.fell_at[p]) if fell else None, "unstable": bool(self.unstable[p])}
+            d = {"u0": float(self.params["u0"][p, 0]), "fell": fell, "fell_at": float(self.fell_at[p]) if fell
+                 else None, "unstable": bool(self.unstable[p])}
             d.update(m.as_dict())
             if fell:
                 d["gait"] = "fell"

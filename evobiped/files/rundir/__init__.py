@@ -4,8 +4,8 @@ record of every individual (:mod:`.individuals_file`), the lock (:mod:`.locking`
 
 A run directory (``evobiped evolve --out DIR``)::
 
-    start.json             the start genome (genome-file format, ``source``: where it came from), for a run started --from
-    config.json            the full resolved RunConfig
+    start.json             the start genome (genome-file format, ``source``: where it came from), for a run started
+    --from config.json            the full resolved RunConfig
     checkpoint.json        the commit point, the run's record (:mod:`.record`): its format, optimizer state,
                            history, best genome, outcomes after the last generation
     history.csv            one row per generation (HISTORY_COLUMNS)           } derived from the checkpoint,
@@ -50,9 +50,12 @@ from .generation_check import check_generation_files, digest
 from .record import (DIGESTS_KEY, FORMAT, FORMAT_KEY, OPTIMIZER_KEY, SETTINGS_KEY, START_KEY, RunRecord, check_start,
                      upgrade)
 from .genome_source import FROM_CHECKPOINT, GenomeSource, check_at_rest, checkpoint_mark, genome_path, resolve_genome
-from .individuals_file import INDIVIDUALS, append_individuals, committed_size, cut_individuals, individuals_text, read_individuals
-from .history_file import HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history, write_history
-from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HISTORY, LOCK, OUTCOME, RECORDING, START, SUMMARY,
+from .individuals_file import (INDIVIDUALS, append_individuals, committed_size, cut_individuals, individuals_text,
+                               read_individuals)
+from .history_file import (HISTORY_COLUMNS, TERM_PREFIX, column, history_columns, history_text, read_history,
+                           write_history)
+from .layout import (BEST, CHECKPOINT, CONFIG, GENERATIONS, GENOME_OUTPUTS, HISTORY, LOCK, OUTCOME, RECORDING, START,
+                     SUMMARY,
                      figures_dir, generation_file, generation_files, generation_of, genome_outputs, is_unused, label,
                      remove_stale_temporaries, replay_file, robustness_stem)
 from .locking import lock, unlock
@@ -60,7 +63,9 @@ from .derived_file import sync_file
 from .summary_file import agreeing_summary, summary_table, write_summary_file
 
 __all__ = [
-    "ARCHIVE", "ArchiveContents", "archive_text", "agreeing_summary", "summary_table", "sync_file", "write_summary_file", "BEST", "CHECKPOINT", "CONFIG", "DIGESTS_KEY", "check_generation_files", "digest", "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
+    "ARCHIVE", "ArchiveContents", "archive_text", "agreeing_summary", "summary_table", "sync_file",
+    "write_summary_file", "BEST", "CHECKPOINT", "CONFIG", "DIGESTS_KEY", "check_generation_files", "digest",
+    "GENERATIONS", "GENOME_OUTPUTS", "GenomeSource", "HISTORY", "HISTORY_COLUMNS",
     "INDIVIDUALS", "LOCK", "FORMAT", "FORMAT_KEY", "OPTIMIZER_KEY", "RunRecord", "check_start", "upgrade",
     "OUTCOME", "RECORDING", "SETTINGS_KEY", "START",
     "START_KEY", "SUMMARY", "TERM_PREFIX", "append_individuals", "column", "committed_size", "cut_individuals",

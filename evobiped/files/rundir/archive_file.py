@@ -1,5 +1,5 @@
-"""A MAP-Elites run's archive as a file: ``archive.json`` in the run directory, derived from the checkpoint at each commit
-(from what the optimizer gives, :class:`ArchiveContents`; the optimizer writes no file).
+"""A MAP-Elites run's archive as a file: ``archive.json`` in the run directory, derived from the checkpoint at each
+commit (from what the optimizer gives, :class:`ArchiveContents`; the optimizer writes no file).
 
 ::
 
@@ -56,7 +56,8 @@ def archive_text(archive: ArchiveContents) -> str:
                         "end_time": float(elites["end_time"][k]), "genome": [float(x) for x in elites["genome"][k]]})
             for k, cell in enumerate(cells)]
     p = np.asarray(archive.progress, float).reshape(-1, 3)
-    prog = {"evaluations": [int(x) for x in p[:, 0]], "cells": [int(x) for x in p[:, 1]], "qd_score": [float(x) for x in p[:, 2]]}
+    prog = {"evaluations": [int(x) for x in p[:, 0]], "cells": [int(x) for x in p[:, 1]],
+            "qd_score": [float(x) for x in p[:, 2]]}
     text = json.dumps(head, indent=2)[:-2] + ',\n  "elites": [\n' + ",\n".join("    " + r for r in rows)
     return text + ("\n  ],\n" if rows else "],\n") + '  "progress": ' + json.dumps(prog) + "\n}\n"
 
@@ -64,8 +65,8 @@ def archive_text(archive: ArchiveContents) -> str:
 @dataclass(frozen=True)
 class Archive:
     """A read archive.json: the measures' names, bounds and resolution, and the elites' arrays in cell order (``cell``
-    ``(E, 2)``, ``measures`` ``(E, 2)``, ``objective``, ``fell``, ``end_time`` ``(E,)``, ``genome`` ``(E, G)``); ``progress``
-    ``(generations, 3)``."""
+    ``(E, 2)``, ``measures`` ``(E, 2)``, ``objective``, ``fell``, ``end_time`` ``(E,)``, ``genome`` ``(E, G)``);
+    ``progress`` ``(generations, 3)``."""
 
     path: Path
     measures: tuple[str, str]
@@ -85,8 +86,9 @@ class Archive:
         hit = np.flatnonzero((self.cell == np.asarray(cell)).all(axis=1))
         if not len(hit):
             lo, hi = self.cell.min(axis=0), self.cell.max(axis=0)
-            raise UserError(f"{self.path}: cell {cell[0]},{cell[1]} holds no elite (of {self.resolution[0]}x{self.resolution[1]} cells "
-                            f"{len(self.cell)} are filled, i {lo[0]}-{hi[0]}, j {lo[1]}-{hi[1]})")
+            raise UserError(f"{self.path}: cell {cell[0]},{cell[1]} holds no elite (of "
+                            f"{self.resolution[0]}x{self.resolution[1]} cells {len(self.cell)} are filled, i "
+                            f"{lo[0]}-{hi[0]}, j {lo[1]}-{hi[1]})")
         return int(hit[0])
 
 
@@ -105,8 +107,10 @@ def read_archive(source: str | Path) -> Archive:
         if not e:
             raise ValueError("holds no elite")
         col = lambda k, dtype=float: np.array([x[k] for x in e], dtype)  # noqa: E731
-        a = Archive(path, tuple(t["measures"]), np.array(t["low"], float), np.array(t["high"], float), tuple(t["resolution"]),
-                    col("cell", int), col("measures"), col("objective"), col("fell", bool), col("end_time"), col("genome"),
+        a = Archive(path, tuple(t["measures"]), np.array(t["low"], float), np.array(t["high"], float),
+                    tuple(t["resolution"]),
+                    col("cell", int), col("measures"), col("objective"), col("fell", bool), col("end_time"),
+                    col("genome"),
                     np.array([t["progress"][k] for k in ("evaluations", "cells", "qd_score")], float).T.reshape(-1, 3))
         if a.cell.shape != (len(e), 2) or a.values.shape != (len(e), 2) or a.genome.ndim != 2 or len(a.measures) != 2:
             raise ValueError("each elite needs a cell and two measures")

@@ -19,7 +19,8 @@ def sync_file(directory: Path, name: str, text: str | None, repairs: list[str] |
     if current == text:
         return
     if repairs is not None:
-        repairs.append(f"{name} {'rewritten from the checkpoint' if text is not None else 'removed (no generation is complete)'}")
+        repairs.append(
+            f"{name} {'rewritten from the checkpoint' if text is not None else 'removed (no generation is complete)'}")
     if text is None:
         path.unlink(missing_ok=True)
     else:

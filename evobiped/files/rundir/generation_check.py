@@ -82,7 +82,8 @@ def check_generation_files(directory: str | Path, ck: dict | None = None) -> lis
             text = _text(d / BEST)
             if _holds(text, g, ck, genome=True):
                 atomic_write(path, text)
-                repairs.append(f"{name} rewritten from the checkpoint (it was {'missing' if missing else 'cut, edited or replaced'})")
+                repairs.append(f"{name} rewritten from the checkpoint (it was "
+                               f"{'missing' if missing else 'cut, edited or replaced'})")
                 continue
         raise UserError(f"{d / name} {what}, and the checkpoint does not hold that generation's best genome: "
                         f"restore the file from a copy of the run")

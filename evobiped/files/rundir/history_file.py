@@ -1,4 +1,5 @@
-"""history.csv: one row per generation (HISTORY_COLUMNS, then the best's terms and the run's further columns), its reader and writer."""
+"""history.csv: one row per generation (HISTORY_COLUMNS, then the best's terms and the run's further columns), its
+reader and writer."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ def _term_names(terms: list[dict] | None) -> list[str]:
     return list(dict.fromkeys(k for t in terms or () for k in t))
 
 
-def history_columns(rows: list[list], terms: list[dict] | None = None, extra: list[dict] | None = None) -> dict[str, np.ndarray]:
+def history_columns(rows: list[list], terms: list[dict] | None = None,
+                    extra: list[dict] | None = None) -> dict[str, np.ndarray]:
     """History rows (HISTORY_COLUMNS each), the best's terms per generation (name -> value) and further columns per
     generation (``extra``: name -> value, e.g. a curriculum's phase) -> ``{column: (n_generations,) array}``, as
     :func:`read_history` gives (a missing value: NaN)."""
@@ -43,7 +45,8 @@ def column(rows: list[list], name: str) -> list:
 
 
 def read_history(path: str | Path) -> dict[str, np.ndarray]:
-    """``history.csv`` -> ``{column: (n_generations,) float array}``; needs generation/best/mean (UserError otherwise)."""
+    """``history.csv`` -> ``{column: (n_generations,) float array}``; needs generation/best/mean (UserError
+    otherwise)."""
     path = Path(path)
     if not path.is_file():
         raise UserError(f"history file not found: {path}")
@@ -59,12 +62,14 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
     except (TypeError, ValueError) as exc:
         raise UserError(f"{path}: not a number in the history ({exc})") from None
     for name, values in out.items():
-        bad = np.isnan(values) | (values == np.inf) if name in _FITNESS else ~np.isfinite(values) if name in HISTORY_COLUMNS else None
+        bad = np.isnan(values) | (values == np.inf) if name in _FITNESS else ~np.isfinite(
+            values) if name in HISTORY_COLUMNS else None
         if name in _COUNTS:
             bad = bad | (values < 0) | (values != np.round(values))
         if bad is not None and bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise UserError(f"{path}: {name} of row {row + 1} is {values[row]:g}, not a {'count' if name in _COUNTS else 'fitness' if name in _FITNESS else 'number'}")
+            raise UserError(f"{path}: {name} of row {row + 1} is {values[row]:g}, not a "
+                            f"{'count' if name in _COUNTS else 'fitness' if name in _FITNESS else 'number'}")
     if not np.array_equal(out["generation"], np.arange(len(rows))):
         raise UserError(f"{path}: the generations must be numbered 0, 1, 2, ... one row each")
     return out
@@ -79,7 +84,8 @@ def history_text(rows: list[list], terms: list[dict] | None = None, extra: list[
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([*HISTORY_COLUMNS, *(TERM_PREFIX + n for n in names), *more])
-    w.writerows([*r, *("nan" if t.get(n) is None else t[n] for n in names), *("nan" if x.get(n) is None else x[n] for n in more)]
+    w.writerows([*r, *("nan" if t.get(n) is None else t[n] for n in names),
+                 *("nan" if x.get(n) is None else x[n] for n in more)]
                 for r, t, x in zip(rows, padded, padded_more))
     return buf.getvalue()
 

@@ -1,4 +1,5 @@
-"""individuals.jsonl: an append-only record of every individual of a run, one JSON line per population row per generation.
+"""individuals.jsonl: an append-only record of every individual of a run, one JSON line per population row per
+generation.
 
 Each line is a table (keys in this order, :data:`INDIVIDUAL_KEYS`)::
 
@@ -28,7 +29,8 @@ from ...core.errors import UserError
 from ...core.fileio import WriteError
 
 INDIVIDUALS = "individuals.jsonl"
-INDIVIDUAL_KEYS = ("generation", "row", "evaluated", "previous", "parents", "fitness", "fell", "unstable", "end_time", "terms")
+INDIVIDUAL_KEYS = ("generation", "row", "evaluated", "previous", "parents", "fitness", "fell", "unstable", "end_time",
+                   "terms")
 
 
 def individuals_text(rows: list[dict]) -> str:
@@ -37,7 +39,8 @@ def individuals_text(rows: list[dict]) -> str:
 
 
 def append_individuals(path: str | Path, rows: list[dict]) -> None:
-    """Append ``rows``' lines to ``path`` and make them durable (fsync); :class:`~evobiped.core.fileio.WriteError` if it cannot."""
+    """Append ``rows``' lines to ``path`` and make them durable (fsync); :class:`~evobiped.core.fileio.WriteError` if it
+    cannot."""
     try:
         with open(path, "a") as f:
             f.write(individuals_text(rows))

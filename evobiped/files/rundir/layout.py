@@ -61,7 +61,8 @@ def genome_outputs(genome_path: Path) -> Path:
 
 
 def robustness_stem(label: str) -> str:
-    """File stem of the robustness battery's results in a run directory: ``robustness`` for the best, ``robustness_<label>``."""
+    """File stem of the robustness battery's results in a run directory: ``robustness`` for the best,
+    ``robustness_<label>``."""
     return "robustness" if label == "best" else f"robustness_{label}"
 
 
@@ -75,13 +76,15 @@ def remove_stale_temporaries(directory: Path) -> list[Path]:
 
 def is_unused(directory: Path) -> bool:
     """True for a directory that holds no run: nothing, or only what a run killed before writing its config leaves
-    (the lock, an empty generations folder, temporaries, the start genome); a directory that cannot be listed is a WriteError."""
+    (the lock, an empty generations folder, temporaries, the start genome); a directory that cannot be listed is a
+    WriteError."""
     try:
         configured = (Path(directory) / CONFIG).exists()
         for p in Path(directory).iterdir():
             temporary = p.name.startswith(".") and p.name.endswith(".tmp")
             start = p.name == START and not configured
-            if not (p.name == LOCK or temporary or start or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
+            if not (p.name == LOCK or temporary or start
+                    or (p.name == GENERATIONS and p.is_dir() and not any(p.iterdir()))):
                 return False
     except OSError as exc:
         raise WriteError(exc.filename or directory, exc) from None

@@ -1,5 +1,5 @@
-"""A gait repertoire (a MAP-Elites archive) as PNG figures: the grid's cells coloured by their elite, and the QD score and
-coverage against the evaluations."""
+"""A gait repertoire (a MAP-Elites archive) as PNG figures: the grid's cells coloured by their elite, and the QD score
+and coverage against the evaluations."""
 
 from __future__ import annotations
 
@@ -10,12 +10,14 @@ import numpy as np
 from .figures import pyplot, save_figure
 
 
-def archive_figure(path: str | Path, *, cells: np.ndarray, objective: np.ndarray, walking: np.ndarray, names: tuple[str, str],
-                   low: np.ndarray, high: np.ndarray, resolution: tuple[int, int], objective_label: str, who: str = "") -> Path:
+def archive_figure(path: str | Path, *, cells: np.ndarray, objective: np.ndarray, walking: np.ndarray,
+                   names: tuple[str, str],
+                   low: np.ndarray, high: np.ndarray, resolution: tuple[int, int], objective_label: str,
+                   who: str = "") -> Path:
     """Left: each filled cell coloured by its elite's objective (white: empty); right: the cells whose elite walks
     (``walking`` ``(E,)`` bool), coloured by the second measure's value at the cell centre to read turning left from
-    right.  ``cells`` ``(E, 2)`` grid coordinates (i along ``names[0]``, x axis), ``objective`` ``(E,)``; ``names`` the two
-    measures with units, ``low``/``high`` ``(2,)`` their bounds, ``resolution`` the cells along each."""
+    right.  ``cells`` ``(E, 2)`` grid coordinates (i along ``names[0]``, x axis), ``objective`` ``(E,)``; ``names`` the
+    two measures with units, ``low``/``high`` ``(2,)`` their bounds, ``resolution`` the cells along each."""
     plt = pyplot()
     grid = np.full(tuple(resolution), np.nan)
     grid[cells[:, 0], cells[:, 1]] = objective
@@ -39,7 +41,8 @@ def archive_figure(path: str | Path, *, cells: np.ndarray, objective: np.ndarray
     return save_figure(fig, path)
 
 
-def progress_figure(path: str | Path, *, progress: np.ndarray, walking_cells: int, cells_total: int, who: str = "") -> Path:
+def progress_figure(path: str | Path, *, progress: np.ndarray, walking_cells: int, cells_total: int,
+                    who: str = "") -> Path:
     """The QD score (the sum of the elites' objectives; left axis) and the cells filled (right axis, % of
     ``cells_total``) after each generation, against the evaluations so far; ``progress`` ``(generations, 3)``
     evaluations, cells, QD score as archive.json keeps it; ``walking_cells`` noted at the end."""
@@ -53,7 +56,8 @@ def progress_figure(path: str | Path, *, progress: np.ndarray, walking_cells: in
     b.plot(ev, 100 * filled / cells_total, color="tab:blue", label="coverage")
     b.set_ylabel("coverage (% of cells filled)", color="tab:blue")
     b.set_ylim(0, 100)
-    a.set_title(f"Archive growth: {int(filled[-1])} cells filled, {walking_cells} of them walking, after {int(ev[-1])} evaluations"
+    a.set_title(f"Archive growth: {int(filled[-1])} cells filled, {walking_cells} of them walking, after {int(ev[-1])} "
+                "evaluations"
                 + (f"\n{who}" if who else ""), fontsize=10)
     a.grid(alpha=0.3)
     fig.tight_layout()

@@ -77,14 +77,16 @@ def _title(what: str, who: str, traj: Trajectory | None = None) -> str:
 
 
 def fitness_label(config) -> str:
-    """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit (``Task.fitness_label``)."""
+    """The y-axis label of a fitness graph for an ``EpisodeConfig``: the quantity and its unit
+    (``Task.fitness_label``)."""
     return config.parts()[2].fitness_label()
 
 
 def fitness_graph(history: dict[str, np.ndarray], path: str | Path, *, title: str = "Fitness per generation",
                   ylabel: str = "fitness: distance from the start (m)", who: str = "") -> Path:
-    """Each generation's best (black; "this generation's" in the progress lines) and mean (grey) fitness, as in Fig. 6; ``history`` from :func:`evobiped.files.rundir.read_history`;
-    ``ylabel`` from :func:`fitness_label`.  The last tick is the last generation."""
+    """Each generation's best (black; "this generation's" in the progress lines) and mean (grey) fitness, as in Fig. 6;
+    ``history`` from :func:`evobiped.files.rundir.read_history`; ``ylabel`` from :func:`fitness_label`.  The last tick
+    is the last generation."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     g = history["generation"]
@@ -129,7 +131,8 @@ def motor_activations(traj: Trajectory, path: str | Path, *, seconds: float | No
         ax.tick_params(labelsize=7)
     fig.supylabel(quantity, fontsize=9)
     axes[-1, 0].set_xlabel("time (s)")
-    what = "Motor neuron outputs" if unit else "Joint target angles (the controller's outputs)" if target else "Motor outputs"
+    what = ("Motor neuron outputs" if unit else "Joint target angles (the controller's outputs)" if target
+            else "Motor outputs")
     if traj.stance_frame:
         what += " in the stance frame"
     if traj.direct_path:
@@ -154,7 +157,8 @@ def motion_sequence(traj: Trajectory, path: str | Path, *, frames: int = 12, col
     spacing = float(traj.state_time[idx[1]] - traj.state_time[idx[0]]) if len(idx) > 1 else 0.0
     rows_n = int(np.ceil(len(idx) / columns))
     axis, parts = _side_axis(traj), shapes(traj.model)
-    fig, axes = plt.subplots(rows_n, columns, figsize=(2.4 * columns, 2.2 * rows_n + 0.8), squeeze=False, sharex=True, sharey=True)
+    fig, axes = plt.subplots(rows_n, columns, figsize=(2.4 * columns, 2.2 * rows_n + 0.8), squeeze=False, sharex=True,
+                             sharey=True)
     h, z = _side_points(traj, parts, idx, axis)
     height = max(float(z.max()) + 0.1, 0.5)
     lo, hi = float(h.min()) - 0.1, float(h.max()) + 0.1
@@ -208,8 +212,10 @@ def stick_figure(traj: Trajectory, path: str | Path, *, every: float = 0.1, spac
         ax.set_xlim((lo + hi) / 2 - 0.5, (lo + hi) / 2 + 0.5)
     ax.set_xlabel("position along the initial facing (m; negative = backwards)")
     ax.set_ylabel("height (m)")
-    shown = f"first {traj.state_time[last]:.1f} s of {traj.end_time:g} s" if last < len(h) - 1 else f"{traj.end_time:g} s"
-    ax.set_title(_title(f"Stick figures {spacing:g} m or more apart ({len(rows)} in the {shown}); times below the ground line",
+    shown = f"first {traj.state_time[last]:.1f} s of {traj.end_time:g} s" if last < len(
+        h) - 1 else f"{traj.end_time:g} s"
+    ax.set_title(_title(f"Stick figures {spacing:g} m or more apart ({len(rows)} in the {shown}); times below the "
+                        "ground line",
                         f"{who or traj.body_name}; walked {walk_text(traj)}"), fontsize=9)
     _side_key(ax, traj, parts, com=True)
     return save_figure(fig, path)

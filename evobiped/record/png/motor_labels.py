@@ -13,7 +13,8 @@ def _motor_quantity(traj: Trajectory) -> tuple[bool, bool, str]:
     motor = traj.neurons[:, : traj.n_motor]
     unit = motor.size == 0 or (np.nanmin(motor) >= 0.0 and np.nanmax(motor) <= 1.0)  # else e.g. angles, torques
     target = traj.action_kind == "position"  # PD target angles
-    quantity = "output (0-1)" if unit else "target angle (rad)" if target else "torque (N m)" if traj.action_kind == "torque" else "command"
+    quantity = ("output (0-1)" if unit else "target angle (rad)" if target else "torque (N m)"
+                if traj.action_kind == "torque" else "command")
     return unit, target, quantity
 
 
@@ -25,7 +26,8 @@ def motor_file(traj: Trajectory) -> str:
 
 
 def _motor_label(traj: Trajectory, i: int) -> str:
-    """Motor output ``i``'s name: its actuator, or in the stance frame its joint on the stance (first half) or swing leg."""
+    """Motor output ``i``'s name: its actuator, or in the stance frame its joint on the stance (first half) or swing
+    leg."""
     if i >= len(traj.actuator_names):
         return f"output {i + 1}"
     name = traj.actuator_names[i]

@@ -26,13 +26,15 @@ def robustness_figure(trials: list[Trial], path: str | Path, *, title: str, seco
     # a family whose trials are named gets the room of its lines of text: one unit per line, bars one unit high
     room = np.array([1.0 + len(few[f]) if f in few else 1.4 for f in families])
     y = room.sum() - (np.cumsum(room) - room / 2)
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12.5, max(5.6, 1.6 + 0.2 * room.sum())), gridspec_kw={"width_ratios": [1, 1.4]})
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12.5, max(5.6, 1.6 + 0.2 * room.sum())),
+                               gridspec_kw={"width_ratios": [1, 1.4]})
     a.barh(y, [100 * r["survival"] for r in rows], color=[colours[f] for f in families], height=0.9)
     a.set_ylim(0, room.sum())
     for yi, r in zip(y, rows):
         text = f"{r['survived']}/{r['trials']}"
         if r["family"] in few:  # name the values: which stayed up, which fell
-            text += "".join(f"\n{t.label}: {'up' if t.survived else f'fell at {t.end_time:.1f} s'}" for t in few[r["family"]])
+            text += "".join(f"\n{t.label}: {'up' if t.survived else f'fell at {t.end_time:.1f} s'}"
+                            for t in few[r["family"]])
         a.text(min(100 * r["survival"] + 2, 60), yi, text, va="center", fontsize=9 if r["family"] not in few else 7,
                bbox=dict(facecolor="white", edgecolor="none", alpha=0.85, pad=1.0))  # readable over a long bar
     a.set_yticks(y, families, fontsize=8)

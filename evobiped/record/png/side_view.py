@@ -41,7 +41,8 @@ def _color(name: str) -> str:
     return LEFT if "left" in n else RIGHT if "right" in n else OTHER
 
 
-def _side_points(traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _side_points(traj: Trajectory, parts: list[Shape], rows: np.ndarray,
+                 axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Side-view coordinates ``(R, n)`` (along ``axis``, height) of every shape's extreme points."""
     pts = []
     for s in parts:
@@ -55,7 +56,8 @@ def _side_points(traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: n
     return allp[..., :2] @ axis, allp[..., 2]
 
 
-def _draw_walker(ax, traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray, offset: float = 0.0, alpha: float = 1.0) -> None:
+def _draw_walker(ax, traj: Trajectory, parts: list[Shape], rows: np.ndarray, axis: np.ndarray, offset: float = 0.0,
+                 alpha: float = 1.0) -> None:
     """Side view of the walker at state rows ``rows``: horizontal = along ``axis``, vertical = z."""
     import matplotlib.patches as mpatches
 

@@ -24,15 +24,15 @@ def _travel_heading(traj: Trajectory, window: float = 1.0) -> tuple[np.ndarray, 
     return traj.state_time[k:], ang
 
 
-def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | None = None, labels: list[str] | None = None,
-                    seconds: float | None = None, who: str = "") -> Path:
+def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | None = None,
+                    labels: list[str] | None = None, seconds: float | None = None, who: str = "") -> Path:
     """How the walker steers, one colour per presentation (sound source), as in Fig. 12 (Fig. 13's question):
     the direction it travels relative to its initial facing (deg, over 1 s), the ear signal it hears if it
     has ears, and what the controller does differently: with two sources every output's mean after the first
     2 s, source 1 minus source 2 (the bias that steers), else one output per source overlaid, as
-    commanded and as its 1 s running mean: ``neuron`` (the paper's Fig. 13: right hip sagittal = neuron 4, index 3), by default the one whose
-    running means differ most between the sources.  ``seconds``: the motor output's first this many seconds
-    (default None: all; 10 keeps the rhythm visible)."""
+    commanded and as its 1 s running mean: ``neuron`` (the paper's Fig. 13: right hip sagittal = neuron 4, index 3), by
+    default the one whose running means differ most between the sources.  ``seconds``: the motor output's first this
+    many seconds (default None: all; 10 keeps the rhythm visible)."""
     plt = pyplot()
     colors = plt.get_cmap("tab10").colors
     labels = labels or [f"presentation {j + 1}" for j in range(len(trajs))]
@@ -61,9 +61,12 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | 
             axes[-1].plot(tr.command_time[keep], tr.neurons[keep, neuron], color=c, lw=0.6, alpha=0.35)
             axes[-1].plot(running(tr.command_time), running(tr.neurons[:, neuron]), color=c, lw=2.0)
     if len(trajs) == 2:  # two sources: every output's mean over the walk (after the first 2 s), source 1 minus source 2
-        names = [trajs[0].actuator_names[i] if i < len(trajs[0].actuator_names) else f"output {i + 1}" for i in range(trajs[0].n_motor)]
-        after = min(2.0, 0.5 * min(float(tr.command_time[-1]) for tr in trajs))  # the start-up aside (short episodes: their second half)
-        bias = [1000 * (tr0.neurons[tr0.command_time >= after, i].mean() - tr1.neurons[tr1.command_time >= after, i].mean())
+        names = [trajs[0].actuator_names[i] if i < len(trajs[0].actuator_names) else f"output {i + 1}"
+                 for i in range(trajs[0].n_motor)]
+        # the start-up aside (short episodes: their second half)
+        after = min(2.0, 0.5 * min(float(tr.command_time[-1]) for tr in trajs))
+        bias = [1000 * (tr0.neurons[tr0.command_time >= after, i].mean()
+                        - tr1.neurons[tr1.command_time >= after, i].mean())
                 for tr0, tr1 in [trajs] for i in range(trajs[0].n_motor)]
         bars = axes[-1].bar(np.arange(len(names)), bias, color="0.5")
         axes[-1].bar_label(bars, fmt="%+.1f", fontsize=7)
@@ -83,7 +86,8 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | 
         what = "each output's bias between the two sources"
     else:
         axes[-1].set_ylabel(f"{name}\n{quantity}", fontsize=8)
-        axes[-1].set_xlabel("time (s)" + (f", first {seconds:g} s" if seconds else "") + "; thin: as commanded, thick: 1 s running mean",
+        axes[-1].set_xlabel("time (s)" + (f", first {seconds:g} s" if seconds else "")
+                            + "; thin: as commanded, thick: 1 s running mean",
                             fontsize=8)
         what = f"motor neuron {neuron + 1} ({name})" if unit else f"{name} {'target' if target else 'command'}"
     if unit and len(trajs) != 2:
@@ -91,8 +95,8 @@ def steering_neuron(trajs: list[Trajectory], path: str | Path, *, neuron: int | 
     for ax in axes:
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
-    fig.suptitle(_title(f"Steering toward each source: direction of travel{', ear signal' if hearing else ''} and {what}",
-                        who, trajs[0]), fontsize=9)
+    fig.suptitle(_title(f"Steering toward each source: direction of travel{', ear signal' if hearing else ''} and "
+                        f"{what}", who, trajs[0]), fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)
 

@@ -30,7 +30,8 @@ from ...files.rundir import RECORDING, TERM_PREFIX, sync_file
 from .viewer import connect_url, flush, require_viewer
 
 TIMELINE = "generation"
-_STYLE = {"best": ((0, 0, 0), 2.5), "mean": ((150, 150, 150), 2.0), "median": ((90, 140, 200), 1.0), "worst": ((220, 120, 120), 1.0)}
+_STYLE = {"best": ((0, 0, 0), 2.5), "mean": ((150, 150, 150), 2.0), "median": ((90, 140, 200), 1.0),
+          "worst": ((220, 120, 120), 1.0)}
 #: the last bytes of a complete .rrd file start with this
 _FOOTER = b"RRF2FOOT"
 
@@ -40,7 +41,8 @@ def declare_series(rec) -> None:
     import rerun as rr
 
     for name, (color, width) in _STYLE.items():
-        rec.log(f"evolution/{name}", rr.SeriesLines(names=[f"{name} fitness"], colors=[color], widths=[width]), static=True)
+        rec.log(f"evolution/{name}", rr.SeriesLines(names=[f"{name} fitness"], colors=[color], widths=[width]),
+                static=True)
 
 
 def log_history(rec, history: dict[str, np.ndarray]) -> None:
@@ -52,7 +54,8 @@ def log_history(rec, history: dict[str, np.ndarray]) -> None:
     for name, vals in history.items():
         if name == "generation":
             continue
-        path = f"evolution/{name}" if name in _STYLE else f"evolution/terms/{name}" if name.startswith(TERM_PREFIX) else f"evolution/counts/{name}"
+        path = f"evolution/{name}" if name in _STYLE else f"evolution/terms/{name}" if name.startswith(
+            TERM_PREFIX) else f"evolution/counts/{name}"
         rec.send_columns(path, indexes=idx, columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
 
 
@@ -62,17 +65,21 @@ def log_series(rec, series: dict[str, np.ndarray]) -> None:
 
     for name, vals in series.items():
         idx = [rr.TimeColumn(TIMELINE, sequence=np.arange(len(vals), dtype=np.int64))]
-        rec.send_columns(f"evolution/optimizer/{name}", indexes=idx, columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
+        rec.send_columns(f"evolution/optimizer/{name}", indexes=idx,
+                         columns=rr.Scalars.columns(scalars=np.asarray(vals, float)))
 
 
 def _blueprint(optimizer_series: bool = False):
     import rerun.blueprint as rrb
 
-    views = [rrb.TimeSeriesView(origin="evolution", contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"], name="fitness per generation"),
+    views = [rrb.TimeSeriesView(origin="evolution",
+                                contents=["evolution/best", "evolution/mean", "evolution/median", "evolution/worst"],
+                                name="fitness per generation"),
              rrb.TimeSeriesView(origin="evolution/terms", name="the best individual's terms"),
              rrb.TimeSeriesView(origin="evolution/counts", name="evaluations, falls, time")]
     if optimizer_series:
-        views.append(rrb.TimeSeriesView(origin="evolution/optimizer", name="the optimizer's own (MAP-Elites: the archive's growth)"))
+        views.append(rrb.TimeSeriesView(origin="evolution/optimizer",
+                                        name="the optimizer's own (MAP-Elites: the archive's growth)"))
     return rrb.Blueprint(rrb.Vertical(*views, row_shares=[3, 1, 1, 2][: len(views)]), collapse_panels=True)
 
 
@@ -146,7 +153,8 @@ class EvolutionLog:
     The file (``path``) is made in memory and written whole and atomically by :meth:`close`.
     """
 
-    def __init__(self, *, path: str | Path | None = None, spawn: bool = False, connect: str | None = None, application_id: str = "evobiped_evolve", recording_id: str | None = None):
+    def __init__(self, *, path: str | Path | None = None, spawn: bool = False, connect: str | None = None,
+                 application_id: str = "evobiped_evolve", recording_id: str | None = None):
         import rerun as rr
 
         if not (spawn or connect is not None or path is not None):
@@ -173,7 +181,8 @@ class EvolutionLog:
         for rec, _ in self._targets:
             declare_series(rec)
 
-    def log_generation(self, generation: int, *, best: float, mean: float, worst: float, median: float | None = None, **counts: float) -> None:
+    def log_generation(self, generation: int, *, best: float, mean: float, worst: float, median: float | None = None,
+                       **counts: float) -> None:
         """One generation's fitness summary; ``counts`` (e.g. evaluations=50, falls=12) go to ``evolution/counts``."""
         import rerun as rr
 

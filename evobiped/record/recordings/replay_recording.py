@@ -34,7 +34,8 @@ class ReplayRecording:
             self.rec.spawn()
         else:
             self.rec.connect_grpc(connect_url(connect))
-        self.rec.send_recording_name(name.encode(errors="surrogateescape").decode(errors="replace"))  # a path's undecodable bytes
+        # a path's undecodable bytes
+        self.rec.send_recording_name(name.encode(errors="surrogateescape").decode(errors="replace"))
         #: the episode's listener: the walker's trajectory, logged as it goes
         self.recorder = RerunRecorder(self.rec)
 
@@ -92,6 +93,7 @@ def log_gait(rec, gait: dict, traj: Trajectory) -> None:
         on = np.zeros(len(t))
         for a, b in episodes:
             on[(t > a + 1e-9) & (t <= b + 1e-9)] = 1.0
-        rec.send_columns(f"contacts/stance_{foot}", indexes=[rr.TimeColumn(TIMELINE, duration=t)], columns=rr.Scalars.columns(scalars=on))
+        rec.send_columns(f"contacts/stance_{foot}", indexes=[rr.TimeColumn(TIMELINE, duration=t)],
+                         columns=rr.Scalars.columns(scalars=on))
     verdict = "walks" if gait["walks"] else "does not walk: " + ", ".join(gait["failed"])
     rec.log("gait", rr.TextDocument(f"{verdict}\n\n{gait_line(gait)}"), static=True)

@@ -7,8 +7,8 @@ Entity tree (time series on the ``sim_time`` timeline, in s)::
     world/bodies/<body>/<geom>     static: capsule / sphere / ellipsoid / cylinder / box in the body frame
     world/bodies/<body>/sites      static: visible sites (ears, ...)
     world/com                      Points3D: the centre of mass
-    world/com_path                 static LineStrips3D: the centre-of-mass path of the whole episode (one point per 0.1 s)
-    world/contacts                 Points3D: touch sensors that touch the ground
+    world/com_path                 static LineStrips3D: the centre-of-mass path of the whole episode (one point per 0.1
+    s) world/contacts                 Points3D: touch sensors that touch the ground
     world/source, world/sources    Points3D: sound sources (when the task has them)
     world/presentations/<j>/path   static LineStrips3D: the centre-of-mass path towards source j (several sources)
     presentations/<j>/sound        Scalars: the ear signal s heard on the way to source j
@@ -37,7 +37,8 @@ from ..trajectory import Trajectory, TrajectoryRecorder
 TIMELINE = "sim_time"
 #: the centre-of-mass path keeps one point per this many seconds (plus the last one)
 TRAIL_DT = 0.1
-_MOTOR_COLORS = [(228, 26, 28), (55, 126, 184), (77, 175, 74), (152, 78, 163), (255, 127, 0), (166, 86, 40), (247, 129, 191), (0, 150, 150)]
+_MOTOR_COLORS = [(228, 26, 28), (55, 126, 184), (77, 175, 74), (152, 78, 163), (255, 127, 0), (166, 86, 40),
+                 (247, 129, 191), (0, 150, 150)]
 
 
 def _rgb(rgba) -> list[int]:
@@ -57,20 +58,23 @@ def log_geometry(rec, model) -> None:
         if s.kind == "capsule":
             # MuJoCo: centred, along the geom z axis; Rerun: from the origin along +z
             start = s.pos - quat_to_mat(s.quat) @ np.array([0.0, 0.0, s.size[1]])
-            arch = rr.Capsules3D(lengths=[2 * s.size[1]], radii=[s.size[0]], translations=[start], quaternions=q, colors=col)
+            arch = rr.Capsules3D(lengths=[2 * s.size[1]], radii=[s.size[0]], translations=[start], quaternions=q,
+                                 colors=col)
         elif s.kind == "sphere":
             arch = rr.Ellipsoids3D(half_sizes=[[s.size[0]] * 3], centers=[s.pos], colors=col, fill_mode="solid")
         elif s.kind == "ellipsoid":
             arch = rr.Ellipsoids3D(half_sizes=[s.size], centers=[s.pos], quaternions=q, colors=col, fill_mode="solid")
         elif s.kind == "cylinder":
-            arch = rr.Cylinders3D(lengths=[2 * s.size[1]], radii=[s.size[0]], centers=[s.pos], quaternions=q, colors=col)
+            arch = rr.Cylinders3D(lengths=[2 * s.size[1]], radii=[s.size[0]], centers=[s.pos], quaternions=q,
+                                  colors=col)
         elif s.kind == "box":
             arch = rr.Boxes3D(half_sizes=[s.size], centers=[s.pos], quaternions=q, colors=col, fill_mode="solid")
         elif s.kind == "plane":
             hx, hy = (s.size[i] if s.size[i] > 0 else PLANE_HALF_SIZE for i in (0, 1))
             # a thin slab whose top face is the plane
             centre = s.pos + np.array([0.0, 0.0, -0.005])
-            arch = rr.Boxes3D(half_sizes=[[hx, hy, 0.005]], centers=[centre], quaternions=q, colors=col, fill_mode="solid")
+            arch = rr.Boxes3D(half_sizes=[[hx, hy, 0.005]], centers=[centre], quaternions=q, colors=col,
+                              fill_mode="solid")
         else:  # heightfields and meshes: mark where they are
             arch = rr.Points3D([s.pos], labels=[f"{s.kind} {s.name} (not drawn)"], colors=col)
         rec.log(path, arch, static=True)
@@ -114,7 +118,8 @@ def _log_commands(rec, traj: Trajectory) -> None:
     for name, walked, unit in (("speed", along, "m/s"), ("turning", turn, "deg/s")):
         rec.log(f"commands/{name}", rr.SeriesLines(names=[f"commanded ({unit})", f"walked, 1 s mean ({unit})"],
                                                    colors=[[0, 0, 0], [220, 60, 30]], widths=[2.0, 1.5]), static=True)
-        rec.send_columns(f"commands/{name}", indexes=tk, columns=rr.Scalars.columns(scalars=np.column_stack([told[name], mean(walked)])))
+        rec.send_columns(f"commands/{name}", indexes=tk,
+                         columns=rr.Scalars.columns(scalars=np.column_stack([told[name], mean(walked)])))
 
 
 def log_trajectory(rec, traj: Trajectory) -> None:
@@ -127,9 +132,11 @@ def log_trajectory(rec, traj: Trajectory) -> None:
         rec.send_columns(
             f"world/bodies/{names[b]}",
             indexes=st,
-            columns=rr.Transform3D.columns(translation=traj.body_pos[:, b], quaternion=wxyz_to_xyzw(traj.body_quat[:, b])),
+            columns=rr.Transform3D.columns(translation=traj.body_pos[:, b],
+                                           quaternion=wxyz_to_xyzw(traj.body_quat[:, b])),
         )
-    rec.log("world/com", rr.Points3D.from_fields(radii=[0.03], colors=[[20, 20, 20]], labels=["centre of mass"]), static=True)
+    rec.log("world/com", rr.Points3D.from_fields(radii=[0.03], colors=[[20, 20, 20]], labels=["centre of mass"]),
+            static=True)
     rec.send_columns("world/com", indexes=st, columns=rr.Points3D.columns(positions=traj.com))
     rec.log("world/com_path", rr.LineStrips3D([_path(traj.state_time, traj.com)], radii=[0.008], colors=[[30, 30, 30]],
                                               labels=["centre-of-mass path"]), static=True)
@@ -146,24 +153,28 @@ def log_trajectory(rec, traj: Trajectory) -> None:
         )
         for k, name in enumerate(traj.touch_names):
             rec.log(f"contacts/{name}", rr.SeriesLines(names=[name]), static=True)
-            rec.send_columns(f"contacts/{name}", indexes=tk, columns=rr.Scalars.columns(scalars=touching[:, k].astype(float)))
+            rec.send_columns(f"contacts/{name}", indexes=tk,
+                             columns=rr.Scalars.columns(scalars=touching[:, k].astype(float)))
     rec.log("fitness", rr.SeriesLines(names=["fitness so far"], colors=[[0, 0, 0]], widths=[2.0]), static=True)
     rec.send_columns("fitness", indexes=tk, columns=rr.Scalars.columns(scalars=traj.fitness))
     for name, vals in traj.sensors.items():
         k = vals.shape[1]
-        rec.log(f"sensors/{name}", rr.SeriesLines(names=[f"{name}[{i}]" for i in range(k)] if k > 1 else [name]), static=True)
+        rec.log(f"sensors/{name}", rr.SeriesLines(names=[f"{name}[{i}]" for i in range(k)] if k > 1 else [name]),
+                static=True)
         rec.send_columns(f"sensors/{name}", indexes=tk, columns=rr.Scalars.columns(scalars=vals))
     if "command_speed" in traj.sensors:
         _log_commands(rec, traj)
     if traj.source is not None:
         src = np.column_stack([traj.source, np.zeros(len(traj.source))])
-        rec.log("world/source", rr.Points3D.from_fields(radii=[0.12], colors=[[255, 140, 0]], labels=["sound source"]), static=True)
+        rec.log("world/source", rr.Points3D.from_fields(radii=[0.12], colors=[[255, 140, 0]], labels=["sound source"]),
+                static=True)
         rec.send_columns("world/source", indexes=tk, columns=rr.Points3D.columns(positions=src))
     if traj.sources is not None:
         s = np.asarray(traj.sources, float)
         rec.log(
             "world/sources",
-            rr.Points3D(np.column_stack([s, np.zeros(len(s))]), radii=0.08, colors=[255, 200, 120], labels=[f"source {i + 1}" for i in range(len(s))]),
+            rr.Points3D(np.column_stack([s, np.zeros(len(s))]), radii=0.08, colors=[255, 200, 120],
+                        labels=[f"source {i + 1}" for i in range(len(s))]),
             static=True,
         )
 
@@ -181,7 +192,8 @@ def log_trajectory(rec, traj: Trajectory) -> None:
     for a, act in enumerate(traj.actuator_names):
         if not np.isnan(traj.joint_angle[:, a]).all():
             rec.log(f"joints/{act}/angle", rr.SeriesLines(names=[f"{act} angle (rad)"], widths=[2.0]), static=True)
-            rec.send_columns(f"joints/{act}/angle", indexes=st, columns=rr.Scalars.columns(scalars=traj.joint_angle[:, a]))
+            rec.send_columns(f"joints/{act}/angle", indexes=st,
+                             columns=rr.Scalars.columns(scalars=traj.joint_angle[:, a]))
         rec.log(f"joints/{act}/target", rr.SeriesLines(names=[f"{act} {what}"]), static=True)
         rec.send_columns(f"joints/{act}/target", indexes=cm, columns=rr.Scalars.columns(scalars=traj.action[:, a]))
 
@@ -193,13 +205,16 @@ def log_presentations(rec, trajs: list[Trajectory]) -> None:
 
     for j, traj in enumerate(trajs, 1):
         color = _MOTOR_COLORS[(j - 1) % len(_MOTOR_COLORS)]
-        rec.log(f"world/presentations/{j}/path", rr.LineStrips3D([_path(traj.state_time, traj.com)], radii=[0.01], colors=[color],
+        rec.log(f"world/presentations/{j}/path",
+                rr.LineStrips3D([_path(traj.state_time, traj.com)], radii=[0.01], colors=[color],
                                                                   labels=[f"towards source {j}"]), static=True)
         if traj.source is not None:
-            rec.log(f"world/presentations/{j}/source", rr.Points3D([[*traj.source[0], 0.0]], radii=[0.12], colors=[color],
+            rec.log(f"world/presentations/{j}/source",
+                    rr.Points3D([[*traj.source[0], 0.0]], radii=[0.12], colors=[color],
                                                                     labels=[f"source {j}"]), static=True)
         if "sound" in traj.sensors:
-            rec.log(f"presentations/{j}/sound", rr.SeriesLines(names=[f"ear signal s, source {j}"], colors=[color]), static=True)
+            rec.log(f"presentations/{j}/sound", rr.SeriesLines(names=[f"ear signal s, source {j}"], colors=[color]),
+                    static=True)
             rec.send_columns(f"presentations/{j}/sound", indexes=_cols(traj.tick_time),
                              columns=rr.Scalars.columns(scalars=traj.sensors["sound"][:, 0]))
 
@@ -210,7 +225,8 @@ def _path(times: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.concatenate([points[::step], points[-1:]])
 
 
-def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentations: bool = False, with_video: bool = False):
+def blueprint(traj: Trajectory, *, with_evolution: bool = False, with_presentations: bool = False,
+              with_video: bool = False):
     """3D view (tracking the first moving body) beside time-series panels; ``with_video``: the rendered
     frames (entity ``video``) in a tab beside the 3D view."""
     import rerun.blueprint as rrb

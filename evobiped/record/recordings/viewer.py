@@ -44,7 +44,8 @@ def require_display() -> None:
 
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise UserError("cannot spawn a Rerun viewer: no display here (DISPLAY and WAYLAND_DISPLAY are unset); "
-                        "write a file with --out and open it with `rerun FILE` where there is a screen, or --connect to a viewer")
+                        "write a file with --out and open it with `rerun FILE` where there is a screen, or --connect "
+                        "to a viewer")
 
 
 def flush(rec, *, streaming: bool) -> None:
