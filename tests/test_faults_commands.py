@@ -114,6 +114,7 @@ def live_run(tmp_path):
     p = _start("evolve", "--population", "4", "--generations", "400", "--seconds", "0.5", "--backend", "serial",
                "--quiet", "--out", d)
     _wait_for(p, d / "checkpoint.json")
+    _wait_for(p, d / "best.json")  # derived after the commit: a moment later
     yield d, p
     p.kill()
     p.communicate(timeout=60)

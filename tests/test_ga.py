@@ -91,7 +91,7 @@ def test_survivors_keep_their_outcome():
     _, unknown = ga.ask()
     r = _result(fit, fit < 2.5, fit == 0.0, 10 * fit)
     ga.tell(r)
-    ind.told(unknown, r)
+    ind.record_results(unknown, r)
     assert ind.outcome["end_time"].tolist() == [30.0, 10.0, 50.0, 0.0, 40.0, 20.0]
     ind.carry(ga.next_generation(), ga.parent_rows())  # survivors 2, 4, 0 (fitness 5, 4, 3)
     assert ind.outcome["end_time"][:3].tolist() == [50.0, 40.0, 30.0] and np.isnan(ind.outcome["end_time"][3:]).all()
@@ -104,7 +104,7 @@ def test_survivors_keep_their_outcome():
     r = _result(np.array([6.0, 1.0, 2.0]), np.array([False, True, True]), np.array([False, False, True]),
                 np.array([60.0, 1.5, 2.5]))
     ga.tell(r)
-    ind.told(unknown, r)
+    ind.record_results(unknown, r)
     assert ind.outcome["end_time"].tolist() == [50.0, 40.0, 30.0, 60.0, 1.5, 2.5]
     assert ind.outcome["unstable"].tolist() == [False] * 5 + [True]
     back = Individuals.from_dict(json.loads(json.dumps(ind.to_dict())), 6)

@@ -39,7 +39,7 @@ class Individuals:
     previous: np.ndarray | None = None
     parents: np.ndarray | None = None
 
-    def told(self, unknown: np.ndarray, result) -> None:
+    def record_results(self, unknown: np.ndarray, result) -> None:
         """The :class:`~evobiped.episode.result.EpisodeResult` of the rows ``unknown`` (a bool mask ``(P,)``), in
         order."""
         n = len(unknown)

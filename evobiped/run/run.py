@@ -189,7 +189,7 @@ class Run:
         # a plain run's evaluations take no context (an evaluator written before contexts still serves it)
         result = evaluator.evaluate(pop[unknown], key=self._key(g), **({} if context.empty else {"context": context}))
         opt.tell(result)
-        self.individuals.told(unknown, result)
+        self.individuals.record_results(unknown, result)
         b = int(opt.ranking()[0])
         stats, terms = self._stats(g, b, unknown, result), self.individuals.terms_of(b)
         meta = dict(fitness=stats.best, fell=stats.best_fell, end_time=float(self.individuals.outcome["end_time"][b]),
