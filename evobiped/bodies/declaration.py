@@ -118,7 +118,9 @@ def read_declaration(spec: str) -> Declaration:
             problems.append(f"{key} must be a number in ({low:g}, {high:g}], got {v!r}")
     legs = {}
     raw = t.get("legs")
-    if not isinstance(raw, dict) or sorted(raw) != sorted(LEGS):
+    if raw is None:
+        pass  # missing: said above
+    elif not isinstance(raw, dict) or sorted(raw) != sorted(LEGS):
         problems.append("legs must be the tables [legs.left] and [legs.right], got "
                         f"{sorted(raw) if isinstance(raw, dict) else raw!r}")
     else:
