@@ -55,7 +55,8 @@ def test_the_return_is_that_of_the_same_policy_rolled_out_by_hand():
     for g, s, f in zip(genomes, seeds, result.fitness):
         assert f == by_hand("Hopper-v5", g, s, 150)
     assert set(result.terms) == {"return", "length", "terminated"}
-    assert (result.terms["return"] == result.fitness).all() and (result.end_time == result.terms["length"] * 0.008).all()
+    assert (result.terms["return"] == result.fitness).all()
+    assert (result.end_time == result.terms["length"] * 0.008).all()
     alone = episode.run(genomes[2], trials=(5, 2))  # a genome's return is its own, in any batch
     assert alone.fitness[0] == result.fitness[2]
 
@@ -77,8 +78,8 @@ def test_a_short_ars_run_improves_the_return(tmp_path):
 
 def test_history_identical_on_every_backend_and_worker_count(tmp_path):
     ref, best = evolve_with(tmp_path, "serial", "serial", config=ARS)
-    runs = [evolve_with(tmp_path, "p1", "process", 1, config=ARS), evolve_with(tmp_path, "p2", "process", 2, config=ARS),
-            evolve_with(tmp_path, "t2", "thread", 2, config=ARS)]
+    runs = [evolve_with(tmp_path, name, backend, workers, config=ARS)
+            for name, backend, workers in (("p1", "process", 1), ("p2", "process", 2), ("t2", "thread", 2))]
     pytest.importorskip("ray")
     runs.append(evolve_with(tmp_path, "ray", "ray", 2, config=ARS))
     for hist, b in runs:
@@ -118,6 +119,12 @@ def test_evolve_env_on_the_command_line(tmp_path, capsys):
                "--backend", "serial", "--out", out) == 0
     assert "evolving Hopper-v5: ctrnn with cma" in capsys.readouterr().err
     assert json.loads((out / "best.json").read_text())["fitness"] > 0
+    assert cli("replay", out) == 0  # the best's episode again, into a Rerun recording
+    said = capsys.readouterr().out
+    assert "the replay equals it bit for bit" in said and f"recording: {out / 'replay_best.rrd'}" in said
+    data = (out / "replay_best.rrd").read_bytes()
+    assert all(name in data for name in (b"world/bodies/torso", b"observation", b"action", b"reward", b"return"))
+    assert cli("replay", out, "--video", tmp_path / "v.mp4") == 2
 
 
 def test_an_environment_episode_takes_no_body_settings():

@@ -65,9 +65,11 @@ def make_env(env_id: str, max_steps: int | None = None):
     try:
         return gymnasium.make(name, disable_env_checker=True, **extra)
     except gymnasium.error.Error as exc:
-        raise ConfigError(f"episode.env: {env_id!r} is no Gymnasium environment here ({exc})".replace("\n", " ")) from None
+        why = str(exc).replace("\n", " ")
+        raise ConfigError(f"episode.env: {env_id!r} is no Gymnasium environment here ({why})") from None
     except Exception as exc:  # a registered environment that cannot be made (a missing dependency)
-        raise ConfigError(f"episode.env: {env_id!r} cannot be made: {type(exc).__name__}: {exc}".replace("\n", " ")) from None
+        why = str(exc).replace("\n", " ")
+        raise ConfigError(f"episode.env: {env_id!r} cannot be made: {type(exc).__name__}: {why}") from None
 
 
 @dataclass(frozen=True)
@@ -96,7 +98,7 @@ class GymSpec:
                                       "a controller needs flat Box spaces")
             low, high = (np.asarray(b, float) for b in (env.action_space.low, env.action_space.high))
             if not (np.isfinite(low).all() and np.isfinite(high).all()):
-                raise ConfigError(f"episode.env: {env_id!r} has an unbounded action box; a controller needs a bounded one")
+                raise ConfigError(f"episode.env: {env_id!r} has an unbounded action box; a controller needs bounds")
             dt = float(getattr(env.unwrapped, "dt", 1.0))
             return cls(env_id, int(env.observation_space.shape[0]), low, high, dt,
                        None if env.spec is None else env.spec.max_episode_steps, hasattr(env.unwrapped, "model"))
@@ -218,7 +220,7 @@ class GymEpisode:
         ``tick(step, obs (P, k), action (P, n), reward (P,), rows)`` after each step, ``end(result)``."""
         ctx = context or Context()
         if seconds is not None or ctx.seconds is not None or ctx.weights is not None:
-            raise ConfigError("an environment's episode has its own length and fitness: no seconds, curriculum or weights")
+            raise ConfigError("an environment's episode has its own length and fitness: no seconds, curriculum, weights")
         ctrl = self.controller
         genomes = ctrl.layout.validate(genomes)
         params = ctrl.decode(genomes)
@@ -255,7 +257,8 @@ class GymEpisode:
                 listener.tick(k + 1, obs, action, reward, rows)
         result = EpisodeResult(
             fitness=ret, fell=terminated.copy(), unstable=unstable, end_time=steps * self.spec.dt,
-            start_position=np.zeros((P, 2)), end_position=np.zeros((P, 2)), start_facing=np.tile([1.0, 0.0], (P, 1)),
+            start_position=np.zeros((P, 2)), end_position=np.zeros((P, 2)),
+            start_facing=np.tile([1.0, 0.0], (P, 1)),
             terms={"return": ret.copy(), "length": steps.astype(float), "terminated": terminated.astype(float)},
             senses=None if senses is None else senses.table())
         if listener is not None:
