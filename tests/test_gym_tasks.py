@@ -61,6 +61,14 @@ def test_the_return_is_that_of_the_same_policy_rolled_out_by_hand():
     assert alone.fitness[0] == result.fitness[2]
 
 
+def test_a_reward_shift_lowers_the_fitness_by_the_steps_and_leaves_the_return():
+    shifted = EpisodeConfig(env="Hopper-v5", controller="linear", env_options={"max_steps": 150, "reward_shift": 1.0})
+    genomes = np.random.default_rng(2).normal(0.0, 0.3, (2, HOPPER.layout().size))
+    plain, less = HOPPER.build().run(genomes, trials=(0, 0)), shifted.build().run(genomes, trials=(0, 0))
+    assert (less.terms["return"] == plain.fitness).all()
+    assert (less.fitness == plain.fitness - less.terms["length"]).all()
+
+
 def test_a_short_ars_run_improves_the_return(tmp_path):
     """The policy of zeros falls after about 135 steps; within 6 generations ARS stands the 400 steps and goes on."""
     episode = {**HOPPER.to_dict(), "env_options": {"max_steps": 400}}

@@ -7,9 +7,9 @@
 * Its outputs map onto the action box as onto a body of torques (:mod:`evobiped.interface.mapping`): ``signed`` and
   ``angle`` outputs are clipped to the box (what the MuJoCo tasks do to a control beyond its range), ``unit`` and
   ``centred`` outputs span it.
-* Fitness = the undiscounted return; terms ``return``, ``length`` (steps) and ``terminated`` (1: the environment
-  ended it, e.g. the hopper fell; 0: its time limit or ``max_steps``).  An episode runs to the environment's own
-  TimeLimit (1000 steps for the MuJoCo locomotion tasks) unless ``env_options.max_steps`` says otherwise.
+* Fitness = the undiscounted return (less ``env_options.reward_shift`` per step, when set); terms ``return``,
+  ``length`` (steps) and ``terminated`` (1: the environment ended it, e.g. the hopper fell; 0: its time limit or
+  ``max_steps``).  An episode runs to the environment's own TimeLimit (1000 steps for the MuJoCo locomotion tasks) unless ``env_options.max_steps`` says otherwise.
 * Deterministic and batch-independent: each genome's episode starts from ``env.reset(seed=s)``, s drawn from the
   generation's key (run seed, generation) and the genome's own bits (:func:`reset_seeds`), so a genome's return does
   not depend on its batch, its row or the number of workers, and a resume continues bit for bit.
@@ -48,6 +48,8 @@ class GymOptions:
 
     max_steps: int | None = option(None, "environment steps per episode (none: the environment's own TimeLimit)",
                                    low=1, high=10**7, integer=True)
+    reward_shift: float = option(0.0, "subtracted from every step's reward in the fitness (ARS's shift of the survival "
+                                 "bonus: 1 for Hopper, Walker2d and Ant); the `return` term stays the environment's")
 
     def __post_init__(self):
         check_fields(self, "episode.env_options")
@@ -220,7 +222,7 @@ class GymEpisode:
         ``tick(step, obs (P, k), action (P, n), reward (P,), rows)`` after each step, ``end(result)``."""
         ctx = context or Context()
         if seconds is not None or ctx.seconds is not None or ctx.weights is not None:
-            raise ConfigError("an environment's episode has its own length and fitness: no seconds, curriculum, weights")
+            raise ConfigError("an environment's episode has its own length and fitness: no seconds or weights")
         ctrl = self.controller
         genomes = ctrl.layout.validate(genomes)
         params = ctrl.decode(genomes)
@@ -256,7 +258,8 @@ class GymEpisode:
             if listener is not None:
                 listener.tick(k + 1, obs, action, reward, rows)
         result = EpisodeResult(
-            fitness=ret, fell=terminated.copy(), unstable=unstable, end_time=steps * self.spec.dt,
+            fitness=ret - float(self.options.reward_shift) * steps, fell=terminated.copy(), unstable=unstable,
+            end_time=steps * self.spec.dt,
             start_position=np.zeros((P, 2)), end_position=np.zeros((P, 2)),
             start_facing=np.tile([1.0, 0.0], (P, 1)),
             terms={"return": ret.copy(), "length": steps.astype(float), "terminated": terminated.astype(float)},
