@@ -4,6 +4,7 @@ same on every backend and worker count, across a resume, and equal to a rollout 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,6 +134,14 @@ def test_evolve_env_on_the_command_line(tmp_path, capsys):
     data = (out / "replay_best.rrd").read_bytes()
     assert all(name in data for name in (b"world/bodies/torso", b"observation", b"action", b"reward", b"return"))
     assert cli("replay", out, "--video", tmp_path / "v.mp4") == 2
+
+
+@pytest.mark.parametrize("path", sorted(Path(__file__).parent.parent.glob("docs/benchmarks/*.toml")), ids=lambda p: p.name)
+def test_the_benchmark_settings_are_accepted(path):
+    from evobiped.flags import run_config
+
+    config = run_config(config=str(path))
+    assert config.episode.env == "Hopper-v5" and config.normalise.running and config.budget
 
 
 def test_an_environment_episode_takes_no_body_settings():

@@ -137,6 +137,11 @@ class _Shown:
         best = summary["best"]
         state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
         walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
+        if run.config.episode.env is not None:  # an environment's episode: its return and steps, no walk
+            terms = best.get("terms", {})
+            state = (f"return {terms.get('return', best['fitness']):.3f} in {terms.get('length', 0):.0f} steps, "
+                     + ("ended by the environment" if best["fell"] else "to its time limit"))
+            walk = ""
         # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
         earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if self.args.resume else ""
         if run.context.lost_stop():
