@@ -61,7 +61,8 @@ def main() -> None:
         line = f"{run}: generation {g}, {episodes} episodes ({pert} of perturbations); best return {best:.1f}"
         if args.fresh:
             fresh = fresh_returns(run, g, args.fresh)
-            line += f"; that policy over {args.fresh} fresh resets: mean {statistics.mean(fresh):.1f}, min {min(fresh):.1f}"
+            line += (f"; that policy over {args.fresh} fresh resets: mean {statistics.mean(fresh):.1f}, "
+                     f"min {min(fresh):.1f}")
         print(line)
     if found:
         eps, pert = zip(*found)

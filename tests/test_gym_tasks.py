@@ -136,7 +136,10 @@ def test_evolve_env_on_the_command_line(tmp_path, capsys):
     assert cli("replay", out, "--video", tmp_path / "v.mp4") == 2
 
 
-@pytest.mark.parametrize("path", sorted(Path(__file__).parent.parent.glob("docs/benchmarks/*.toml")), ids=lambda p: p.name)
+BENCHMARKS = sorted(Path(__file__).parent.parent.glob("docs/benchmarks/*.toml"))
+
+
+@pytest.mark.parametrize("path", BENCHMARKS, ids=lambda p: p.name)
 def test_the_benchmark_settings_are_accepted(path):
     from evobiped.flags import run_config
 
