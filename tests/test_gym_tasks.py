@@ -156,6 +156,17 @@ def test_an_environment_episode_takes_no_body_settings():
         EpisodeConfig(env="Hopper-v5", controller="linear", env_options={"max_steps": 0})
 
 
+def test_an_environment_without_a_mujoco_model_records_its_time_series_alone(tmp_path):
+    from evobiped.record.recordings.gym_recording import GymRecorder, write_gym_recording
+
+    episode = EpisodeConfig(env="Pendulum-v1", controller="linear", env_options={"max_steps": 30}).build()
+    recorder = GymRecorder()
+    result = episode.run(np.zeros((1, episode.controller.layout.size)), trials=(0, 0), listener=recorder)
+    assert recorder.model is None and len(recorder.rewards) == 30 and result.terms["terminated"][0] == 0
+    data = write_gym_recording(tmp_path / "p.rrd", recorder, name="pendulum").read_bytes()
+    assert b"observation" in data and b"world/bodies" not in data
+
+
 @pytest.mark.parametrize("env", ["evobiped/ReilBiped-v0", "evobiped/TagaBiped-v0"])
 def test_this_package_s_own_environments_are_tasks_too(env):
     config = EpisodeConfig(env=env, controller="linear", env_options={"max_steps": 10})
