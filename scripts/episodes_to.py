@@ -53,6 +53,10 @@ def main() -> None:
     found = []
     for run in args.runs:
         g, episodes, n, best = episodes_to(run, args.threshold)
+        if args.fresh:
+            final = fresh_returns(run, n - 1, args.fresh)
+            print(f"{run}: the last generation's best ({n - 1}) over {args.fresh} fresh resets: mean "
+                  f"{statistics.mean(final):.1f}, min {min(final):.1f}")
         if g is None:
             print(f"{run}: not reached in {n} generations (best return {best:.1f})")
             continue
