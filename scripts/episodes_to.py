@@ -4,7 +4,8 @@
 
 For each run directory: the first generation whose best row (ES: theta's own episode) returned at least the
 threshold (history.csv's ``best_return``), the episodes evaluated up to and including it (every row: an ES run's
-2 N perturbations and theta's row), those of the perturbations alone (``--pairs N``), and the best return reached.
+2 N perturbations and theta's row), those of the perturbations alone (``--pairs N``), and the best return reached;
+with ``--fresh K`` that policy's and the last generation's mean return over K resets they were never scored on.
 Then the median and range over the runs that reached it.
 """
 
