@@ -170,7 +170,10 @@ class EpisodeConfig:
         if self.env is not None:
             from .gym_episode import gym_parts
 
-            return gym_parts(self.env, self.controller, self.controller_options)
+            parts = gym_parts(self.env, self.controller, self.controller_options)
+            if parts[0].spec.max_steps is None and self.env_options.max_steps is None:
+                raise ConfigError(f"episode.env_options.max_steps: {self.env!r} has no time limit of its own: give one")
+            return parts
         body, body_key = body_part(self.body, self.body_options)
         task, task_key = task_part(self.task, self.task_options, body_key)
         if self.controller is None:

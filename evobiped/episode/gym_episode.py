@@ -194,9 +194,8 @@ class GymEpisode:
         self.body, self.task = GymBody(spec), GymTask(spec)
         self.controller = controller.bound(spec.dt)
         self.control_dt = spec.dt
-        self.max_steps = options.max_steps if options.max_steps is not None else spec.max_steps
-        if self.max_steps is None:
-            raise ConfigError(f"episode.env_options.max_steps: {spec.env_id!r} has no time limit of its own: give one")
+        #: steps per episode (the config checked that there is a limit: ``EpisodeConfig.parts``)
+        self.max_steps = int(options.max_steps if options.max_steps is not None else spec.max_steps)
         self.seconds = self.max_steps * spec.dt
         self._envs: list = []
 
