@@ -231,7 +231,8 @@ def walk_line(walk: dict) -> str:
 
 #: the run-settings flags :func:`run_config` takes (evolve's; not --out, --resume, --rerun, --quiet)
 RUN_FLAGS = ("preset", "config", "optimizer", "body", "controller", "task", "sources", "population", "generations",
-             "episode_seconds", "cyclic", "seed", "backend", "workers", "address", "initial", "freeze")
+             "episode_seconds", "cyclic", "seed", "backend", "workers", "address", "initial", "freeze",
+             "env")
 
 
 def run_config(*, preset: str | None = None, config: str | None = None, optimizer: str | None = None,
@@ -239,7 +240,8 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
                controller: str | None = None, task: str | None = None, sources=None, population: int | None = None,
                generations: int | None = None, episode_seconds: float | None = None, cyclic: bool | None = None,
                seed: int | None = None, backend: str | None = None, workers: int | None = None,
-               address: str | None = None, initial: str | None = None, freeze: str | None = None):
+               address: str | None = None, initial: str | None = None, freeze: str | None = None,
+               env: str | None = None):
     """RunConfig from a preset, a settings file and the flags' values (None: not given; flags win)."""
     from .episode import EpisodeConfig
     from .run.run_config import RunConfig, check_tables
@@ -254,7 +256,8 @@ def run_config(*, preset: str | None = None, config: str | None = None, optimize
     where = config or (f"preset {preset}" if preset else "")
     check_tables(d, where)  # before the flags go into its tables
     ep = dict(d.get("episode", {})) if isinstance(d.get("episode", {}), dict) else d.get("episode")
-    for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds)):
+    for key, value in (("body", body), ("controller", controller), ("task", task), ("seconds", episode_seconds),
+                       ("env", env)):
         if value is not None:
             ep[key] = value
     task_name = ep.get("task", EpisodeConfig.task) if isinstance(ep, dict) else None

@@ -58,8 +58,15 @@ class EpisodeConfig:
     #: how the control tick's array work runs (:mod:`evobiped.core.kernel`): ``auto`` (compiled where numba is
     #: installed, else NumPy), ``compiled`` or ``numpy``; the same numbers to the last bit in each
     kernel: str = "auto"
+    #: a Gymnasium environment's id (``Hopper-v5``, ``evobiped/ReilBiped-v0``): its physics and reward are the episode
+    #: (:mod:`.gym_episode`; ``body``, ``task``, ``seconds`` and the perturbations are not used); None: none
+    env: str | None = None
+    #: the environment's episode settings (:class:`~.gym_episode.GymOptions`: ``max_steps``)
+    env_options: Any = field(default_factory=dict)
 
     def __post_init__(self):
+        if self.env is not None or self.env_options not in ({}, None):
+            self._check_env()
         if isinstance(self.body, str) and self.body.startswith(DECLARED):  # a file's: found from any directory
             object.__setattr__(self, "body", declared_name(self.body))
         body_cls = body_class(self.body)
@@ -87,10 +94,32 @@ class EpisodeConfig:
                           ("task_options", TASKS[self.task].Options), ("perturbations", PerturbationOptions)):
             object.__setattr__(self, name, parsed(cls, getattr(self, name), f"episode.{name}"))
 
+    def _check_env(self) -> None:
+        """An environment's episode: a controller, no body's settings; its ``env_options`` parsed."""
+        from .gym_episode import GymOptions
+
+        if not isinstance(self.env, str) or not self.env:
+            raise ConfigError(f"episode.env: must be a Gymnasium environment id, got {self.env!r}")
+        if self.controller is None:
+            raise ConfigError("episode.controller: an environment's episode needs a controller (its genome is evolved)")
+        for name in ("body", "task", "seconds", "stop_on_fall", "control_dt"):
+            if getattr(self, name) != getattr(EpisodeConfig, name):
+                raise ConfigError(f"episode.{name}: an environment's episode ({self.env}) has its own"
+                                  + (" length: give env_options.max_steps" if name == "seconds" else ""))
+        for name in ("body_options", "task_options", "perturbations"):
+            if given(getattr(self, name)) if not isinstance(getattr(self, name), dict) else getattr(self, name):
+                raise ConfigError(f"episode.{name}: an environment's episode ({self.env}) takes none")
+        object.__setattr__(self, "env_options", parsed(GymOptions, self.env_options or {}, "episode.env_options"))
+
     def to_dict(self) -> dict:
         """The config as a table (config.json, genome files): every option table as its settings were given
-        (``control_dt`` only where it is set)."""
+        (``control_dt`` only where it is set); an environment's episode: its id, options and controller alone."""
         d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        if self.env is not None:
+            return {"env": self.env, "env_options": copy.deepcopy(given(self.env_options)),
+                    "controller": self.controller, "controller_options": copy.deepcopy(given(self.controller_options)),
+                    **({"kernel": self.kernel} if self.kernel != "auto" else {})}
+        del d["env"], d["env_options"]
         for name in ("body_options", "controller_options", "task_options", "perturbations"):
             d[name] = copy.deepcopy(given(d[name]))
         if d["control_dt"] is None:
@@ -103,6 +132,14 @@ class EpisodeConfig:
     def perturbed(self) -> bool:
         """The config perturbs its episodes (it has a perturbations table)."""
         return bool(given(self.perturbations)) or self.perturbations.active
+
+    @property
+    def length(self) -> float:
+        """s: an episode's planned length (an environment's: its time limit in steps times its step)."""
+        if self.env is None:
+            return float(self.seconds)
+        spec = self.parts()[0].spec
+        return float((self.env_options.max_steps or spec.max_steps or 0) * spec.dt)
 
     @property
     def latency(self) -> int:
@@ -130,6 +167,13 @@ class EpisodeConfig:
         return {k: v for k, v in self.__dict__.items() if k != "_parts"}
 
     def _make_parts(self) -> tuple[Body, Controller | None, Task]:
+        if self.env is not None:
+            from .gym_episode import gym_parts
+
+            parts = gym_parts(self.env, self.controller, self.controller_options)
+            if parts[0].spec.max_steps is None and self.env_options.max_steps is None:
+                raise ConfigError(f"episode.env_options.max_steps: {self.env!r} has no time limit of its own: give one")
+            return parts
         body, body_key = body_part(self.body, self.body_options)
         task, task_key = task_part(self.task, self.task_options, body_key)
         if self.controller is None:
@@ -170,6 +214,10 @@ class EpisodeConfig:
         from .loop import Episode
 
         body, own, task = self.parts()
+        if self.env is not None:
+            from .gym_episode import GymEpisode
+
+            return GymEpisode(body.spec, own if controller is None else controller, self.env_options)
         return Episode(body, own if controller is None else controller, task, seconds=float(self.seconds),
                        stop_on_fall=bool(self.stop_on_fall), perturbations=self.perturbations
                            if self.perturbations.active else None,

@@ -93,7 +93,8 @@ def start_evaluator(opened: OpenRun, on_retry: Callable[[int, int], None] | None
 def default_run_dir(config: RunConfig) -> str:
     """Where a new run goes when no directory is named: ``runs/<body>_<controller>_seed<seed>``, or the first of
     ``..._2``, ``..._3``, ... that does not exist yet."""
-    base = Path("runs") / f"{config.episode.body}_{config.episode.controller}_seed{config.seed}"
+    where = config.episode.body if config.episode.env is None else config.episode.env.replace("/", "_")
+    base = Path("runs") / f"{where}_{config.episode.controller}_seed{config.seed}"
     path, i = base, 1
     while path.exists():
         i += 1

@@ -24,6 +24,8 @@ def add_evolve(sub) -> None:
     p.add_argument("--optimizer", choices=tuple(OPTIMIZERS), help=f"{described(quote='')}; default ga")
     p.add_argument("--body", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its declaration: "
                                   "docs/own_robot.md; default reil)")
+    p.add_argument("--env", metavar="ID", help="a Gymnasium environment's id (Hopper-v5, Walker2d-v5, "
+                   "evobiped/ReilBiped-v0, ...): its physics and return are the episode and the fitness (docs/gym.md)")
     p.add_argument("--controller", help=f"controller: {choices_text('controller')} (default ctrnn)")
     p.add_argument("--task", help=f"task: {choices_text('task')} (default walk)")
     add_source_flag(p)
@@ -113,14 +115,15 @@ class _Shown:
         population = len(run.optimizer.ask()[0])
         until = (f" (or fewer: it stops once its walker {'walks' if c.stop.when == 'walking' else 'is fit enough'})"
                  if c.stop.active else "")
-        self.say(f"evolving {c.episode.body}/{c.episode.controller} on '{c.episode.task}' with {c.optimizer}, "
-                 f"population {population}, {c.generations} generations{until}, {c.episode.seconds:g} s episodes, seed "
-                 f"{c.seed}, backend {backend} -> {run.dir}")
+        what = (f"{c.episode.env}: {c.episode.controller}" if c.episode.env else
+                f"{c.episode.body}/{c.episode.controller} on '{c.episode.task}'")
+        self.say(f"evolving {what} with {c.optimizer}, population {population}, {c.generations} generations{until}, "
+                 f"{c.episode.length:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
         if self.args.rerun is not None:
             self.log = self.viewer.enter_context(_viewer_log(run, self.args.rerun))
         self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet, at_most=c.stop.active)
         # every walker's episode, generation by generation
-        self.clock = GenerationClock(c.generations, c.episode.seconds)
+        self.clock = GenerationClock(c.generations, c.episode.length)
 
     def evaluated(self, rows) -> None:
         self.clock.episodes(rows.end_time)
@@ -147,6 +150,11 @@ class _Shown:
         best = summary["best"]
         state = "fell at %.2f s" % best["end_time"] if best["fell"] else "did not fall"
         walk = f"; {walk_line(summary['best_walk'])}" if summary.get("best_walk") else ""
+        if run.config.episode.env is not None:  # an environment's episode: its return and steps, no walk
+            terms = best.get("terms", {})
+            state = (f"return {terms.get('return', best['fitness']):.3f} in {terms.get('length', 0):.0f} steps, "
+                     + ("ended by the environment" if best["fell"] else "to its time limit"))
+            walk = ""
         # the elapsed time of the progress lines; a resumed run's evaluations span its earlier sessions too
         earlier = f" ({hms(summary['wall_seconds'])} of evaluation over all its sessions)" if self.args.resume else ""
         if run.context.lost_stop():

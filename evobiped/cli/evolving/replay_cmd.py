@@ -56,6 +56,8 @@ def run_replay_cmd(args) -> int:
         refuse("--video-window", f"needs 0 <= T0 < T1, got {args.video_window[0]:g} {args.video_window[1]:g}")
     source = stored_walker(args.source, args.generation, args.cell, args.allow_unfinished)
     unfinished_note(source)
+    if source.config.env is not None:
+        return _replay_env(args, source)
     figures = args.figures
     if figures == "":
         base = Path(args.out).parent if args.out else source.outputs
@@ -118,6 +120,29 @@ def run_replay_cmd(args) -> int:
     if r.video is not None:
         print(f"video: {r.video}")
     return 0 if r.reproduced else 1
+
+
+def _replay_env(args, source) -> int:
+    """The replay of a genome evolved in a Gymnasium environment: its recording, its return against the stored one."""
+    from pathlib import Path
+
+    from ...usecases.gym_replaying import replay_env
+    from ...usecases.replaying import default_out
+
+    given = [f for f, v in (("--video", args.video), ("--spawn", args.spawn), ("--connect", args.connect),
+                            ("--figures", args.figures), ("--seconds", args.seconds), ("--source", args.sources)) if v]
+    if given:
+        refuse(given[0], f"not for an environment's episode ({source.config.env}): it records to a file")
+    r = replay_env(source, Path(args.out) if args.out else default_out(source))
+    ended = "ended by the environment" if r.terminated else "to its time limit"
+    print(f"replayed return = {r.fitness!r}; {r.steps} steps, {ended}")
+    if r.stored_fitness is not None:
+        same = "equals it bit for bit" if r.matches else f"DIFFERS by {r.fitness - r.stored_fitness:.3g}"
+        differs = "; ".join(r.environment_differences)
+        other = f" (numerical environment differs: {differs})" if differs else ""
+        print(f"stored fitness  = {r.stored_fitness!r}: the replay {same}{other}")
+    print(f"recording: {r.recording}")
+    return 0 if r.matches or r.stored_fitness is None or r.environment_differences else 1
 
 
 def drift_text(value: float, stored: float) -> str:
