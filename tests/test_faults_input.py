@@ -408,13 +408,12 @@ def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_
 
 @pytest.mark.parametrize("kib, command", [
     (524_288, ["replay", ROOT / "docs/walkers/ctrnn_walk_seed1.json", "--seconds", "0.5", "--out", "r.rrd"]),
-    (600_000, ["evolve", *TINY, "--backend", "serial", "--config", "numpy.toml", "--out", "run"])])
+    (600_000, ["evolve", *TINY, "--backend", "serial", "--out", "run"])])
 def test_a_command_whose_libraries_need_more_than_the_minimum_names_the_limit_in_one_line(tmp_path, kib, command):
     """Rerun's and Arrow's libraries (replay, evolve's last files) need more than the 512 MiB the command starts in:
     one line naming the limit and its fix, never a library's own traceback.  The run has no worker (a worker's own
-    need raced the last files) and steps the NumPy kernel (numba's compiler, on a cold cache, under the limit is
-    another case)."""
-    (tmp_path / "numpy.toml").write_text('[episode]\nkernel = "numpy"\n')
+    need raced the last files); under the limit the ``auto`` kernel steps NumPy (numba's compiler on a cold cache
+    spun there without end)."""
     r = guarded(*command, memory=kib * 1024, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     one_line_error(r.stderr, f"out of address space: this process may take {kib:,} KiB (ulimit -v {kib})",

@@ -121,3 +121,15 @@ def test_bench_refuses_an_unknown_kernel_in_one_line_exit_2():
                        text=True, timeout=120)
     assert p.returncode == 2
     assert len(p.stderr.strip().splitlines()) == 1 and "kernel" in p.stderr
+
+
+def test_auto_runs_numpy_where_the_address_space_is_limited_below_the_compilers_need():
+    """Under ``ulimit -v 600000`` numba's compiler spun without end on a cold cache: ``auto`` then runs NumPy (the
+    same numbers); an explicit ``compiled`` is still what was asked."""
+    import subprocess
+    import sys
+
+    code = ("import resource; resource.setrlimit(resource.RLIMIT_AS, (3 * 2**30, 3 * 2**30)); "
+            "from evobiped.core import kernel; print(kernel.compiled('auto'), kernel.compiled('numpy'))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.split() == ["False", "False"], out.stderr

@@ -97,12 +97,28 @@ def unavailable() -> str | None:
     return None
 
 
+#: bytes of address space below which ``auto`` runs NumPy: numba's compiler (LLVM) reserves gigabytes of address
+#: space, and under ``ulimit -v 600000`` it spun without end on a cold cache instead of failing
+COMPILE_ADDRESS_SPACE = 4 * 2**30
+
+
+def _address_space_short() -> bool:
+    """This process's address space is limited below :data:`COMPILE_ADDRESS_SPACE` (``ulimit -v``)."""
+    try:
+        import resource
+    except ImportError:  # not POSIX: no such limit
+        return False
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    return soft != resource.RLIM_INFINITY and soft < COMPILE_ADDRESS_SPACE
+
+
 def compiled(kernel: str, where: str = "episode.kernel") -> bool:
     """Whether ``kernel`` (one of :data:`KERNELS`) runs compiled here; ConfigError (one line) for an unknown one and for
-    ``compiled`` where it is unavailable."""
+    ``compiled`` where it is unavailable.  ``auto`` runs NumPy (the same numbers) where the address space is limited
+    below :data:`COMPILE_ADDRESS_SPACE`."""
     if kernel not in KERNELS:
         raise ConfigError(f"{where}: unknown kernel {kernel!r} (choose from {', '.join(KERNELS)})")
-    if kernel == "numpy":
+    if kernel == "numpy" or (kernel == "auto" and _address_space_short()):
         return False
     why = unavailable()
     if why is not None and kernel == "compiled":
