@@ -173,3 +173,22 @@ class Body(ABC):
     def gait_constants(self, model: mujoco.MjModel) -> tuple[float, float]:
         """The body's total mass (kg) and leg length (m, hip to the ground in the initial pose), from ``model``."""
         raise ConfigError(f"body {self.name!r} declares no feet: its gait cannot be measured")
+
+
+#: cross-product index cycles: (1, 2, 0) and (2, 0, 1)
+_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
+
+
+def links_com_velocity(sims: Sims, root: int, links, mass_share: np.ndarray) -> np.ndarray:
+    """``(P, 3)`` m/s: the mass-weighted velocity of the centres of mass of ``links`` (body ids, or a slice of them),
+    each weighing ``mass_share`` ``(L,)``, in the tree of body ``root``.
+
+    ``cvel`` gives each link's angular and linear velocity at the tree's centre of mass (``subtree_com`` of the
+    root); a link's own centre moves at v + w x (xipos - that).  Computed on demand rather than by a MuJoCo sensor,
+    which would cost every simulation ~5 % of its step time whether a controller reads it or not.
+    """
+    cvel = sims.cvel[:, links]
+    w, r = cvel[..., :3], sims.xipos[:, links] - sims.subtree_com[:, root, None]
+    # w x r: component i is w_(i+1) r_(i+2) - w_(i+2) r_(i+1), the same products and differences as np.cross
+    v = cvel[..., 3:] + (w[..., _NEXT] * r[..., _AFTER] - w[..., _AFTER] * r[..., _NEXT])
+    return np.einsum("b,pbi->pi", mass_share, v)

@@ -31,7 +31,7 @@ from ..physics import gait
 from ..physics.gait_lab import FootSample
 from ..physics.models import load_model
 from ..physics.sim import Sims
-from .base import Body
+from .base import Body, links_com_velocity
 from .declaration import AXES, GEOMS, LEGS, Declaration, check_model, read_declaration, refuse_declaration
 
 #: the declared body's scales (one standard deviation of a walk's readings, of the Reil body's kind)
@@ -258,9 +258,7 @@ class DeclaredBiped(Body):
         return self._feet_points(sims)[..., 2] <= 0.0
 
     def _com_velocity(self, sims) -> np.ndarray:
-        cvel = sims.cvel[:, self._tree]
-        w, r = cvel[..., :3], sims.xipos[:, self._tree] - sims.subtree_com[:, self._pelvis, None]
-        return np.einsum("b,pbi->pi", self._mass_share, cvel[..., 3:] + np.cross(w, r))
+        return links_com_velocity(sims, self._pelvis, self._tree, self._mass_share)
 
     def feet(self, sims: Sims) -> FootSample:
         """Each foot's lowest point against the floor plane (z = 0): in contact at or below it; slip is that point's

@@ -40,7 +40,7 @@ from ..physics.sim import Sims
 from ..core.options import option
 from ..physics import gait
 from ..physics.gait_lab import FootSample
-from .base import Body, model_file_option
+from .base import Body, links_com_velocity, model_file_option
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
 ACTUATORS = (
@@ -68,8 +68,6 @@ def _range_of(actuator: str) -> tuple[float, float]:
 _FRAME_COLUMNS, _FRAME_SIGNS = np.array([0, 1, 1, 0]), np.array([1.0, 1.0, -1.0, 1.0])
 #: pitch = -asin(R_20) (+ nose down), roll = asin(R_21) (+ left side up)
 _TILT_SIGNS = np.array([-1.0, 1.0])
-#: cross-product index cycles: (1, 2, 0) and (2, 0, 1)
-_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -284,15 +282,6 @@ class ReilBiped(Body):
         return float(model.body_mass.sum()), float(hip - foot)
 
     def _com_velocity(self, sims: Sims) -> np.ndarray:
-        """``(P, 3)`` m/s: the mass-weighted velocity of the links' centres of mass.
-
-        ``cvel`` gives each link's angular and linear velocity at the tree's centre of mass
-        (``subtree_com`` of the pelvis); a link's own centre moves at v + w x (xipos - that).
-        Computed here, on demand, rather than by a MuJoCo sensor, which would cost every
-        simulation ~5 % of its step time whether a controller reads it or not.
-        """
-        cvel = sims.cvel[:, 1:]
-        w, r = cvel[..., :3], sims.xipos[:, 1:] - sims.subtree_com[:, self._pelvis, None]
-        # w x r: component i is w_(i+1) r_(i+2) - w_(i+2) r_(i+1), the same products and differences as np.cross
-        v = cvel[..., 3:] + (w[..., _NEXT] * r[..., _AFTER] - w[..., _AFTER] * r[..., _NEXT])
-        return np.einsum("b,pbi->pi", self._mass_share, v)
+        """``(P, 3)`` m/s: the links' mass-weighted velocity (:func:`~.base.links_com_velocity`; every link is in the
+        pelvis's tree)."""
+        return links_com_velocity(sims, self._pelvis, slice(1, None), self._mass_share)
