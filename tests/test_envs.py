@@ -198,12 +198,32 @@ def test_a_bad_action_raises_and_leaves_the_simulation_untouched(bad, words):
     (dict(seconds=-1), "seconds: must be > 0"),
     (dict(control_dt=0.007), "not a multiple"),
     (dict(render_mode="human"), "render_mode"),
+    (dict(actions="normalised"), "actions"),
 ])
 def test_bad_options_raise_one_clear_error(kw, words):
     with pytest.raises(ConfigError, match=words):
         gymnasium.make("evobiped/ReilBiped-v0", **kw) if "render_mode" not in kw else ReilBipedEnv(**kw)
     with pytest.raises(ConfigError, match=words):
         ReilBipedVectorEnv(2, **kw)
+
+
+@pytest.mark.parametrize("cls", [ReilBipedEnv, TagaBipedEnv])
+def test_unit_actions_are_the_body_s_bounds_mapped_linearly(cls):
+    """``actions="unit"``: the space is [-1, 1]^n_act (what RL libraries expect), and a unit action a drives the
+    body exactly as the native action low + (a + 1) / 2 (high - low) does; beyond [-1, 1] it is clipped."""
+    unit, native = cls(seconds=0.2, actions="unit"), cls(seconds=0.2)
+    low, high = native.walkers.low, native.walkers.high  # the body's bounds (float64; the space holds float32)
+    assert (unit.action_space.low == -1).all() and (unit.action_space.high == 1).all()
+    assert unit.action_space.shape == native.action_space.shape and not np.allclose(low, -1)
+    unit.reset(seed=3), native.reset(seed=3)
+    rng = np.random.default_rng(0)
+    for k in range(8):
+        a = rng.uniform(-1.5, 1.5, unit.action_space.shape)  # beyond the box too: clipped to its edges
+        o1, r1, *_ = unit.step(a)
+        o2, r2, *_ = native.step(low + 0.5 * (np.clip(a, -1, 1) + 1) * (high - low))
+        assert np.array_equal(o1, o2) and r1 == r2, k
+    unit.reset(seed=4), native.reset(seed=4)  # a unit 0 is the middle of every bound (Reil's not the native 0)
+    assert np.array_equal(unit.step(np.zeros(len(low)))[0], native.step(low + 0.5 * (high - low))[0])
 
 
 def _python(code: str, **env) -> subprocess.CompletedProcess:

@@ -29,7 +29,7 @@ from .walkers import EnvOptions, Walkers, env_config, env_name
 def _walkers(cls, n: int, kwargs: dict) -> tuple[Walkers, EnvOptions]:
     """The walkers of environment class ``cls`` from its keyword arguments (EnvOptions', then the body's)."""
     config, options = env_config(cls.body_name, cls.default_control_dt, kwargs, f"{cls.body_name} biped environment")
-    return Walkers(config, n, options.reset_noise_scale), options
+    return Walkers(config, n, options.reset_noise_scale, options.actions), options
 
 
 def _doc(summary: str, body: str) -> str:

@@ -29,6 +29,8 @@ from ..core.options import option
 from ..tasks import TASKS
 
 _HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
+#: the environments' action spaces (``EnvOptions.actions``)
+ACTION_SPACES = ("native", "unit")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -44,6 +46,9 @@ class EnvOptions:
                                       unit="s", above=0)
     reset_noise_scale: float = option(0.01, "each hinge angle starts U(-s, s) off the body's initial pose", unit="rad",
                                       low=0)
+    actions: str = option("native", "the action space: `native` (the body's own units and bounds: rad targets or N m "
+                          "torques) or `unit` (each action in [-1, 1], mapped linearly onto the body's bounds: what RL "
+                          "libraries expect)", choices=ACTION_SPACES)
     task: str = option("walk", "the task whose fitness increments are the reward (its terms are in `info`)",
                        choices=TASKS)  # the registry itself: a task registered later counts
     task_options: Any = option(None, "the task's options (its table); none: its defaults, but the walk task's "
@@ -112,8 +117,9 @@ class Walkers:
     Rows are independent: row i's trajectory depends only on its actions and its reset noise.
     """
 
-    def __init__(self, config: EpisodeConfig, n: int, reset_noise_scale: float):
-        self.config = config
+    def __init__(self, config: EpisodeConfig, n: int, reset_noise_scale: float, actions: str = "native"):
+        """``actions``: one of :data:`ACTION_SPACES`: the space :meth:`step`'s actions are in."""
+        self.config, self.actions = config, actions
         self.episode = config.build()
         self.n, self.noise = int(n), float(reset_noise_scale)
         self.body, self.model = self.episode.body, self.episode.model
@@ -167,10 +173,10 @@ class Walkers:
         st.ended[ids] = False
 
     def step(self, ids: np.ndarray, action: np.ndarray):
-        """Rows ``ids`` take ``action`` ``(n, n_act)`` (clipped to the bounds; other rows' ignored) for one
-        control period.  Returns ``(reward, terminated, truncated, unstable)``, each ``(len(ids),)``."""
+        """Rows ``ids`` take ``action`` ``(n, n_act)`` (clipped to the bounds of :meth:`spaces`; other rows' ignored)
+        for one control period.  Returns ``(reward, terminated, truncated, unstable)``, each ``(len(ids),)``."""
         env, task = self.state, self.episode.task
-        st = self.episode.step(env.episode, np.clip(action, self.low, self.high), rows=ids)
+        st = self.episode.step(env.episode, self.native(action), rows=ids)
         fitness = task.fitness(st.task)
         reward = fitness[ids] - env.fitness[ids]
         env.fitness[ids] = fitness[ids]
@@ -206,7 +212,17 @@ class Walkers:
             raise ValueError("action contains NaN or infinity")
         return a
 
+    def native(self, action: np.ndarray) -> np.ndarray:
+        """``action`` ``(n, n_act)`` in the space of :attr:`actions`, clipped to its bounds, in the body's units: a
+        ``unit`` action a goes to low + (a + 1) / 2 (high - low)."""
+        if self.actions == "unit":
+            return self.low + 0.5 * (np.clip(action, -1.0, 1.0) + 1.0) * (self.high - self.low)
+        return np.clip(action, self.low, self.high)
+
     def spaces(self) -> tuple[spaces.Box, spaces.Box]:
+        """The observation space (unbounded float64) and the action space of :attr:`actions` (float32)."""
         obs = spaces.Box(-np.inf, np.inf, (self.obs_size,), np.float64)
+        if self.actions == "unit":
+            return obs, spaces.Box(-1.0, 1.0, self.low.shape, dtype=np.float32)
         act = spaces.Box(self.low.astype(np.float32), self.high.astype(np.float32), dtype=np.float32)
         return obs, act
