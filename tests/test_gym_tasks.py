@@ -136,6 +136,19 @@ def test_evolve_env_on_the_command_line(tmp_path, capsys):
     assert cli("replay", out, "--video", tmp_path / "v.mp4") == 2
 
 
+def test_a_run_its_budget_ends_counts_episodes_in_its_progress(tmp_path, capsys):
+    """A run whose episode budget ends it long before its generations would says so and counts episodes, its time
+    left from the budget (not from 100,000 generations)."""
+    config = tmp_path / "b.toml"
+    config.write_text('optimizer = "es"\ngenerations = 100000\nbudget = 34\n[episode]\nenv = "Hopper-v5"\n'
+                      'controller = "linear"\n[episode.env_options]\nmax_steps = 20\n[es]\npairs = 8\n')
+    assert cli("evolve", "--config", config, "--backend", "serial", "--out", tmp_path / "r") == 0
+    err = capsys.readouterr().err
+    assert "population 17, 34 episodes (its budget)" in err
+    assert "evolve:  50% (17 of 34 episodes; generation 1;" in err and "(34 of 34 episodes; generation 2;" in err
+    assert "generations;" not in err
+
+
 BENCHMARKS = sorted(Path(__file__).parent.parent.glob("docs/benchmarks/*.toml"))
 
 
@@ -144,7 +157,8 @@ def test_the_benchmark_settings_are_accepted(path):
     from evobiped.flags import run_config
 
     config = run_config(config=str(path))
-    assert config.episode.env == "Hopper-v5" and config.normalise.running and config.budget
+    assert config.episode.env == {"hopper": "Hopper-v5", "walker2d": "Walker2d-v5"}[path.name.split("-")[0]]
+    assert config.normalise.running and config.budget
 
 
 def test_an_environment_episode_takes_no_body_settings():

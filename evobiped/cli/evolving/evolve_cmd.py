@@ -117,11 +117,21 @@ class _Shown:
                  if c.stop.active else "")
         what = (f"{c.episode.env}: {c.episode.controller}" if c.episode.env else
                 f"{c.episode.body}/{c.episode.controller} on '{c.episode.task}'")
-        self.say(f"evolving {what} with {c.optimizer}, population {population}, {c.generations} generations{until}, "
+        from ...run.run_config import episodes_per_genome
+
+        # a budget that ends the run before its generations do: the line counts episodes, its time left at the
+        # rate of this session's episodes (else generations, forecast walker by walker)
+        self.budgeted = c.budget is not None and c.budget < c.generations * population * episodes_per_genome(c)
+        length = f"{c.budget} episodes (its budget)" if self.budgeted else f"{c.generations} generations"
+        self.say(f"evolving {what} with {c.optimizer}, population {population}, {length}{until}, "
                  f"{c.episode.length:g} s episodes, seed {c.seed}, backend {backend} -> {run.dir}")
         if self.args.rerun is not None:
             self.log = self.viewer.enter_context(_viewer_log(run, self.args.rerun))
-        self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet, at_most=c.stop.active)
+        if self.budgeted:
+            self.line = Progress("evolve", c.budget, "episodes", quiet=self.args.quiet, at_most=c.stop.active)
+            self.first_episodes = run.episodes()
+        else:
+            self.line = Progress("evolve", c.generations, "generations", quiet=self.args.quiet, at_most=c.stop.active)
         # every walker's episode, generation by generation
         self.clock = GenerationClock(c.generations, c.episode.length)
 
@@ -137,11 +147,17 @@ class _Shown:
                                     wall_seconds=s.wall_seconds)
         self.clock.generation(s.wall_seconds)
         best = self.run.record.best or {"fitness": s.best, "fell": s.best_fell}
-        self.line.report(s.generation + 1, generation_note(
+        note = generation_note(
             best=best["fitness"], best_fell=best["fell"], this=s.best, this_fell=s.best_fell, mean=s.mean,
             worst=s.worst,
             evals_per_second=s.evals_per_second, simulated=s.simulated_seconds, longest=s.longest_seconds)
-            + phase_note(self.run), left=self.clock.left(s.generation + 1))
+        if self.budgeted:
+            done = self.run.episodes()
+            rate = (done - self.first_episodes) / self.line.elapsed if self.line.elapsed > 0 else 0.0
+            left = max(self.line.total - done, 0) / rate if rate > 0 else float("nan")
+            self.line.report(done, f"generation {s.generation + 1}; {note}" + phase_note(self.run), left=left)
+        else:
+            self.line.report(s.generation + 1, note + phase_note(self.run), left=self.clock.left(s.generation + 1))
         lost = lost_line(self.run, s.generation)
         if lost:
             self.say(lost)
