@@ -82,22 +82,23 @@ def train(name: str, steps: int, *, seed: int = 0, seconds: float = 10.0, every:
     return out
 
 
-def figure(curve: dict, name: str, path: Path) -> None:
-    """The learning curve: mean return of the deterministic policy against timesteps, the random policy's line."""
+def figure(curve: dict, name: str, path: Path, episodes: int, control_dt: float) -> None:
+    """The learning curve: the deterministic policy's mean return and time up on ``episodes`` held-out resets
+    against timesteps (the untrained policy at 0), the random policy's as a dashed line."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    t, ret, up = (np.array([r[k] for r in curve["rows"]]) for k in (0, 1, 2))
+    rows = [(0, *curve["untrained"], 0.0), *curve["rows"]]
+    t, ret, up = (np.array([r[k] for r in rows]) for k in (0, 1, 2))
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8))
-    a.plot(t, ret, "o-", label="PPO (deterministic policy)")
+    a.plot(t, ret, "o-", ms=3, label="PPO's deterministic policy")
     a.axhline(curve["random"][0], color="grey", ls="--", label="uniformly random actions")
-    a.set(xlabel="timesteps", ylabel=f"mean return over {len(curve['rows']) and 'held-out'} resets",
-          title=f"SB3 PPO on {name}")
-    b.plot(t, up * 0.02 if "Reil" in name else up, "o-")
-    b.axhline(curve["random"][1] * (0.02 if "Reil" in name else 1), color="grey", ls="--")
-    b.set(xlabel="timesteps", ylabel="s up before a fall" if "Reil" in name else "steps up", title="time up")
+    a.set(xlabel="timesteps", ylabel=f"mean return, {episodes} held-out resets", title=f"SB3 PPO on {name}")
+    b.plot(t, up * control_dt, "o-", ms=3)
+    b.axhline(curve["random"][1] * control_dt, color="grey", ls="--")
+    b.set(xlabel="timesteps", ylabel="mean time up (s)", title="time up before a fall or the episode's end")
     a.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
@@ -129,7 +130,10 @@ def main(argv=None) -> int:
         w.writerow(["timesteps", "mean_return", "mean_steps_up", "wall_s"])
         w.writerow([0, *curve["untrained"], 0.0])
         w.writerows(curve["rows"])
-    figure(curve, a.env, a.out / "curve.png")
+    import gymnasium
+
+    control_dt = gymnasium.make(a.env, actions="unit").unwrapped.walkers.control_dt  # s per step
+    figure(curve, a.env, a.out / "curve.png", a.episodes, control_dt)
     print(f"random policy {curve['random'][0]:.3f}; results in {a.out}")
     return 0
 
