@@ -85,7 +85,12 @@ def test_a_lost_run_can_stop_or_warn_and_says_so(tmp_path, capsys):
     assert summary["generations"] == 4 and summary["lost"] == [{"generation": 3, "phase": 0, "action": "stop",
                                                                 "why": "patience"}]
     warned = _evolve(tmp_path / "warn", _config(patience=[4], action="warn"))
-    assert json.loads((warned.dir / "summary.json").read_text())["generations"] == 10
+    said = json.loads((warned.dir / "summary.json").read_text())
+    assert said["generations"] == 10 and [e["generation"] for e in said["lost"]] == [3]  # said once, then on
+    plain = _evolve(tmp_path / "plain", _config())
+    # warning changes nothing of the evolution: every fitness column as without the rule
+    assert [row[: len(fitness_history(plain.dir)[0])] for row in fitness_history(warned.dir)] == fitness_history(
+        plain.dir)
     cfg = tmp_path / "lost.toml"
     cfg.write_text('optimizer = "ga"\ngenerations = 5\nseed = 4\n[ga]\npopulation = 8\n[episode]\nseconds = 1.0\n'
                    '[restart]\npatience = [2]\nmax_restarts = 1\n')
