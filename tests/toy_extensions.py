@@ -19,7 +19,7 @@ import numpy as np
 from evobiped.bodies.reil import ReilBiped
 from evobiped.core.options import option
 from evobiped.interface.contract import Environment
-from evobiped.optimizers.base import Optimizer, OptimizerState, frozen_array
+from evobiped.optimizers.base import Optimizer, PopulationState
 from evobiped.tasks.terms import Term, TermGroup
 
 
@@ -38,19 +38,10 @@ class RandomOptions:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class RandomState(OptimizerState):
+class RandomState(PopulationState):
     """The random search between generations: generation, population ``(P, G)``, its fitness ``(P,)``."""
 
     name = "random"
-    population: np.ndarray
-
-    def __post_init__(self):
-        object.__setattr__(self, "population", frozen_array(self.population))
-        object.__setattr__(self, "fitness", frozen_array(self.fitness))
-
-    def to_dict(self) -> dict:
-        return {"name": self.name, "generation": self.generation, "population": self.population.tolist(),
-                "fitness": [None if np.isnan(f) else float(f) for f in self.fitness]}
 
 
 class RandomSearch(Optimizer):
@@ -80,9 +71,7 @@ class RandomSearch(Optimizer):
         self.generation = int(state.generation)
 
     def _state_from(self, table: dict) -> RandomState:
-        pop = RandomState.numbers_of(table, "population", rows=self.layout.size, non_empty=True)
-        return RandomState(generation=RandomState.generation_of(table), population=pop, fitness=RandomState.numbers_of(
-            table, "fitness", null=np.nan, length=len(pop), minus_infinity=True))
+        return RandomState.from_table(table, self.layout.size)
 
 
 def _lateral(task, state, out) -> dict[str, np.ndarray]:

@@ -111,6 +111,30 @@ class OptimizerState:
         return np.array([[value(x) for x in r] for r in vals], float).reshape(-1, rows)
 
 
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PopulationState(OptimizerState):
+    """An optimizer whose state is its population ``(P, G)`` and their fitness ``(P,)`` (read-only arrays; the GA's,
+    an extension's): written as ``name``, ``generation``, ``population`` and ``fitness`` (null: not yet evaluated)."""
+
+    population: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "population", frozen_array(self.population))
+        object.__setattr__(self, "fitness", frozen_array(self.fitness))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "generation": self.generation, "population": self.population.tolist(),
+                "fitness": [None if np.isnan(f) else float(f) for f in self.fitness]}
+
+    @classmethod
+    def from_table(cls, table: dict, genes: int):
+        """The state a checkpoint's table holds, each field checked (one UserError naming the first bad one) for
+        genomes of ``genes`` genes."""
+        pop = cls.numbers_of(table, "population", rows=genes, non_empty=True)
+        return cls(generation=cls.generation_of(table), population=pop,
+                   fitness=cls.numbers_of(table, "fitness", null=np.nan, length=len(pop), minus_infinity=True))
+
+
 class Optimizer:
     """Base of the optimizers: what they are made from, their random stream and the ask/tell seam.  A subclass registers
     (:data:`evobiped.optimizers.OPTIMIZERS`) with ``name``, ``Options`` (its settings' frozen dataclass), ``table`` (the

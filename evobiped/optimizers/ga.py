@@ -24,7 +24,7 @@ import numpy as np
 
 from ..core.errors import ConfigError, UserError
 from ..core.options import check_fields, option
-from .base import MAX_POPULATION, Optimizer, OptimizerState, frozen_array
+from .base import MAX_POPULATION, Optimizer, PopulationState
 
 
 def _bool_or_none(v) -> None:
@@ -57,19 +57,10 @@ class GAOptions:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class GAState(OptimizerState):
+class GAState(PopulationState):
     """The GA between generations: generation, population ``(P, G)`` and its fitness ``(P,)`` (read-only arrays)."""
 
     name = "ga"
-    population: np.ndarray
-
-    def __post_init__(self):
-        object.__setattr__(self, "population", frozen_array(self.population))
-        object.__setattr__(self, "fitness", frozen_array(self.fitness))
-
-    def to_dict(self) -> dict:
-        return {"name": self.name, "generation": self.generation, "population": self.population.tolist(),
-                "fitness": [None if np.isnan(f) else float(f) for f in self.fitness]}
 
 
 class GA(Optimizer):
@@ -169,8 +160,4 @@ class GA(Optimizer):
                                                                               float), int(state.generation)
 
     def _state_from(self, table: dict) -> GAState:
-        gen = GAState.generation_of(table)
-        pop = GAState.numbers_of(table, "population", rows=self.layout.size, non_empty=True)
-        # null: unknown
-        fitness = GAState.numbers_of(table, "fitness", null=np.nan, length=len(pop), minus_infinity=True)
-        return GAState(generation=gen, population=pop, fitness=fitness)
+        return GAState.from_table(table, self.layout.size)
