@@ -179,6 +179,20 @@ class Body(ABC):
 _NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
 
 
+def joint_senses(sims: Sims, qadr: np.ndarray, dadr: np.ndarray, contact: np.ndarray,
+                 want: Collection[str]) -> dict[str, np.ndarray]:
+    """The senses every jointed body reads alike, those of ``want``: ``joint_angles`` (qpos at ``qadr``, rad),
+    ``joint_velocities`` (qvel at ``dadr``, rad/s) and ``foot_contact`` (``contact`` ``(P, F)`` as 0 or 1)."""
+    out = {}
+    if "joint_angles" in want:
+        out["joint_angles"] = sims.qpos[:, qadr]
+    if "joint_velocities" in want:
+        out["joint_velocities"] = sims.qvel[:, dadr]
+    if "foot_contact" in want:
+        out["foot_contact"] = contact.astype(float)
+    return out
+
+
 def links_com_velocity(sims: Sims, root: int, links, mass_share: np.ndarray) -> np.ndarray:
     """``(P, 3)`` m/s: the mass-weighted velocity of the centres of mass of ``links`` (body ids, or a slice of them),
     each weighing ``mass_share`` ``(L,)``, in the tree of body ``root``.

@@ -31,7 +31,7 @@ from ..physics import gait
 from ..physics.gait_lab import FootSample
 from ..physics.models import load_model
 from ..physics.sim import Sims
-from .base import Body, links_com_velocity
+from .base import Body, joint_senses, links_com_velocity
 from .declaration import AXES, GEOMS, LEGS, Declaration, check_model, read_declaration, refuse_declaration
 
 #: the declared body's scales (one standard deviation of a walk's readings, of the Reil body's kind)
@@ -231,14 +231,8 @@ class DeclaredBiped(Body):
     def sensors(self, sims: Sims, names: Collection[str] | None = None) -> dict[str, np.ndarray]:
         """The senses the module docstring lists; only ``names`` are computed (default all)."""
         want = self.sensor_widths if names is None else names
-        out = {}
-        if "joint_angles" in want:
-            out["joint_angles"] = sims.qpos[:, self._qadr]
-        if "joint_velocities" in want:
-            out["joint_velocities"] = sims.qvel[:, self._dadr]
         contact = self.contacts(sims)
-        if "foot_contact" in want:
-            out["foot_contact"] = contact.astype(float)
+        out = joint_senses(sims, self._qadr, self._dadr, contact, want)
         if "pelvis_tilt" in want:
             rot = self._rot(sims)
             out["pelvis_tilt"] = np.stack([-np.arcsin(np.clip((rot @ self._fwd)[:, 2], -1, 1)),

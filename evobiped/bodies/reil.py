@@ -40,7 +40,7 @@ from ..physics.sim import Sims
 from ..core.options import option
 from ..physics import gait
 from ..physics.gait_lab import FootSample
-from .base import Body, links_com_velocity, model_file_option
+from .base import Body, joint_senses, links_com_velocity, model_file_option
 
 #: Table II target-angle ranges (rad), and the actuator order = motor neurons 1-6
 ACTUATORS = (
@@ -230,14 +230,8 @@ class ReilBiped(Body):
         Only ``names`` are computed (default all), in the order above.
         """
         want = self.sensor_widths if names is None else names
-        out = {}
-        if "joint_angles" in want:
-            out["joint_angles"] = sims.qpos[:, self._qadr]
-        if "joint_velocities" in want:
-            out["joint_velocities"] = sims.qvel[:, self._dadr]
         contact = self.contacts(sims)
-        if "foot_contact" in want:
-            out["foot_contact"] = contact.astype(float)
+        out = joint_senses(sims, self._qadr, self._dadr, contact, want)
         if "pelvis_tilt" in want:  # (-asin R_20, asin R_21) of the pelvis rotation (row-major)
             out["pelvis_tilt"] = np.arcsin(np.clip(sims.xmat[:, self._pelvis, 6:8], -1, 1)) * _TILT_SIGNS
         if "pelvis_tilt_rate" in want or "com_from_feet" in want or "com_velocity" in want:
