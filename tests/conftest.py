@@ -35,3 +35,20 @@ def cli(*args) -> int:
         return main([str(a) for a in args])
     except SystemExit as exc:
         return exc.code
+
+
+class ActionRecorder:
+    """An episode listener keeping the action ``(n, n_act)`` every control tick took (``seen``, one array a tick;
+    ``row``: only that row's ``(n_act,)``)."""
+
+    def __init__(self, row: int | None = None):
+        self.row, self.seen = row, []
+
+    def start(self, episode, sims) -> None:
+        pass
+
+    def tick(self, t, sims, ids, neurons, action, task_state) -> None:
+        self.seen.append((action if self.row is None else action[self.row]).copy())
+
+    def end(self, result) -> None:
+        pass

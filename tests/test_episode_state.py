@@ -14,7 +14,7 @@ from evobiped.experiments.taga.walking import set_push
 from evobiped.files.genome_file import load_genome
 from evobiped.tasks import TASKS
 
-from .conftest import WALKERS, random_genomes
+from .conftest import WALKERS, ActionRecorder, random_genomes
 
 
 def _same(a, b) -> None:
@@ -150,14 +150,7 @@ def test_a_controller_s_advance_is_its_actions_through_step():
     ep = EpisodeConfig(body="taga", controller="matsuoka", seconds=1.0).build()
     g = np.tile(preset_genome(ep.controller), (2, 1))
 
-    class Actions:
-        def __init__(self):
-            self.seen = []
-
-        def tick(self, t, sims, ids, neurons, action, task_state):
-            self.seen.append(action.copy())
-
-    seen = Actions()
+    seen = ActionRecorder()
     walked = ep.advance(ep.start(g), 1.0, listener=seen)
     outside = Episode(ep.body, None, ep.task, seconds=1.0, control_dt=ep.control_dt)
     fed = outside.start(2)

@@ -18,7 +18,8 @@ from evobiped.evaluation import make_evaluator  # noqa: E402
 from evobiped.run import Run, RunConfig  # noqa: E402
 
 from .conftest import cli  # noqa: E402
-from .test_evolve import Stop, evolve_with, fitness_history  # noqa: E402
+from .test_evolve import evolve_with, fitness_history  # noqa: E402
+from .test_stopping import _evolve  # noqa: E402
 
 HOPPER = EpisodeConfig(env="Hopper-v5", controller="linear", env_options={"max_steps": 150})
 #: ARS V2-t on a short Hopper: 4 pairs, the running normaliser, 4 generations
@@ -98,14 +99,8 @@ def test_history_identical_on_every_backend_and_worker_count(tmp_path):
 
 def test_resume_equals_uninterrupted(tmp_path):
     ref, ref_best = evolve_with(tmp_path, "whole", "serial", config=ARS)
-    run = Run.create(tmp_path / "cut", ARS)
-
-    def stop(stats):
-        if stats.generation == 1:
-            raise Stop
-
-    with make_evaluator(ARS.episode, "serial") as ev, pytest.raises(Stop):
-        run.evolve(ev, stop)
+    run = _evolve(tmp_path / "cut", ARS, stop_at=1)
+    assert len(fitness_history(run.dir)) == 2  # interrupted after its second generation
     resumed = Run.resume(run.dir)
     with make_evaluator(ARS.episode, "process", 2) as ev:
         resumed.evolve(ev)

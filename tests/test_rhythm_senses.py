@@ -7,6 +7,8 @@ import pytest
 
 from evobiped.episode import EpisodeConfig
 
+from .conftest import ActionRecorder
+
 INPUTS = ["joint_angles", "joint_velocities", "foot_contact", "pelvis_tilt", "pelvis_tilt_rate", "since_touchdown"]
 
 
@@ -68,17 +70,9 @@ def test_angle_output_is_the_pd_target_in_rad_about_the_posture_bias():
     y = np.abs(rng.normal(size=(1, c.n)))
     out = c.torques(params, y)
     assert np.allclose(out[0], 0.7 * y[0, 1::2] - 0.2 * y[0, 0::2] + bias, atol=1e-14)
-    seen = []
-
-    class Grab:
-        def start(self, episode, sims): ...
-        def tick(self, t, sims, ids, neurons, action, task_state):
-            seen.append(action[0].copy())
-        def end(self, result): ...
-
-    still = _genome(c, rng, bias=bias, p_e=0.0, p_f=0.0)
-    ep.run(still[None], listener=Grab())
-    assert np.allclose(seen[0], np.clip(bias, ep.low, ep.high))  # no rhythm: the targets are the posture
+    still, grab = _genome(c, rng, bias=bias, p_e=0.0, p_f=0.0), ActionRecorder(row=0)
+    ep.run(still[None], listener=grab)
+    assert np.allclose(grab.seen[0], np.clip(bias, ep.low, ep.high))  # no rhythm: the targets are the posture
 
 
 def test_senses_need_declared_scales_and_signed_output_is_unchanged():

@@ -16,6 +16,8 @@ from evobiped.controllers.matsuoka import Matsuoka, taga_feedback
 from evobiped.core.errors import UserError
 from evobiped.physics.sim import Sims
 
+from .conftest import ActionRecorder
+
 
 # ---------------------------------------------------------------- structure
 def test_model_masses_and_rod_inertias():
@@ -354,16 +356,9 @@ def test_matsuoka_drives_reil_pd_targets_within_range():
 
     ep = build_episode(body="reil", controller="matsuoka", seconds=1.0)
     assert ep.controller.feedback == "none" and ep.controller.input_names == ()
-    seen = []
-
-    class Grab:
-        def start(self, episode, sims): ...
-        def tick(self, t, sims, ids, neurons, action, task_state):
-            seen.append(action[0].copy())
-        def end(self, result): ...
-
-    ep.run(preset_genome(ep.controller), listener=Grab())
-    a = np.array(seen)
+    grab = ActionRecorder(row=0)
+    ep.run(preset_genome(ep.controller), listener=grab)
+    a = np.array(grab.seen)
     low, high = ep.low, ep.high
     assert (a >= low).all() and (a <= high).all()
     assert (a.max(0) - a.min(0) > 0.2 * (high - low)).all()  # every joint is driven through its range
