@@ -15,7 +15,7 @@ LAYERS: list[set[str]] = [
     {"core.validate", "core.kernel", "core.ufunc_calls", "core.fileio", "core.net", "core.progress", "core.provenance",
      "physics.models", "physics.sim",
      "interface.genome", "interface.mapping", "interface.frame", "interface.normaliser", "files.presets",
-     "physics.gait_lab"},
+     "physics.gait_lab", "physics.trials"},
     {"core.schedule"},
     {"core.options", "interface.contract", "physics.gait"},
     {"physics.perturb"},

@@ -13,7 +13,8 @@ from evobiped.run.run import Run
 from evobiped.run.run_config import RunConfig
 from evobiped.files.genome_file import load_genome
 from evobiped.episode.disturbances import assist_torque
-from evobiped.physics.perturb import PerturbationOptions, Trials
+from evobiped.physics.perturb import PerturbationOptions
+from evobiped.physics.trials import Trials
 
 from .conftest import WALKERS
 from .test_evolve import fitness_history, whole_and_resumed

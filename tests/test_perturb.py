@@ -10,7 +10,8 @@ from evobiped.episode import EpisodeConfig
 from evobiped.core.errors import ConfigError
 from evobiped.files.genome_file import load_genome
 from evobiped.physics.models import model_path
-from evobiped.physics.perturb import PerturbationOptions, Trials
+from evobiped.physics.perturb import PerturbationOptions
+from evobiped.physics.trials import Trials
 from evobiped.core.schedule import Schedule
 
 from .conftest import WALKERS

@@ -10,7 +10,7 @@ from evobiped.cli import main
 from evobiped.core.errors import UserError
 from evobiped.experiments.taga.parameters import preset_genome
 from evobiped.files.genome_file import load_genome, save_genome
-from evobiped.physics.perturb import Trials
+from evobiped.physics.trials import Trials
 from evobiped.analysis.robustness import battery, score, summarise
 
 from .conftest import WALKERS

@@ -48,7 +48,7 @@ import numpy as np
 from ..interface.contract import index
 from ..episode import Episode
 from ..core.errors import UserError
-from ..physics.perturb import Trials
+from ..physics.trials import Trials
 from ..core.progress import Progress
 
 PUSH_FORCES = (5.0, 10.0, 15.0, 20.0)  # N

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..bodies.base import Body
-from ..physics.perturb import PerturbationOptions, Trials
+from ..physics.perturb import PerturbationOptions
+from ..physics.trials import Trials
 from ..physics.sim import Sims
 from ..tasks.base import Task
 from .state import Disturbances

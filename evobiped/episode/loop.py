@@ -12,7 +12,8 @@ from ..core.kernel import compiled
 from ..interface.mapping import to_action
 from ..physics import gait
 from ..physics.gait_lab import stacked
-from ..physics.perturb import PerturbationOptions, Trials
+from ..physics.perturb import PerturbationOptions
+from ..physics.trials import Trials
 from ..physics.sim import Sims
 from ..tasks.base import Task
 from .disturbances import assisted_physics, disturb, draw_trials

@@ -11,7 +11,7 @@ import numpy as np
 
 from .result import EpisodeResult
 from ..interface.normaliser import SenseSums
-from ..physics.perturb import TargetNoise, Trials
+from ..physics.trials import TargetNoise, Trials
 from ..physics.sim import Sims
 from ..tasks.base import TaskState
 
