@@ -54,6 +54,7 @@ def train(name: str, steps: int, *, seed: int = 0, seconds: float = 10.0, every:
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.vec_env import VecNormalize
 
     import evobiped.envs  # noqa: F401  (registers the environments)
@@ -65,6 +66,7 @@ def train(name: str, steps: int, *, seed: int = 0, seconds: float = 10.0, every:
     out = {"random": evaluate(name, kw, lambda o: space.sample(), episodes)}
     venv = VecNormalize(make_vec_env(name, n_envs=4, seed=seed, env_kwargs=kw))
     model = PPO("MlpPolicy", venv, seed=seed, device="cpu", **(PPO_OPTIONS | (ppo or {})))
+    model.set_logger(Logger(None, []))  # SB3's own logger writes a folder into the temporary directory every learn()
 
     def policy(obs):
         return model.predict(venv.normalize_obs(obs), deterministic=True)[0]

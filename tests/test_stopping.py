@@ -102,3 +102,13 @@ def test_a_run_stopped_by_its_rule_is_read_and_selected_like_any_other(tmp_path)
     history = read_history(run.dir / "history.csv")  # stop_met is a number like every column
     assert set(history["stop_met"]) <= {0.0, 1.0} and history["stop_met"][-1] == 1.0
     assert cli("select", run.dir, "--top", 2, "--seconds", 3) == 0 and (run.dir / "selected.json").is_file()
+
+
+def test_no_rule_is_met_while_the_pelvis_assistance_holds_the_walkers(tmp_path):
+    """A walker held up by the assistance does not walk: the stopping rule counts only unassisted generations (met
+    in every generation here, it stops two generations after the assistance has faded to 0 at generation 4)."""
+    config = _config(when="fitness", above=-1e9, generations=2)
+    assert len(fitness_history(_evolve(tmp_path / "plain", config).dir)) == 2
+    held = RunConfig.from_dict({**config.to_dict(), "episode": {
+        "seconds": 1.5, "perturbations": {"assist": 10.0, "assist_generations": 4}}})
+    assert len(fitness_history(_evolve(tmp_path / "held", held).dir)) == 6

@@ -199,7 +199,7 @@ class Run:
         best = None
         if self._replaces_best(g, stats.best):
             best, self.context.best = (meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)), context
-        self._next_generation(result, unknown)
+        self._next_generation(result, unknown, self._assisted(g))
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.record = self.record.committed(
             stats.row(), {k: v if np.isfinite(v) else None for k, v in means.items()}, rundir.digest(text),
@@ -207,11 +207,12 @@ class Run:
             best=best)
         return stats
 
-    def _next_generation(self, result, unknown: np.ndarray) -> None:
-        """The context learns from the generation (``result`` of the rows ``unknown`` ``(P,)``), the optimizer makes
-        the next one, and each individual it keeps keeps its outcome."""
+    def _next_generation(self, result, unknown: np.ndarray, assisted: bool) -> None:
+        """The context learns from the generation (``result`` of the rows ``unknown`` ``(P,)``; ``assisted``: the
+        pelvis assistance held its walkers), the optimizer makes the next one, and each individual it keeps keeps its
+        outcome."""
         opt = self.optimizer
-        self.context.after(result, unknown, opt.evaluation_rows(), opt.fitness)
+        self.context.after(result, unknown, opt.evaluation_rows(), opt.fitness, assisted=assisted)
         carried = opt.next_generation()
         if self.context.restart_due:  # the lost-run rule: the search starts over (every individual new)
             self.individuals.carry(opt.start_over(), None)
@@ -240,6 +241,11 @@ class Run:
         """What generation ``generation``'s perturbed presentations are drawn from (:meth:`PerturbationOptions.key`)."""
         bests = rundir.column(self.record.history, "best")
         return self.config.episode.perturbations.key(self.config.seed, generation, bests)
+
+    def _assisted(self, generation: int) -> bool:
+        """Generation ``generation``'s walkers were held by the pelvis assistance (its stiffness above 0)."""
+        p = self.config.episode.perturbations
+        return p.assist > 0 and p.assist_at(p.assist_clock(generation, rundir.column(self.record.history, "best"))) > 0
 
     def _incomparable(self, generation: int) -> bool:
         """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,
