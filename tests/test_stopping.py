@@ -104,11 +104,13 @@ def test_a_run_stopped_by_its_rule_is_read_and_selected_like_any_other(tmp_path)
     assert cli("select", run.dir, "--top", 2, "--seconds", 3) == 0 and (run.dir / "selected.json").is_file()
 
 
-def test_no_rule_is_met_while_the_pelvis_assistance_holds_the_walkers(tmp_path):
-    """A walker held up by the assistance does not walk: the stopping rule counts only unassisted generations (met
-    in every generation here, it stops two generations after the assistance has faded to 0 at generation 4)."""
+@pytest.mark.parametrize("help", [{"assist": 10.0, "assist_generations": 4},
+                                  {"gravity": {"start": 0.5, "end": 1.0, "generations": 4}}])
+def test_no_rule_is_met_while_the_walkers_are_helped(tmp_path, help):
+    """A walker held up by the assistance, or under less than the model's gravity, does not walk: the stopping rule
+    counts only generations without help (met in every generation here, it stops two generations after the help
+    has gone at generation 4)."""
     config = _config(when="fitness", above=-1e9, generations=2)
     assert len(fitness_history(_evolve(tmp_path / "plain", config).dir)) == 2
-    held = RunConfig.from_dict({**config.to_dict(), "episode": {
-        "seconds": 1.5, "perturbations": {"assist": 10.0, "assist_generations": 4}}})
-    assert len(fitness_history(_evolve(tmp_path / "held", held).dir)) == 6
+    helped = RunConfig.from_dict({**config.to_dict(), "episode": {"seconds": 1.5, "perturbations": help}})
+    assert len(fitness_history(_evolve(tmp_path / "helped", helped).dir)) == 6

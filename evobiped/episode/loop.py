@@ -67,9 +67,10 @@ class Episode:
     def n_ticks(self) -> int:
         return int(round(self.seconds / self.control_dt))
 
-    def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0, slope_direction: float = 0.0) -> Sims:
+    def sims(self, n: int, *, friction: float | None = None, slope: float = 0.0, slope_direction: float = 0.0,
+             gravity: float = 1.0) -> Sims:
         """A new batch of ``n`` simulations (each :meth:`start` owns one) on this ground (:meth:`Grounds.sims`)."""
-        return self.grounds.sims(n, friction=friction, slope=slope, slope_direction=slope_direction)
+        return self.grounds.sims(n, friction=friction, slope=slope, slope_direction=slope_direction, gravity=gravity)
 
     def trials_for(self, key: tuple[int, int] | None) -> Trials | None:
         """The perturbed presentations of generation key = (run seed, generation); None: nominal
@@ -127,7 +128,8 @@ class Episode:
         n_ticks = self.n_ticks if seconds is None else int(round(seconds / self.control_dt))
         body = self.body
         sims = self.sims(P) if trials is None else self.sims(P, friction=trials.friction, slope=trials.slope,
-                                                              slope_direction=trials.slope_direction)
+                                                              slope_direction=trials.slope_direction,
+                                                              gravity=trials.gravity)
         body.reset(sims)
         trial = np.arange(P) // S % R  # each row's trial
         if trials is not None and trials.pose_offset is not None and trials.pose_offset.any():

@@ -12,6 +12,11 @@ with its own disturbances (:class:`Trials`, one row per presentation):
   (the genome's neighbours: a walker on a flat optimum survives it);
 * **ground**: the floor's sliding friction and a slope (grade, rise over run, rising
   towards a direction in the walker's initial-facing frame), the same for every row of a batch.
+* **gravity** (a curriculum, not a disturbance): the model's gravity times ``gravity`` (1: as modelled), the
+  same for every row of a generation; a schedule from below 1 up to 1 (e.g. ``{start = 0.25, end = 1.0,
+  generations = 80}``) lets a network learn to balance a slower fall first (an inverted pendulum of length L
+  falls with the time constant sqrt(L / g): at a quarter of g, half as fast).  The gait lab's measures that
+  divide by g (cost of transport, Froude number) keep 9.81 m/s^2.
 * **pelvis assistance** (a curriculum, not a disturbance): a roll/pitch stiffness
   k (N m/rad) and damping c = ``assist_damping`` k (N m s/rad) that hold the
   trunk upright, applied before every physics step (applied once per control
@@ -104,6 +109,9 @@ class PerturbationOptions:
     slope: float = option(0.0, "largest grade of the floor (rise over run), one draw per generation: a grade uniform "
                                "in [0, slope] rising towards a uniform random direction of the initial facing's frame",
                           low=0, high=0.5, schedule=True)
+    gravity: float = option(1.0, "the gravity's share of the model's, the same for every presentation of a generation "
+                                 "(a curriculum: a schedule from below 1 up to 1 slows the fall a network first "
+                                 "learns to balance)", above=0, high=1, schedule=True)
     gene_noise: float = option(0.0, "standard deviation of the noise on every gene, in units of that gene's range, one "
                                     "draw per presentation, the same for every genome of a generation", low=0, below=1,
                                schedule=True)
@@ -145,19 +153,22 @@ class PerturbationOptions:
         """Anything to perturb (or several presentations to aggregate) in some generation."""
         strong = any(s.start > 0 or s.end > 0 for s in (scheduled(self, n) for n in STRENGTHS if n != "push_force"))
         fr = scheduled(self, "friction")
-        return self.presentations > 1 or self.pushes > 0 or bool(fr.start) or bool(fr.end) or strong or self.assist > 0
+        gr = scheduled(self, "gravity")
+        return (self.presentations > 1 or self.pushes > 0 or bool(fr.start) or bool(fr.end) or strong or self.assist > 0
+                or gr.start != 1 or gr.end != 1)
 
     @property
     def comparable_from(self) -> int:
         """The first generation from which every schedule has reached its end and ``aggregate_later`` (if any) applies:
         from there on, generations meet disturbances of one distribution and their fitness compares (0: no schedule)."""
-        ends = [s.after + s.generations for s in (scheduled(self, n) for n in (*STRENGTHS, "friction", "quantile"))
+        ends = [s.after + s.generations
+                for s in (scheduled(self, n) for n in (*STRENGTHS, "friction", "quantile", "gravity"))
                 if s.start != s.end]
         return max([*ends, self.aggregate_from if self.aggregate_later is not None else 0, 0])
 
     def at(self, generation: int) -> dict:
         """Every scheduled option's value at ``generation`` (name -> number, friction a tuple)."""
-        return {n: scheduled(self, n).at(generation) for n in (*STRENGTHS, "friction", "quantile")}
+        return {n: scheduled(self, n).at(generation) for n in (*STRENGTHS, "friction", "quantile", "gravity")}
 
     def aggregate_at(self, generation: int) -> str:
         """The aggregate of ``generation``."""
@@ -223,6 +234,7 @@ class PerturbationOptions:
                 raise ConfigError("episode.perturbations.gene_noise: these trials are drawn without a genome (no "
                                   "controller)")
             trials.gene_noise = rng.normal(0.0, v["gene_noise"], (R, n_genes))
+        trials.gravity = float(v["gravity"])  # no draw: the gravity is the schedule's
         trials.assist = self._assist_rows(int(key[2]) if len(key) > 2 else int(key[1]))
         trials.assist_damping = self.assist_damping
         return trials

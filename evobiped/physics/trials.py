@@ -40,6 +40,8 @@ class Trials:
     slope: float = 0.0
     #: rad: where the floor rises, in the initial-facing frame (0: ahead, pi/2: to the left, pi: behind)
     slope_direction: float = 0.0
+    #: the gravity's share of the model's (1: as modelled; below 1: a slower fall, the gravity curriculum's)
+    gravity: float = 1.0
     #: ``(R, G)``: noise added to every gene, in units of that gene's range (None: none)
     gene_noise: np.ndarray | None = None
     aggregate: str = "mean"

@@ -199,7 +199,7 @@ class Run:
         best = None
         if self._replaces_best(g, stats.best):
             best, self.context.best = (meta, [float(x) for x in pop[b]], self.individuals.walk_of(b)), context
-        self._next_generation(result, unknown, self._assisted(g))
+        self._next_generation(result, unknown, self._helped(g))
         means = {k: float(np.mean(np.array(v, dtype=float))) for k, v in terms.items()}
         self.record = self.record.committed(
             stats.row(), {k: v if np.isfinite(v) else None for k, v in means.items()}, rundir.digest(text),
@@ -207,12 +207,12 @@ class Run:
             best=best)
         return stats
 
-    def _next_generation(self, result, unknown: np.ndarray, assisted: bool) -> None:
-        """The context learns from the generation (``result`` of the rows ``unknown`` ``(P,)``; ``assisted``: the
-        pelvis assistance held its walkers), the optimizer makes the next one, and each individual it keeps keeps its
-        outcome."""
+    def _next_generation(self, result, unknown: np.ndarray, helped: bool) -> None:
+        """The context learns from the generation (``result`` of the rows ``unknown`` ``(P,)``; ``helped``: its
+        walkers were helped, :meth:`_helped`), the optimizer makes the next one, and each individual it keeps keeps
+        its outcome."""
         opt = self.optimizer
-        self.context.after(result, unknown, opt.evaluation_rows(), opt.fitness, assisted=assisted)
+        self.context.after(result, unknown, opt.evaluation_rows(), opt.fitness, helped=helped)
         carried = opt.next_generation()
         if self.context.restart_due:  # the lost-run rule: the search starts over (every individual new)
             self.individuals.carry(opt.start_over(), None)
@@ -242,10 +242,12 @@ class Run:
         bests = rundir.column(self.record.history, "best")
         return self.config.episode.perturbations.key(self.config.seed, generation, bests)
 
-    def _assisted(self, generation: int) -> bool:
-        """Generation ``generation``'s walkers were held by the pelvis assistance (its stiffness above 0)."""
+    def _helped(self, generation: int) -> bool:
+        """Generation ``generation``'s walkers were helped: the pelvis assistance held them (its stiffness above 0),
+        or they walked under less than the model's gravity."""
         p = self.config.episode.perturbations
-        return p.assist > 0 and p.assist_at(p.assist_clock(generation, rundir.column(self.record.history, "best"))) > 0
+        bests = rundir.column(self.record.history, "best")
+        return p.at(generation)["gravity"] < 1 or p.assist > 0 and p.assist_at(p.assist_clock(generation, bests)) > 0
 
     def _incomparable(self, generation: int) -> bool:
         """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,

@@ -113,10 +113,11 @@ class RunContext:
         return self.episode(self.best)
 
     def after(self, result: EpisodeResult, unknown: np.ndarray, evaluation_rows: np.ndarray | None,
-              fitness: np.ndarray, *, assisted: bool = False) -> None:
+              fitness: np.ndarray, *, helped: bool = False) -> None:
         """Learn from a generation: ``result`` over the evaluated rows (``unknown`` of the population), the optimizer's
-        evaluation rows (None: the fittest evaluated row) and the population's ``fitness``; ``assisted``: the pelvis
-        assistance held its walkers up (the stopping rule is not met then: a walker held up does not walk)."""
+        evaluation rows (None: the fittest evaluated row) and the population's ``fitness``; ``helped``: the pelvis
+        assistance held its walkers up, or less than the model's gravity pulled them down (the stopping rule is not
+        met then: a walker helped does not walk)."""
         if not self.active:
             return
         position = np.cumsum(unknown) - 1
@@ -142,7 +143,7 @@ class RunContext:
             last_phase = not self.curriculum.active or phase == len(self.curriculum.options.phases) - 1
             # each presentation of each evaluation walker (a term is (genomes,) or (genomes, presentations))
             terms = {k: np.asarray(v)[rows].reshape(-1) for k, v in result.terms.items()}
-            self.history[-1][STOP_COLUMN] = int(last_phase and not assisted
+            self.history[-1][STOP_COLUMN] = int(last_phase and not helped
                                                 and stop.met(terms, _row_fell(result, rows), fitness[chosen]))
 
     def _lost(self, phase: int, fell: bool) -> None:
