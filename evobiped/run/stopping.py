@@ -7,8 +7,8 @@ least 0.3 m/s, each foot standing half the time, no flight, symmetric feet that 
 phase for ``generations`` generations running.  ``when = "fitness"``: their mean fitness reached ``above`` as many
 generations running.  Neither is met in a generation whose walkers were helped (the pelvis assistance held them, or
 less than the model's gravity pulled them: a walker helped does not walk).  The record of each generation (met or
-not) is part of the checkpoint's context, so a resumed run stops where the uninterrupted one would.  The direction criterion is left to the walker test after the run (the gait
-terms hold no heading).
+not) is part of the checkpoint's context, so a resumed run stops where the uninterrupted one would.  The direction
+criterion is left to the walker test after the run (the gait terms hold no heading).
 
 **A lost run** (``[restart]``): ``patience`` gives each phase of the curriculum (one entry per phase; one entry for a
 run without a curriculum) the generations it may take within an attempt: to advance to the next phase, or, in the
