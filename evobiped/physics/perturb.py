@@ -194,6 +194,11 @@ class PerturbationOptions:
         assistance is on (``best`` as in :meth:`key`); its fitness does not compare with a later generation's."""
         return generation < self.comparable_from or self.assist_at(self.assist_clock(generation, best)) > 0
 
+    def helps(self, generation: int, best: list[float]) -> bool:
+        """Generation ``generation``'s walkers are helped (``best`` as in :meth:`key`): the pelvis assistance holds
+        them, or less than the model's gravity pulls them (a walker helped does not walk)."""
+        return self.at(generation)["gravity"] < 1 or self.assist_at(self.assist_clock(generation, best)) > 0
+
     def assist_at(self, clock: int) -> float:
         """The assistance stiffness (N m/rad) at this clock: ``assist`` faded linearly to 0 over
         ``assist_generations``."""

@@ -245,9 +245,7 @@ class Run:
     def _helped(self, generation: int) -> bool:
         """Generation ``generation``'s walkers were helped: the pelvis assistance held them (its stiffness above 0),
         or they walked under less than the model's gravity."""
-        p = self.config.episode.perturbations
-        bests = rundir.column(self.record.history, "best")
-        return p.at(generation)["gravity"] < 1 or p.assist > 0 and p.assist_at(p.assist_clock(generation, bests)) > 0
+        return self.config.episode.perturbations.helps(generation, rundir.column(self.record.history, "best"))
 
     def _incomparable(self, generation: int) -> bool:
         """Generation ``generation`` is not comparable with later ones: a schedule still changed, the assistance was on,
