@@ -48,6 +48,11 @@ def _probe(ufunc: np.ufunc) -> list[np.ndarray]:
     rng = np.random.default_rng(12345)
     if ufunc is np.arcsin:
         x = np.concatenate([rng.uniform(-1, 1, 4099), [-1.0, 1.0, 0.0, -0.0, 1e-300, 0.5, np.nan]])
+    elif ufunc.nin == 2:  # arctan2, hypot: every quadrant, both scales, signed zeros, infinities, NaN
+        edge = np.array([0.0, -0.0, 1.0, -1.0, np.inf, -np.inf, np.nan, 1e-300])
+        x = np.concatenate([rng.normal(size=4099) * 10.0 ** rng.integers(-3, 4, 4099), np.repeat(edge, len(edge))])
+        y = np.concatenate([rng.normal(size=4099) * 10.0 ** rng.integers(-3, 4, 4099), np.tile(edge, len(edge))])
+        return [x, y]
     else:
         x = np.concatenate([rng.uniform(-40, 40, 4099), rng.uniform(-800, 800, 1001),
                             [0.0, -0.0, np.inf, -np.inf, np.nan]])
@@ -56,13 +61,15 @@ def _probe(ufunc: np.ufunc) -> list[np.ndarray]:
 
 @functools.cache
 def ufunc_loop(ufunc: np.ufunc) -> int | None:
-    """The address of NumPy's float64 inner loop of the unary ``ufunc`` (``np.exp``, ``np.arcsin``): the one
-    ``ufunc(x)`` runs for a contiguous float64 ``x`` (the first float64 loop in its type list), checked to the last
-    bit against ``ufunc`` on a probe; None where NumPy's layout or loop is not what this expects.  Compiled code
-    calls it through :func:`evobiped.core.ufunc_calls.apply_loop`."""
+    """The address of NumPy's float64 inner loop of ``ufunc``, unary (``np.exp``, ``np.arcsin``) or binary
+    (``np.arctan2``, ``np.hypot``): the one ``ufunc(x)`` (``ufunc(x, y)``) runs for contiguous float64 arguments (the
+    first float64 loop in its type list), checked to the last bit against ``ufunc`` on a probe; None where NumPy's
+    layout or loop is not what this expects.  Compiled code calls it through
+    :func:`evobiped.core.ufunc_calls.apply_loop` (:func:`~evobiped.core.ufunc_calls.apply_loop2`)."""
     try:
         u = _UFunc.from_address(id(ufunc))
-        if u.name != ufunc.__name__.encode() or u.nin != 1 or u.nout != 1 or u.ntypes != len(ufunc.types):
+        if (u.name != ufunc.__name__.encode() or u.nin not in (1, 2) or u.nin != ufunc.nin or u.nout != 1
+                or u.ntypes != len(ufunc.types)):
             return None
         for i in range(u.ntypes):
             if all(b == _NPY_DOUBLE for b in u.types[i * u.nargs:(i + 1) * u.nargs]):
@@ -74,13 +81,47 @@ def ufunc_loop(ufunc: np.ufunc) -> int | None:
         address = int(u.functions[i])
     except (ValueError, TypeError, OverflowError):
         return None
-    (x,) = _probe(ufunc)
-    out = np.empty_like(x)
-    args = np.array([x.ctypes.data, out.ctypes.data, len(x), 8, 8], np.intp)
+    given = _probe(ufunc)
+    out = np.empty_like(given[0])
+    pointers = [a.ctypes.data for a in given] + [out.ctypes.data]
+    args = np.array(pointers + [len(out)] + [8] * len(pointers), np.intp)
+    n = len(pointers)
     with np.errstate(all="ignore"):
-        LOOP(address)(args.ctypes.data, args[2:].ctypes.data, args[3:].ctypes.data, 0)
-        want = ufunc(x)
+        LOOP(address)(args.ctypes.data, args[n:].ctypes.data, args[n + 1:].ctypes.data, 0)
+        want = ufunc(*given)
     return address if np.array_equal(out.view(np.int64), want.view(np.int64)) else None
+
+
+#: ``double f(double, double)``: the scalar function a generic binary loop calls (its data pointer)
+SCALAR2 = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_double, ctypes.c_double)
+
+
+@functools.cache
+def ufunc_scalar2(ufunc: np.ufunc) -> int | None:
+    """For a binary ufunc whose float64 loop is NumPy's generic one over a C function (``np.hypot``: ``npy_hypot``,
+    handed to the loop as its data), that function's address, checked to the last bit against ``ufunc`` on a probe;
+    None where the loop is another kind (then :func:`ufunc_loop` has it).  Compiled code calls it through
+    :func:`evobiped.core.ufunc_calls.call_scalar2`."""
+    try:
+        u = _UFunc.from_address(id(ufunc))
+        if u.name != ufunc.__name__.encode() or u.nin != 2 or u.nout != 1 or u.ntypes != len(ufunc.types):
+            return None
+        for i in range(u.ntypes):
+            if all(b == _NPY_DOUBLE for b in u.types[i * u.nargs:(i + 1) * u.nargs]):
+                break
+        else:
+            return None
+        if not u.data[i]:
+            return None
+        address = int(u.data[i])
+    except (ValueError, TypeError, OverflowError):
+        return None
+    x, y = _probe(ufunc)
+    f = SCALAR2(address)
+    got = np.array([f(a, b) for a, b in zip(x.tolist(), y.tolist())])
+    with np.errstate(all="ignore"):
+        want = ufunc(x, y)
+    return address if np.array_equal(got.view(np.int64), want.view(np.int64)) else None
 
 
 @functools.cache
@@ -91,9 +132,11 @@ def unavailable() -> str | None:
             importlib.import_module("numba")
     except ImportError:
         return "the compiled kernel needs numba (pip install numba, a dependency of evobiped)"
-    for f in (np.exp, np.arcsin):
+    for f in (np.exp, np.arcsin, np.arctan2):
         if ufunc_loop(f) is None:
             return f"the compiled kernel could not find NumPy {np.__version__}'s own float64 {f.__name__} loop"
+    if ufunc_scalar2(np.hypot) is None:
+        return f"the compiled kernel could not find the C function behind NumPy {np.__version__}'s float64 hypot"
     return None
 
 

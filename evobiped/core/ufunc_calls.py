@@ -22,6 +22,18 @@ def _call_loop(typingctx, address, args, dimensions, steps):
     return types.void(types.intp, types.intp, types.intp, types.intp), codegen
 
 
+@intrinsic
+def call_scalar2(typingctx, address, x, y):
+    """``((double (*)(double, double)) address)(x, y)``: the C function behind a generic binary loop
+    (:func:`evobiped.core.kernel.ufunc_scalar2`), at a run-time address."""
+    def codegen(context, builder, signature, values):
+        d = ir.DoubleType()
+        fn = builder.inttoptr(values[0], ir.FunctionType(d, [d, d]).as_pointer())
+        return builder.call(fn, values[1:])
+
+    return types.float64(types.intp, types.float64, types.float64), codegen
+
+
 @njit(cache=True, nogil=True)
 def apply_loop(loop: int, x: np.ndarray, out: np.ndarray) -> None:
     """``out[:] = f(x)`` by NumPy's inner loop at address ``loop`` of a unary float64 ufunc f: ``x`` and ``out``
@@ -29,3 +41,13 @@ def apply_loop(loop: int, x: np.ndarray, out: np.ndarray) -> None:
     io = np.empty(5, np.intp)  # args (2 pointers), dimensions (1), steps (2): what a ufunc loop is handed
     io[0], io[1], io[2], io[3], io[4] = x.ctypes.data, out.ctypes.data, x.size, 8, 8
     _call_loop(loop, io.ctypes.data, io[2:].ctypes.data, io[3:].ctypes.data)
+
+
+@njit(cache=True, nogil=True)
+def apply_loop2(loop: int, x: np.ndarray, y: np.ndarray, out: np.ndarray) -> None:
+    """``out[:] = f(x, y)`` by NumPy's inner loop at address ``loop`` of a binary float64 ufunc f (``np.arctan2``,
+    ``np.hypot``): contiguous float64 arrays of one size (``out`` may be either); the same bits as ``f(x, y)``."""
+    io = np.empty(7, np.intp)  # args (3 pointers), dimensions (1), steps (3)
+    io[0], io[1], io[2], io[3] = x.ctypes.data, y.ctypes.data, out.ctypes.data, x.size
+    io[4], io[5], io[6] = 8, 8, 8
+    _call_loop(loop, io.ctypes.data, io[3:].ctypes.data, io[4:].ctypes.data)

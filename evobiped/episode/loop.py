@@ -62,6 +62,8 @@ class Episode:
         self.senses = None if self.controller is None else SensePlan(body, self.controller, task)
         self._task_reads_neurons = task.reads_neurons()
         self._task_reads_steps = task.reads_feet_steps()
+        #: the whole episode compiled (:mod:`.compiled.whole`), made on first use where the kernel is compiled
+        self._whole = None
 
     @property
     def n_ticks(self) -> int:
@@ -186,6 +188,8 @@ class Episode:
         ctrl, st = self.controller, state
         if ctrl is None:
             raise ConfigError("this episode has no controller: its actions come from outside (Episode.step)")
+        if self.compiled and self._run_whole(st, n, listener):
+            return state
         params, alive = st.params, st.alive
         P = len(alive)
         for _ in range(n):
@@ -200,6 +204,18 @@ class Episode:
                 action = ctrl.frame.actions(action, flip)
             self.step(st, action, neurons=neurons, listener=listener)
         return state
+
+    def _run_whole(self, state: EpisodeState, n: int, listener: Listener | None) -> bool:
+        """Whether ``n`` ticks of ``state`` ran as one compiled call (:mod:`.compiled.whole`: the same numbers),
+        where its parts allow it and ``n`` is long enough to pay for the call."""
+        from .compiled.whole import MIN_TICKS, WholeEpisodes, unsupported
+
+        if n < MIN_TICKS or unsupported(self, state, listener) is not None:
+            return False
+        if self._whole is None:
+            self._whole = WholeEpisodes(self)
+        self._whole.advance(self, state, n)
+        return True
 
     def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,
              listener: Listener | None = None, rows: np.ndarray | None = None) -> EpisodeState:

@@ -20,8 +20,8 @@ import numpy as np
 from mujoco.batch import Batch, SimulationError
 
 _VEL = mujoco.mjtStage.mjSTAGE_VEL
-# warnings that mean the state blew up: BADQPOS, BADQVEL, BADQACC, BADCTRL
-_FIRST_BAD = int(mujoco.mjtWarning.mjWARN_BADQPOS)
+#: warnings that mean the state blew up: BADQPOS, BADQVEL, BADQACC, BADCTRL (this index and after)
+FIRST_BAD_WARNING = int(mujoco.mjtWarning.mjWARN_BADQPOS)
 #: m/s or rad/s; no part of a walker moves this fast (a 0.5 m link at 100 rad/s: 50 m/s at its tip)
 MAX_SPEED = 100.0
 _DATA_FIELDS = frozenset(mujoco.batch.DATA_FIELDS)
@@ -104,7 +104,8 @@ class Sims:
             self.batch.step(ids=None if every else ids, nstep=nstep, stage=_VEL)
         except SimulationError as exc:
             failed |= np.isin(ids, exc.ids)
-        warn = self.batch.warning[rows, _FIRST_BAD:, 0].any(axis=1)
+        # each warning's (lastinfo, number): its count, not its last info (a bad position at DOF 0 has info 0)
+        warn = self.batch.warning[rows, FIRST_BAD_WARNING:, 1].any(axis=1)
         # NaN fails the comparison, so "not below the bound" catches it too
         wild = ~(np.abs(self.qvel[rows]) < MAX_SPEED).all(axis=1) | ~np.isfinite(self.qpos[rows]).all(axis=1)
         return failed | warn | wild

@@ -1,0 +1,342 @@
+"""A whole episode in one compiled call: the control ticks of every walker, MuJoCo's stepping included, without
+Python and without the GIL (the episode's ``kernel``, :mod:`evobiped.core.kernel`).
+
+:meth:`Episode.advance <evobiped.episode.loop.Episode.advance>` steps the batch in lock step, one control tick of
+every walker at a time, with the tick's work in NumPy between MuJoCo calls.  Where the episode's parts are ones this
+module knows (:func:`unsupported` says which are not), the ticks run instead in one numba call
+(``@njit(cache=True, nogil=True)``): walker after walker, each its own ``MjData`` stepped through MuJoCo's C entry
+points (reached from compiled code at run-time addresses) for all its ticks while its data stay in the cache.  In the
+same loop: the senses the controller reads, the stance frame's mirror, the running normaliser's sums and its read,
+the controller's step (:mod:`evobiped.controllers.ctrnn_kernel`'s), the output mapping, the gait tracker, the fall
+test and the walk task's bookkeeping (its position, its steps, the gait lab's samples).  A thread that runs it holds
+no GIL, so threads evaluate in parallel.
+
+What it computes is what the lock-step loop computes, to the last bit (tests hold every supported part to it): the
+same MuJoCo calls on the same state (``mj_step2`` then ``mj_step1`` for each physics step, as the persistent batch
+runs them), every elementwise expression in NumPy's order, every sum in NumPy's order, every transcendental NumPy's
+own loop (:func:`evobiped.core.kernel.ufunc_loop`).  The episode starts and ends in the batch
+(:meth:`Episode.start`, :meth:`Episode.result`): each walker's ``MjData`` is loaded from the batch before the ticks;
+after them the batch is put in the state before each walker's last physics step and takes that step itself, so every
+field it holds (acceleration-stage sensors too) is what the loop would have left, and a later call of either kind
+continues from it.  The gait lab's samples are handed to the task's meter as its own ticks would have been.
+
+Known today: the Reil body; a CTRNN, with any of the body's senses and the walk task's heading as inputs, in the body
+or the stance frame, normalised or not, with or without its direct path; the walk task with any fitness but the
+cyclic criterion and the gait measures (its steps and gait-lab terms at either sampling included); no perturbed
+presentations, latency or listener.  Anything else runs the lock-step loop, with the same numbers.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from numba import typed
+
+from ...controllers import ctrnn_kernel
+from ...core.kernel import jit, ufunc_loop, ufunc_scalar2
+from ...physics import gait
+from ...physics.sim import FIRST_BAD_WARNING, MAX_SPEED
+from .mujoco_calls import call, entry, read_state, time_of
+from .readings import SENSES, foot_sample, senses
+
+_STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+#: output kinds (controller -> PD target) the compiled tick maps: :mod:`evobiped.interface.mapping`'s
+_OUTPUT_MAPS = {"unit": 0, "centred": 1, "centred_full": 2, "angle": 3}
+#: the gait lab's sampling: none, the last physics step of each tick, every physics step
+_SAMPLING = {None: 0, "control_tick": 1, "physics_step": 2}
+#: fewer ticks than this in one call run the lock-step loop (loading and handing back the batch costs about a tick)
+MIN_TICKS = 10
+
+
+@jit
+def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
+             codes, widths, mirror, norm, observed, ctrnn, kind, bounds, n_ticks, nstep, stop_on_fall, fall,
+             tick0, born, control_dt, facing0, tracker, steps, samples, position, alive, fell, unstable, end_time,
+             pre):
+    """``n_ticks`` control ticks of every walker that is up, walker after walker (see the module docstring); returns
+    the ticks each ran ``(P,)`` and the simulated time after the first tick of the call (NaN: none ran).
+
+    ``funcs``: the addresses of NumPy's exp, arcsin and arctan2 loops and of its hypot; ``mj``: of mj_step1,
+    mj_step2, mj_getState and the mjModel; ``datas`` ``(P,)`` each walker's mjData, at the velocity stage of its
+    state; ``F`` a tuple of typed lists of each walker's views of its ``MjData`` fields.  In place: the CTRNN's state,
+    the tracker, the steps, the running sums, the gait lab's ``samples`` ``(n_ticks S, P, ...)``, ``position``
+    ``(P, 2)`` (the last finite planar position), ``alive``, ``fell``, ``unstable``, ``end_time`` (s), and ``pre``
+    ``(P, nstate)``: each walker's integration state before its last physics step."""
+    qpos, qvel, ctrl, xpos, xmat, subtree_com, site_xpos, cvel, xipos, sensordata, geom_xpos, force, avel, warnings = F
+    in_perm, in_sign, act_perm, act_sign, framed = mirror
+    mean, std, normalised = norm
+    count, total, squares, observe = observed
+    A, alpha, W, V, tau, substeps, dt, exponential, after, c, D, n_out = ctrnn
+    low, high, span = bounds
+    fall_height, cos_tilt = fall
+    stance, touchdown, lifted, tracked = tracker
+    kept_stance, n_steps, counts_steps = steps
+    contact, slip, height, knee, power, torque, ticked, sampling = samples
+    exp = funcs[0]
+    step1, step2, get_state, model = mj[0], mj[1], mj[2], mj[3]
+    touch0, touch1, pelvis = body_ids[1], body_ids[2], body_ids[0]
+    P = A.shape[0]
+    k = codes.shape[0]
+    n_in = 0
+    for g in range(k):
+        n_in += widths[g]
+    ran = np.zeros(P, np.int64)
+    first_time = np.nan
+    x, xm, xn = np.zeros((1, n_in)), np.zeros(n_in), np.zeros((1, n_in))
+    scratch, clock = np.zeros(3), np.zeros(1)
+    action = np.zeros(ctrl[0].shape[0])
+    for p in range(P):
+        if not alive[p]:
+            continue
+        d = datas[p]
+        q, v, u, sens, w = qpos[p], qvel[p], ctrl[p], sensordata[p], warnings[p]
+        a, al, Wp, Vp, tp, sp = A[p:p + 1], alpha[p:p + 1], W[p:p + 1], V[p:p + 1], tau[p:p + 1], substeps[p:p + 1]
+        cp, Dp = c[p:p + 1] if c.shape[0] else c, D[p:p + 1] if D.shape[0] else D
+        for t in range(n_ticks):
+            # the inputs, in the stance frame where the controller takes it, summed for a running normaliser
+            flip = framed and stance[p] != 0
+            if k:
+                senses(codes, widths, xm, funcs, q, v, xmat[p], subtree_com[p], site_xpos[p], cvel[p], xipos[p],
+                       sens, time_of(get_state, model, d, clock), body_ids, qadr, dadr, share, stance[p], touchdown[p],
+                       facing0[p], scratch)
+                for i in range(n_in):
+                    x[0, i] = xm[in_perm[i]] * in_sign[i] if flip else xm[i]
+                if observe:
+                    count[p] += 1
+                    for i in range(n_in):
+                        total[p, i] += x[0, i]
+                        squares[p, i] += x[0, i] * x[0, i]
+                for i in range(n_in):
+                    xn[0, i] = (x[0, i] - mean[i]) / std[i] if normalised else x[0, i]
+            a2, out = ctrnn_kernel._step(exp, a, xn, al, Wp, Vp, tp, sp, dt, exponential, after, cp, Dp, n_out)
+            a[0, :] = a2[0, :]
+            for j in range(action.shape[0]):
+                o = out[0, j]
+                if kind == 0:
+                    action[j] = low[j] + o * (high[j] - low[j])
+                else:
+                    if kind == 1:
+                        y = (o - 0.5) * (high[j] - low[j])
+                    elif kind == 2:
+                        y = (o - 0.5) * 2.0 * span[j]
+                    else:
+                        y = o
+                    action[j] = low[j] if y < low[j] else (high[j] if y > high[j] else y)
+            for j in range(action.shape[0]):
+                u[j] = action[act_perm[j]] * act_sign[j] if flip else action[j]
+            # the physics, the gait lab's samples after every physics step (or the last)
+            for s in range(nstep):
+                if s == nstep - 1:
+                    read_state(get_state, model, d, pre[p].ctypes.data, _STATE)
+                call(step2, model, d)
+                call(step1, model, d)
+                if sampling == 2 or (sampling == 1 and s == nstep - 1):
+                    at = t * nstep + s if sampling == 2 else t
+                    foot_sample(funcs, at, p, q, geom_xpos[p], cvel[p], subtree_com[p], force[p], avel[p], body_ids,
+                                 radius, knees, contact, slip, height, knee, power, torque)
+            ran[p] = t + 1
+            now = time_of(get_state, model, d, clock)
+            bad = False
+            for i in range(FIRST_BAD_WARNING, w.shape[0]):
+                if w[i] > 0:
+                    bad = True
+            for i in range(v.shape[0]):
+                if not abs(v[i]) < MAX_SPEED:
+                    bad = True
+            for i in range(q.shape[0]):
+                if not np.isfinite(q[i]):
+                    bad = True
+            if tracked:  # the gait tracker (physics.gait.update), every row that took the tick
+                c0, c1 = sens[touch0] > 0, sens[touch1] > 0
+                st = stance[p]
+                other = c1 if st == 0 else c0
+                lift = lifted[p, 1] if st == 0 else lifted[p, 0]
+                if other and now - lift >= gait.MIN_AIRBORNE:
+                    stance[p], touchdown[p] = 1 - st, now
+                lifted[p, 0] = np.inf if c0 else (lifted[p, 0] if lifted[p, 0] < now else now)
+                lifted[p, 1] = np.inf if c1 else (lifted[p, 1] if lifted[p, 1] < now else now)
+            if not bad:  # the task's bookkeeping of a row stepped and finite
+                if t == 0 and first_time != first_time:
+                    first_time = now
+                if counts_steps:
+                    n_steps[p] += 1.0 if stance[p] != kept_stance[p] else 0.0
+                    kept_stance[p] = stance[p]
+                if sampling == 2:
+                    for s in range(nstep):
+                        ticked[t * nstep + s, p] = True
+                elif sampling == 1:
+                    ticked[t, p] = True
+                position[p, 0], position[p, 1] = xpos[p][pelvis, 0], xpos[p][pelvis, 1]
+            mp = xmat[p]
+            down = bad or (stop_on_fall and (subtree_com[p][pelvis, 2] < fall_height or mp[pelvis, 8] < cos_tilt))
+            if down:
+                unstable[p] = bad
+                fell[p], alive[p] = True, False
+                end_time[p] = (tick0 + t + 1 - born[p]) * control_dt
+                break
+    return ran, first_time
+
+
+class WholeEpisodes:
+    """One ``MjData`` per walker of an episode's model, kept for the worker's life, and the typed lists of their
+    fields the compiled episode reads (built once for each count of walkers)."""
+
+    FIELDS = ("qpos", "qvel", "ctrl", "xpos", "xmat", "subtree_com", "site_xpos", "cvel", "xipos", "sensordata",
+              "geom_xpos", "actuator_force", "actuator_velocity")
+
+    def __init__(self, episode):
+        self.model = episode.model
+        self.datas: list[mujoco.MjData] = []
+        self._lists: dict[int, tuple] = {}
+        body, m = episode.body, episode.model
+        self.body_ids = np.array([body._pelvis, body._touch[0], body._touch[1], body._feet[0], body._feet[1],
+                                  body._foot_geoms[0], body._foot_geoms[1], body._foot_bodies[0],
+                                  body._foot_bodies[1]], np.int64)
+        self.qadr, self.dadr = body._qadr.astype(np.int64), body._dadr.astype(np.int64)
+        self.knees = body._knees.astype(np.int64)
+        self.share = np.ascontiguousarray(body._mass_share, float)
+        self.radius = np.ascontiguousarray(body._foot_radius, float)
+        if m.nbody - 1 != len(self.share):
+            raise AssertionError("every link is in the pelvis's tree")
+        ctrl = episode.controller
+        widths = {**body.sensor_widths, **episode.task.sensor_widths()}
+        self.codes = np.array([SENSES.index(n) for n in ctrl.input_names], np.int64)
+        self.widths = np.array([widths[n] for n in ctrl.input_names], np.int64)
+        frame = getattr(ctrl, "frame", None)
+        k = int(self.widths.sum())
+        n_act = len(body.actuator_names)
+        self.mirror = ((frame.input_perm.astype(np.int64), frame.input_sign.astype(float),
+                        frame.action_perm.astype(np.int64), frame.action_sign.astype(float), True)
+                       if frame is not None else
+                       (np.arange(k), np.ones(k), np.arange(n_act), np.ones(n_act), False))
+        low, high = episode.low.astype(float), episode.high.astype(float)
+        self.bounds = (low, high, np.maximum(np.abs(low), np.abs(high)))
+        self.funcs = (ufunc_loop(np.exp), ufunc_loop(np.arcsin), ufunc_loop(np.arctan2), ufunc_scalar2(np.hypot))
+        self.mj = (entry("mj_step1"), entry("mj_step2"), entry("mj_getState"), self.model._address)
+
+    def fields(self, n: int) -> tuple:
+        """The addresses ``(n,)`` of the first ``n`` ``MjData`` and typed lists of their fields."""
+        got = self._lists.get(n)
+        if got is None:
+            while len(self.datas) < n:
+                self.datas.append(mujoco.MjData(self.model))
+            ds = self.datas[:n]
+
+            def listed(f):
+                out = typed.List()
+                for d in ds:
+                    out.append(f(d))
+                return out
+
+            views = tuple(listed(lambda d, name=name: getattr(d, name)) for name in self.FIELDS)
+            got = self._lists[n] = (np.array([d._address for d in ds], np.int64),
+                                    views + (listed(lambda d: d.warning.number),))
+        return got
+
+    def advance(self, episode, state, n: int) -> None:
+        """``n`` ticks of ``state`` (an :class:`EpisodeState` of ``episode``, which :func:`unsupported` allows), in
+        place, as :meth:`Episode.advance` would run them."""
+        sims, ctrl, body, task = state.sims, episode.controller, episode.body, episode.task
+        P = sims.n
+        addresses, F = self.fields(P)
+        batch = sims.batch
+        for i in range(P):
+            batch.get_data(i, self.datas[i])
+        S = episode.substeps
+        # the gait tracker, begun from the contacts now where anything reads it (as the loop's first read would)
+        if getattr(ctrl, "frame", None) is not None or any(SENSES[c] in gait.NAMES for c in self.codes):
+            gait.tracker(body.contacts(sims), sims)
+        table = sims.extra.get("gait")
+        tracker = ((table["stance"], table["touchdown"], table["lifted"], True) if table is not None else
+                   (np.zeros(P, np.int64), np.zeros(P), np.zeros((P, 2)), False))
+        if tracker[0].dtype != np.int64:
+            raise AssertionError("the tracker's stance is int64")
+        tstate = state.task
+        kept = tstate.kept
+        steps = ((kept["stance"], kept["steps"], True) if task.counts_steps else
+                 (np.zeros(P, np.int64), np.zeros(P), False))
+        meter = kept.get("gait_lab")
+        sampling = _SAMPLING[None if meter is None else meter.sampling]
+        T = 0 if meter is None else n * (S if sampling == 2 else 1)
+        A = len(body.actuator_names)
+        samples = (np.zeros((T, P, 2), bool), np.zeros((T, P, 2)), np.zeros((T, P, 2)), np.zeros((T, P, 2)),
+                   np.zeros((T, P, A)), np.zeros((T, P, A)), np.zeros((T, P), bool), sampling)
+        k = int(self.widths.sum())
+        norm = state.norm if state.norm is not None else ctrl.input_norm
+        norm = ((np.ascontiguousarray(norm[0], float) * np.ones(k), np.ascontiguousarray(norm[1], float) * np.ones(k),
+                 True) if norm is not None else (np.zeros(k), np.ones(k), False))
+        rs = state.senses
+        observed = ((rs.count, rs.total, rs.squares, True) if rs is not None else
+                    (np.zeros(P), np.zeros((P, k)), np.zeros((P, k)), False))
+        params, f = state.params, np.ascontiguousarray
+        c, D = (f(params["c"]), f(params["D"])) if ctrl.direct else (np.zeros((0, 0)), np.zeros((0, 0, 0)))
+        substeps = f(params["substeps"], np.int64) if ctrl.exponential else np.zeros(P, np.int64)
+        A = f(state.controller, float)
+        ctrnn = (A, f(params["alpha"]), f(params["W"]), f(params["V"]), f(params["tau"]), substeps, ctrl.dt,
+                 ctrl.exponential, ctrl.outputs_after, c, D, ctrl.n_outputs)
+        facing0 = f(tstate.facing, float)
+        pre = np.zeros((P, mujoco.mj_stateSize(self.model, _STATE)))
+        ran, first_time = _episode(
+            self.funcs, self.mj, addresses, F, self.body_ids, self.qadr, self.dadr, self.share, self.radius,
+            self.knees, self.codes, self.widths, self.mirror, norm, observed, ctrnn, _OUTPUT_MAPS[ctrl.output_kind],
+            self.bounds, int(n), S, episode.stop_on_fall, (body.fall_height, float(np.cos(body.fall_tilt))),
+            int(state.ticks), f(state.born, np.int64), float(episode.control_dt), facing0, tracker, steps, samples,
+            tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre)
+        state.controller = A
+        ticks = int(ran.max(initial=0))
+        state.ticks += ticks
+        if meter is not None and ticks:
+            _hand_to_meter(meter, samples, ticks * (S if sampling == 2 else 1), S if sampling == 2 else 1, first_time)
+        # the batch takes each walker's last physics step itself: every field it holds is then the loop's
+        stepped = np.flatnonzero(ran > 0)
+        if len(stepped):
+            batch.state[stepped] = pre[stepped]
+            sims.forward(stepped)
+            batch.step(ids=stepped, nstep=1, stage=mujoco.mjtStage.mjSTAGE_VEL)
+            sims.readings.clear()
+
+
+def _hand_to_meter(meter, samples, T: int, per_tick: int, first_time: float) -> None:
+    """The gait lab's samples of the call's ``T`` samples (``per_tick`` a tick) appended to ``meter`` as its own
+    :meth:`~evobiped.physics.gait_lab.GaitMeter.tick` would have kept them."""
+    contact, slip, height, knee, power, torque, ticked, _ = samples
+    if not np.isfinite(meter.dt) and np.isfinite(first_time):
+        meter.dt = (float(first_time) - meter._start_time) / per_tick
+    for t in range(0, T, per_tick):
+        mask = ticked[t].copy()
+        meter.ticked.extend([mask] * per_tick)
+    fields = {"contact": contact, "slip": slip, "height": height, "knee": knee, "power": power, "torque": torque}
+    for name, series in meter.series.items():
+        series.extend(fields[name][:T])
+    meter._measured = None
+
+
+def unsupported(episode, state, listener=None) -> str | None:
+    """Why ``state`` of ``episode`` (watched by ``listener``) cannot run whole in compiled code, in words; None where
+    it can."""
+    from ...bodies.reil import ReilBiped
+    from ...controllers.ctrnn import CTRNN
+    from ...tasks.walk import WalkTask
+
+    body, ctrl, task = episode.body, episode.controller, episode.task
+    if not episode.compiled:
+        return "the kernel is numpy"
+    if listener is not None:
+        return "a listener watches every tick"
+    if type(body) is not ReilBiped or body.has_custom_forces:
+        return f"the body {body.name!r}"
+    if type(ctrl) is not CTRNN:
+        return f"the controller {ctrl.name!r}"
+    task_senses = set(task.sensor_widths())
+    unknown = [n for n in ctrl.input_names if n not in SENSES or (n in task_senses) != (n == "heading_error")]
+    if unknown:
+        return f"the inputs {', '.join(unknown)}"
+    if ctrl.output_kind not in _OUTPUT_MAPS or body.action_kind != "position":
+        return f"the output map {ctrl.output_kind!r} -> {body.action_kind!r}"
+    if type(task) is not WalkTask:
+        return f"the task {task.name!r}"
+    if task.cyclic_weight or task.options.gait_measures:
+        return "the walk task's cyclic criterion or gait measures"
+    if episode.latency or state.disturbances is not None:
+        return "latency or perturbed presentations"
+    return None

@@ -1,0 +1,100 @@
+"""The whole episode compiled (evobiped.episode.compiled.whole) computes what the lock-step loop computes, to the last
+bit: the fitness, the terms, where and when each walker fell, a blow-up, and the state the batch is left in."""
+
+import numpy as np
+import pytest
+
+from evobiped.episode import build_episode
+from evobiped.episode.compiled import whole
+from evobiped.optimizers import GA, GAOptions
+from evobiped.physics.sim import Sims
+
+
+def bits(a):
+    return np.ascontiguousarray(a, float).view(np.int64)
+
+
+def _pair(**config):
+    """The same episode with the NumPy kernel (the lock-step loop) and compiled (the whole episode)."""
+    return build_episode(kernel="numpy", **config), build_episode(kernel="compiled", **config)
+
+
+def _same(a, b):
+    for field in ("fitness", "end_position", "end_time", "fell", "unstable"):
+        assert np.array_equal(bits(getattr(a, field)), bits(getattr(b, field))), field
+    assert a.terms.keys() == b.terms.keys()
+    for k in a.terms:
+        assert np.array_equal(bits(a.terms[k]), bits(b.terms[k])), k
+
+
+@pytest.mark.parametrize("stop_on_fall", [True, False])
+def test_the_paper_s_episode_whole_is_the_lock_step_loop_to_the_last_bit(stop_on_fall):
+    slow, fast = _pair(body="reil", seconds=4.0, stop_on_fall=stop_on_fall)
+    genomes = GA(slow.controller.layout, GAOptions(population=12), seed=5).ask()[0]
+    state = fast.start(genomes)
+    assert whole.unsupported(fast, state) is None and whole.unsupported(slow, state) == "the kernel is numpy"
+    fast.advance(state, 1.5)  # in two calls, the batch's state handed on between them
+    fast.advance(state, 2.5)
+    a, b = slow.run(genomes), fast.result(state)
+    _same(a, b)
+    assert a.fell.any() if stop_on_fall else not a.fell.any()
+    # the batch is left where the loop leaves it
+    ref = slow.start(genomes)
+    slow.advance(ref, 4.0)
+    assert ref.ticks == state.ticks
+    assert np.array_equal(bits(ref.sims.qpos), bits(state.sims.qpos))
+    assert np.array_equal(bits(ref.sims.xpos), bits(state.sims.xpos))
+
+
+def test_a_walker_that_blows_up_is_unstable_in_both():
+    slow, fast = _pair(body="reil", seconds=1.0)
+    genomes = GA(slow.controller.layout, GAOptions(population=4), seed=1).ask()[0]
+    results = []
+    for ep in (slow, fast):
+        state = ep.start(genomes)
+        state.sims.qpos[2, 0] = np.nan  # MuJoCo resets it with a warning whose info is DOF 0
+        ep.advance(state, 1.0)
+        results.append(ep.result(state))
+    _same(*results)
+    assert results[0].unstable.tolist() == [False, False, True, False]
+    assert results[0].end_time[2] == slow.control_dt
+
+
+def test_a_bad_position_at_dof_0_is_a_blow_up():
+    """MuJoCo resets a simulation whose qpos is not finite and warns with the DOF as its info: at DOF 0 the info is
+    0, so the warning's count, not its info, says it happened."""
+    ep = build_episode(body="reil", seconds=1.0)
+    sims = Sims(ep.model, 3)
+    sims.reset()
+    sims.qpos[1, 0] = np.nan
+    sims.qpos[2, 3] = np.inf
+    bad = sims.step(np.arange(3), 2)
+    assert bad.tolist() == [False, True, True]
+    assert np.isfinite(sims.qpos).all()  # reset: only the warning tells
+
+
+def test_what_the_whole_episode_does_not_know_runs_the_loop():
+    ep = build_episode(body="reil", seconds=1.0, kernel="compiled", task_options={"fitness": "weighted"})
+    state = ep.start(GA(ep.controller.layout, GAOptions(population=2), seed=1).ask()[0])
+    assert whole.unsupported(ep, state) is None
+    assert whole.unsupported(ep, state, listener=object()) == "a listener watches every tick"
+    assert whole.unsupported(build_episode(body="taga", seconds=1.0, kernel="compiled"), state) == "the body 'taga'"
+
+
+@pytest.mark.parametrize("name", ["ctrnn_walk_seed1", "ctrnn_es_seed5", "ctrnn_distilled_seed5"])
+def test_a_shipped_walker_s_episode_whole_is_the_loop_to_the_last_bit(name):
+    """The walkers' episodes read the senses, mirror them into the stance frame, normalise them, count steps and
+    measure the gait: every term the same bits either way, over the whole episode."""
+    import dataclasses
+    from pathlib import Path
+
+    from evobiped.files.genome_file import load_genome
+
+    genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / f"{name}.json")
+    config = dataclasses.replace(config, seconds=min(config.seconds, 12.0))
+    genomes = np.stack([genome, genome + 0.01])
+    slow, fast = (dataclasses.replace(config, kernel=k).build() for k in ("numpy", "compiled"))
+    assert whole.unsupported(fast, fast.start(genomes)) is None
+    a, b = slow.run(genomes), fast.run(genomes)
+    _same(a, b)
+    assert a.end_time[0] == config.seconds and len(a.terms) >= 3
