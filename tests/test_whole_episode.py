@@ -81,7 +81,8 @@ def test_what_the_whole_episode_does_not_know_runs_the_loop():
     assert whole.unsupported(build_episode(body="taga", seconds=1.0, kernel="compiled"), state) == "the body 'taga'"
 
 
-@pytest.mark.parametrize("name", ["ctrnn_walk_seed1", "ctrnn_es_seed5", "ctrnn_distilled_seed5"])
+@pytest.mark.parametrize("name", ["ctrnn_walk_seed1", "ctrnn_es_seed5", "ctrnn_distilled_seed5",
+                                  "ctrnn_command_seed1"])
 def test_a_shipped_walker_s_episode_whole_is_the_loop_to_the_last_bit(name):
     """The walkers' episodes read the senses, mirror them into the stance frame, normalise them, count steps and
     measure the gait: every term the same bits either way, over the whole episode."""
@@ -98,3 +99,53 @@ def test_a_shipped_walker_s_episode_whole_is_the_loop_to_the_last_bit(name):
     a, b = slow.run(genomes), fast.run(genomes)
     _same(a, b)
     assert a.end_time[0] == config.seconds and len(a.terms) >= 3
+
+
+@pytest.mark.parametrize("preset, name", [("walker-command", "ctrnn_command_seed1"),
+                                          ("walker-ctrnn-walk", "ctrnn_walk_seed1")])
+def test_a_generation_s_presentations_whole_are_the_loop_s(preset, name):
+    """As evolution presents them: a generation's pose noise and (for the command task) its drawn commands, with the
+    running normaliser's senses collected."""
+    import dataclasses
+    from pathlib import Path
+
+    from evobiped.episode import Context
+    from evobiped.episode.disturbances import draw_trials
+    from evobiped.files.genome_file import load_genome
+    from evobiped.flags import run_config
+
+    genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / f"{name}.json")
+    config = dataclasses.replace(config, seconds=11.0, perturbations=run_config(preset=preset).episode.perturbations)
+    genomes = np.stack([genome, genome + 0.005])
+    out = []
+    for k in ("numpy", "compiled"):
+        ep = dataclasses.replace(config, kernel=k).build()
+        trials = draw_trials(config.perturbations, ep.task, (3, 7), seconds=config.seconds,
+                             n_actuators=len(ep.body.actuator_names), n_genes=genomes.shape[1])
+        assert trials is not None
+        if k == "compiled":
+            assert whole.unsupported(ep, ep.start(genomes, trials=trials)) is None
+        out.append(ep.run(genomes, trials=trials, context=Context(observe=True)))
+    _same(*out)
+    assert out[0].senses.keys() == out[1].senses.keys() == {"count", "total", "squares"}
+    for k, v in out[0].senses.items():
+        assert np.array_equal(bits(v), bits(out[1].senses[k])), k
+
+
+def test_a_commanded_walker_stopped_and_turned_whole_is_the_loop_to_the_last_bit():
+    """A piecewise schedule with a stop (the stand term) and turns both ways (the commanded facing's leash)."""
+    import dataclasses
+    from pathlib import Path
+
+    from evobiped.files.genome_file import load_genome
+
+    genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "ctrnn_command_seed1.json")
+    schedule = {"schedule": "piecewise", "times": [0.0, 3.0, 6.0, 9.0], "speed": [0.5, 0.0, 0.4, 0.6],
+                "turning": [0.0, 0.0, 0.35, -0.35]}
+    options = dataclasses.replace(config.task_options, **schedule)
+    config = dataclasses.replace(config, seconds=12.0, task_options=options)
+    slow, fast = (dataclasses.replace(config, kernel=k).build() for k in ("numpy", "compiled"))
+    genomes = np.stack([genome, genome + 0.01])
+    a, b = slow.run(genomes), fast.run(genomes)
+    _same(a, b)
+    assert a.terms["stand"][0] > 0 and a.end_time[0] == 12.0

@@ -17,10 +17,11 @@ missing), ``auto`` (compiled where available, else numpy: the default, as both g
 
 from __future__ import annotations
 
-import importlib
-
 import ctypes
 import functools
+import hashlib
+import importlib
+from pathlib import Path
 
 import numpy as np
 
@@ -132,7 +133,7 @@ def unavailable() -> str | None:
             importlib.import_module("numba")
     except ImportError:
         return "the compiled kernel needs numba (pip install numba, a dependency of evobiped)"
-    for f in (np.exp, np.arcsin, np.arctan2):
+    for f in (np.exp, np.arcsin, np.arctan2, np.remainder):
         if ufunc_loop(f) is None:
             return f"the compiled kernel could not find NumPy {np.__version__}'s own float64 {f.__name__} loop"
     if ufunc_scalar2(np.hypot) is None:
@@ -171,8 +172,47 @@ def compiled(kernel: str, where: str = "episode.kernel") -> bool:
 
 def jit(fn):
     """``numba.njit(cache=True, nogil=True)``: compiled once per machine (the cache beside the module), runs without
-    the GIL."""
+    the GIL.  The cache is keyed on every source file of the package (:func:`package_stamp`), not only on the
+    function's own: compiled code inlines the functions it calls and the constants it reads from other modules, and
+    numba's own key would keep a stale copy of them after an edit or an upgrade."""
     with signals_deferred():
         import numba
 
-    return numba.njit(cache=True, nogil=True)(fn)
+    dispatcher = numba.njit(nogil=True)(fn)
+    cache = _package_keyed_cache()
+    if cache is None:  # a numba whose cache classes are not the ones known here: its own key
+        dispatcher.enable_caching()
+    else:
+        dispatcher._cache = cache(fn)
+    return dispatcher
+
+
+@functools.cache
+def package_stamp() -> str:
+    """A hash of every Python source file of the package (their paths and contents)."""
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
+@functools.cache
+def _package_keyed_cache():
+    """numba's function cache with :func:`package_stamp` added to each locator's source stamp (None where this
+    numba's cache classes differ from the ones known here)."""
+    try:
+        from numba.core import caching
+
+        bases = (caching.UserProvidedCacheLocator, caching.InTreeCacheLocator, caching.UserWideCacheLocator)
+        impl, cache = caching.CompileResultCacheImpl, caching.FunctionCache
+    except (ImportError, AttributeError):
+        return None
+
+    class Stamped:
+        def get_source_stamp(self):
+            return super().get_source_stamp(), package_stamp()
+
+    locators = [type(f"Package{b.__name__}", (Stamped, b), {}) for b in bases]
+    return type("PackageKeyedCache", (cache,), {"_impl_class": type("PackageKeyedImpl", (impl,),
+                                                                       {"_locator_classes": locators})})

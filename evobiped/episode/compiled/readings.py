@@ -9,10 +9,13 @@ import numpy as np
 from ...core.kernel import jit
 from ...core.ufunc_calls import apply_loop, apply_loop2, call_scalar2
 from ...physics import gait
+from .command_tick import heading_error as command_heading_error
 
-#: the senses the compiled tick reads, by code (the Reil body's groups, then the walk task's heading)
+#: the senses the compiled tick reads, by code (the Reil body's groups, the walk or command task's heading, the command
+#: task's commands)
 SENSES = ("joint_angles", "joint_velocities", "foot_contact", "pelvis_tilt", "pelvis_tilt_rate", "com_from_feet",
-          "com_velocity", "stance_leg", "since_touchdown", "stance_side", "heading_error")
+          "com_velocity", "stance_leg", "since_touchdown", "stance_side", "heading_error", "command_speed",
+          "command_turning", "command_stop")
 
 
 @jit
@@ -22,16 +25,24 @@ def _frame_dot(fx, fy, a, b):
 
 
 @jit
-def senses(codes, widths, x, funcs, q, v, xmat, com, site, cvel, xipos, sens, time, body_ids, qadr, dadr, share,
-            stance, touchdown, facing0, scratch):
-    """The controller's inputs ``x`` ``(k,)`` of one walker now, in input order (``codes`` into :data:`SENSES`), as
-    :meth:`ReilBiped.sensors <evobiped.bodies.reil.ReilBiped.sensors>` and the walk task compute them."""
-    pelvis, touch0, touch1, site0, site1 = body_ids[0], body_ids[1], body_ids[2], body_ids[3], body_ids[4]
-    arcsin, arctan2 = funcs[1], funcs[2]
+def facing(xmat, pelvis):
+    """The direction the walker faces on the ground ``(fx, fy)`` (:meth:`ReilBiped.heading`)."""
     fx, fy = xmat[pelvis, 0], xmat[pelvis, 3]
     n = np.sqrt(fx * fx + fy * fy)
     n = n if n > 1e-12 else 1e-12
-    fx, fy = fx / n, fy / n
+    return fx / n, fy / n
+
+
+@jit
+def senses(codes, widths, x, funcs, q, v, xmat, com, site, cvel, xipos, sens, time, body_ids, qadr, dadr, share,
+            stance, touchdown, facing0, command, scratch):
+    """The controller's inputs ``x`` ``(k,)`` of one walker now, in input order (``codes`` into :data:`SENSES`), as
+    :meth:`ReilBiped.sensors <evobiped.bodies.reil.ReilBiped.sensors>` and the walk or command task compute them
+    (``command``: whether the task is the command task, the speed m/s and turning rate rad/s it asks for now, and its
+    commanded facing rad)."""
+    pelvis, touch0, touch1, site0, site1 = body_ids[0], body_ids[1], body_ids[2], body_ids[3], body_ids[4]
+    arcsin, arctan2 = funcs[1], funcs[2]
+    fx, fy = facing(xmat, pelvis)
     at = 0
     for g in range(codes.shape[0]):
         c = codes[g]
@@ -73,7 +84,15 @@ def senses(codes, widths, x, funcs, q, v, xmat, com, site, cvel, xipos, sens, ti
             x[at] = s if s < gait.CAP else gait.CAP  # np.minimum: NaN stays NaN
             if s != s:
                 x[at] = s
-        else:  # heading_error: the facing's angle from the initial facing
+        elif c == 10 and command[0]:  # the command task's heading_error: from the commanded facing
+            x[at] = command_heading_error(funcs, fx, fy, command[3], scratch)
+        elif c == 11:
+            x[at] = command[1]
+        elif c == 12:
+            x[at] = command[2]
+        elif c == 13:
+            x[at] = 1.0 if command[1] == 0 else 0.0
+        else:  # the walk task's heading_error: the facing's angle from the initial facing
             scratch[0] = facing0[0] * fy - facing0[1] * fx
             scratch[1] = facing0[0] * fx + facing0[1] * fy
             apply_loop2(arctan2, scratch[:1], scratch[1:2], scratch[2:3])

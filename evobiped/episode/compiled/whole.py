@@ -36,8 +36,11 @@ from ...controllers import ctrnn_kernel
 from ...core.kernel import jit, ufunc_loop, ufunc_scalar2
 from ...physics import gait
 from ...physics.sim import FIRST_BAD_WARNING, MAX_SPEED
+from ...tasks.command import CommandTask
+from ...tasks.command_schedule import CLOCK_TOLERANCE, DrawnCommands
 from .mujoco_calls import call, entry, read_state, time_of
-from .readings import SENSES, foot_sample, senses
+from . import command_tick
+from .readings import SENSES, facing, foot_sample, senses
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 #: output kinds (controller -> PD target) the compiled tick maps: :mod:`evobiped.interface.mapping`'s
@@ -46,13 +49,15 @@ _OUTPUT_MAPS = {"unit": 0, "centred": 1, "centred_full": 2, "angle": 3}
 _SAMPLING = {None: 0, "control_tick": 1, "physics_step": 2}
 #: fewer ticks than this in one call run the lock-step loop (loading and handing back the batch costs about a tick)
 MIN_TICKS = 10
+#: the senses of :data:`SENSES` a task computes (the others are the body's)
+_TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_stop"}
 
 
 @jit
 def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
              codes, widths, mirror, norm, observed, ctrnn, kind, bounds, n_ticks, nstep, stop_on_fall, fall,
              tick0, born, control_dt, facing0, tracker, steps, samples, position, alive, fell, unstable, end_time,
-             pre):
+             pre, command):
     """``n_ticks`` control ticks of every walker that is up, walker after walker (see the module docstring); returns
     the ticks each ran ``(P,)`` and the simulated time after the first tick of the call (NaN: none ran).
 
@@ -61,7 +66,9 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     state; ``F`` a tuple of typed lists of each walker's views of its ``MjData`` fields.  In place: the CTRNN's state,
     the tracker, the steps, the running sums, the gait lab's ``samples`` ``(n_ticks S, P, ...)``, ``position``
     ``(P, 2)`` (the last finite planar position), ``alive``, ``fell``, ``unstable``, ``end_time`` (s), and ``pre``
-    ``(P, nstate)``: each walker's integration state before its last physics step."""
+    ``(P, nstate)``: each walker's integration state before its last physics step; ``command``: whether the task is
+    the command task, its schedule (times s, speeds m/s, turning rates rad/s, drawn stretch s or 0), its rows' start
+    times ``(P,)``, its arrays (:func:`.command_tick.tick`) and options, all in place."""
     qpos, qvel, ctrl, xpos, xmat, subtree_com, site_xpos, cvel, xipos, sensordata, geom_xpos, force, avel, warnings = F
     in_perm, in_sign, act_perm, act_sign, framed = mirror
     mean, std, normalised = norm
@@ -75,6 +82,8 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     exp = funcs[0]
     step1, step2, get_state, model = mj[0], mj[1], mj[2], mj[3]
     touch0, touch1, pelvis = body_ids[1], body_ids[2], body_ids[0]
+    commands, times, speeds, turns, stretch, t0, kept, options = command
+    clock_c, yaw_cmd = kept[0], kept[3]
     P = A.shape[0]
     k = codes.shape[0]
     n_in = 0
@@ -95,10 +104,12 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
         for t in range(n_ticks):
             # the inputs, in the stance frame where the controller takes it, summed for a running normaliser
             flip = framed and stance[p] != 0
+            v_cmd, w_cmd = command_tick.command_at(times, speeds, turns, stretch, clock_c[p] - t0[p]) if commands else (
+                0.0, 0.0)
             if k:
                 senses(codes, widths, xm, funcs, q, v, xmat[p], subtree_com[p], site_xpos[p], cvel[p], xipos[p],
                        sens, time_of(get_state, model, d, clock), body_ids, qadr, dadr, share, stance[p], touchdown[p],
-                       facing0[p], scratch)
+                       facing0[p], (commands, v_cmd, w_cmd, yaw_cmd[p]), scratch)
                 for i in range(n_in):
                     x[0, i] = xm[in_perm[i]] * in_sign[i] if flip else xm[i]
                 if observe:
@@ -156,6 +167,11 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                 lifted[p, 0] = np.inf if c0 else (lifted[p, 0] if lifted[p, 0] < now else now)
                 lifted[p, 1] = np.inf if c1 else (lifted[p, 1] if lifted[p, 1] < now else now)
             if not bad:  # the task's bookkeeping of a row stepped and finite
+                if commands:
+                    fx, fy = facing(xmat[p], pelvis)
+                    command_tick.tick(funcs, p, now, fx, fy, xpos[p][pelvis, 0], xpos[p][pelvis, 1],
+                                   sens[touch0] > 0 and sens[touch1] > 0, position, kept, options, v_cmd, w_cmd,
+                                   scratch)
                 if t == 0 and first_time != first_time:
                     first_time = now
                 if counts_steps:
@@ -211,7 +227,8 @@ class WholeEpisodes:
                        (np.arange(k), np.ones(k), np.arange(n_act), np.ones(n_act), False))
         low, high = episode.low.astype(float), episode.high.astype(float)
         self.bounds = (low, high, np.maximum(np.abs(low), np.abs(high)))
-        self.funcs = (ufunc_loop(np.exp), ufunc_loop(np.arcsin), ufunc_loop(np.arctan2), ufunc_scalar2(np.hypot))
+        self.funcs = (ufunc_loop(np.exp), ufunc_loop(np.arcsin), ufunc_loop(np.arctan2), ufunc_scalar2(np.hypot),
+                      ufunc_loop(np.remainder))
         self.mj = (entry("mj_step1"), entry("mj_step2"), entry("mj_getState"), self.model._address)
 
     def fields(self, n: int) -> tuple:
@@ -281,7 +298,8 @@ class WholeEpisodes:
             self.knees, self.codes, self.widths, self.mirror, norm, observed, ctrnn, _OUTPUT_MAPS[ctrl.output_kind],
             self.bounds, int(n), S, episode.stop_on_fall, (body.fall_height, float(np.cos(body.fall_tilt))),
             int(state.ticks), f(state.born, np.int64), float(episode.control_dt), facing0, tracker, steps, samples,
-            tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre)
+            tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre, self.commands(task, tstate,
+                                                                                             n, episode.control_dt))
         state.controller = A
         ticks = int(ran.max(initial=0))
         state.ticks += ticks
@@ -294,6 +312,32 @@ class WholeEpisodes:
             sims.forward(stepped)
             batch.step(ids=stepped, nstep=1, stage=mujoco.mjtStage.mjSTAGE_VEL)
             sims.readings.clear()
+
+
+    @staticmethod
+    def commands(task, tstate, n: int, control_dt: float) -> tuple:
+        """The command task's schedule, arrays and options as the compiled episode takes them (the walk task's: none);
+        a drawn schedule's stretches drawn up to the end of these ``n`` ticks."""
+        if not isinstance(task, CommandTask):
+            z = np.zeros(1)
+            return False, z, z, z, 0.0, z, (z, z, np.zeros((1, 2)), z, np.zeros((1, 3)), np.zeros((1, 3)),
+                                            np.zeros(1, bool)), (1.0, 1.0, 0.0)
+        s, f = tstate.commands, np.ascontiguousarray
+        if isinstance(s, DrawnCommands):
+            last = float(np.max(tstate.clock - tstate.t0)) + n * control_dt + CLOCK_TOLERANCE
+            drawn = [s.stretch_commands(i) for i in range(int(np.floor(last / s.stretch)) + 2)]
+            times, speeds, turns, stretch = (np.zeros(1), np.array([d[0] for d in drawn], float),
+                                             np.array([d[1] for d in drawn], float), float(s.stretch))
+        else:
+            times, speeds, turns, stretch = f(s.times, float), f(s.speed, float), f(s.turning, float), 0.0
+        o = task.options
+        kept = (tstate.clock, tstate.up, tstate.last_facing, tstate.yaw_cmd, tstate.measured, tstate.sums,
+                tstate.first)
+        for a in kept:
+            if not a.flags.c_contiguous:
+                raise AssertionError("the command task's arrays are contiguous")
+        return (True, times, speeds, turns, stretch, f(tstate.t0, float), kept,
+                (o.sigma_speed ** 2, o.sigma_turning ** 2, float(o.smoothing)))
 
 
 def _hand_to_meter(meter, samples, T: int, per_tick: int, first_time: float) -> None:
@@ -328,15 +372,19 @@ def unsupported(episode, state, listener=None) -> str | None:
     if type(ctrl) is not CTRNN:
         return f"the controller {ctrl.name!r}"
     task_senses = set(task.sensor_widths())
-    unknown = [n for n in ctrl.input_names if n not in SENSES or (n in task_senses) != (n == "heading_error")]
+    unknown = [n for n in ctrl.input_names if n not in SENSES or (n in task_senses) != (n in _TASK_SENSES)]
     if unknown:
         return f"the inputs {', '.join(unknown)}"
     if ctrl.output_kind not in _OUTPUT_MAPS or body.action_kind != "position":
         return f"the output map {ctrl.output_kind!r} -> {body.action_kind!r}"
-    if type(task) is not WalkTask:
+    if type(task) not in (WalkTask, CommandTask):
         return f"the task {task.name!r}"
     if task.cyclic_weight or task.options.gait_measures:
         return "the walk task's cyclic criterion or gait measures"
-    if episode.latency or state.disturbances is not None:
-        return "latency or perturbed presentations"
+    d = state.disturbances
+    if episode.latency:
+        return "latency"
+    if d is not None and (d.offset is not None or d.noise.sigma > 0 or d.trials.push_start.size
+                          or d.assist is not None):
+        return "presentations disturbed while they run (target noise or offsets, pushes, assistance)"
     return None
