@@ -101,11 +101,10 @@ def test_a_shipped_walker_s_episode_whole_is_the_loop_to_the_last_bit(name):
     assert a.end_time[0] == config.seconds and len(a.terms) >= 3
 
 
-@pytest.mark.parametrize("preset, name", [("walker-command", "ctrnn_command_seed1"),
-                                          ("walker-ctrnn-walk", "ctrnn_walk_seed1")])
-def test_a_generation_s_presentations_whole_are_the_loop_s(preset, name):
-    """As evolution presents them: a generation's pose noise and (for the command task) its drawn commands, with the
-    running normaliser's senses collected."""
+@pytest.mark.parametrize("name", ["ctrnn_command_seed1", "ctrnn_walk_seed1", "steer_ctrnn_es_seed0"])
+def test_a_generation_s_presentations_whole_are_the_loop_s(name):
+    """As evolution presents them: a generation's pose noise, the command task's drawn commands, the steer task's
+    random sources, with the running normaliser's senses collected (the route presets' pose noise)."""
     import dataclasses
     from pathlib import Path
 
@@ -115,7 +114,7 @@ def test_a_generation_s_presentations_whole_are_the_loop_s(preset, name):
     from evobiped.flags import run_config
 
     genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / f"{name}.json")
-    config = dataclasses.replace(config, seconds=11.0, perturbations=run_config(preset=preset).episode.perturbations)
+    config = dataclasses.replace(config, seconds=11.0, perturbations=run_config(preset="walker-ctrnn-walk").episode.perturbations)
     genomes = np.stack([genome, genome + 0.005])
     out = []
     for k in ("numpy", "compiled"):
@@ -149,3 +148,26 @@ def test_a_commanded_walker_stopped_and_turned_whole_is_the_loop_to_the_last_bit
     a, b = slow.run(genomes), fast.run(genomes)
     _same(a, b)
     assert a.terms["stand"][0] > 0 and a.end_time[0] == 12.0
+
+
+def test_a_steering_walker_near_its_sources_whole_is_the_loop_to_the_last_bit():
+    """The ears' sense clipped, the ticks within reach of a source counted, the gait lab's terms weighed."""
+    import dataclasses
+    from pathlib import Path
+
+    from evobiped.files.genome_file import load_genome
+
+    genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "steer_ctrnn_es_seed0.json")
+    options = dataclasses.replace(config.task_options, sources=((2.0, 0.3), (1.5, -0.5)), reach=0.8, random_sources=0,
+                                  gait_weights={"airborne": -100.0, "sliding": -100.0}, gait_sampling="physics_step")
+    config = dataclasses.replace(config, seconds=10.0, task_options=options)
+    slow, fast = (dataclasses.replace(config, kernel=k).build() for k in ("numpy", "compiled"))
+    genomes = np.stack([genome, genome + 0.01])
+    states = [ep.start(genomes) for ep in (slow, fast)]
+    assert whole.unsupported(fast, states[1]) is None
+    for ep, state in zip((slow, fast), states):
+        ep.advance(state, config.seconds)
+    _same(slow.result(states[0]), fast.result(states[1]))
+    near = [state.task.near for state in states]
+    assert np.array_equal(near[0], near[1]) and near[0].max() > 0 and states[0].task.ticks == states[1].task.ticks
+    assert "sliding" in slow.result(states[0]).terms

@@ -12,10 +12,10 @@ from ...physics import gait
 from .command_tick import heading_error as command_heading_error
 
 #: the senses the compiled tick reads, by code (the Reil body's groups, the walk or command task's heading, the command
-#: task's commands)
+#: task's commands, the steer task's ears)
 SENSES = ("joint_angles", "joint_velocities", "foot_contact", "pelvis_tilt", "pelvis_tilt_rate", "com_from_feet",
           "com_velocity", "stance_leg", "since_touchdown", "stance_side", "heading_error", "command_speed",
-          "command_turning", "command_stop")
+          "command_turning", "command_stop", "sound", "loudness")
 
 
 @jit
@@ -34,12 +34,19 @@ def facing(xmat, pelvis):
 
 
 @jit
+def intensity(dx, dy):
+    """I = 1 / |e - q|^2 (1/m^2) of an ear ``(dx, dy)`` m from its source (:func:`evobiped.tasks.sound.intensity`)."""
+    d = dx * dx + dy * dy
+    return 1.0 / (d if d > 1e-12 else (d if d != d else 1e-12))
+
+
+@jit
 def senses(codes, widths, x, funcs, q, v, xmat, com, site, cvel, xipos, sens, time, body_ids, qadr, dadr, share,
-            stance, touchdown, facing0, command, scratch):
+            stance, touchdown, facing0, command, hearing, scratch):
     """The controller's inputs ``x`` ``(k,)`` of one walker now, in input order (``codes`` into :data:`SENSES`), as
     :meth:`ReilBiped.sensors <evobiped.bodies.reil.ReilBiped.sensors>` and the walk or command task compute them
     (``command``: whether the task is the command task, the speed m/s and turning rate rad/s it asks for now, and its
-    commanded facing rad)."""
+    commanded facing rad; ``hearing``: the steer task's source ``(2,)`` m, its ears' site ids and its sound limit)."""
     pelvis, touch0, touch1, site0, site1 = body_ids[0], body_ids[1], body_ids[2], body_ids[3], body_ids[4]
     arcsin, arctan2 = funcs[1], funcs[2]
     fx, fy = facing(xmat, pelvis)
@@ -92,6 +99,16 @@ def senses(codes, widths, x, funcs, q, v, xmat, com, site, cvel, xipos, sens, ti
             x[at] = command[2]
         elif c == 13:
             x[at] = 1.0 if command[1] == 0 else 0.0
+        elif c == 14 or c == 15:  # the steer task's ears
+            source, ears, limit = hearing
+            a = intensity(site[ears[0], 0] - source[0], site[ears[0], 1] - source[1])
+            b = intensity(site[ears[1], 0] - source[0], site[ears[1], 1] - source[1])
+            if c == 14:
+                s = (a - b) / (a + b)
+                x[at] = s if limit >= 1 else (-limit if s < -limit else (limit if s > limit else s))
+            else:
+                s = (a + b) / 2
+                x[at] = s if s < 1.0 else (1.0 if s == s else s)  # np.minimum: NaN stays NaN
         else:  # the walk task's heading_error: the facing's angle from the initial facing
             scratch[0] = facing0[0] * fy - facing0[1] * fx
             scratch[1] = facing0[0] * fx + facing0[1] * fy

@@ -20,10 +20,12 @@ after them the batch is put in the state before each walker's last physics step 
 field it holds (acceleration-stage sensors too) is what the loop would have left, and a later call of either kind
 continues from it.  The gait lab's samples are handed to the task's meter as its own ticks would have been.
 
-Known today: the Reil body; a CTRNN, with any of the body's senses and the walk task's heading as inputs, in the body
-or the stance frame, normalised or not, with or without its direct path; the walk task with any fitness but the
-cyclic criterion and the gait measures (its steps and gait-lab terms at either sampling included); no perturbed
-presentations, latency or listener.  Anything else runs the lock-step loop, with the same numbers.
+Known today: the Reil body; a CTRNN, with any of the body's senses and its task's as inputs, in the body or the
+stance frame, normalised or not, with or without its direct path; the walk task with any fitness but the cyclic
+criterion and the gait measures (its steps and gait-lab terms at either sampling included); the command task (any
+schedule, drawn or not); the steer task (its ears, its reach, its gait terms); presentations whose disturbances end at
+the start (pose noise, the drawn commands and sources); no disturbance while the episode runs (target noise or
+offsets, pushes, assistance), no latency, no listener.  Anything else runs the lock-step loop, with the same numbers.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from ...physics import gait
 from ...physics.sim import FIRST_BAD_WARNING, MAX_SPEED
 from ...tasks.command import CommandTask
 from ...tasks.command_schedule import CLOCK_TOLERANCE, DrawnCommands
+from ...tasks.steer import SteerTask
 from .mujoco_calls import call, entry, read_state, time_of
 from . import command_tick
 from .readings import SENSES, facing, foot_sample, senses
@@ -50,14 +53,14 @@ _SAMPLING = {None: 0, "control_tick": 1, "physics_step": 2}
 #: fewer ticks than this in one call run the lock-step loop (loading and handing back the batch costs about a tick)
 MIN_TICKS = 10
 #: the senses of :data:`SENSES` a task computes (the others are the body's)
-_TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_stop"}
+_TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_stop", "sound", "loudness"}
 
 
 @jit
 def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
              codes, widths, mirror, norm, observed, ctrnn, kind, bounds, n_ticks, nstep, stop_on_fall, fall,
              tick0, born, control_dt, facing0, tracker, steps, samples, position, alive, fell, unstable, end_time,
-             pre, command):
+             pre, command, steer):
     """``n_ticks`` control ticks of every walker that is up, walker after walker (see the module docstring); returns
     the ticks each ran ``(P,)`` and the simulated time after the first tick of the call (NaN: none ran).
 
@@ -68,7 +71,9 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     ``(P, 2)`` (the last finite planar position), ``alive``, ``fell``, ``unstable``, ``end_time`` (s), and ``pre``
     ``(P, nstate)``: each walker's integration state before its last physics step; ``command``: whether the task is
     the command task, its schedule (times s, speeds m/s, turning rates rad/s, drawn stretch s or 0), its rows' start
-    times ``(P,)``, its arrays (:func:`.command_tick.tick`) and options, all in place."""
+    times ``(P,)``, its arrays (:func:`.command_tick.tick`) and options, all in place; ``steer``: the steer task's
+    sources ``(P, 2)`` m, its ears' site ids, its sound limit, its reach m (0: none) and the ticks each walker spent
+    within it ``(P,)``, in place."""
     qpos, qvel, ctrl, xpos, xmat, subtree_com, site_xpos, cvel, xipos, sensordata, geom_xpos, force, avel, warnings = F
     in_perm, in_sign, act_perm, act_sign, framed = mirror
     mean, std, normalised = norm
@@ -84,6 +89,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     touch0, touch1, pelvis = body_ids[1], body_ids[2], body_ids[0]
     commands, times, speeds, turns, stretch, t0, kept, options = command
     clock_c, yaw_cmd = kept[0], kept[3]
+    sources, ears, sound_limit, reach, near = steer
     P = A.shape[0]
     k = codes.shape[0]
     n_in = 0
@@ -109,7 +115,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
             if k:
                 senses(codes, widths, xm, funcs, q, v, xmat[p], subtree_com[p], site_xpos[p], cvel[p], xipos[p],
                        sens, time_of(get_state, model, d, clock), body_ids, qadr, dadr, share, stance[p], touchdown[p],
-                       facing0[p], (commands, v_cmd, w_cmd, yaw_cmd[p]), scratch)
+                       facing0[p], (commands, v_cmd, w_cmd, yaw_cmd[p]), (sources[p], ears, sound_limit), scratch)
                 for i in range(n_in):
                     x[0, i] = xm[in_perm[i]] * in_sign[i] if flip else xm[i]
                 if observe:
@@ -183,6 +189,10 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                 elif sampling == 1:
                     ticked[t, p] = True
                 position[p, 0], position[p, 1] = xpos[p][pelvis, 0], xpos[p][pelvis, 1]
+                if reach > 0:
+                    dx, dy = position[p, 0] - sources[p, 0], position[p, 1] - sources[p, 1]
+                    if np.sqrt(dx * dx + dy * dy) <= reach:
+                        near[p] += 1.0
             mp = xmat[p]
             down = bad or (stop_on_fall and (subtree_com[p][pelvis, 2] < fall_height or mp[pelvis, 8] < cos_tilt))
             if down:
@@ -269,10 +279,11 @@ class WholeEpisodes:
         if tracker[0].dtype != np.int64:
             raise AssertionError("the tracker's stance is int64")
         tstate = state.task
-        kept = tstate.kept
-        steps = ((kept["stance"], kept["steps"], True) if task.counts_steps else
+        kept = getattr(tstate, "kept", {})
+        steer = isinstance(task, SteerTask)
+        steps = ((kept["stance"], kept["steps"], True) if not steer and task.counts_steps else
                  (np.zeros(P, np.int64), np.zeros(P), False))
-        meter = kept.get("gait_lab")
+        meter = tstate.gait_lab if steer else kept.get("gait_lab")
         sampling = _SAMPLING[None if meter is None else meter.sampling]
         T = 0 if meter is None else n * (S if sampling == 2 else 1)
         A = len(body.actuator_names)
@@ -291,7 +302,7 @@ class WholeEpisodes:
         A = f(state.controller, float)
         ctrnn = (A, f(params["alpha"]), f(params["W"]), f(params["V"]), f(params["tau"]), substeps, ctrl.dt,
                  ctrl.exponential, ctrl.outputs_after, c, D, ctrl.n_outputs)
-        facing0 = f(tstate.facing, float)
+        facing0 = np.zeros((P, 2)) if steer else f(tstate.facing, float)
         pre = np.zeros((P, mujoco.mj_stateSize(self.model, _STATE)))
         ran, first_time = _episode(
             self.funcs, self.mj, addresses, F, self.body_ids, self.qadr, self.dadr, self.share, self.radius,
@@ -299,10 +310,13 @@ class WholeEpisodes:
             self.bounds, int(n), S, episode.stop_on_fall, (body.fall_height, float(np.cos(body.fall_tilt))),
             int(state.ticks), f(state.born, np.int64), float(episode.control_dt), facing0, tracker, steps, samples,
             tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre, self.commands(task, tstate,
-                                                                                             n, episode.control_dt))
+                                                                                             n, episode.control_dt),
+            self.hearing(task, tstate, P))
         state.controller = A
         ticks = int(ran.max(initial=0))
         state.ticks += ticks
+        if steer:
+            tstate.ticks += ticks
         if meter is not None and ticks:
             _hand_to_meter(meter, samples, ticks * (S if sampling == 2 else 1), S if sampling == 2 else 1, first_time)
         # the batch takes each walker's last physics step itself: every field it holds is then the loop's
@@ -313,6 +327,18 @@ class WholeEpisodes:
             batch.step(ids=stepped, nstep=1, stage=mujoco.mjtStage.mjSTAGE_VEL)
             sims.readings.clear()
 
+
+    @staticmethod
+    def hearing(task, tstate, P: int) -> tuple:
+        """The steer task's sources, ears, sound limit, reach and ticks near as the compiled episode takes them (other
+        tasks': none)."""
+        if not isinstance(task, SteerTask):
+            return np.zeros((P, 2)), np.zeros(2, np.int64), 1.0, 0.0, np.zeros(P)
+        if tstate.near.dtype != float or not tstate.near.flags.c_contiguous:
+            raise AssertionError("the steer task counts its ticks near in a contiguous float array")
+        o = task.options
+        return (np.ascontiguousarray(tstate.source, float), np.array(task._ears, np.int64), float(o.sound_limit),
+                float(o.reach), tstate.near)
 
     @staticmethod
     def commands(task, tstate, n: int, control_dt: float) -> tuple:
@@ -377,9 +403,9 @@ def unsupported(episode, state, listener=None) -> str | None:
         return f"the inputs {', '.join(unknown)}"
     if ctrl.output_kind not in _OUTPUT_MAPS or body.action_kind != "position":
         return f"the output map {ctrl.output_kind!r} -> {body.action_kind!r}"
-    if type(task) not in (WalkTask, CommandTask):
+    if type(task) not in (WalkTask, CommandTask, SteerTask):
         return f"the task {task.name!r}"
-    if task.cyclic_weight or task.options.gait_measures:
+    if type(task) is not SteerTask and (task.cyclic_weight or task.options.gait_measures):
         return "the walk task's cyclic criterion or gait measures"
     d = state.disturbances
     if episode.latency:
