@@ -114,7 +114,8 @@ def test_a_generation_s_presentations_whole_are_the_loop_s(name):
     from evobiped.flags import run_config
 
     genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / f"{name}.json")
-    config = dataclasses.replace(config, seconds=11.0, perturbations=run_config(preset="walker-ctrnn-walk").episode.perturbations)
+    noise = run_config(preset="walker-ctrnn-walk").episode.perturbations
+    config = dataclasses.replace(config, seconds=11.0, perturbations=noise)
     genomes = np.stack([genome, genome + 0.005])
     out = []
     for k in ("numpy", "compiled"):

@@ -34,7 +34,7 @@ def facing(xmat, pelvis):
 
 
 @jit
-def intensity(dx, dy):
+def _intensity(dx, dy):
     """I = 1 / |e - q|^2 (1/m^2) of an ear ``(dx, dy)`` m from its source (:func:`evobiped.tasks.sound.intensity`)."""
     d = dx * dx + dy * dy
     return 1.0 / (d if d > 1e-12 else (d if d != d else 1e-12))
@@ -101,8 +101,8 @@ def senses(codes, widths, x, funcs, q, v, xmat, com, site, cvel, xipos, sens, ti
             x[at] = 1.0 if command[1] == 0 else 0.0
         elif c == 14 or c == 15:  # the steer task's ears
             source, ears, limit = hearing
-            a = intensity(site[ears[0], 0] - source[0], site[ears[0], 1] - source[1])
-            b = intensity(site[ears[1], 0] - source[0], site[ears[1], 1] - source[1])
+            a = _intensity(site[ears[0], 0] - source[0], site[ears[0], 1] - source[1])
+            b = _intensity(site[ears[1], 0] - source[0], site[ears[1], 1] - source[1])
             if c == 14:
                 s = (a - b) / (a + b)
                 x[at] = s if limit >= 1 else (-limit if s < -limit else (limit if s > limit else s))
