@@ -1,6 +1,8 @@
 """The whole episode compiled (evobiped.episode.compiled.whole) computes what the lock-step loop computes, to the last
 bit: the fitness, the terms, where and when each walker fell, a blow-up, and the state the batch is left in."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -172,3 +174,21 @@ def test_a_steering_walker_near_its_sources_whole_is_the_loop_to_the_last_bit():
     near = [state.task.near for state in states]
     assert np.array_equal(near[0], near[1]) and near[0].max() > 0 and states[0].task.ticks == states[1].task.ticks
     assert "sliding" in slow.result(states[0]).terms
+
+
+def test_a_walker_on_another_ground_runs_whole_on_that_ground_s_model():
+    """A presentation on another floor, slope and gravity runs on its own model (the episode's grounds), whole as in
+    the loop."""
+    from pathlib import Path
+
+    from evobiped.files.genome_file import load_genome
+    from evobiped.physics.trials import Trials
+
+    genome, config, _ = load_genome(Path(__file__).parents[1] / "docs" / "walkers" / "ctrnn_walk_seed1.json")
+    out = []
+    for k in ("numpy", "compiled"):
+        ep = dataclasses.replace(config, seconds=6.0, kernel=k).build()
+        trials = Trials.nominal(1, 6, friction=0.3, slope=0.05, gravity=0.5)
+        out.append(ep.run(np.stack([genome, genome + 0.01]), trials=trials))
+    _same(*out)
+    assert out[0].end_time.max() > 1.0

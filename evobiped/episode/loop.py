@@ -62,8 +62,9 @@ class Episode:
         self.senses = None if self.controller is None else SensePlan(body, self.controller, task)
         self._task_reads_neurons = task.reads_neurons()
         self._task_reads_steps = task.reads_feet_steps()
-        #: the whole episode compiled (:mod:`.compiled.whole`), made on first use where the kernel is compiled
-        self._whole = None
+        #: the whole episode compiled (:mod:`.compiled.whole`) for each model a batch runs on (the episode's, its
+        #: grounds'), made on first use where the kernel is compiled
+        self._whole: dict[int, object] = {}
 
     @property
     def n_ticks(self) -> int:
@@ -212,9 +213,11 @@ class Episode:
 
         if n < MIN_TICKS or unsupported(self, state, listener) is not None:
             return False
-        if self._whole is None:
-            self._whole = WholeEpisodes(self)
-        self._whole.advance(self, state, n)
+        model = state.sims.model
+        whole = self._whole.get(id(model))
+        if whole is None or whole.model is not model:
+            whole = self._whole[id(model)] = WholeEpisodes(self, model)
+        whole.advance(self, state, n)
         return True
 
     def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,

@@ -209,11 +209,11 @@ class WholeEpisodes:
     FIELDS = ("qpos", "qvel", "ctrl", "xpos", "xmat", "subtree_com", "site_xpos", "cvel", "xipos", "sensordata",
               "geom_xpos", "actuator_force", "actuator_velocity")
 
-    def __init__(self, episode):
-        self.model = episode.model
+    def __init__(self, episode, model: mujoco.MjModel):
+        self.model = model  # the episode's, or one of its grounds' (another friction, slope or gravity)
         self.datas: list[mujoco.MjData] = []
         self._lists: dict[int, tuple] = {}
-        body, m = episode.body, episode.model
+        body, m = episode.body, model
         self.body_ids = np.array([body._pelvis, body._touch[0], body._touch[1], body._feet[0], body._feet[1],
                                   body._foot_geoms[0], body._foot_geoms[1], body._foot_bodies[0],
                                   body._foot_bodies[1]], np.int64)
@@ -263,6 +263,8 @@ class WholeEpisodes:
         """``n`` ticks of ``state`` (an :class:`EpisodeState` of ``episode``, which :func:`unsupported` allows), in
         place, as :meth:`Episode.advance` would run them."""
         sims, ctrl, body, task = state.sims, episode.controller, episode.body, episode.task
+        if sims.model is not self.model:
+            raise AssertionError("a whole episode runs on the model its MjData were made for")
         P = sims.n
         addresses, F = self.fields(P)
         batch = sims.batch
