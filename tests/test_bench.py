@@ -4,6 +4,7 @@ Speed itself is not asserted (timings belong to the benchmark, not the tests).
 """
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,8 @@ import pytest
 from evobiped.analysis.bench import bench
 from evobiped.cli import main
 from evobiped.episode import EpisodeConfig
+
+STEERER = str(Path(__file__).parents[1] / "docs" / "walkers" / "steer_ctrnn_es_seed0.json")
 
 
 def test_raw_replay_on_threads_reproduces_the_closed_loop_episodes_exactly():
@@ -78,3 +81,21 @@ def test_presentations_measurement_counts_every_presentation(capsys):
     # (a e) replays every perturbed row open-loop (its start, controls and push forces): the same physics to the bit
     assert r["replay_presentations_gap_m"] == 0.0
     assert r["efficiency_presentations"] == pytest.approx(m["eval x3"] / m["raw x3"])
+
+
+def test_a_preset_that_tunes_a_genome_is_timed_from_it_every_presentation_replayed(capsys):
+    """steer-walk presents each walker its 4 sources: 4 rows a walker, each replayed open-loop to the bit."""
+    args = ["bench", "--preset", "steer-walk", "--from", STEERER, "--population",
+            "2", "--seconds", "0.5", "--workers", "1", "--repeats", "1", "--json"]
+    assert main(args) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["rows"] == 8 and r["simulated_seconds"] == pytest.approx(8 * 0.5)
+    assert r["replay_end_position_gap_m"] == 0.0 and r["replay_blow_ups"] == 0
+
+
+@pytest.mark.parametrize("args, words", [(["--preset", "steer-walk", "--from", "no/such.json"], "no such run"),
+                                         (["--from", STEERER], "--from names")])
+def test_a_bad_genome_to_time_from_is_one_line(capsys, args, words):
+    assert main(["bench", *args, "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1

@@ -119,16 +119,17 @@ def bench(
         raise ConfigError(f"bench: body {config.body!r} adds forces in Python between physics steps; (a) cannot replay "
                           "it open-loop")
     genomes = GA(ep.controller.layout, GAOptions(population=max(2, population)), seed=seed).ask()[0][:population]
-    sim_seconds = population * ep.n_ticks * ep.control_dt
 
     ep.run(genomes[:1], seconds=ep.control_dt)  # warm up (allocations)
     rec = _ControlRecorder()
     result = ep.run(genomes, listener=rec)
     ctrl = np.repeat(np.stack(rec.ctrl, axis=1), ep.substeps, axis=1)  # (P, nstep, nu)
-    model, initial = ep.model, rec.initial[0]  # every walker starts from the same state
+    model, initial = ep.model, rec.initial  # a row for each walker and each of the task's presentations
+    rows = len(initial)
+    sim_seconds = rows * ep.n_ticks * ep.control_dt
     data = [mujoco.MjData(model) for _ in range(workers)]
     nstep = ctrl.shape[1]
-    finals = np.empty((population, model.nq))
+    finals = np.empty((rows, model.nq))
     threads = rollout.Rollout(nthread=workers) if workers > 1 else None
 
     def raw(n: int):
@@ -137,12 +138,12 @@ def bench(
         group = 1 if n == 1 else 4 * n
 
         def go():
-            for p in range(0, population, group):
+            for p in range(0, rows, group):
                 if n == 1:
-                    state, _ = rollout.rollout(model, data[0], initial[None], ctrl[p : p + 1], nstep=nstep)
+                    state, _ = rollout.rollout(model, data[0], initial[p : p + 1], ctrl[p : p + 1], nstep=nstep)
                 else:
-                    state, _ = threads.rollout(model, data[:n], initial[None], ctrl[p : p + group], nstep=nstep,
-                                               chunk_size=1)
+                    state, _ = threads.rollout(model, data[:n], initial[p : p + group], ctrl[p : p + group],
+                                               nstep=nstep, chunk_size=1)
                 finals[p : p + len(state)] = state[:, -1, 1 : 1 + model.nq]
         return go
 
@@ -192,7 +193,10 @@ def bench(
             progress.total = float(len(fns) * repeats)
             progress.unit = "measurements"
         walls = _walls(fns, repeats, progress)
-        end_gap = float(np.max(np.abs(finals[:, :2] - result.end_position)))
+        by_row = result.rows if result.rows is not None else result
+        stable = ~np.asarray(by_row.unstable, bool).reshape(rows)  # a blow-up ends the episode's row, not the replay's
+        end_gap = float(np.max(np.abs(finals[stable, :2] - by_row.end_position.reshape(rows, 2)[stable]),
+                               initial=0.0))
     finally:
         for pool in (*pools.values(), thread_ev):
             pool.close()
@@ -209,6 +213,7 @@ def bench(
         "timestep_s": model.opt.timestep,
         "control_dt_s": ep.control_dt,
         "population": population,
+        "rows": rows,
         "episode_seconds": config.seconds,
         "simulated_seconds": sim_seconds,
         "simulated_seconds_each": simulated,
@@ -226,6 +231,7 @@ def bench(
         "efficiency_presentations": median[f"eval x{presentations}"] / median[f"raw x{presentations}"]
             if presentations > 1 else None,
         "replay_end_position_gap_m": end_gap,
+        "replay_blow_ups": int(rows - stable.sum()),
         "replay_presentations_gap_m": max(gaps) if gaps else None,
         "wall_seconds": walls,
     }
@@ -241,7 +247,9 @@ def format_bench(r: dict) -> str:
              f"raw x{r['presentations']}": "(a e) raw stepping of (e)'s rows, 1 thread",
              f"eval x{r['presentations']}": f"(e) evaluation, {r['presentations']} presentations"}
     lines = [
-        f"{r['body']}/{r['controller']}: {r['population']} walker(s) x {r['episode_seconds']:g} s, "
+        f"{r['body']}/{r['controller']}: {r['population']} walker(s)"
+        + (f" x {r['rows'] // r['population']} presentations" if r["rows"] != r["population"] else "")
+        + f" x {r['episode_seconds']:g} s, "
         f"physics step {r['timestep_s'] * 1000:g} ms, control step {r['control_dt_s'] * 1000:g} ms, "
         f"{r['cpu_count']} cores, {r['kernel']} kernel",
         f"median of {r['repeats']} interleaved repeat(s), sim-s/s [slowest, fastest repeat]",
@@ -258,6 +266,8 @@ def format_bench(r: dict) -> str:
            f"{r['efficiency_presentations']:.3f} (one presentation: (b)/(a 1) = {r['efficiency_one_core']:.3f})"]
           if r["presentations"] > 1 else []),
         f"open-loop replay of (b)'s controls ends within {r['replay_end_position_gap_m']:.2g} m of (b)"
+        + (f" (its {r['replay_blow_ups']} blown-up row(s) left out: a blow-up ends a row of (b), not its replay)"
+           if r["replay_blow_ups"] else "")
         + (f", of (e)'s within {r['replay_presentations_gap_m']:.2g} m of (e)" if r["presentations"] > 1 else ""),
     ]
     return "\n".join(lines)

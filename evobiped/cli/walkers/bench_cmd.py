@@ -6,6 +6,7 @@ import dataclasses
 import json
 
 from ...flags import check_workers, choices_text, positive_float, positive_int
+from ...core.errors import UserError
 from ...core.progress import Progress
 
 
@@ -14,6 +15,8 @@ def add_bench(sub) -> None:
     p.add_argument("--preset", metavar="NAME", help="time the episode of this preset (its body, controller, task and "
                                                     "options, nominal; with its running normaliser's sense collection) "
                                                     "instead of --body/--controller")
+    p.add_argument("--from", dest="initial", metavar="GENOME_OR_RUN",
+                   help="the genome a preset that tunes a given genome starts from (its episode is timed)")
     p.add_argument("--body", default="reil", help=f"body: {choices_text('body')}, or mjcf:PATH (an MJCF biped and its "
                                                   "declaration: docs/own_robot.md; default reil)")
     p.add_argument("--controller", default="ctrnn", help=f"controller: {choices_text('controller')} (default ctrnn)")
@@ -45,10 +48,16 @@ def run_bench_cmd(args) -> int:
         from ...episode import Context
         from ...flags import run_config
 
-        run = run_config(preset=args.preset)
+        run = run_config(preset=args.preset, initial=args.initial)
+        if run.initial:  # the genome is read and checked against the preset's layout, as evolve would
+            from ...run.run_config import start_genome
+
+            start_genome(run)
         cfg = dataclasses.replace(run.episode.nominal(), seconds=size["seconds"])
         context = Context(observe=True) if run.normalise.running else None
     else:
+        if args.initial:
+            raise UserError("bench: --from names the genome of a --preset that tunes one")
         cfg = EpisodeConfig(body=args.body, controller=args.controller, seconds=size["seconds"])
     from ...core.kernel import compiled
 
