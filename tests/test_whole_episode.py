@@ -192,3 +192,31 @@ def test_a_walker_on_another_ground_runs_whole_on_that_ground_s_model():
         out.append(ep.run(np.stack([genome, genome + 0.01]), trials=trials))
     _same(*out)
     assert out[0].end_time.max() > 1.0
+
+
+def test_ctrl_c_stops_a_long_whole_episode_with_a_keyboard_interrupt():
+    """Signals are handled between the compiled calls (each a fraction of a second) and a pending one is raised as
+    the KeyboardInterrupt it is (numba's boxing of a returned array turned it into a SystemError)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    code = ("import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "import numpy as np\nfrom evobiped.episode import build_episode\n"
+            "from evobiped.optimizers import GA, GAOptions\n"
+            "ep = build_episode(body='reil', seconds=600.0, stop_on_fall=False, kernel='compiled')\n"
+            "g = GA(ep.controller.layout, GAOptions(population=20), seed=5).ask()[0]\n"
+            "ep.run(g[:2], seconds=1.0)\nprint('go', flush=True)\n"
+            "try:\n    ep.run(g)\nexcept KeyboardInterrupt:\n    print('interrupted', flush=True)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "go"
+        time.sleep(1.0)
+        sent = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=60)
+        assert out.strip() == "interrupted" and time.monotonic() - sent < 10.0
+    finally:
+        proc.kill()
+        proc.wait()

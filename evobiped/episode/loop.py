@@ -207,9 +207,10 @@ class Episode:
         return state
 
     def _run_whole(self, state: EpisodeState, n: int, listener: Listener | None) -> bool:
-        """Whether ``n`` ticks of ``state`` ran as one compiled call (:mod:`.compiled.whole`: the same numbers),
-        where its parts allow it and ``n`` is long enough to pay for the call."""
-        from .compiled.whole import MIN_TICKS, WholeEpisodes, unsupported
+        """Whether ``n`` ticks of ``state`` ran in compiled calls (:mod:`.compiled.whole`: the same numbers), where
+        its parts allow it and ``n`` is long enough to pay for a call; calls of at most ``CALL_WALKER_TICKS``
+        walker-ticks, until every walker is down."""
+        from .compiled.whole import CALL_WALKER_TICKS, MIN_TICKS, WholeEpisodes, unsupported
 
         if n < MIN_TICKS or unsupported(self, state, listener) is not None:
             return False
@@ -217,7 +218,12 @@ class Episode:
         whole = self._whole.get(id(model))
         if whole is None or whole.model is not model:
             whole = self._whole[id(model)] = WholeEpisodes(self, model)
-        whole.advance(self, state, n)
+        chunk = max(MIN_TICKS, CALL_WALKER_TICKS // max(1, len(state.alive)))
+        done = 0
+        while done < n and state.alive.any():
+            ticks = min(n - done, chunk)
+            whole.advance(self, state, ticks)
+            done += ticks
         return True
 
     def step(self, state: EpisodeState, action: np.ndarray, *, neurons: np.ndarray | None = None,

@@ -51,6 +51,9 @@ _OUTPUT_MAPS = {"unit": 0, "centred": 1, "centred_full": 2, "angle": 3}
 _SAMPLING = {None: 0, "control_tick": 1, "physics_step": 2}
 #: fewer ticks than this in one call run the lock-step loop (loading and handing back the batch costs about a tick)
 MIN_TICKS = 10
+#: a call runs at most about this many walker-ticks (a third of a second): signals (Ctrl-C, a run's stop) are handled
+#: between calls, and a call's handing back of the batch costs about a tick
+CALL_WALKER_TICKS = 12_500
 #: the senses of :data:`SENSES` a task computes (the others are the body's)
 _TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_stop", "sound", "loudness"}
 
@@ -59,9 +62,11 @@ _TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_st
 def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
              codes, widths, mirror, norm, observed, ctrnn, kind, bounds, n_ticks, nstep, stop_on_fall, fall,
              tick0, born, control_dt, facing0, tracker, steps, samples, position, alive, fell, unstable, end_time,
-             pre, command, steer):
-    """``n_ticks`` control ticks of every walker that is up, walker after walker (see the module docstring); returns
-    the ticks each ran ``(P,)`` and the simulated time after the first tick of the call (NaN: none ran).
+             pre, command, steer, ran, first):
+    """``n_ticks`` control ticks of every walker that is up, walker after walker (see the module docstring); writes
+    the ticks each ran into ``ran`` ``(P,)`` and the simulated time after the first tick of the call into ``first``
+    ``(1,)`` (NaN: none ran).  It returns nothing: numba boxes a returned array by running Python, where a pending
+    signal (Ctrl-C) would raise inside its wrapper and leave a SystemError instead of the KeyboardInterrupt.
 
     ``funcs``: the addresses of NumPy's exp, arcsin and arctan2 loops and of its hypot; ``mj``: of mj_step1,
     mj_step2, mj_getState and the mjModel; ``datas`` ``(P,)`` each walker's mjData, at the velocity stage of its
@@ -94,7 +99,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     n_in = 0
     for g in range(k):
         n_in += widths[g]
-    ran = np.zeros(P, np.int64)
+    ran[:] = 0
     first_time = np.nan
     x, xm, xn = np.zeros((1, n_in)), np.zeros(n_in), np.zeros((1, n_in))
     scratch, clock = np.zeros(3), np.zeros(1)
@@ -199,7 +204,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                 fell[p], alive[p] = True, False
                 end_time[p] = (tick0 + t + 1 - born[p]) * control_dt
                 break
-    return ran, first_time
+    first[0] = first_time
 
 
 class WholeEpisodes:
@@ -305,13 +310,15 @@ class WholeEpisodes:
                  ctrl.exponential, ctrl.outputs_after, c, D, ctrl.n_outputs)
         facing0 = np.zeros((P, 2)) if steer else f(tstate.facing, float)
         pre = np.zeros((P, mujoco.mj_stateSize(self.model, _STATE)))
-        ran, first_time = _episode(
+        ran, first = np.zeros(P, np.int64), np.full(1, np.nan)
+        _episode(
             self.funcs, self.mj, addresses, F, self.body_ids, self.qadr, self.dadr, self.share, self.radius,
             self.knees, self.codes, self.widths, self.mirror, norm, observed, ctrnn, _OUTPUT_MAPS[ctrl.output_kind],
             self.bounds, int(n), S, episode.stop_on_fall, (body.fall_height, float(np.cos(body.fall_tilt))),
             int(state.ticks), f(state.born, np.int64), float(episode.control_dt), facing0, tracker, steps, samples,
             tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre,
-            task_arrays.commands(task, tstate, n, episode.control_dt), task_arrays.hearing(task, tstate, P))
+            task_arrays.commands(task, tstate, n, episode.control_dt), task_arrays.hearing(task, tstate, P), ran, first)
+        first_time = float(first[0])
         state.controller = A
         ticks = int(ran.max(initial=0))
         state.ticks += ticks
