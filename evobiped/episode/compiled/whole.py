@@ -21,11 +21,12 @@ field it holds (acceleration-stage sensors too) is what the loop would have left
 continues from it.  The gait lab's samples are handed to the task's meter as its own ticks would have been.
 
 Known today: the Reil body; a CTRNN, with any of the body's senses and its task's as inputs, in the body or the
-stance frame, normalised or not, with or without its direct path; the walk task with any fitness but the cyclic
-criterion and the gait measures (its steps and gait-lab terms at either sampling included); the command task (any
-schedule, drawn or not); the steer task (its ears, its reach, its gait terms); presentations whose disturbances end at
-the start (pose noise, the drawn commands and sources); no disturbance while the episode runs (target noise or
-offsets, pushes, assistance), no latency, no listener.  Anything else runs the lock-step loop, with the same numbers.
+stance frame, normalised or not, with or without its direct path, or the SIMBICON-style controller, deaf or hearing;
+the walk task with any fitness but the cyclic criterion and the gait measures (its steps and gait-lab terms at either
+sampling included); the command task (any schedule, drawn or not); the steer task (its ears, its reach, its gait
+terms); presentations whose disturbances end at the start (pose noise, the drawn commands and sources) on any ground;
+no disturbance while the episode runs (target noise or offsets, pushes, assistance), no latency, no listener.
+Anything else runs the lock-step loop, with the same numbers.
 """
 
 from __future__ import annotations
@@ -35,14 +36,16 @@ import numpy as np
 from numba import typed
 
 from ...controllers import ctrnn_kernel
+from ...controllers.simbicon import Simbicon
 from ...core.kernel import jit, ufunc_loop, ufunc_scalar2
 from ...physics import gait
 from ...physics.sim import FIRST_BAD_WARNING, MAX_SPEED
 from ...tasks.command import CommandTask
 from ...tasks.steer import SteerTask
 from .mujoco_calls import call, entry, read_state, time_of
-from . import command_tick, task_arrays
+from . import command_tick, state_arrays
 from .readings import SENSES, facing, foot_sample, senses
+from .simbicon_tick import INPUTS as SIMBICON_INPUTS, simbicon_step
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 #: output kinds (controller -> PD target) the compiled tick maps: :mod:`evobiped.interface.mapping`'s
@@ -62,7 +65,7 @@ _TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_st
 def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
              codes, widths, mirror, norm, observed, ctrnn, kind, bounds, n_ticks, nstep, stop_on_fall, fall,
              tick0, born, control_dt, facing0, tracker, steps, samples, position, alive, fell, unstable, end_time,
-             pre, command, steer, ran, first):
+             pre, command, steer, simb, ran, first):
     """``n_ticks`` control ticks of every walker that is up, walker after walker (see the module docstring); writes
     the ticks each ran into ``ran`` ``(P,)`` and the simulated time after the first tick of the call into ``first``
     ``(1,)`` (NaN: none ran).  It returns nothing: numba boxes a returned array by running Python, where a pending
@@ -77,7 +80,8 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     the command task, its schedule (times s, speeds m/s, turning rates rad/s, drawn stretch s or 0), its rows' start
     times ``(P,)``, its arrays (:func:`.command_tick.tick`) and options, all in place; ``steer``: the steer task's
     sources ``(P, 2)`` m, its ears' site ids, its sound limit, its reach m (0: none) and the ticks each walker spent
-    within it ``(P,)``, in place."""
+    within it ``(P,)``, in place; ``simb``: whether the controller is the SIMBICON-style one, its genes, its inputs'
+    offsets, its state (stance, time in the swing, targets; in place) and constants (:mod:`.simbicon_tick`)."""
     qpos, qvel, ctrl, xpos, xmat, subtree_com, site_xpos, cvel, xipos, sensordata, geom_xpos, force, avel, warnings = F
     in_perm, in_sign, act_perm, act_sign, framed = mirror
     mean, std, normalised = norm
@@ -94,6 +98,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     commands, times, speeds, turns, stretch, t0, kept, options = command
     clock_c, yaw_cmd = kept[0], kept[3]
     sources, ears, sound_limit, reach, near = steer
+    simbicon, G, at_in, s_stance, s_t, s_out, hears, s_limit, pcols, rcols, kcols, s_dt = simb
     P = A.shape[0]
     k = codes.shape[0]
     n_in = 0
@@ -104,6 +109,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     x, xm, xn = np.zeros((1, n_in)), np.zeros(n_in), np.zeros((1, n_in))
     scratch, clock = np.zeros(3), np.zeros(1)
     action = np.zeros(ctrl[0].shape[0])
+    o_row = np.zeros(ctrl[0].shape[0])
     for p in range(P):
         if not alive[p]:
             continue
@@ -129,10 +135,18 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                         squares[p, i] += x[0, i] * x[0, i]
                 for i in range(n_in):
                     xn[0, i] = (x[0, i] - mean[i]) / std[i] if normalised else x[0, i]
-            a2, out = ctrnn_kernel._step(exp, a, xn, al, Wp, Vp, tp, sp, dt, exponential, after, cp, Dp, n_out)
-            a[0, :] = a2[0, :]
+            if simbicon:
+                s_stance[p], s_t[p] = simbicon_step(xn[0], at_in, G[p], s_stance[p], s_t[p], hears, s_limit, pcols,
+                                                    rcols, kcols, s_dt, o_row)
+                for j in range(o_row.shape[0]):
+                    s_out[p, j] = o_row[j]
+            else:
+                a2, out = ctrnn_kernel._step(exp, a, xn, al, Wp, Vp, tp, sp, dt, exponential, after, cp, Dp, n_out)
+                a[0, :] = a2[0, :]
+                for j in range(o_row.shape[0]):
+                    o_row[j] = out[0, j]
             for j in range(action.shape[0]):
-                o = out[0, j]
+                o = o_row[j]
                 if kind == 0:
                     action[j] = low[j] + o * (high[j] - low[j])
                 else:
@@ -241,6 +255,8 @@ class WholeEpisodes:
                        (np.arange(k), np.ones(k), np.arange(n_act), np.ones(n_act), False))
         low, high = episode.low.astype(float), episode.high.astype(float)
         self.bounds = (low, high, np.maximum(np.abs(low), np.abs(high)))
+        at = getattr(ctrl, "_at", {})
+        self.simbicon_at = np.array([at[name].start if name in at else 0 for name in SIMBICON_INPUTS], np.int64)
         self.funcs = (ufunc_loop(np.exp), ufunc_loop(np.arcsin), ufunc_loop(np.arctan2), ufunc_scalar2(np.hypot),
                       ufunc_loop(np.remainder))
         self.mj = (entry("mj_step1"), entry("mj_step2"), entry("mj_getState"), self.model._address)
@@ -303,11 +319,8 @@ class WholeEpisodes:
         observed = ((rs.count, rs.total, rs.squares, True) if rs is not None else
                     (np.zeros(P), np.zeros((P, k)), np.zeros((P, k)), False))
         params, f = state.params, np.ascontiguousarray
-        c, D = (f(params["c"]), f(params["D"])) if ctrl.direct else (np.zeros((0, 0)), np.zeros((0, 0, 0)))
-        substeps = f(params["substeps"], np.int64) if ctrl.exponential else np.zeros(P, np.int64)
-        A = f(state.controller, float)
-        ctrnn = (A, f(params["alpha"]), f(params["W"]), f(params["V"]), f(params["tau"]), substeps, ctrl.dt,
-                 ctrl.exponential, ctrl.outputs_after, c, D, ctrl.n_outputs)
+        simbicon = isinstance(ctrl, Simbicon)
+        ctrnn, simb = state_arrays.controller(ctrl, state, P, self.simbicon_at)
         facing0 = np.zeros((P, 2)) if steer else f(tstate.facing, float)
         pre = np.zeros((P, mujoco.mj_stateSize(self.model, _STATE)))
         ran, first = np.zeros(P, np.int64), np.full(1, np.nan)
@@ -317,15 +330,20 @@ class WholeEpisodes:
             self.bounds, int(n), S, episode.stop_on_fall, (body.fall_height, float(np.cos(body.fall_tilt))),
             int(state.ticks), f(state.born, np.int64), float(episode.control_dt), facing0, tracker, steps, samples,
             tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre,
-            task_arrays.commands(task, tstate, n, episode.control_dt), task_arrays.hearing(task, tstate, P), ran, first)
+            state_arrays.commands(task, tstate, n, episode.control_dt), state_arrays.hearing(task, tstate, P), simb,
+            ran, first)
         first_time = float(first[0])
-        state.controller = A
+        if simbicon:
+            state.controller = {"stance": simb[3], "t": simb[4], "out": simb[5]}
+        else:
+            state.controller = ctrnn[0]
         ticks = int(ran.max(initial=0))
         state.ticks += ticks
         if steer:
             tstate.ticks += ticks
         if meter is not None and ticks:
-            _hand_to_meter(meter, samples, ticks * (S if sampling == 2 else 1), S if sampling == 2 else 1, first_time)
+            per_tick = S if sampling == 2 else 1
+            state_arrays.hand_to_meter(meter, samples, ticks * per_tick, per_tick, first_time)
         # the batch takes each walker's last physics step itself: every field it holds is then the loop's
         stepped = np.flatnonzero(ran > 0)
         if len(stepped):
@@ -333,21 +351,6 @@ class WholeEpisodes:
             sims.forward(stepped)
             batch.step(ids=stepped, nstep=1, stage=mujoco.mjtStage.mjSTAGE_VEL)
             sims.readings.clear()
-
-
-def _hand_to_meter(meter, samples, T: int, per_tick: int, first_time: float) -> None:
-    """The gait lab's samples of the call's ``T`` samples (``per_tick`` a tick) appended to ``meter`` as its own
-    :meth:`~evobiped.physics.gait_lab.GaitMeter.tick` would have kept them."""
-    contact, slip, height, knee, power, torque, ticked, _ = samples
-    if not np.isfinite(meter.dt) and np.isfinite(first_time):
-        meter.dt = (float(first_time) - meter._start_time) / per_tick
-    for t in range(0, T, per_tick):
-        mask = ticked[t].copy()
-        meter.ticked.extend([mask] * per_tick)
-    fields = {"contact": contact, "slip": slip, "height": height, "knee": knee, "power": power, "torque": torque}
-    for name, series in meter.series.items():
-        series.extend(fields[name][:T])
-    meter._measured = None
 
 
 def unsupported(episode, state, listener=None) -> str | None:
@@ -364,7 +367,7 @@ def unsupported(episode, state, listener=None) -> str | None:
         return "a listener watches every tick"
     if type(body) is not ReilBiped or body.has_custom_forces:
         return f"the body {body.name!r}"
-    if type(ctrl) is not CTRNN:
+    if type(ctrl) not in (CTRNN, Simbicon):
         return f"the controller {ctrl.name!r}"
     task_senses = set(task.sensor_widths())
     unknown = [n for n in ctrl.input_names if n not in SENSES or (n in task_senses) != (n in _TASK_SENSES)]
