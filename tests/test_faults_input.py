@@ -396,8 +396,9 @@ def test_the_least_address_space_runs_presets_and_an_episode(tmp_path):
 
 
 def test_importing_the_package_under_a_low_limit_checks_nothing_and_leaves_ctrl_c_alone():
-    def limit():
+    def limit():  # and Ctrl-C as a shell's new process has it, whatever this test process inherited
         resource.setrlimit(resource.RLIMIT_AS, (100_000 * 1024, 100_000 * 1024))
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
 
     code = ("import signal, sys, evobiped; "
             "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, 'numpy' in sys.modules)")
