@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from evobiped.episode import build_episode
-from evobiped.episode.compiled import whole
+from evobiped.episode.compiled import scope
 from evobiped.optimizers import GA, GAOptions
 from evobiped.physics.sim import Sims
 
@@ -34,7 +34,7 @@ def test_the_paper_s_episode_whole_is_the_lock_step_loop_to_the_last_bit(stop_on
     slow, fast = _pair(body="reil", seconds=4.0, stop_on_fall=stop_on_fall)
     genomes = GA(slow.controller.layout, GAOptions(population=12), seed=5).ask()[0]
     state = fast.start(genomes)
-    assert whole.unsupported(fast, state) is None and whole.unsupported(slow, state) == "the kernel is numpy"
+    assert scope.unsupported(fast, state) is None and scope.unsupported(slow, state) == "the kernel is numpy"
     fast.advance(state, 1.5)  # in two calls, the batch's state handed on between them
     fast.advance(state, 2.5)
     a, b = slow.run(genomes), fast.result(state)
@@ -78,9 +78,9 @@ def test_a_bad_position_at_dof_0_is_a_blow_up():
 def test_what_the_whole_episode_does_not_know_runs_the_loop():
     ep = build_episode(body="reil", seconds=1.0, kernel="compiled", task_options={"fitness": "weighted"})
     state = ep.start(GA(ep.controller.layout, GAOptions(population=2), seed=1).ask()[0])
-    assert whole.unsupported(ep, state) is None
-    assert whole.unsupported(ep, state, listener=object()) == "a listener watches every tick"
-    assert whole.unsupported(build_episode(body="taga", seconds=1.0, kernel="compiled"), state) == "the body 'taga'"
+    assert scope.unsupported(ep, state) is None
+    assert scope.unsupported(ep, state, listener=object()) == "a listener watches every tick"
+    assert scope.unsupported(build_episode(body="taga", seconds=1.0, kernel="compiled"), state) == "the body 'taga'"
 
 
 @pytest.mark.parametrize("name", ["ctrnn_walk_seed1", "ctrnn_es_seed5", "ctrnn_distilled_seed5",
@@ -98,7 +98,7 @@ def test_a_shipped_walker_s_episode_whole_is_the_loop_to_the_last_bit(name):
     config = dataclasses.replace(config, seconds=min(config.seconds, 12.0))
     genomes = np.stack([genome, genome + 0.01])
     slow, fast = (dataclasses.replace(config, kernel=k).build() for k in ("numpy", "compiled"))
-    assert whole.unsupported(fast, fast.start(genomes)) is None
+    assert scope.unsupported(fast, fast.start(genomes)) is None
     a, b = slow.run(genomes), fast.run(genomes)
     _same(a, b)
     assert a.end_time[0] == config.seconds and len(a.terms) >= 2
@@ -127,7 +127,7 @@ def test_a_generation_s_presentations_whole_are_the_loop_s(name):
                              n_actuators=len(ep.body.actuator_names), n_genes=genomes.shape[1])
         assert trials is not None
         if k == "compiled":
-            assert whole.unsupported(ep, ep.start(genomes, trials=trials)) is None
+            assert scope.unsupported(ep, ep.start(genomes, trials=trials)) is None
         out.append(ep.run(genomes, trials=trials, context=Context(observe=True)))
     _same(*out)
     assert out[0].senses.keys() == out[1].senses.keys() == {"count", "total", "squares"}
@@ -168,7 +168,7 @@ def test_a_steering_walker_near_its_sources_whole_is_the_loop_to_the_last_bit():
     slow, fast = (dataclasses.replace(config, kernel=k).build() for k in ("numpy", "compiled"))
     genomes = np.stack([genome, genome + 0.01])
     states = [ep.start(genomes) for ep in (slow, fast)]
-    assert whole.unsupported(fast, states[1]) is None
+    assert scope.unsupported(fast, states[1]) is None
     for ep, state in zip((slow, fast), states):
         ep.advance(state, config.seconds)
     _same(slow.result(states[0]), fast.result(states[1]))

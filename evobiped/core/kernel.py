@@ -60,6 +60,19 @@ def _probe(ufunc: np.ufunc) -> list[np.ndarray]:
     return [x]
 
 
+def _float64_entry(ufunc: np.ufunc, nins: tuple[int, ...]) -> tuple[_UFunc, int] | None:
+    """``ufunc``'s head and the index of its first all-float64 type signature, where its head is one this reads
+    (its name, ``nin`` among ``nins``, one output, its type count); None otherwise."""
+    u = _UFunc.from_address(id(ufunc))
+    if (u.name != ufunc.__name__.encode() or u.nin not in nins or u.nin != ufunc.nin or u.nout != 1
+            or u.ntypes != len(ufunc.types)):
+        return None
+    for i in range(u.ntypes):
+        if all(b == _NPY_DOUBLE for b in u.types[i * u.nargs:(i + 1) * u.nargs]):
+            return u, i
+    return None
+
+
 @functools.cache
 def ufunc_loop(ufunc: np.ufunc) -> int | None:
     """The address of NumPy's float64 inner loop of ``ufunc``, unary (``np.exp``, ``np.arcsin``) or binary
@@ -68,15 +81,10 @@ def ufunc_loop(ufunc: np.ufunc) -> int | None:
     layout or loop is not what this expects.  Compiled code calls it through
     :func:`evobiped.core.ufunc_calls.apply_loop` (:func:`~evobiped.core.ufunc_calls.apply_loop2`)."""
     try:
-        u = _UFunc.from_address(id(ufunc))
-        if (u.name != ufunc.__name__.encode() or u.nin not in (1, 2) or u.nin != ufunc.nin or u.nout != 1
-                or u.ntypes != len(ufunc.types)):
+        found = _float64_entry(ufunc, (1, 2))
+        if found is None:
             return None
-        for i in range(u.ntypes):
-            if all(b == _NPY_DOUBLE for b in u.types[i * u.nargs:(i + 1) * u.nargs]):
-                break
-        else:
-            return None
+        u, i = found
         if not u.functions[i] or u.data[i]:  # a loop that needs its data pointer is not one this calls
             return None
         address = int(u.functions[i])
@@ -104,17 +112,10 @@ def ufunc_scalar2(ufunc: np.ufunc) -> int | None:
     None where the loop is another kind (then :func:`ufunc_loop` has it).  Compiled code calls it through
     :func:`evobiped.core.ufunc_calls.call_scalar2`."""
     try:
-        u = _UFunc.from_address(id(ufunc))
-        if u.name != ufunc.__name__.encode() or u.nin != 2 or u.nout != 1 or u.ntypes != len(ufunc.types):
+        found = _float64_entry(ufunc, (2,))
+        if found is None or not found[0].data[found[1]]:
             return None
-        for i in range(u.ntypes):
-            if all(b == _NPY_DOUBLE for b in u.types[i * u.nargs:(i + 1) * u.nargs]):
-                break
-        else:
-            return None
-        if not u.data[i]:
-            return None
-        address = int(u.data[i])
+        address = int(found[0].data[found[1]])
     except (ValueError, TypeError, OverflowError):
         return None
     x, y = _probe(ufunc)

@@ -210,7 +210,8 @@ class Episode:
         """Whether ``n`` ticks of ``state`` ran in compiled calls (:mod:`.compiled.whole`: the same numbers), where
         its parts allow it and ``n`` is long enough to pay for a call; calls of at most ``CALL_WALKER_TICKS``
         walker-ticks, until every walker is down."""
-        from .compiled.whole import CALL_WALKER_TICKS, MIN_TICKS, WholeEpisodes, unsupported
+        from .compiled.scope import unsupported
+        from .compiled.whole import CALL_WALKER_TICKS, MIN_TICKS, WholeEpisodes
 
         if n < MIN_TICKS or unsupported(self, state, listener) is not None:
             return False

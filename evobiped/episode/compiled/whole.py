@@ -3,7 +3,7 @@ Python and without the GIL (the episode's ``kernel``, :mod:`evobiped.core.kernel
 
 :meth:`Episode.advance <evobiped.episode.loop.Episode.advance>` steps the batch in lock step, one control tick of
 every walker at a time, with the tick's work in NumPy between MuJoCo calls.  Where the episode's parts are ones this
-module knows (:func:`unsupported` says which are not), the ticks run instead in one numba call
+module knows (:func:`.scope.unsupported` says which are not), the ticks run instead in one numba call
 (``@njit(cache=True, nogil=True)``): walker after walker, each its own ``MjData`` stepped through MuJoCo's C entry
 points (reached from compiled code at run-time addresses) for all its ticks while its data stay in the cache.  In the
 same loop: the senses the controller reads, the stance frame's mirror, the running normaliser's sums and its read,
@@ -40,16 +40,14 @@ from ...controllers.simbicon import Simbicon
 from ...core.kernel import jit, ufunc_loop, ufunc_scalar2
 from ...physics import gait
 from ...physics.sim import FIRST_BAD_WARNING, MAX_SPEED
-from ...tasks.command import CommandTask
 from ...tasks.steer import SteerTask
 from .mujoco_calls import call, entry, read_state, time_of
 from . import command_tick, state_arrays
 from .readings import SENSES, facing, foot_sample, senses
+from .scope import OUTPUT_MAPS
 from .simbicon_tick import INPUTS as SIMBICON_INPUTS, simbicon_step
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION)
-#: output kinds (controller -> PD target) the compiled tick maps: :mod:`evobiped.interface.mapping`'s
-_OUTPUT_MAPS = {"unit": 0, "centred": 1, "centred_full": 2, "angle": 3}
 #: the gait lab's sampling: none, the last physics step of each tick, every physics step
 _SAMPLING = {None: 0, "control_tick": 1, "physics_step": 2}
 #: fewer ticks than this in one call run the lock-step loop (loading and handing back the batch costs about a tick)
@@ -57,8 +55,39 @@ MIN_TICKS = 10
 #: a call runs at most about this many walker-ticks (a third of a second): signals (Ctrl-C, a run's stop) are handled
 #: between calls, and a call's handing back of the batch costs about a tick
 CALL_WALKER_TICKS = 12_500
-#: the senses of :data:`SENSES` a task computes (the others are the body's)
-_TASK_SENSES = {"heading_error", "command_speed", "command_turning", "command_stop", "sound", "loudness"}
+
+
+@jit
+def _to_action(kind, out, low, high, span, action):
+    """The PD targets ``action`` ``(n_act,)`` of the controller's outputs ``out`` by output kind ``kind``
+    (:data:`.scope.OUTPUT_MAPS`; :func:`evobiped.interface.mapping.to_action`'s expressions)."""
+    for j in range(action.shape[0]):
+        o = out[j]
+        if kind == 0:
+            action[j] = low[j] + o * (high[j] - low[j])
+            continue
+        if kind == 1:
+            y = (o - 0.5) * (high[j] - low[j])
+        elif kind == 2:
+            y = (o - 0.5) * 2.0 * span[j]
+        else:
+            y = o
+        action[j] = low[j] if y < low[j] else (high[j] if y > high[j] else y)
+
+
+@jit
+def _blew_up(warnings, qvel, qpos):
+    """A walker's simulation blew up in its last steps (:meth:`Sims.step <evobiped.physics.sim.Sims.step>`'s test)."""
+    for i in range(FIRST_BAD_WARNING, warnings.shape[0]):
+        if warnings[i] > 0:
+            return True
+    for i in range(qvel.shape[0]):
+        if not abs(qvel[i]) < MAX_SPEED:
+            return True
+    for i in range(qpos.shape[0]):
+        if not np.isfinite(qpos[i]):
+            return True
+    return False
 
 
 @jit
@@ -71,7 +100,8 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
     ``(1,)`` (NaN: none ran).  It returns nothing: numba boxes a returned array by running Python, where a pending
     signal (Ctrl-C) would raise inside its wrapper and leave a SystemError instead of the KeyboardInterrupt.
 
-    ``funcs``: the addresses of NumPy's exp, arcsin and arctan2 loops and of its hypot; ``mj``: of mj_step1,
+    ``funcs``: the addresses of NumPy's exp, arcsin and arctan2 loops, of its hypot and of its mod loop; ``mj``: of
+    mj_step1,
     mj_step2, mj_getState and the mjModel; ``datas`` ``(P,)`` each walker's mjData, at the velocity stage of its
     state; ``F`` a tuple of typed lists of each walker's views of its ``MjData`` fields.  In place: the CTRNN's state,
     the tracker, the steps, the running sums, the gait lab's ``samples`` ``(n_ticks S, P, ...)``, ``position``
@@ -117,6 +147,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
         q, v, u, sens, w = qpos[p], qvel[p], ctrl[p], sensordata[p], warnings[p]
         a, al, Wp, Vp, tp, sp = A[p:p + 1], alpha[p:p + 1], W[p:p + 1], V[p:p + 1], tau[p:p + 1], substeps[p:p + 1]
         cp, Dp = c[p:p + 1] if c.shape[0] else c, D[p:p + 1] if D.shape[0] else D
+        now = time_of(get_state, model, d, clock)  # the simulated time now (s), read again after each tick
         for t in range(n_ticks):
             # the inputs, in the stance frame where the controller takes it, summed for a running normaliser
             flip = framed and stance[p] != 0
@@ -124,7 +155,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                 0.0, 0.0)
             if k:
                 senses(codes, widths, xm, funcs, q, v, xmat[p], subtree_com[p], site_xpos[p], cvel[p], xipos[p],
-                       sens, time_of(get_state, model, d, clock), body_ids, qadr, dadr, share, stance[p], touchdown[p],
+                       sens, now, body_ids, qadr, dadr, share, stance[p], touchdown[p],
                        facing0[p], (commands, v_cmd, w_cmd, yaw_cmd[p]), (sources[p], ears, sound_limit), scratch)
                 for i in range(n_in):
                     x[0, i] = xm[in_perm[i]] * in_sign[i] if flip else xm[i]
@@ -145,18 +176,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                 a[0, :] = a2[0, :]
                 for j in range(o_row.shape[0]):
                     o_row[j] = out[0, j]
-            for j in range(action.shape[0]):
-                o = o_row[j]
-                if kind == 0:
-                    action[j] = low[j] + o * (high[j] - low[j])
-                else:
-                    if kind == 1:
-                        y = (o - 0.5) * (high[j] - low[j])
-                    elif kind == 2:
-                        y = (o - 0.5) * 2.0 * span[j]
-                    else:
-                        y = o
-                    action[j] = low[j] if y < low[j] else (high[j] if y > high[j] else y)
+            _to_action(kind, o_row, low, high, span, action)
             for j in range(action.shape[0]):
                 u[j] = action[act_perm[j]] * act_sign[j] if flip else action[j]
             # the physics, the gait lab's samples after every physics step (or the last)
@@ -171,16 +191,7 @@ def _episode(funcs, mj, datas, F, body_ids, qadr, dadr, share, radius, knees,
                                  radius, knees, contact, slip, height, knee, power, torque)
             ran[p] = t + 1
             now = time_of(get_state, model, d, clock)
-            bad = False
-            for i in range(FIRST_BAD_WARNING, w.shape[0]):
-                if w[i] > 0:
-                    bad = True
-            for i in range(v.shape[0]):
-                if not abs(v[i]) < MAX_SPEED:
-                    bad = True
-            for i in range(q.shape[0]):
-                if not np.isfinite(q[i]):
-                    bad = True
+            bad = _blew_up(w, v, q)
             if tracked:  # the gait tracker (physics.gait.update), every row that took the tick
                 c0, c1 = sens[touch0] > 0, sens[touch1] > 0
                 st = stance[p]
@@ -281,8 +292,8 @@ class WholeEpisodes:
         return got
 
     def advance(self, episode, state, n: int) -> None:
-        """``n`` ticks of ``state`` (an :class:`EpisodeState` of ``episode``, which :func:`unsupported` allows), in
-        place, as :meth:`Episode.advance` would run them."""
+        """``n`` ticks of ``state`` (an :class:`EpisodeState` of ``episode``, which :func:`.scope.unsupported`
+        allows), in place, as :meth:`Episode.advance` would run them."""
         sims, ctrl, body, task = state.sims, episode.controller, episode.body, episode.task
         if sims.model is not self.model:
             raise AssertionError("a whole episode runs on the model its MjData were made for")
@@ -326,7 +337,7 @@ class WholeEpisodes:
         ran, first = np.zeros(P, np.int64), np.full(1, np.nan)
         _episode(
             self.funcs, self.mj, addresses, F, self.body_ids, self.qadr, self.dadr, self.share, self.radius,
-            self.knees, self.codes, self.widths, self.mirror, norm, observed, ctrnn, _OUTPUT_MAPS[ctrl.output_kind],
+            self.knees, self.codes, self.widths, self.mirror, norm, observed, ctrnn, OUTPUT_MAPS[ctrl.output_kind],
             self.bounds, int(n), S, episode.stop_on_fall, (body.fall_height, float(np.cos(body.fall_tilt))),
             int(state.ticks), f(state.born, np.int64), float(episode.control_dt), facing0, tracker, steps, samples,
             tstate.position, state.alive, state.fell, state.unstable, state.end_time, pre,
@@ -351,38 +362,3 @@ class WholeEpisodes:
             sims.forward(stepped)
             batch.step(ids=stepped, nstep=1, stage=mujoco.mjtStage.mjSTAGE_VEL)
             sims.readings.clear()
-
-
-def unsupported(episode, state, listener=None) -> str | None:
-    """Why ``state`` of ``episode`` (watched by ``listener``) cannot run whole in compiled code, in words; None where
-    it can."""
-    from ...bodies.reil import ReilBiped
-    from ...controllers.ctrnn import CTRNN
-    from ...tasks.walk import WalkTask
-
-    body, ctrl, task = episode.body, episode.controller, episode.task
-    if not episode.compiled:
-        return "the kernel is numpy"
-    if listener is not None:
-        return "a listener watches every tick"
-    if type(body) is not ReilBiped or body.has_custom_forces:
-        return f"the body {body.name!r}"
-    if type(ctrl) not in (CTRNN, Simbicon):
-        return f"the controller {ctrl.name!r}"
-    task_senses = set(task.sensor_widths())
-    unknown = [n for n in ctrl.input_names if n not in SENSES or (n in task_senses) != (n in _TASK_SENSES)]
-    if unknown:
-        return f"the inputs {', '.join(unknown)}"
-    if ctrl.output_kind not in _OUTPUT_MAPS or body.action_kind != "position":
-        return f"the output map {ctrl.output_kind!r} -> {body.action_kind!r}"
-    if type(task) not in (WalkTask, CommandTask, SteerTask):
-        return f"the task {task.name!r}"
-    if type(task) is not SteerTask and (task.cyclic_weight or task.options.gait_measures):
-        return "the walk task's cyclic criterion or gait measures"
-    d = state.disturbances
-    if episode.latency:
-        return "latency"
-    if d is not None and (d.offset is not None or d.noise.sigma > 0 or d.trials.push_start.size
-                          or d.assist is not None):
-        return "presentations disturbed while they run (target noise or offsets, pushes, assistance)"
-    return None
