@@ -23,7 +23,8 @@ says so) through an evolvable gain matrix K ``(n_osc, k)``, push-pull as Appendi
 o's flexor receives +(K x)_o and its extensor -(K x)_o.  With foot contacts, the time since touch-down and
 the pelvis' tilt among the inputs these are the paper's kinds of pathway (touch-down resetting the hips'
 phase, posture terms) with their gains and signs evolved.  Forward Euler at the control period
-(the physics step by default: tau = 0.025 s over dt = 0.5 ms).  The initial
+(the physics step by default: tau = 0.025 s over dt = 0.5 ms), or with ``integration = "exponential"`` each leak
+solved exactly over the period, the other inputs held (stable for any tau; for control periods of 10-20 ms).  The initial
 state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
 second leg's extensors there, e.g. for the isolated generator, which from an
 exactly symmetric state settles to its fixed point instead of oscillating).
@@ -113,6 +114,9 @@ class MatsuokaOptions(ControllerOptions):
                           "target directly through evolved gains R (a posture reflex beside the rhythm)")
     initial_u: float = option(0.0, "initial u of the first leg's flexors and the second leg's extensors")
     dt: float | None = option(None, "control period (none: the physics step)", unit="s", above=0)
+    integration: str = option("euler", "`euler`: forward Euler at the control period (Taga's); `exponential`: each "
+                              "leak solved exactly over the period with the other inputs held (stable for any "
+                              "time constant)", choices=("euler", "exponential"))
 
 
 class Matsuoka(Controller):
@@ -257,6 +261,10 @@ class Matsuoka(Controller):
         du = (-u + net - params["beta"] * v + params["u0"] + self.feed(params, inputs)) / params["tau"]
         dv = (-v + y) / params["tau_adapt"]
         h = self.period
+        if self.options.integration == "exponential":  # x' = (x_inf - x)/tau solved over h: x_inf + (x - x_inf) e^-h/tau
+            ku, kv = np.exp(-h / params["tau"]), np.exp(-h / params["tau_adapt"])
+            u_inf, v_inf = u + params["tau"] * du, v + params["tau_adapt"] * dv
+            return {"u": u_inf + (u - u_inf) * ku, "v": v_inf + (v - v_inf) * kv}, out
         return {"u": u + h * du, "v": v + h * dv}, out
 
     def neuron_outputs(self, params, state):
