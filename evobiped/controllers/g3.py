@@ -42,6 +42,7 @@ from ..core.errors import ConfigError
 from .g3_network import CELLS, rk4_step
 from ..interface.genome import GeneBlock, GenomeLayout
 from ..core.options import option
+from ..core.schedule import level_at, timed_levels
 from .base import Controller, ControllerOptions
 
 SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1)
@@ -51,32 +52,13 @@ OFFSET = dict(low=0.0, high=1.0, init_mean=0.5, init_sigma=0.2, mutation_sigma=0
 SENSE_GAIN = dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05)
 
 
-def _schedule(go) -> tuple[np.ndarray, np.ndarray]:
-    """``go`` (a level, or [[t_s, level], ...]) -> (times (K,) s, levels (K,))."""
-    if isinstance(go, (int, float)):
-        pairs = [(0.0, float(go))]
-    else:
-        try:
-            pairs = [(float(t), float(v)) for t, v in go]
-        except (TypeError, ValueError):
-            raise ConfigError(f"go must be a level or a list of [time_s, level] pairs, got {go!r}") from None
-    if not pairs:
-        raise ConfigError("the go schedule is empty")
-    t, v = np.array(pairs).T
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))) or (v < 0).any() or (t < 0).any():
-        raise ConfigError(f"go levels and times must be finite and >= 0, got {go!r}")
-    if np.any(np.diff(t) <= 0):
-        raise ConfigError("go schedule times must increase")
-    return t, v
-
-
 @dataclass(frozen=True, kw_only=True)
 class G3Options(ControllerOptions):
     """Options of the g3 controller."""
 
     dt: float = option(0.02, "control period", unit="s", above=0)
     go: float = option(0.1, "the GO signal: a level, or a schedule [[t, level], ...] (t in s from the episode start)",
-                       check=_schedule, span="level >= 0, or [[t_s, level], ...]")
+                       check=timed_levels, span="level >= 0, or [[t_s, level], ...]")
     lag: float = option(0.05, "GO lag of each channel behind the previous one", unit="model time", low=0)
     time_scale: float = option(10.0, "model time units per second of simulated time", unit="1/s", above=0)
     max_step: float = option(0.05, "largest RK4 step", unit="model time", above=0)
@@ -117,7 +99,7 @@ class G3Controller(Controller):
         self.input_names = tuple(inputs)
         self.n_inputs = int(sum(inputs.values()))
         self.dt, self.time_scale, self.lag = float(dt), float(time_scale), float(lag)
-        self.go_times, self.go_levels = _schedule(go)
+        self.go_times, self.go_levels = timed_levels(go)
         self.cells = CELLS[preset]
         span = self.dt * self.time_scale  # model units per control period
         self.substeps = int(np.ceil(span / max_step - 1e-9))
@@ -159,9 +141,7 @@ class G3Controller(Controller):
 
     def go_at(self, k: np.ndarray) -> np.ndarray:
         """GO level at internal steps ``k`` (any shape): the schedule's level at t = k h / time_scale s."""
-        t = np.asarray(k) * self.h / self.time_scale
-        i = np.searchsorted(self.go_times, t + 1e-9, side="right") - 1
-        return np.where(i >= 0, self.go_levels[np.maximum(i, 0)], 0.0)
+        return level_at(self.go_times, self.go_levels, np.asarray(k) * self.h / self.time_scale)
 
     def outputs_of(self, params: dict[str, np.ndarray], x: np.ndarray) -> np.ndarray:
         """o = clip(offset + gain x, 0, 1), ``(P, N)``."""

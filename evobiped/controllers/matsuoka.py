@@ -24,8 +24,8 @@ o's flexor receives +(K x)_o and its extensor -(K x)_o.  With foot contacts, the
 the pelvis' tilt among the inputs these are the paper's kinds of pathway (touch-down resetting the hips'
 phase, posture terms) with their gains and signs evolved.  Forward Euler at the control period
 (the physics step by default: tau = 0.025 s over dt = 0.5 ms), or with ``integration = "exponential"`` each leak
-solved exactly over the period, the other inputs held (stable for any tau; for control periods of 10-20 ms).  The initial
-state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
+solved exactly over the period, the other inputs held (stable for any tau; for control periods of 10-20 ms).  The
+initial state is u = v = 0 (``initial_u`` > 0 starts the first leg's flexors and the
 second leg's extensors there, e.g. for the isolated generator, which from an
 exactly symmetric state settles to its fixed point instead of oscillating).
 
@@ -33,7 +33,11 @@ Genome blocks (Taga's Appendix D values: :mod:`evobiped.experiments.taga.paramet
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
 ``w_hka``; with Taga's feedback, ``feedback`` = a_1..a_8; with the senses', ``sense_gain`` = K row-major
 (oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about.  The
-tonic input u_0 is a structure option (the experiments' control parameter), not a gene.
+tonic input u_0 is a structure option (the experiments' control parameter, Taga's speed command), not a gene: a level,
+or a schedule ``[[t_s, level], ...]`` (seconds from the episode start, :func:`evobiped.core.schedule.timed_levels`; 0
+before its first step), so one episode can walk a walker through several speeds.  A level is the decoded
+``params["u0"]`` ``(P, 1)`` (an experiment may set it per walker, as :class:`~evobiped.experiments.taga.walking.
+TagaWalker` does); a schedule's level at each tick's start time k * period (the state's tick count ``k``) replaces it.
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ from ..interface.contract import Actuator, Needs, Offer, index, legs, problem
 from ..core.errors import ConfigError
 from ..interface.genome import GeneBlock, GenomeLayout
 from ..core.options import option
+from ..core.schedule import level_at, timed_levels
 from .base import Controller, ControllerOptions
 
 #: sensors the Appendix C feedback needs (provided by the Taga body), with their widths
@@ -103,7 +108,9 @@ def taga_feedback(a: np.ndarray, angles: np.ndarray, rates: np.ndarray, contact:
 class MatsuokaOptions(ControllerOptions):
     """Options of the matsuoka controller."""
 
-    u0: float = option(5.5, "tonic input u_0 (the experiments' speed control)", low=0)
+    u0: float | list = option(5.5, "tonic input u_0 (the experiments' speed control): a level, or a schedule "
+                              "[[t, level], ...] (t in s from the episode start)", check=timed_levels,
+                              span="level >= 0, or [[t_s, level], ...]")
     feedback: str = option("auto", "Appendix C feedback: `taga` (required), `none`, `auto` (where the body has Taga's "
                            "legs and sensors), or `senses`: any body's normalised senses through evolved gains",
                            choices=("auto", "taga", "senses", "none"))
@@ -151,7 +158,10 @@ class Matsuoka(Controller):
         u0, initial_u, dt = o.u0, o.initial_u, o.dt
         self.n_outputs = self.n_osc = int(n_outputs)
         self.n = 2 * self.n_osc
-        self.u0, self.initial_u = float(u0), float(initial_u)
+        #: u_0's schedule: step times (K,) s and levels (K,); ``u0_constant``: one level from t = 0 (``params["u0"]``)
+        self.u0_times, self.u0_levels = timed_levels(u0)
+        self.u0_constant = len(self.u0_times) == 1 and self.u0_times[0] == 0.0
+        self.u0, self.initial_u = float(level_at(self.u0_times, self.u0_levels, 0.0)), float(initial_u)
         self.input_names = tuple(inputs)
         self._widths = dict(inputs)
         self.dt = None if dt is None else float(dt)
@@ -208,7 +218,7 @@ class Matsuoka(Controller):
                 W[:, 2 * o + 1, 2 * hip] = W[:, 2 * o + 1, 2 * hip + 1] = g["w_hka"][:, 0]
         out = dict(W=W, tau=rep(g["tau"]), tau_adapt=rep(g["tau_adapt"]), beta=g["beta"], p_e=g["p_e"], p_f=g["p_f"],
                    bias=g["bias"] if "bias" in g else np.zeros((P, self.n_osc)))
-        out["u0"] = np.full((P, 1), self.u0)
+        out["u0"] = np.full((P, 1), self.u0)  # u_0 at 0 s; a schedule's level is read at each tick instead
         out["a"] = g["feedback"] if self.feedback == "taga" else np.zeros((P, 8))
         if self.feedback == "senses":
             out["K"] = g["sense_gain"].reshape(P, self.n_osc, self.n_inputs)
@@ -217,13 +227,19 @@ class Matsuoka(Controller):
         return out
 
     # ------------------------------------------------------------ dynamics
-    def initial_state(self, params: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    def initial_state(self, params: dict[str, np.ndarray]) -> dict:
+        """u, v ``(P, n)`` (see the module for u's start) and the tick count k (0)."""
         P = params["W"].shape[0]
         u = np.zeros((P, self.n))
         half = self.n_osc // 2  # first leg's flexors and second leg's extensors ahead
         u[:, 0 : 2 * half : 2] = self.initial_u
         u[:, 2 * half + 1 :: 2] = self.initial_u
-        return {"u": u, "v": np.zeros((P, self.n))}
+        return {"u": u, "v": np.zeros((P, self.n)), "k": 0}
+
+    def u0_at(self, params: dict[str, np.ndarray], k: int) -> np.ndarray | float:
+        """u_0 at tick ``k``: ``params["u0"]`` ``(P, 1)`` for a constant one, else the schedule's level at k * period
+        s."""
+        return params["u0"] if self.u0_constant else float(level_at(self.u0_times, self.u0_levels, k * self.period))
 
     def feed(self, params: dict[str, np.ndarray], inputs: np.ndarray) -> np.ndarray:
         """Feed_i ``(P, n)`` in internal neuron order (0 without feedback)."""
@@ -252,20 +268,20 @@ class Matsuoka(Controller):
         if self.period is None:
             raise ConfigError("matsuoka: the control period is unknown (step the controller bound(dt) returns, or give "
                               "dt)")
-        u, v = state["u"], state["v"]
+        u, v, k = state["u"], state["v"], state["k"]
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)
         if self.reflex:
             out = out + np.einsum("pok,pk->po", params["R"], inputs)
         net = (params["W"] * y[:, None, :]).sum(axis=2)
-        du = (-u + net - params["beta"] * v + params["u0"] + self.feed(params, inputs)) / params["tau"]
+        du = (-u + net - params["beta"] * v + self.u0_at(params, k) + self.feed(params, inputs)) / params["tau"]
         dv = (-v + y) / params["tau_adapt"]
         h = self.period
-        if self.options.integration == "exponential":  # x' = (x_inf - x)/tau solved over h: x_inf + (x - x_inf) e^-h/tau
+        if self.options.integration == "exponential":  # x' = (x_inf - x)/tau over h: x_inf + (x - x_inf) e^-h/tau
             ku, kv = np.exp(-h / params["tau"]), np.exp(-h / params["tau_adapt"])
             u_inf, v_inf = u + params["tau"] * du, v + params["tau_adapt"] * dv
-            return {"u": u_inf + (u - u_inf) * ku, "v": v_inf + (v - v_inf) * kv}, out
-        return {"u": u + h * du, "v": v + h * dv}, out
+            return {"u": u_inf + (u - u_inf) * ku, "v": v_inf + (v - v_inf) * kv, "k": k + 1}, out
+        return {"u": u + h * du, "v": v + h * dv, "k": k + 1}, out
 
     def neuron_outputs(self, params, state):
         return np.maximum(state["u"], 0.0)

@@ -1,4 +1,7 @@
-"""A value that changes over the generations of a run: constant, or a linear ramp from ``start`` to ``end``.
+"""A value that changes over the generations of a run (:class:`Schedule`), or over an episode's time
+(:func:`timed_levels`).
+
+**Over the generations**: constant, or a linear ramp from ``start`` to ``end``.
 
 A config gives a scheduled option either as a plain value (constant) or as a table::
 
@@ -10,12 +13,19 @@ generation ``after + generations`` on.  ``start`` and ``end`` are numbers, or
 lists of numbers of one length (a friction range ``[low, high]``), ramped
 element by element.  The value at a generation is a function of the generation
 alone, so a resumed run and one on any number of workers see the same values.
+
+**Over an episode** (a controller's command: the matsuoka controller's tonic input ``u0``, the g3 controller's GO
+signal ``go``): a level, or a list of steps ``[[t_s, level], ...]`` in seconds from the episode's start, times
+increasing, each level held until the next step's time; the level is 0 before the first step.  Levels and times are
+finite and >= 0.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any, Callable
+
+import numpy as np
 
 from .errors import ConfigError
 from .validate import number
@@ -86,3 +96,39 @@ class Schedule:
         if isinstance(self.start, tuple):
             return tuple(a + w * (b - a) for a, b in zip(self.start, self.end))
         return self.start + w * (self.end - self.start)
+
+
+def timed_levels(value: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A level or a schedule over an episode's time (``[[t_s, level], ...]``, see the module) -> ``(times (K,) s,
+    levels (K,))``; a plain level is the one step ``[[0, level]]``.  ConfigError (one line, without the option's path:
+    the caller's check adds it) for anything else: not numbers, an empty list, a non-finite or negative level or
+    time, times that do not increase."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not np.isfinite(value):
+            raise ConfigError(f"must be finite, got {value!r}")
+        if value < 0:
+            raise ConfigError(f"must be >= 0, got {value!r}")
+        return np.array([0.0]), np.array([float(value)])
+    try:
+        if isinstance(value, (str, bytes, dict, bool)):
+            raise TypeError
+        pairs = [(float(t), float(v)) for t, v in value]
+        if any(isinstance(x, bool) for pair in value for x in pair):
+            raise TypeError
+    except (TypeError, ValueError):
+        raise ConfigError(f"must be a level or a list of [time_s, level] pairs, got {value!r}") from None
+    if not pairs:
+        raise ConfigError("the schedule is empty: give a level, or at least one [time_s, level] pair")
+    t, v = np.array(pairs).T
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))) or (v < 0).any() or (t < 0).any():
+        raise ConfigError(f"a schedule's levels and times must be finite and >= 0, got {value!r}")
+    if np.any(np.diff(t) <= 0):
+        raise ConfigError(f"a schedule's times must increase, got {value!r}")
+    return t, v
+
+
+def level_at(times: np.ndarray, levels: np.ndarray, t: Any) -> np.ndarray:
+    """The level of the schedule ``(times (K,) s, levels (K,))`` of :func:`timed_levels` at ``t`` s (any shape): the
+    level of the last step at or before ``t`` (a step's time reached within 1e-9 s counts), 0 before the first."""
+    i = np.searchsorted(times, np.asarray(t) + 1e-9, side="right") - 1
+    return np.where(i >= 0, levels[np.maximum(i, 0)], 0.0)
