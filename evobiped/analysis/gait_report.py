@@ -47,6 +47,8 @@ class FootRecorder:
         self.row = row
         self.samples: dict[str, list[np.ndarray]] = {k: [] for k in FIELDS}
         self.times: list[float] = []
+        #: per tick, how many samples were kept up to its end
+        self.ends: list[int] = []
         self.body = None
 
     def start(self, episode, sims) -> None:
@@ -62,9 +64,24 @@ class FootRecorder:
         for k in self.samples:
             self.samples[k].extend(np.array(getattr(feet, k)[:, self.row]))
         self.times.append(float(t))
+        self.ends.append(len(self.samples[FIELDS[0]]))
 
     def end(self, result) -> None:
         pass
+
+    def between(self, start: float, end: float) -> "FootRecorder":
+        """A recorder holding only the samples of the ticks that end in (``start``, ``end``] s (a stretch of an
+        episode, measured on its own by :func:`measured`)."""
+        t = np.asarray(self.times)
+        ticks = np.flatnonzero((t > start + 1e-9) & (t <= end + 1e-9))
+        out = FootRecorder(self.row)
+        out.body = self.body
+        if len(ticks):
+            a, b = ([0] + self.ends)[ticks[0]], self.ends[ticks[-1]]
+            out.samples = {k: v[a:b] for k, v in self.samples.items()}
+            out.times = [self.times[i] for i in ticks]
+            out.ends = [e - a for e in self.ends[ticks[0]: ticks[-1] + 1]]
+        return out
 
     def series(self) -> dict[str, np.ndarray]:
         """Each sample stacked over the physics steps, ``(T, F)`` (``power`` ``(T, J)``)."""

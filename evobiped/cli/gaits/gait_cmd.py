@@ -1,5 +1,6 @@
-"""``evobiped gait``: a speed knob over a map-elites run's gait repertoire (one commanded speed, or a schedule), or a
-commanded walker's genome (the command task) following commanded speeds and turning rates."""
+"""``evobiped gait``: a speed knob over a map-elites run's gait repertoire (one commanded speed, or a schedule), a
+commanded walker's genome (the command task) following commanded speeds and turning rates, or a rhythm generator's
+walker through levels of its one command (``--u0``, ``--go``: :mod:`.gait_levels`)."""
 
 from __future__ import annotations
 
@@ -22,10 +23,17 @@ def add_gait(sub) -> None:
     p.add_argument("--turning", default="0", metavar="W[,W...]", help="commanded turning rate in deg/s, + left "
                                                                       "(default 0); a commanded walker also takes a "
                                                                       "list, one per speed")
+    p.add_argument("--u0", metavar="A[,B...]", help="a matsuoka walker's genome: its tonic input u0 through these "
+                   "levels, --hold s each, in one episode: speed per level (from 3 s into each), its gait, speed fitted "
+                   "against u0; writes <stem>_u0.json and .png (levels beyond 50 %% outside the u0 it was evolved with "
+                   "are clipped)")
+    p.add_argument("--go", metavar="A[,B...]", help="a g3 walker's genome: its GO signal through these levels, as "
+                   "--u0 does; writes <stem>_go.json and .png")
     p.add_argument("--hold", "--stretch", dest="hold", type=positive_float, default=10.0, metavar="S",
                    help="seconds each command is held (default 10)")
-    p.add_argument("--json", action="store_true", help="a commanded walker: print the report as JSON")
-    p.add_argument("--out", metavar="DIR", help="a commanded walker: where <stem>_command.json and .png go (default: "
+    p.add_argument("--json", action="store_true", help="a commanded walker, --u0, --go: print the report as JSON")
+    p.add_argument("--out", metavar="DIR", help="a commanded walker, --u0, --go: where <stem>_command.json (_u0, _go) "
+                                                "and .png go (default: "
                                                 "the run directory; for a genome file in a run directory or under "
                                                 "runs/ its folder, else runs/<stem>/)")
     p.add_argument("--battery", type=count(10**4, "schedules of a battery"), default=None, metavar="N",
@@ -57,6 +65,11 @@ def add_gait(sub) -> None:
 
 def run_gait_cmd(args) -> int:
     from pathlib import Path
+
+    if args.u0 is not None or args.go is not None:
+        from .gait_levels import run_levels
+
+        return run_levels(args)
 
     speeds = number_list("--speed", args.speed, MAX_SPEED, "m/s")
     turnings = number_list("--turning", args.turning, MAX_TURNING, "deg/s")
