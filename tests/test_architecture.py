@@ -25,7 +25,7 @@ LAYERS: list[set[str]] = [
     {"envs", "files.genome_file", "files.outcome", "analysis.selection", "analysis.compare_stats"},
     {"files.rundir", "files.genome_edit"},
     {"analysis.robustness", "analysis.retest", "analysis.commanded", "distill"},
-    {"analysis.speed_battery"},
+    {"analysis.speed_battery", "analysis.rhythm_command"},
     {"record"},
     {"optimizers", "evaluation"},
     {"run"},

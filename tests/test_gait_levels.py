@@ -83,6 +83,7 @@ def test_a_g3_walker_s_rhythm_follows_its_go_levels(tmp_path, capsys):
     (["--u0", "5,-1"], "--u0: levels must be >= 0"), (["--go", "0.1"], "--go: TAGA is driven by controller "
                                                       "'matsuoka', not 'g3'"),
     (["--u0", "5", "--go", "0.1"], "--u0/--go: give one"), (["--u0", "5", "--speed", "1"], "--speed: do not go"),
+    (["--go", "0.1", "--seed", "2", "--range", "1,2"], "--range/--seed: do not go with --go"),
     (["--u0", "5,6", "--hold", "2000"], "a sweep runs at most 3600 s")])
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, args, words):
     f = _taga_file(tmp_path / "taga.json", u0=5.5)

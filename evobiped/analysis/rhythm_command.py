@@ -79,7 +79,7 @@ def clip_levels(config: EpisodeConfig, option: str, levels: list[float]) -> tupl
                  f"widened by {100 * MARGIN:g} %: {lo:g}-{hi:g}): clipped to {', '.join(f'{c:g}' for _, c in clipped)}"]
 
 
-class _Trace:
+class _LevelTrace:
     """Listener: row 0's time (s), planar position (m) and first command, per tick; its facing at the start."""
 
     def __init__(self):
@@ -139,7 +139,7 @@ def command_sweep(config: EpisodeConfig, genome: np.ndarray, option: str, levels
         raise UserError(f"body {episode.body.name!r} declares no feet: its gait cannot be measured")
     from ..episode.listener import Listeners
 
-    trace, feet = _Trace(), FootRecorder()
+    trace, feet = _LevelTrace(), FootRecorder()
     result = episode.run(np.asarray(genome, float)[None], listener=Listeners(trace, feet))
     t, facing = np.array(trace.t), trace.facing
     forward = (np.array(trace.xy) - trace.xy[0]) @ facing
@@ -170,23 +170,23 @@ def command_sweep(config: EpisodeConfig, genome: np.ndarray, option: str, levels
     for i, row in enumerate(stretches):
         row["deviation_pct"] = deviation.get(i)
     every = max(1, int(round(0.02 / episode.control_dt)))
-    return {"command": option, "hold": float(hold), "settle": float(settle), "feet": list(episode.body.contact_sensor[1]),
-            "stretches": stretches,
-            "fit": fit, "fell": fell, "end_time": end, "seconds": seconds,
+    return {"command": option, "hold": float(hold), "settle": float(settle),
+            "feet": list(episode.body.contact_sensor[1]), "stretches": stretches, "fit": fit, "fell": fell,
+            "end_time": end, "seconds": seconds,
             "trace": {"time": t[::every].tolist(), "forward": forward[::every].tolist()}}
 
 
 def speed_line(stretches: list[dict]) -> dict:
     """The least-squares line speed = ``intercept`` + ``slope`` * level over the stretches with a measured speed and
-    no fall (``stretches``: their indices), each one's ``deviation_pct`` from it (% of the line's value; None where the line is within 1 mm/s of 0),
-    ``monotone`` (``"rising"``, ``"falling"`` or None: the speeds order as the levels do, for every two distinct
-    levels) and ``ratio`` (fastest over slowest; None unless every speed is above 0).  Fewer than two distinct levels:
-    no line (``slope`` None)."""
+    no fall (``stretches``: their indices), each one's ``deviation_pct`` from it (% of the line's value; None where
+    the line is within 1 mm/s of 0), ``monotone`` (``"rising"``, ``"falling"`` or None: the speeds order as the
+    levels do, for every two distinct levels) and ``ratio`` (fastest over slowest; None unless every speed is above
+    0).  Fewer than two distinct levels: no line (``slope`` None)."""
     done = [i for i, s in enumerate(stretches) if s["speed"] is not None and not s["fell"]]
     c = np.array([stretches[i]["level"] for i in done])
     v = np.array([stretches[i]["speed"] for i in done])
-    out = {"stretches": done, "levels": c.tolist(), "speeds": v.tolist(), "intercept": None, "slope": None, "deviation_pct": [],
-           "monotone": None, "ratio": float(v.max() / v.min()) if len(v) and v.min() > 0 else None}
+    out = {"stretches": done, "levels": c.tolist(), "speeds": v.tolist(), "intercept": None, "slope": None,
+           "deviation_pct": [], "monotone": None, "ratio": float(v.max() / v.min()) if len(v) and v.min() > 0 else None}
     if len(set(c.tolist())) < 2:
         return out
     b, a = np.polyfit(c, v, 1)

@@ -17,7 +17,8 @@ so touch-downs and the trunk's tilt can reset and shape the rhythm as Taga's pat
 
 Fixed (options): the cell constants A-G2 of a preset (default ``fig4``); the GO
 signal ``go``, either a level or a schedule ``[[t_s, level], ...]`` (seconds from
-the episode start; the level is 0 before the first entry), so a user can speed
+the episode start; the level is 0 before the first entry: :func:`evobiped.core.schedule.timed_levels`, the parser
+the matsuoka controller's ``u0`` shares), so a user can speed
 a walker up or switch its gait during an episode by changing one number; the
 per-channel GO lag ``lag`` (channel k receives every GO change k*lag model
 time units late, to break symmetry as the paper's cordlag/sidelag do, rounded

@@ -14,8 +14,9 @@ MAX_STRETCHES = 10**5
 def add_gait(sub) -> None:
     p = sub.add_parser("gait", help="walk at a commanded speed (or a schedule of speeds) with the nearest gaits of a "
                                     "map-elites run's archive, or with a commanded walker's genome")
-    p.add_argument("run", metavar="RUN|GENOME", help="a map-elites run directory (its archive.json), or a commanded "
-                                                     "walker (a genome file or run directory of the command task)")
+    p.add_argument("run", metavar="RUN|GENOME", help="a map-elites run directory (its archive.json), a commanded "
+                                                     "walker (a genome file or run directory of the command task), or "
+                                                     "with --u0/--go a matsuoka/g3 walker's")
     p.add_argument("--speed", metavar="V[,V...]",
                    help="commanded mean forward speed in m/s; several, comma-separated: a schedule, --hold s each (a "
                    "repertoire: elites switched on the fly; a commanded walker: 0 is a stop; without it, its own "
@@ -23,10 +24,10 @@ def add_gait(sub) -> None:
     p.add_argument("--turning", default="0", metavar="W[,W...]", help="commanded turning rate in deg/s, + left "
                                                                       "(default 0); a commanded walker also takes a "
                                                                       "list, one per speed")
-    p.add_argument("--u0", metavar="A[,B...]", help="a matsuoka walker's genome: its tonic input u0 through these "
-                   "levels, --hold s each, in one episode: speed per level (from 3 s into each), its gait, speed fitted "
-                   "against u0; writes <stem>_u0.json and .png (levels beyond 50 %% outside the u0 it was evolved with "
-                   "are clipped)")
+    p.add_argument("--u0", metavar="A[,B...]", help="a matsuoka walker's genome: its tonic input u0 through "
+                   "these levels, --hold s each, in one episode: speed per level (from 3 s into each), its gait, "
+                   "speed fitted against u0; writes <stem>_u0.json and .png (levels beyond 50 %% outside the u0 it "
+                   "was evolved with are clipped)")
     p.add_argument("--go", metavar="A[,B...]", help="a g3 walker's genome: its GO signal through these levels, as "
                    "--u0 does; writes <stem>_go.json and .png")
     p.add_argument("--hold", "--stretch", dest="hold", type=positive_float, default=10.0, metavar="S",

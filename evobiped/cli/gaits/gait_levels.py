@@ -9,8 +9,8 @@ from ...flags import note, number_list, refuse
 #: the longest episode a sweep runs, all its levels together (s)
 MAX_SECONDS = 3600.0
 #: the flags of the other gait commands, with their defaults (none of them goes with --u0/--go)
-OTHERS = {"speed": None, "turning": "0", "battery": None, "speed_range": None, "ramp": None, "ramp_down": None,
-          "correction": None, "overshoot": None}
+OTHERS = {"speed": None, "turning": "0", "battery": None, "stretches": 6, "speed_range": None, "seed": 0, "ramp": None,
+          "ramp_down": None, "correction": None, "overshoot": None}
 
 
 def run_levels(args) -> int:
