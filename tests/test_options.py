@@ -58,7 +58,7 @@ BAD = [
     (dict(controller="matsuoka", controller_options={"feedback": "yes"}),
      "episode.controller_options.feedback: must be one of auto, taga, senses, none, got 'yes'"),
     (dict(controller="g3", controller_options={"go": [[1.0, 0.1], [0.5, 0.2]]}),
-     "episode.controller_options.go: go schedule times must increase"),
+     "episode.controller_options.go: a schedule's times must increase"),
     (dict(controller="simbicon", controller_options={"dtt": 0.01}), "episode.controller_options.dtt: unknown option "
                                                                     "(choose from dt, sound_limit, inputs, genes, "
                                                                     "latency, frame, input_norm)"),
