@@ -8,7 +8,8 @@ class drives any body.  Evolvable (the genome):
   without the diagonal): the inhibition matrix of eq. (1);
 * ``gain`` and ``offset`` (N each): the output mapping
   o_k = clip(offset_k + gain_k x_k, 0, 1) ("unit" output: a PD target
-  low + o (high - low) for the Reil body, or a torque for torque bodies).
+  low + o (high - low) for the Reil body, or a torque for torque bodies), or with ``output = "angle"``
+  o_k = offset_k + gain_k x_k, a PD target in rad about the standing pose (offset in [-1, 1] rad).
 
 With ``feedback = "senses"`` the body feeds back into it: the controller's inputs x ``(k,)`` (the senses it is
 wired to, normalised, in the stance frame where ``frame`` says so) reach channel k's excitatory input through
@@ -48,6 +49,8 @@ SELF = dict(low=0.0, high=1.5, init_mean=0.9, init_sigma=0.1, mutation_sigma=0.1
 COUPLING = dict(low=0.0, high=1.5, init_mean=0.15, init_sigma=0.1, mutation_sigma=0.05)
 GAIN = dict(low=-2.0, high=2.0, init_mean=0.0, init_sigma=1.0, mutation_sigma=0.3)
 OFFSET = dict(low=0.0, high=1.0, init_mean=0.5, init_sigma=0.2, mutation_sigma=0.1)
+#: the offset of an ``angle`` output: rad about the standing pose
+ANGLE_OFFSET = dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05)
 SENSE_GAIN = dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05)
 
 
@@ -83,6 +86,9 @@ class G3Options(ControllerOptions):
     preset: str = option("fig4", "cell constants A-G2 of this published parameter set", choices=tuple(CELLS))
     feedback: str = option("none", "`none`: the GO signal alone drives it; `senses`: the body's normalised senses "
                            "also reach each channel's input through evolved gains", choices=("none", "senses"))
+    output: str = option("unit", "what offset + gain x is to the body: `unit` (clipped to [0, 1] across the joint's "
+                         "range, or a torque), `angle` (a PD target in rad: 0 is the standing pose)",
+                         choices=("unit", "angle"))
 
 
 class G3Controller(Controller):
@@ -111,6 +117,7 @@ class G3Controller(Controller):
             raise ConfigError(f"g3: takes no sensor inputs (got {sorted(inputs)}) without feedback = \"senses\"; "
                               "its GO signal is the 'go' option")
         self.normalises_inputs = self.feedback == "senses"
+        self.output_kind = o.output
         if n_outputs < 1:
             raise ConfigError("g3: needs at least one output channel")
         self.n_outputs = self.n = int(n_outputs)
@@ -130,7 +137,7 @@ class G3Controller(Controller):
                 GeneBlock(name="self_inhibition", size=n, **SELF),
                 GeneBlock(name="coupling", size=n * (n - 1), **COUPLING),
                 GeneBlock(name="gain", size=n, **GAIN),
-                GeneBlock(name="offset", size=n, **OFFSET),
+                GeneBlock(name="offset", size=n, **(ANGLE_OFFSET if o.output == "angle" else OFFSET)),
             )
             + ((GeneBlock(name="sense_gain", size=n * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses"
                else ())
@@ -164,8 +171,9 @@ class G3Controller(Controller):
         return np.where(i >= 0, self.go_levels[np.maximum(i, 0)], 0.0)
 
     def outputs_of(self, params: dict[str, np.ndarray], x: np.ndarray) -> np.ndarray:
-        """o = clip(offset + gain x, 0, 1), ``(P, N)``."""
-        return np.clip(params["offset"] + params["gain"] * x, 0.0, 1.0)
+        """o = clip(offset + gain x, 0, 1), or offset + gain x (rad) with an ``angle`` output, ``(P, N)``."""
+        o = params["offset"] + params["gain"] * x
+        return o if self.output_kind == "angle" else np.clip(o, 0.0, 1.0)
 
     def step(self, params, state, inputs):
         x, y, k = state["x"], state["y"], state["k"]
