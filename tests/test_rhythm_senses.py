@@ -137,7 +137,8 @@ def test_exponential_integration_solves_each_leak_exactly_and_stays_stable_where
 
     tau, h = 0.02, 0.05  # h > 2 tau: forward Euler's factor 1 - h/tau = -1.5
     genes = {"tau": {"low": 0.01, "high": 1.0, "init_mean": tau}, "beta": {"low": 0.0, "high": 10.0, "init_mean": 0.0},
-             "w_fe": {"low": -10.0, "high": 0.0, "init_mean": 0.0}, "w_rl": {"low": -10.0, "high": 0.0, "init_mean": 0.0},
+             "w_fe": {"low": -10.0, "high": 0.0, "init_mean": 0.0},
+             "w_rl": {"low": -10.0, "high": 0.0, "init_mean": 0.0},
              "w_hka": {"low": -10.0, "high": 0.0, "init_mean": 0.0}}
     runs = {}
     for integration in ("exponential", "euler"):
@@ -172,7 +173,8 @@ def test_exponential_integration_solves_each_leak_exactly_and_stays_stable_where
 
 def test_g3_angle_output_is_the_pd_target_in_rad_about_the_standing_pose():
     ep = EpisodeConfig(body="reil", controller="g3", seconds=1.0,
-                       controller_options={"feedback": "senses", "go": 0.1, "output": "angle", "inputs": INPUTS}).build()
+                       controller_options={"feedback": "senses", "go": 0.1, "output": "angle",
+                                           "inputs": INPUTS}).build()
     c = ep.controller
     assert c.output_kind == "angle" and {"low": -1.0, "high": 1.0} == {
         k: getattr(next(b for b in c.layout.blocks if b.name == "offset"), k) for k in ("low", "high")}

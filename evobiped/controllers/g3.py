@@ -89,6 +89,8 @@ class G3Options(ControllerOptions):
     output: str = option("unit", "what offset + gain x is to the body: `unit` (clipped to [0, 1] across the joint's "
                          "range, or a torque), `angle` (a PD target in rad: 0 is the standing pose)",
                          choices=("unit", "angle"))
+    symmetric: bool = option(False, "one set of genes for both legs: the second leg's channels mirror the first's "
+                             "(inhibitions, output mapping, and gains reading the mirrored senses)")
 
 
 class G3Controller(Controller):
@@ -132,14 +134,18 @@ class G3Controller(Controller):
         # channel k sees the GO signal lag_k units late: a whole number of internal steps
         self.lag_steps = np.round(np.arange(self.n) * self.lag / self.h).astype(int)
         n = self.n
+        #: the mirror spreading the first leg's genes over both (``symmetric``; set by the episode's wiring)
+        self.bilateral = None
+        self.symmetric = bool(o.symmetric)
+        units = n // 2 if self.symmetric else n  # channels with genes of their own
         self._layout = GenomeLayout(
             (
-                GeneBlock(name="self_inhibition", size=n, **SELF),
-                GeneBlock(name="coupling", size=n * (n - 1), **COUPLING),
-                GeneBlock(name="gain", size=n, **GAIN),
-                GeneBlock(name="offset", size=n, **(ANGLE_OFFSET if o.output == "angle" else OFFSET)),
+                GeneBlock(name="self_inhibition", size=units, **SELF),
+                GeneBlock(name="coupling", size=units * (n - 1), **COUPLING),
+                GeneBlock(name="gain", size=units, **GAIN),
+                GeneBlock(name="offset", size=units, **(ANGLE_OFFSET if o.output == "angle" else OFFSET)),
             )
-            + ((GeneBlock(name="sense_gain", size=n * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses"
+            + ((GeneBlock(name="sense_gain", size=units * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses"
                else ())
         )
 
@@ -150,19 +156,44 @@ class G3Controller(Controller):
     def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
         p = super().decode(genomes)
         P, n = p["gain"].shape[0], self.n
-        D = np.zeros((P, n, n))
-        off = ~np.eye(n, dtype=bool)
-        D[:, off] = p["coupling"]
-        D[:, np.arange(n), np.arange(n)] = p["self_inhibition"]
-        out = {"D": D, "gain": p["gain"], "offset": p["offset"]}
+        if not self.symmetric:
+            D = np.zeros((P, n, n))
+            off = ~np.eye(n, dtype=bool)
+            D[:, off] = p["coupling"]
+            D[:, np.arange(n), np.arange(n)] = p["self_inhibition"]
+            out = {"D": D, "gain": p["gain"], "offset": p["offset"]}
+            if self.feedback == "senses":
+                out["K"] = p["sense_gain"].reshape(P, n, self.n_inputs)
+            return out
+        sym = self.bilateral
+        if sym is None:
+            raise ConfigError("g3: symmetric needs the body's mirror (build it through an episode)")
+        half = n // 2
+        rows = np.zeros((P, half, n))  # what reaches each first-leg channel from every channel
+        off = np.ones((half, n), bool)
+        off[np.arange(half), sym.first] = False
+        rows[:, off] = p["coupling"]
+        rows[:, np.arange(half), sym.first] = p["self_inhibition"]
+        out = {"D": sym.couplings(rows), "gain": sym.units(p["gain"]), "offset": sym.units(p["offset"])}
         if self.feedback == "senses":
-            out["K"] = p["sense_gain"].reshape(P, n, self.n_inputs)
+            out["K"] = sym.gains(p["sense_gain"].reshape(P, half, self.n_inputs))
         return out
 
     def initial_state(self, params: dict[str, np.ndarray]) -> dict:
         """x, y ``(P, N)`` zero (the paper's resting start) and the internal step count k."""
         P = params["gain"].shape[0]
-        return {"x": np.zeros((P, self.n)), "y": np.zeros((P, self.n)), "k": 0}
+        state = {"x": np.zeros((P, self.n)), "y": np.zeros((P, self.n)), "k": 0}
+        if self.frame is not None:  # the rows whose second leg stood at the last tick (reframe)
+            state["flip"] = np.zeros(P, bool)
+        return state
+
+    def reframe(self, state, flip):
+        """Each leg's channels stay on its leg: where the stance leg changed, the legs' channels swap places."""
+        changed = flip != state["flip"]
+        if not changed.any():
+            return state
+        return {**state, "x": self.frame.swapped(state["x"], changed), "y": self.frame.swapped(state["y"], changed),
+                "flip": flip.copy()}
 
     def go_at(self, k: np.ndarray) -> np.ndarray:
         """GO level at internal steps ``k`` (any shape): the schedule's level at t = k h / time_scale s."""
@@ -184,7 +215,7 @@ class G3Controller(Controller):
             if feed is not None:  # an excitatory input: not below 0
                 I = np.maximum(I + feed, 0.0)
             x, y = rk4_step(self.cells, x, y, I, params["D"], self.h)
-        return {"x": x, "y": y, "k": k + self.substeps}, out
+        return {**state, "x": x, "y": y, "k": k + self.substeps}, out
 
     def neuron_outputs(self, params, state):
         """x (the motor channels) then y, ``(P, 2N)``."""
