@@ -14,7 +14,10 @@ class drives any body.  Evolvable (the genome):
 With ``feedback = "senses"`` the body feeds back into it: the controller's inputs x ``(k,)`` (the senses it is
 wired to, normalised, in the stance frame where ``frame`` says so) reach channel k's excitatory input through
 evolved gains, I_k = [GO_k + (K x)_k]^+ held over each control period (``sense_gain``: K ``(N, k)`` row-major),
-so touch-downs and the trunk's tilt can reset and shape the rhythm as Taga's pathways do his.
+so touch-downs and the trunk's tilt can reset and shape the rhythm as Taga's pathways do his.  With ``reflex``
+(and an ``angle`` output) they also reach the targets directly, o += reflex_scale R x (``reflex_gain``: R ``(N, k)``),
+a posture reflex beside the rhythm; with ``symmetric`` the first leg's genes serve both legs
+(:mod:`evobiped.controllers.bilateral`); in the stance frame each leg's channels stay on its leg (:meth:`reframe`).
 
 Fixed (options): the cell constants A-G2 of a preset (default ``fig4``); the GO
 signal ``go``, either a level or a schedule ``[[t_s, level], ...]`` (seconds from
@@ -52,6 +55,7 @@ OFFSET = dict(low=0.0, high=1.0, init_mean=0.5, init_sigma=0.2, mutation_sigma=0
 #: the offset of an ``angle`` output: rad about the standing pose
 ANGLE_OFFSET = dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05)
 SENSE_GAIN = dict(low=-1.0, high=1.0, init_mean=0.0, init_sigma=0.05, mutation_sigma=0.05)
+REFLEX_GAIN = dict(low=-2.0, high=2.0, init_mean=0.0, init_sigma=0.1, mutation_sigma=0.1)
 
 
 def _schedule(go) -> tuple[np.ndarray, np.ndarray]:
@@ -89,6 +93,10 @@ class G3Options(ControllerOptions):
     output: str = option("unit", "what offset + gain x is to the body: `unit` (clipped to [0, 1] across the joint's "
                          "range, or a torque), `angle` (a PD target in rad: 0 is the standing pose)",
                          choices=("unit", "angle"))
+    reflex: bool = option(False, "with `senses` feedback and `angle` output: the senses also reach each joint's "
+                          "target directly through evolved gains R (a posture reflex beside the rhythm)")
+    reflex_scale: float = option(1.0, "the reflex's gains times this (rad of target per unit of gene and of "
+                                 "normalised sense)", above=0)
     symmetric: bool = option(False, "one set of genes for both legs: the second leg's channels mirror the first's "
                              "(inhibitions, output mapping, and gains reading the mirrored senses)")
 
@@ -148,6 +156,12 @@ class G3Controller(Controller):
             + ((GeneBlock(name="sense_gain", size=units * self.n_inputs, **SENSE_GAIN),) if self.feedback == "senses"
                else ())
         )
+        self.reflex = bool(o.reflex)
+        if self.reflex:
+            if self.feedback != "senses" or self.output_kind != "angle":
+                raise ConfigError("g3: reflex needs feedback = \"senses\" and output = \"angle\"")
+            self._layout = GenomeLayout(self._layout.blocks + (
+                GeneBlock(name="reflex_gain", size=units * self.n_inputs, **REFLEX_GAIN),))
 
     @property
     def layout(self) -> GenomeLayout:
@@ -164,6 +178,8 @@ class G3Controller(Controller):
             out = {"D": D, "gain": p["gain"], "offset": p["offset"]}
             if self.feedback == "senses":
                 out["K"] = p["sense_gain"].reshape(P, n, self.n_inputs)
+            if self.reflex:
+                out["R"] = p["reflex_gain"].reshape(P, n, self.n_inputs)
             return out
         sym = self.bilateral
         if sym is None:
@@ -177,6 +193,8 @@ class G3Controller(Controller):
         out = {"D": sym.couplings(rows), "gain": sym.units(p["gain"]), "offset": sym.units(p["offset"])}
         if self.feedback == "senses":
             out["K"] = sym.gains(p["sense_gain"].reshape(P, half, self.n_inputs))
+        if self.reflex:
+            out["R"] = sym.gains(p["reflex_gain"].reshape(P, half, self.n_inputs))
         return out
 
     def initial_state(self, params: dict[str, np.ndarray]) -> dict:
@@ -209,6 +227,8 @@ class G3Controller(Controller):
     def step(self, params, state, inputs):
         x, y, k = state["x"], state["y"], state["k"]
         out = self.outputs_of(params, x)
+        if self.reflex:
+            out = out + self.options.reflex_scale * np.einsum("pnk,pk->pn", params["R"], inputs)
         feed = np.einsum("pnk,pk->pn", params["K"], inputs) if self.feedback == "senses" else None
         for s in range(self.substeps):
             I = self.go_at(k + s - self.lag_steps)[None, :]  # (1, N); 0 before it arrives

@@ -33,7 +33,10 @@ exactly symmetric state settles to its fixed point instead of oscillating).
 Genome blocks (Taga's Appendix D values: :mod:`evobiped.experiments.taga.parameters`): per-oscillator
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
 ``w_hka``; with Taga's feedback, ``feedback`` = a_1..a_8; with the senses', ``sense_gain`` = K row-major
-(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about.  The
+(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about; with
+``reflex``, ``reflex_gain`` R (oscillator by input): the target gains reflex_scale R x.  ``symmetric``: the first
+leg's genes serve both legs (:mod:`evobiped.controllers.bilateral`); in the stance frame each leg's oscillator stays
+on its leg (:meth:`reframe`).  The
 tonic input u_0 is a structure option (the experiments' control parameter), not a gene.
 """
 
@@ -113,6 +116,8 @@ class MatsuokaOptions(ControllerOptions):
                          choices=("signed", "angle"))
     reflex: bool = option(False, "with `senses` feedback and `angle` output: the senses also reach each joint's "
                           "target directly through evolved gains R (a posture reflex beside the rhythm)")
+    reflex_scale: float = option(1.0, "the reflex's gains times this (their genes stay O(1) while the reflex is "
+                                 "gentle: an evolution strategy's sigma is in gene units)", above=0)
     initial_u: float = option(0.0, "initial u of the first leg's flexors and the second leg's extensors")
     dt: float | None = option(None, "control period (none: the physics step)", unit="s", above=0)
     symmetric: bool = option(False, "one set of genes for both legs: the second leg's oscillators mirror the "
@@ -284,7 +289,7 @@ class Matsuoka(Controller):
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)
         if self.reflex:
-            out = out + np.einsum("pok,pk->po", params["R"], inputs)
+            out = out + self.options.reflex_scale * np.einsum("pok,pk->po", params["R"], inputs)
         net = (params["W"] * y[:, None, :]).sum(axis=2)
         du = (-u + net - params["beta"] * v + params["u0"] + self.feed(params, inputs)) / params["tau"]
         dv = (-v + y) / params["tau_adapt"]
