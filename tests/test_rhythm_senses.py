@@ -127,3 +127,62 @@ def test_g3_senses_reach_each_channels_input_and_zero_gains_are_the_go_signal_al
     g = _genome(c, rng, sense_gain=0.0)
     a, b = _g3(seconds=1.5).build().run(g[None]), plain.run(g[None, :plain.controller.layout.size])
     assert np.array_equal(a.end_position, b.end_position) and np.array_equal(a.fitness, b.fitness)
+
+
+def test_exponential_integration_solves_each_leak_exactly_and_stays_stable_where_euler_does_not():
+    """A lone neuron pair without connections, adaptation or feedback relaxes to u0 as u0 + (u_init - u0) e^(-t/tau):
+    the exponential step gives that to rounding at any control period, Euler only for h << tau (and diverges past
+    h = 2 tau); with a rhythm, at a period much shorter than tau, both give the same oscillation."""
+    from evobiped.controllers.matsuoka import Matsuoka
+
+    tau, h = 0.02, 0.05  # h > 2 tau: forward Euler's factor 1 - h/tau = -1.5
+    genes = {"tau": {"low": 0.01, "high": 1.0, "init_mean": tau}, "beta": {"low": 0.0, "high": 10.0, "init_mean": 0.0},
+             "w_fe": {"low": -10.0, "high": 0.0, "init_mean": 0.0},
+             "w_rl": {"low": -10.0, "high": 0.0, "init_mean": 0.0},
+             "w_hka": {"low": -10.0, "high": 0.0, "init_mean": 0.0}}
+    runs = {}
+    for integration in ("exponential", "euler"):
+        c = Matsuoka(n_outputs=2, u0=1.0, feedback="none", initial_u=3.0, dt=h, integration=integration)
+        c.override_genes(genes)
+        c = c.bound(h)
+        p = c.decode(c.layout.init_mean[None])
+        s = c.initial_state(p)
+        u = []
+        for _ in range(8):
+            s, _ = c.step(p, s, np.zeros((1, 0)))
+            u.append(s["u"][0, 0])
+        runs[integration] = np.array(u)
+    exact = 1.0 + (3.0 - 1.0) * np.exp(-h * np.arange(1, 9) / tau)
+    assert np.allclose(runs["exponential"], exact, rtol=0, atol=1e-12)
+    assert abs(runs["euler"][-1] - 1.0) > 10  # |1 - h/tau|^8 = 25.6: Euler's oscillating divergence
+    periods = {}
+    for integration in ("exponential", "euler"):  # the two-neuron rhythm at h = tau / 20
+        c = Matsuoka(n_outputs=2, u0=1.0, feedback="none", initial_u=0.5, dt=0.0025, integration=integration)
+        c.override_genes({"tau": {"low": 0.01, "high": 1.0, "init_mean": 0.05}})
+        c = c.bound(0.0025)
+        p = c.decode(c.layout.init_mean[None])
+        s, out = c.initial_state(p), []
+        for _ in range(4000):
+            s, o = c.step(p, s, np.zeros((1, 0)))
+            out.append(o[0, 0])
+        o = np.array(out[1000:])
+        up = np.flatnonzero((o[1:] > 0) & (o[:-1] <= 0))
+        periods[integration] = np.diff(up).mean() * 0.0025
+    assert periods["euler"] > 0.2 and periods["exponential"] == pytest.approx(periods["euler"], rel=0.02)
+
+
+def test_g3_angle_output_is_the_pd_target_in_rad_about_the_standing_pose():
+    ep = EpisodeConfig(body="reil", controller="g3", seconds=1.0,
+                       controller_options={"feedback": "senses", "go": 0.1, "output": "angle",
+                                           "inputs": INPUTS}).build()
+    c = ep.controller
+    assert c.output_kind == "angle" and {"low": -1.0, "high": 1.0} == {
+        k: getattr(next(b for b in c.layout.blocks if b.name == "offset"), k) for k in ("low", "high")}
+    rng = np.random.default_rng(5)
+    offset = np.array([0.3, -0.1, -0.6, 0.2, 0.05, -0.9])
+    params = c.decode(_genome(c, rng, offset=offset, gain=1.5, sense_gain=0.0)[None])
+    x = np.full((1, c.n), 0.9)  # offset + gain x: 1.65 and more, beyond [0, 1]: not clipped
+    assert np.allclose(c.outputs_of(params, x)[0], offset + 1.5 * 0.9, rtol=0, atol=1e-14)
+    still, grab = _genome(c, rng, offset=offset, gain=0.0, sense_gain=0.0), ActionRecorder(row=0)
+    ep.run(still[None], listener=grab)
+    assert np.allclose(grab.seen[0], np.clip(offset, ep.low, ep.high))  # no rhythm: the targets are the offsets

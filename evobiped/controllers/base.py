@@ -108,6 +108,13 @@ class Controller(ABC):
         itself where the period makes no difference, else a copy (this one is left unchanged)."""
         return self
 
+    def reframe(self, state: Any, flip: np.ndarray) -> Any:
+        """``state`` expressed in this tick's stance frame, ``flip`` ``(P,)`` bool the rows whose second leg stands
+        (called before :meth:`step` where ``frame = "stance"``): itself for a controller whose state has no legs; a
+        rhythm generator swaps its legs' units on the rows whose frame changed, so each leg's oscillator keeps
+        running on that leg while the genes it follows are the stance or the swing leg's."""
+        return state
+
     def compiled(self) -> "Controller":
         """This controller with its step in compiled code giving the same numbers to the last bit (the episode's
         ``kernel``, :mod:`evobiped.core.kernel`): a copy, or itself where it has no compiled step."""

@@ -32,7 +32,10 @@ exactly symmetric state settles to its fixed point instead of oscillating).
 Genome blocks (Taga's Appendix D values: :mod:`evobiped.experiments.taga.parameters`): per-oscillator
 ``tau``, ``tau_adapt``, ``p_e``, ``p_f``; scalars ``beta``, ``w_fe``, ``w_rl``,
 ``w_hka``; with Taga's feedback, ``feedback`` = a_1..a_8; with the senses', ``sense_gain`` = K row-major
-(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about.  The
+(oscillator by input); with ``output = "angle"``, ``bias`` (rad, per oscillator): the posture it swings about; with
+``reflex``, ``reflex_gain`` R (oscillator by input): the target gains reflex_scale R x.  ``symmetric``: the first
+leg's genes serve both legs (:mod:`evobiped.controllers.bilateral`); in the stance frame each leg's oscillator stays
+on its leg (:meth:`reframe`).  The
 tonic input u_0 is a structure option (the experiments' control parameter, Taga's speed command), not a gene: a level,
 or a schedule ``[[t_s, level], ...]`` (seconds from the episode start, :func:`evobiped.core.schedule.timed_levels`; 0
 before its first step), so one episode can walk a walker through several speeds.  A level is the decoded
@@ -119,8 +122,12 @@ class MatsuokaOptions(ControllerOptions):
                          choices=("signed", "angle"))
     reflex: bool = option(False, "with `senses` feedback and `angle` output: the senses also reach each joint's "
                           "target directly through evolved gains R (a posture reflex beside the rhythm)")
+    reflex_scale: float = option(1.0, "the reflex's gains times this (their genes stay O(1) while the reflex is "
+                                 "gentle: an evolution strategy's sigma is in gene units)", above=0)
     initial_u: float = option(0.0, "initial u of the first leg's flexors and the second leg's extensors")
     dt: float | None = option(None, "control period (none: the physics step)", unit="s", above=0)
+    symmetric: bool = option(False, "one set of genes for both legs: the second leg's oscillators mirror the "
+                             "first's (time constants, amplitudes, posture, and gains reading the mirrored senses)")
     integration: str = option("euler", "`euler`: forward Euler at the control period (Taga's); `exponential`: each "
                               "leak solved exactly over the period with the other inputs held (stable for any "
                               "time constant)", choices=("euler", "exponential"))
@@ -167,20 +174,24 @@ class Matsuoka(Controller):
         self.dt = None if dt is None else float(dt)
         self.period = self.dt
         n_osc = self.n_osc
-        blocks = [GeneBlock(name=b, size=n_osc, **BLOCKS[b]) for b in ("tau", "tau_adapt", "p_e", "p_f")]
+        #: the mirror spreading the first leg's genes over both (``symmetric``; set by the episode's wiring)
+        self.bilateral = None
+        self.symmetric = bool(o.symmetric)
+        units = n_osc // 2 if self.symmetric else n_osc  # oscillators with genes of their own
+        blocks = [GeneBlock(name=b, size=units, **BLOCKS[b]) for b in ("tau", "tau_adapt", "p_e", "p_f")]
         blocks += [GeneBlock(name=b, size=1, **BLOCKS[b]) for b in ("beta", "w_fe", "w_rl", "w_hka")]
         self.n_inputs = int(sum(inputs.values()))
         if self.output_kind == "angle":  # each joint's posture: the target (rad) its oscillator swings about
-            blocks.append(GeneBlock(name="bias", size=n_osc, **BLOCKS["bias"]))
+            blocks.append(GeneBlock(name="bias", size=units, **BLOCKS["bias"]))
         if self.feedback == "taga":
             blocks.append(GeneBlock(name="feedback", size=8, **BLOCKS["feedback"]))
         elif self.feedback == "senses":
-            blocks.append(GeneBlock(name="sense_gain", size=n_osc * self.n_inputs, **BLOCKS["sense_gain"]))
+            blocks.append(GeneBlock(name="sense_gain", size=units * self.n_inputs, **BLOCKS["sense_gain"]))
         self.reflex = bool(o.reflex)
         if self.reflex:
             if self.feedback != "senses" or self.output_kind != "angle":
                 raise ConfigError("matsuoka: reflex needs feedback = \"senses\" and output = \"angle\"")
-            blocks.append(GeneBlock(name="reflex_gain", size=n_osc * self.n_inputs, **BLOCKS["sense_gain"]))
+            blocks.append(GeneBlock(name="reflex_gain", size=units * self.n_inputs, **BLOCKS["sense_gain"]))
         self._layout = GenomeLayout(tuple(blocks))
         # Taga's neuron k (0-based) sits at internal index _taga_order[k]: his oscillators are the
         # hips, the knees, the ankles, the first leg's before the second's
@@ -205,6 +216,16 @@ class Matsuoka(Controller):
     def decode(self, genomes: np.ndarray) -> dict[str, np.ndarray]:
         g = super().decode(genomes)
         P, n = g["beta"].shape[0], self.n
+        if self.symmetric:  # the first leg's genes for both legs
+            if self.bilateral is None:
+                raise ConfigError("matsuoka: symmetric needs the body's mirror (build it through an episode)")
+            sym = self.bilateral
+            for b in ("tau", "tau_adapt", "p_e", "p_f", "bias"):
+                if b in g:
+                    g[b] = sym.units(g[b])
+            for b in ("sense_gain", "reflex_gain"):
+                if b in g:
+                    g[b] = sym.gains(g[b].reshape(P, self.n_osc // 2, self.n_inputs)).reshape(P, -1)
         rep = lambda x: np.repeat(x, 2, axis=1)  # noqa: E731  per-oscillator -> per-neuron
         W = np.zeros((P, n, n))
         f, e = 2 * np.arange(self.n_osc), 2 * np.arange(self.n_osc) + 1
@@ -234,7 +255,18 @@ class Matsuoka(Controller):
         half = self.n_osc // 2  # first leg's flexors and second leg's extensors ahead
         u[:, 0 : 2 * half : 2] = self.initial_u
         u[:, 2 * half + 1 :: 2] = self.initial_u
-        return {"u": u, "v": np.zeros((P, self.n)), "k": 0}
+        state = {"u": u, "v": np.zeros((P, self.n)), "k": 0}
+        if self.frame is not None:  # the rows whose second leg stood at the last tick (reframe)
+            state["flip"] = np.zeros(P, bool)
+        return state
+
+    def reframe(self, state, flip):
+        """Each leg's oscillator stays on its leg: where the stance leg changed, the legs' oscillators swap places."""
+        changed = flip != state["flip"]
+        if not changed.any():
+            return state
+        swap = self.frame.swapped
+        return {**state, "u": swap(state["u"], changed, 2), "v": swap(state["v"], changed, 2), "flip": flip.copy()}
 
     def u0_at(self, params: dict[str, np.ndarray], k: int) -> np.ndarray | float:
         """u_0 at tick ``k``: ``params["u0"]`` ``(P, 1)`` for a constant one, else the schedule's level at k * period
@@ -272,7 +304,7 @@ class Matsuoka(Controller):
         y = np.maximum(u, 0.0)
         out = self.torques(params, y)
         if self.reflex:
-            out = out + np.einsum("pok,pk->po", params["R"], inputs)
+            out = out + self.options.reflex_scale * np.einsum("pok,pk->po", params["R"], inputs)
         net = (params["W"] * y[:, None, :]).sum(axis=2)
         du = (-u + net - params["beta"] * v + self.u0_at(params, k) + self.feed(params, inputs)) / params["tau"]
         dv = (-v + y) / params["tau_adapt"]
@@ -280,8 +312,8 @@ class Matsuoka(Controller):
         if self.options.integration == "exponential":  # x' = (x_inf - x)/tau over h: x_inf + (x - x_inf) e^-h/tau
             ku, kv = np.exp(-h / params["tau"]), np.exp(-h / params["tau_adapt"])
             u_inf, v_inf = u + params["tau"] * du, v + params["tau_adapt"] * dv
-            return {"u": u_inf + (u - u_inf) * ku, "v": v_inf + (v - v_inf) * kv, "k": k + 1}, out
-        return {"u": u + h * du, "v": v + h * dv, "k": k + 1}, out
+            return {**state, "u": u_inf + (u - u_inf) * ku, "v": v_inf + (v - v_inf) * kv, "k": k + 1}, out
+        return {**state, "u": u + h * du, "v": v + h * dv, "k": k + 1}, out
 
     def neuron_outputs(self, params, state):
         return np.maximum(state["u"], 0.0)

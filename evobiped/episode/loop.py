@@ -199,6 +199,8 @@ class Episode:
             neurons = ctrl.neuron_outputs(params,
                                           st.controller) if listener is not None or self._task_reads_neurons else None
             inputs, flip = self._inputs(st, P)
+            if flip is not None:
+                st.controller = ctrl.reframe(st.controller, flip)
             st.controller, out = ctrl.step(params, st.controller, inputs)
             action = to_action(ctrl.output_kind, self.low, self.high, self.body.action_kind, out)
             if flip is not None:

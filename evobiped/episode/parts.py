@@ -24,6 +24,7 @@ from ..controllers import CONTROLLERS
 from ..controllers.base import Controller
 from ..core.errors import ConfigError
 from ..interface.frame import StanceFrame
+from ..controllers.bilateral import Bilateral
 from ..physics import gait
 from ..core.options import given, parse
 from ..tasks import TASKS
@@ -128,6 +129,14 @@ def _wired(name: str, opts: Any, body: Body, task: Task) -> Controller:
                               "declares no left/right mirror")
         ctrl.frame = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror,
                                  what=f"{where}.frame")
+    if getattr(opts, "symmetric", False):
+        if body.actuator_mirror is None:
+            raise ConfigError(f"{where}.symmetric: needs a bilateral body; body {body.name!r} declares no left/right "
+                              "mirror")
+        mirror = StanceFrame(inputs, {**body.mirror, **task.sensor_mirror()}, body.actuator_mirror,
+                             what=f"{where}.symmetric")
+        ctrl.bilateral = Bilateral((mirror.action_perm, mirror.action_sign), (mirror.input_perm, mirror.input_sign),
+                                   what=f"{where}.symmetric")
     if "genes" in given(opts):
         try:
             ctrl.override_genes(opts.genes)

@@ -69,6 +69,13 @@ class StanceFrame:
         """Readings ``(P, k)`` in the stance frame: rows ``flip`` ``(P,)`` bool mirrored."""
         return _mirrored(x, flip, self.input_perm, self.input_sign)
 
+    def swapped(self, a: np.ndarray, rows: np.ndarray, per_unit: int = 1) -> np.ndarray:
+        """A controller's per-actuator state ``(P, n_act * per_unit)`` (``per_unit`` columns for each actuator, in
+        action order) with the legs' units swapped on rows ``rows`` ``(P,)`` bool (no signs: a neuron's state is
+        not a direction)."""
+        perm = (self.action_perm[:, None] * per_unit + np.arange(per_unit)).ravel()
+        return np.where(rows[:, None], a[:, perm], a)
+
     def actions(self, a: np.ndarray, flip: np.ndarray) -> np.ndarray:
         """Stance-frame actions ``(P, n_act)`` back on the body's legs: rows ``flip`` mirrored."""
         return _mirrored(a, flip, self.action_perm, self.action_sign)
