@@ -187,7 +187,8 @@ def test_same_genome_same_fitness_any_batch(controller):
 
 @pytest.mark.parametrize(
     "genes, words",
-    [([0.0] * 119, "119 genes"), ([float("nan")] + [0.0] * 119, "not finite"), ([99.0] + [0.0] * 119, "outside")],
+    [([0.0] * 119, "119 genes"), ([float("nan")] + [0.0] * 119, "not finite"), ([99.0] + [0.0] * 119, "outside"),
+     ([[[0.0] * 120]], r"shape \(1, 1, 120\): give one genome \(120,\) or a population \(P, 120\)")],
 )
 def test_malformed_genome_clear_error(genes, words):
     with pytest.raises(GenomeError, match=words):

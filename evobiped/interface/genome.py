@@ -142,9 +142,11 @@ class GenomeLayout:
             raise GenomeError(f"{what} is not an array of numbers ({exc})") from None
         if g.ndim == 1:
             g = g[None, :]
-        if g.ndim != 2 or g.shape[1] != self.size:
-            got = g.shape[-1] if g.ndim else 0
-            raise GenomeError(f"{what} has {got} genes, the layout needs {self.size}")
+        if g.ndim != 2:
+            raise GenomeError(f"{what} is an array of shape {g.shape}: give one genome ({self.size},) or a population "
+                              f"(P, {self.size})")
+        if g.shape[1] != self.size:
+            raise GenomeError(f"{what} has {g.shape[1]} genes, the layout needs {self.size}")
         bad = ~np.isfinite(g)
         if bad.any():
             p, i = np.argwhere(bad)[0]
