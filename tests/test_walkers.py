@@ -11,6 +11,7 @@ import dataclasses
 import json
 import re
 
+import numpy as np
 import pytest
 
 from evobiped.files.genome_file import load_genome
@@ -180,6 +181,12 @@ def test_the_shipped_from_scratch_walkers_gaits_are_their_docs_rows(name, failed
     assert r["shuffle"] == shuffles and (r["step_similar"] < 1 / 3) == shuffles
     if not shuffles:
         assert r["step_length"] >= 0.25 and r["steps_per_s"] <= 3.0 and r["cost_of_transport"] <= 0.6
+    _is_its_docs_row(name, r, failed)
+
+
+def _is_its_docs_row(name, r, failed):
+    """docs/walkers.md's gait-table row of ``name`` holds gait report ``r`` (failing ``failed``) within rounding and
+    the tolerance of another numerical environment."""
     lines = (ROOT / "docs" / "walkers.md").read_text().splitlines()
     head = [c.strip() for c in next(x for x in lines if x.startswith("| walker | up |")).strip("|").split("|")]
     row = next(line for line in lines if line.startswith(f"| `{name}`"))
@@ -191,3 +198,23 @@ def test_the_shipped_from_scratch_walkers_gaits_are_their_docs_rows(name, failed
     assert float(cells["step (m)"]) == pytest.approx(r["step_length"], abs=0.02)
     assert float(cells["CoT"]) == pytest.approx(r["cost_of_transport"], abs=0.1)
     assert float(cells["slid (cm/m)"]) == pytest.approx(100 * r["slide_per_m"], abs=1.0)
+
+
+def test_the_shipped_rhythm_generator_walker_walks_without_a_shuffle_and_its_rhythm_carries_it():
+    """docs/walkers/matsuoka_walk_seed4.json (--preset walker-matsuoka-walk, seed 4): Matsuoka's oscillators with
+    the body's senses fed back walk by every criterion (200 s up, duty >= 0.5 each foot, no flight, slip <= 5 %),
+    with steps of at least a third of what dynamic similarity predicts (no shuffle) at under 4 a second; with the
+    oscillators' outputs silenced (p_e = p_f = 0: the reflex and posture alone) the same genome falls."""
+    from evobiped.analysis.gait_report import gait_report
+
+    genome, cfg, _ = load_genome(WALKERS / "matsuoka_walk_seed4.json")
+    assert cfg.controller == "matsuoka"
+    r = gait_report(cfg, genome, seconds=50.0, up_for=200.0)
+    assert r["walks"] and r["failed"] == [] and not r["shuffle"]
+    assert r["step_length"] >= 0.18 and r["steps_per_s"] <= 4.0 and r["cost_of_transport"] <= 0.6
+    _is_its_docs_row("matsuoka_walk_seed4", r, [])
+    layout = cfg.build().controller.layout
+    silent = np.array(genome, float).reshape(-1).copy()
+    for block in ("p_e", "p_f"):
+        silent[layout.slices()[block]] = 0.0
+    assert not gait_report(cfg, silent, seconds=50.0, up_for=200.0)["up"]
