@@ -86,3 +86,28 @@ def test_in_the_stance_frame_each_legs_oscillator_stays_on_its_leg(controller, o
     c_ = np.array(c_.seen)
     assert not np.allclose(a[:n], c_[:n], rtol=0, atol=1e-3)
 
+
+
+@pytest.mark.parametrize("preset, period", [("walker-matsuoka-walk", 1.2), ("walker-g3-walk", 0.9)])
+def test_the_walking_presets_start_from_a_rhythm_of_the_documented_period(preset, period):
+    """docs/rhythm_walkers.md: at the genes' initial means, with no senses (x = 0), the first generation's
+    generator cycles at about 1.2 s (Matsuoka, tau 0.04 s, tau' 0.3 s) and 0.9 s (G3, GO 0.1 on half Fig. 4's time
+    scale); Matsuoka's hips in antiphase (w_rl), its hip targets swinging by under 0.1 rad so the body starts
+    upright (G3's channels start with equal couplings: their phases are set by the GO lags alone)."""
+    from evobiped.flags import run_config
+
+    cfg = run_config(preset=preset)
+    ep = cfg.episode.nominal().build()
+    c = ep.controller
+    assert c.frame is not None and c.reflex and c.output_kind == "angle"
+    params = c.decode(c.layout.init_mean[None])
+    state, out = c.initial_state(params), []
+    for _ in range(int(12.0 / ep.control_dt)):
+        state, o = c.step(params, state, np.zeros((1, c.n_inputs)))
+        out.append(o[0])
+    out = np.array(out)[int(4.0 / ep.control_dt):]  # past the start
+    hip, other = out[:, 0] - out[:, 0].mean(), out[:, 3] - out[:, 3].mean()
+    ups = np.flatnonzero((hip[1:] > 0) & (hip[:-1] <= 0))
+    assert np.diff(ups).mean() * ep.control_dt == pytest.approx(period, rel=0.1)
+    if preset == "walker-matsuoka-walk":
+        assert np.corrcoef(hip, other)[0, 1] < -0.9 and np.ptp(out[:, 0]) < 0.1
