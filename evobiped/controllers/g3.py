@@ -87,6 +87,11 @@ class G3Options(ControllerOptions):
 class G3Controller(Controller):
     """``n_outputs`` G3 channels, one per actuator; D and the output mapping evolve."""
 
+    docs_note: ClassVar[str] = (
+        "Pribe, Grossberg & Cohen's GO Gait Generator driving a body, one channel per joint; the paper's quadruped "
+        "network is `evobiped g3`'s ([g3.md](g3.md)). `--preset walker-g3-walk` evolves it with the body's senses in "
+        "the stance frame ([rhythm_walkers.md](rhythm_walkers.md)).")
+
     name: ClassVar[str] = "g3"
     output_kind: ClassVar[str] = "unit"
 

@@ -136,6 +136,12 @@ class MatsuokaOptions(ControllerOptions):
 class Matsuoka(Controller):
     """Matsuoka oscillators, one per actuator; Taga's rhythm generator on the Taga body."""
 
+    docs_note: ClassVar[str] = (
+        "Taga's rhythm generator; on the Taga body with his Appendix C pathways ([taga.md](taga.md)). On any body "
+        "`feedback = \"senses\"` feeds the body's normalised senses into the oscillators; with `frame = \"stance\"` "
+        "each leg's oscillator stays on its leg while the genes it follows are the stance or the swing leg's: "
+        "`--preset walker-matsuoka-walk` walks the Reil body from scratch ([rhythm_walkers.md](rhythm_walkers.md)).")
+
     name: ClassVar[str] = "matsuoka"
     output_kind: ClassVar[str] = "signed"
     Options: ClassVar[type] = MatsuokaOptions
