@@ -218,3 +218,21 @@ def test_the_shipped_rhythm_generator_walker_walks_without_a_shuffle_and_its_rhy
     for block in ("p_e", "p_f"):
         silent[layout.slices()[block]] = 0.0
     assert not gait_report(cfg, silent, seconds=50.0, up_for=200.0)["up"]
+
+
+def test_the_shipped_g3_preset_walker_walks_with_long_steps_by_its_reflex():
+    """docs/walkers/g3_walk_seed2.json (--preset walker-g3-walk, seed 2) walks by every criterion with steps of 25
+    cm at 2.5 a second (over half the step dynamic similarity predicts); as docs/rhythm_walkers.md says, its walk is
+    the reflex's: with the G3 channels' outputs silenced (gain = 0) it still walks, without the reflex it falls."""
+    from evobiped.analysis.gait_report import gait_report
+
+    genome, cfg, _ = load_genome(WALKERS / "g3_walk_seed2.json")
+    assert cfg.controller == "g3"
+    r = gait_report(cfg, genome, seconds=50.0, up_for=200.0)
+    assert r["walks"] and not r["shuffle"] and r["step_length"] >= 0.24 and r["steps_per_s"] <= 2.7
+    _is_its_docs_row("g3_walk_seed2", r, [])
+    slices = cfg.build().controller.layout.slices()
+    for block, walks in (("gain", True), ("reflex_gain", False)):
+        g = np.array(genome, float).reshape(-1).copy()
+        g[slices[block]] = 0.0
+        assert gait_report(cfg, g, seconds=50.0)["walks"] == walks, block
