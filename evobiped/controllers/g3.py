@@ -195,11 +195,7 @@ class G3Controller(Controller):
 
     def reframe(self, state, flip):
         """Each leg's channels stay on its leg: where the stance leg changed, the legs' channels swap places."""
-        changed = flip != state["flip"]
-        if not changed.any():
-            return state
-        return {**state, "x": self.frame.swapped(state["x"], changed), "y": self.frame.swapped(state["y"], changed),
-                "flip": flip.copy()}
+        return self.frame.follow(state, flip, {"x": 1, "y": 1})
 
     def go_at(self, k: np.ndarray) -> np.ndarray:
         """GO level at internal steps ``k`` (any shape): the schedule's level at t = k h / time_scale s."""

@@ -268,11 +268,7 @@ class Matsuoka(Controller):
 
     def reframe(self, state, flip):
         """Each leg's oscillator stays on its leg: where the stance leg changed, the legs' oscillators swap places."""
-        changed = flip != state["flip"]
-        if not changed.any():
-            return state
-        swap = self.frame.swapped
-        return {**state, "u": swap(state["u"], changed, 2), "v": swap(state["v"], changed, 2), "flip": flip.copy()}
+        return self.frame.follow(state, flip, {"u": 2, "v": 2})
 
     def u0_at(self, params: dict[str, np.ndarray], k: int) -> np.ndarray | float:
         """u_0 at tick ``k``: ``params["u0"]`` ``(P, 1)`` for a constant one, else the schedule's level at k * period

@@ -76,6 +76,15 @@ class StanceFrame:
         perm = (self.action_perm[:, None] * per_unit + np.arange(per_unit)).ravel()
         return np.where(rows[:, None], a[:, perm], a)
 
+    def follow(self, state: dict, flip: np.ndarray, per_unit: dict[str, int]) -> dict:
+        """A rhythm generator's ``state`` (its arrays ``per_unit`` = {name: columns per actuator}, and ``flip``: the
+        rows whose second leg stood at the last tick) in this tick's frame ``flip`` ``(P,)``: where the stance leg
+        changed, the legs' units swap places, so each leg's oscillator stays on its leg."""
+        changed = flip != state["flip"]
+        if not changed.any():
+            return state
+        return {**state, **{k: self.swapped(state[k], changed, m) for k, m in per_unit.items()}, "flip": flip.copy()}
+
     def actions(self, a: np.ndarray, flip: np.ndarray) -> np.ndarray:
         """Stance-frame actions ``(P, n_act)`` back on the body's legs: rows ``flip`` mirrored."""
         return _mirrored(a, flip, self.action_perm, self.action_sign)
